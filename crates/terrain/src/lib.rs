@@ -1,0 +1,30 @@
+//! # snowscape-terrain: the terrain model
+//!
+//! Everything downstream of raster I/O works on the types defined here:
+//!
+//! - [`GridGeometry`]: the size of a raster, its cell size in metres (x and y may differ), its
+//!   georeferencing (an affine north-up transform in CRS units plus an optional [`Crs`]), and the
+//!   index / coordinate helpers every kernel uses. Row 0 is the northern edge, as in GeoTIFF and
+//!   ESRI ASCII grids.
+//! - [`Grid`]: a flat `Vec<f32>` (struct of arrays, the layout rayon, SIMD and wgpu kernels share)
+//!   that owns its geometry and a [`NodataMask`], with bilinear sampling.
+//! - [`LayeredTerrain`]: bedrock plus the four snow layers of Cordonnier et al. 2018, Section 3
+//!   (compacted, stable, unstable, powder), all in metres of snow depth, and named auxiliary maps
+//!   (sun exposure, temperature, wind...) that the simulation adds.
+//! - [`random`]: counter-based random numbers keyed by (seed, stream, index), so a run is a pure
+//!   function of its inputs and seed whatever the thread count.
+//! - [`procedural`]: the deterministic procedural alpine terrain bundled as the default input.
+//! - [`surface`]: slopes and normals by central differences, shared by the renderer, the mesh
+//!   exporter and the phenomena.
+
+pub mod error;
+pub mod geometry;
+pub mod grid;
+pub mod layers;
+pub mod random;
+pub mod surface;
+
+pub use error::TerrainError;
+pub use geometry::{Crs, GeoTransform, GridGeometry};
+pub use grid::{Grid, NodataMask};
+pub use layers::{LayeredTerrain, SnowLayer};
