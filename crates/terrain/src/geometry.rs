@@ -217,9 +217,9 @@ impl GridGeometry {
 
     /// Latitude of the grid centre in degrees, when the grid is in degrees.
     pub fn centre_latitude_deg(&self) -> Option<f64> {
-        self.is_geographic().then(|| {
-            self.transform.origin_y - 0.5 * self.height as f64 * self.transform.pixel_height
-        })
+        let centre =
+            self.transform.origin_y - 0.5 * self.height as f64 * self.transform.pixel_height;
+        self.is_geographic().then_some(centre)
     }
 
     /// Number of columns.
