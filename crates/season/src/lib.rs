@@ -1,0 +1,22 @@
+//! # snowscape-season: snow-cover evolution through a winter
+//!
+//! The phenomena of Cordonnier et al. 2018, Section 5, each a module with a pure step
+//! `step(params, state, scratch, dt) -> budget` over a [`LayeredTerrain`](snowscape_terrain::LayeredTerrain).
+//! Every step reports the snow volume it added, removed or moved, so a run's mass budget is
+//! tracked rather than hoped for.
+
+pub mod snowfall;
+
+/// Snow volume a step added to and removed from the terrain, m³ of snow.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct VolumeChange {
+    /// m³ of snow added (snowfall, deposit from outside).
+    pub added: f64,
+    /// m³ of snow removed (melt, outflow across the border).
+    pub removed: f64,
+}
+
+/// Sums per-row partial sums in row order, so totals do not depend on the thread count.
+pub(crate) fn ordered_sum(rows: &[f64]) -> f64 {
+    rows.iter().sum()
+}
