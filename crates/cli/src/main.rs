@@ -1,1 +1,60 @@
-fn main() {}
+//! `snowscape`: the command-line front end.
+//!
+//! Exit codes: 0 success; 1 the job failed (an output could not be written, an internal error);
+//! 2 bad input (a usage error, an unreadable or invalid file, an invalid parameter).
+
+mod cli;
+mod commands;
+mod dem_input;
+mod failure;
+mod outputs;
+mod progress;
+mod report;
+
+use clap::Parser;
+use failure::Failure;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let args = cli::Cli::parse();
+    init_logging(args.global.quiet, args.global.verbose);
+    if let Some(n) = args.global.threads {
+        if n == 0 {
+            eprintln!("error: --threads must be at least 1 (got 0)");
+            return ExitCode::from(2);
+        }
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+        {
+            eprintln!("error: cannot start {n} worker threads: {e}");
+            return ExitCode::from(1);
+        }
+    }
+    match commands::dispatch(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure { code, error }) => {
+            eprintln!("error: {error}");
+            for cause in error.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::from(code)
+        }
+    }
+}
+
+fn init_logging(quiet: bool, verbose: u8) {
+    let level = match (quiet, verbose) {
+        (true, _) => "error",
+        (false, 0) => "warn",
+        (false, 1) => "info",
+        _ => "debug",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_env("SNOWSCAPE_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .init();
+}

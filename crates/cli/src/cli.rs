@@ -1,0 +1,156 @@
+//! Command-line definitions (clap derive).
+
+use crate::dem_input::DemInputArgs;
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+const EXAMPLES: &str = "\
+Examples:
+  snowscape demo                                  # procedural terrain, every output in out/demo
+  snowscape demo --size 1024 --seed 7 --out out/s7
+  snowscape info ../shared/data/dem/avaframe_avaMal/avaMal.asc
+  snowscape render dem.tif --out relief.png --sun-azimuth 300
+  snowscape convert dem.asc dem.tif               # any readable format to GeoTIFF/EXR/PNG16/ASC/NPY
+  snowscape convert height.png dem.tif --cell-size 2 --height-range 1000,2500
+  snowscape bench --size 1024                     # kernel throughput and memory-bandwidth share
+
+Exit codes: 0 success, 1 the job failed, 2 bad input (usage, file or parameter).";
+
+/// snowscape: snow-covered landscapes from real terrain.
+#[derive(Debug, Parser)]
+#[command(name = "snowscape", version, about, long_about = None, after_help = EXAMPLES)]
+pub struct Cli {
+    #[command(flatten)]
+    pub global: GlobalArgs,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Options every command accepts.
+#[derive(Debug, Args)]
+pub struct GlobalArgs {
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true)]
+    pub threads: Option<usize>,
+    /// No progress bars and no messages except errors.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// More log output (-v info, -vv debug); SNOWSCAPE_LOG overrides.
+    #[arg(long, short, global = true, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Generate the procedural alpine terrain, cover it with snow, write every output.
+    Demo(DemoArgs),
+    /// Describe a terrain file: grid size, cell size, CRS, value range, nodata share.
+    Info(InfoArgs),
+    /// Render a shaded-relief preview of a terrain file to PNG.
+    Render(RenderArgs),
+    /// Convert a raster between formats (format from the output extension or --to).
+    Convert(ConvertArgs),
+    /// Measure memory bandwidth and kernel throughput; write bench.json.
+    Bench(BenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "out/demo")]
+    pub out: PathBuf,
+    /// Cells per side of the procedural terrain (128..=8192).
+    #[arg(long, default_value_t = 512)]
+    pub size: usize,
+    /// Random seed: the same seed gives the same bytes.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Cell size of the procedural terrain, metres.
+    #[arg(long, default_value_t = 10.0)]
+    pub cell_size: f64,
+    /// Days of snowfall to accumulate before the outputs are written.
+    #[arg(long, default_value_t = 30)]
+    pub days: u32,
+    /// Frames in the time-lapse (one per snapshot day, spread over the run).
+    #[arg(long, default_value_t = 10)]
+    pub frames: usize,
+}
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// Terrain raster (.asc, .tif, .png, .raw/.r16, .npy).
+    pub file: PathBuf,
+    #[command(flatten)]
+    pub dem: DemInputArgs,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Colouring of a rendered preview.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum RenderMode {
+    /// Shaded relief with hypsometric tint.
+    Relief,
+    /// Snow cover, white by depth (the file is taken as bare terrain: no snow).
+    Snow,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Terrain raster to render.
+    pub file: PathBuf,
+    /// Output PNG.
+    #[arg(long)]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub dem: DemInputArgs,
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Colouring.
+    #[arg(long, value_enum, default_value_t = RenderMode::Relief)]
+    pub mode: RenderMode,
+}
+
+/// Preview camera and light.
+#[derive(Debug, Args, Clone)]
+pub struct ViewArgs {
+    /// Sun azimuth, degrees clockwise from north.
+    #[arg(long, default_value_t = 315.0)]
+    pub sun_azimuth: f64,
+    /// Sun elevation above the horizon, degrees.
+    #[arg(long, default_value_t = 35.0)]
+    pub sun_elevation: f64,
+    /// Vertical exaggeration of the shading.
+    #[arg(long, default_value_t = 1.0)]
+    pub exaggeration: f64,
+    /// Longest side of the image in pixels (bigger grids are downsampled).
+    #[arg(long, default_value_t = 2048)]
+    pub max_size: usize,
+}
+
+#[derive(Debug, Args)]
+pub struct ConvertArgs {
+    /// Input raster.
+    pub input: PathBuf,
+    /// Output raster (.tif, .exr, .png (16-bit + JSON sidecar), .asc, .npy).
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub dem: DemInputArgs,
+    /// Output format, when the extension does not say it.
+    #[arg(long)]
+    pub to: Option<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Grid size (cells per side) of the kernels.
+    #[arg(long, default_value_t = 1024)]
+    pub size: usize,
+    /// Timed repetitions per kernel (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeats: usize,
+    /// Where to write the JSON report.
+    #[arg(long, default_value = "bench.json")]
+    pub out: PathBuf,
+}

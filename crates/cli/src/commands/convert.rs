@@ -1,0 +1,26 @@
+//! `snowscape convert IN OUT`: raster format conversion, georeferencing kept.
+
+use crate::cli::ConvertArgs;
+use crate::failure::{ExitCodeExt, Failure};
+use anyhow::anyhow;
+use snowscape_io::{RasterFormat, write_raster};
+
+pub fn run(args: &ConvertArgs) -> Result<(), Failure> {
+    let format = match &args.to {
+        Some(f) => f
+            .parse::<RasterFormat>()
+            .map_err(|e| anyhow!("--to {f:?}: {e}"))
+            .bad_input()?,
+        None => RasterFormat::from_path(&args.output)
+            .ok_or_else(|| {
+                anyhow!(
+                    "cannot tell the output format from {:?}: use a .tif, .exr, .png, .asc or .npy extension, or --to",
+                    args.output
+                )
+            })
+            .bad_input()?,
+    };
+    let grid = args.dem.read(&args.input).bad_input()?;
+    write_raster(&args.output, &grid, format).job_failed()?;
+    Ok(())
+}

@@ -1,0 +1,22 @@
+//! One module per verb; [`dispatch`] is the only entry point.
+
+mod bench;
+mod convert;
+mod demo;
+mod info;
+mod render;
+
+use crate::cli::{Cli, Command};
+use crate::failure::Failure;
+
+/// Runs the command the user asked for.
+pub fn dispatch(cli: Cli) -> Result<(), Failure> {
+    let g = &cli.global;
+    match &cli.command {
+        Command::Demo(a) => demo::run(a, g),
+        Command::Info(a) => info::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Convert(a) => convert::run(a),
+        Command::Bench(a) => bench::run(a, g),
+    }
+}
