@@ -5,6 +5,7 @@
 //! Every step reports the snow volume it added, removed or moved, so a run's mass budget is
 //! tracked rather than hoped for.
 
+pub mod scheduler;
 pub mod snowfall;
 
 /// Snow volume a step added to and removed from the terrain, m³ of snow.
