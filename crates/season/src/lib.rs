@@ -5,8 +5,12 @@
 //! Every step reports the snow volume it added, removed or moved, so a run's mass budget is
 //! tracked rather than hoped for.
 
+pub mod checkpoint;
 pub mod scheduler;
 pub mod snowfall;
+pub mod melt;
+pub mod phenomenon;
+pub mod stability;
 
 /// Snow volume a step added to and removed from the terrain, m³ of snow.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
