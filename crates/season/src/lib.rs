@@ -6,10 +6,10 @@
 //! tracked rather than hoped for.
 
 pub mod checkpoint;
-pub mod scheduler;
-pub mod snowfall;
 pub mod melt;
 pub mod phenomenon;
+pub mod scheduler;
+pub mod snowfall;
 pub mod stability;
 
 /// Snow volume a step added to and removed from the terrain, m³ of snow.

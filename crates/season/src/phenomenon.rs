@@ -1,0 +1,247 @@
+//! Plumbing shared by the Section 5 phenomena (melt, stability, powder diffusion, wind
+//! transport): typed input errors, the nodata view that lets kernels compile a branch-free
+//! interior for mask-free grids, and the surface-gradient row stencil.
+//!
+//! Kernels are written once over a [`Validity`] and instantiated twice: with [`AllValid`]
+//! (every validity test folds to `true`, so interior loops carry no mask branch) and with
+//! [`Masked`] (the terrain's per-cell nodata flags).
+
+use snowscape_terrain::{GridGeometry, NodataMask, surface};
+use thiserror::Error;
+
+/// A bad input to a phenomenon step: a map of the wrong size, a parameter out of range or a
+/// bad time step. Each variant carries the offending value.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum PhenomenonError {
+    /// A per-cell input map whose length does not match the terrain.
+    #[error("{map} map has {actual} values but the {width}x{height} terrain needs {expected}")]
+    MapLength {
+        map: &'static str,
+        width: usize,
+        height: usize,
+        expected: usize,
+        actual: usize,
+    },
+    /// A parameter outside its valid range.
+    #[error("invalid {phenomenon} parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        phenomenon: &'static str,
+        name: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
+    /// A time step that is negative, NaN or infinite.
+    #[error("invalid time step {dt_days} days: it must be finite and non-negative")]
+    InvalidTimeStep { dt_days: f64 },
+}
+
+/// Checks that a per-cell map covers the grid.
+pub(crate) fn check_map(
+    map: &'static str,
+    values: &[f32],
+    geometry: &GridGeometry,
+) -> Result<(), PhenomenonError> {
+    if values.len() == geometry.len() {
+        Ok(())
+    } else {
+        Err(PhenomenonError::MapLength {
+            map,
+            width: geometry.width(),
+            height: geometry.height(),
+            expected: geometry.len(),
+            actual: values.len(),
+        })
+    }
+}
+
+/// Checks a time step.
+pub(crate) fn check_dt(dt_days: f64) -> Result<(), PhenomenonError> {
+    if dt_days.is_finite() && dt_days >= 0.0 {
+        Ok(())
+    } else {
+        Err(PhenomenonError::InvalidTimeStep { dt_days })
+    }
+}
+
+/// Checks that a parameter is finite and not below `min`.
+pub(crate) fn check_at_least(
+    phenomenon: &'static str,
+    name: &'static str,
+    value: f64,
+    min: f64,
+) -> Result<(), PhenomenonError> {
+    if value.is_finite() && value >= min {
+        Ok(())
+    } else {
+        Err(PhenomenonError::InvalidParameter {
+            phenomenon,
+            name,
+            value,
+            reason: if value.is_finite() {
+                "below its minimum"
+            } else {
+                "not a finite number"
+            },
+        })
+    }
+}
+
+/// Checks that a parameter is a finite number.
+pub(crate) fn check_finite(
+    phenomenon: &'static str,
+    name: &'static str,
+    value: f64,
+) -> Result<(), PhenomenonError> {
+    check_at_least(phenomenon, name, value, f64::MIN)
+}
+
+/// Which cells hold data, as seen by a kernel.
+pub(crate) trait Validity: Sync {
+    /// Whether cell `i` holds data.
+    fn at(&self, i: usize) -> bool;
+}
+
+/// Every cell holds data: the test folds away.
+pub(crate) struct AllValid;
+
+impl Validity for AllValid {
+    #[inline(always)]
+    fn at(&self, _i: usize) -> bool {
+        true
+    }
+}
+
+/// Per-cell nodata flags (`true` = nodata).
+pub(crate) struct Masked<'a>(pub &'a [bool]);
+
+impl Validity for Masked<'_> {
+    #[inline(always)]
+    fn at(&self, i: usize) -> bool {
+        !self.0[i]
+    }
+}
+
+/// Runs `kernel` with the cheapest [`Validity`] for `mask`.
+macro_rules! with_validity {
+    ($mask:expr, |$v:ident| $body:expr) => {
+        match $mask.invalid_cells() {
+            None => {
+                let $v = &$crate::phenomenon::AllValid;
+                $body
+            }
+            Some(flags) => {
+                let $v = &$crate::phenomenon::Masked(flags);
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_validity;
+
+/// Norm of the surface gradient `‖∇A‖` (tan of the slope) along one row, into `out`.
+///
+/// Central differences in the interior (the stencil of [`surface::gradient`], written without
+/// per-cell clamping); border cells and cells next to nodata use [`surface::gradient`]'s
+/// one-sided rule. Nodata cells get 0.
+pub(crate) fn row_gradient_norm<V: Validity>(
+    a: &[f32],
+    geometry: &GridGeometry,
+    mask: &NodataMask,
+    valid: &V,
+    row: usize,
+    out: &mut [f32],
+) {
+    let w = geometry.width();
+    let h = geometry.height();
+    let half_inv_dx = (0.5 / geometry.cell_size_x()) as f32;
+    let half_inv_dy = (0.5 / geometry.cell_size_y()) as f32;
+    let slow = |col: usize| -> f32 {
+        let (gx, gy) = surface::gradient(a, geometry, mask, col, row);
+        (gx * gx + gy * gy).sqrt()
+    };
+    let base = row * w;
+    if row == 0 || row + 1 == h || w < 3 {
+        for (col, o) in out.iter_mut().enumerate() {
+            *o = if valid.at(base + col) { slow(col) } else { 0.0 };
+        }
+        return;
+    }
+    let up = &a[base - w..base];
+    let mid = &a[base..base + w];
+    let dn = &a[base + w..base + 2 * w];
+    let out = &mut out[..w];
+    out[0] = if valid.at(base) { slow(0) } else { 0.0 };
+    out[w - 1] = if valid.at(base + w - 1) {
+        slow(w - 1)
+    } else {
+        0.0
+    };
+    for col in 1..w - 1 {
+        let i = base + col;
+        out[col] = if !valid.at(i) {
+            0.0
+        } else if valid.at(i - 1) && valid.at(i + 1) && valid.at(i - w) && valid.at(i + w) {
+            let gx = (mid[col + 1] - mid[col - 1]) * half_inv_dx;
+            let gy = (up[col] - dn[col]) * half_inv_dy;
+            (gx * gx + gy * gy).sqrt()
+        } else {
+            slow(col)
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use snowscape_terrain::{Grid, GridGeometry};
+
+    #[test]
+    fn row_gradient_matches_the_terrain_stencil_everywhere() {
+        let geo = GridGeometry::new(7, 5, 2.0, 3.0).unwrap();
+        let mut invalid = vec![false; geo.len()];
+        invalid[geo.index(3, 2)] = true;
+        let g = Grid::new(
+            geo.clone(),
+            (0..geo.len())
+                .map(|i| ((i * 37) % 11) as f32 * 0.7)
+                .collect(),
+            NodataMask::from_invalid(invalid),
+        )
+        .unwrap();
+        let mask = g.mask();
+        for row in 0..geo.height() {
+            let mut out = vec![0.0; geo.width()];
+            with_validity!(mask, |v| row_gradient_norm(
+                g.data(),
+                &geo,
+                mask,
+                v,
+                row,
+                &mut out
+            ));
+            for (col, &o) in out.iter().enumerate() {
+                let expect = if mask.is_valid(geo.index(col, row)) {
+                    let (gx, gy) = surface::gradient(g.data(), &geo, mask, col, row);
+                    (gx * gx + gy * gy).sqrt()
+                } else {
+                    0.0
+                };
+                assert!((o - expect).abs() < 1e-5, "({col},{row}) {o} vs {expect}");
+            }
+        }
+    }
+
+    #[test]
+    fn errors_carry_the_offending_values() {
+        let geo = GridGeometry::square(4, 3, 1.0).unwrap();
+        let e = check_map("temperature", &[0.0; 5], &geo).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "temperature map has 5 values but the 4x3 terrain needs 12"
+        );
+        assert!(check_dt(-1.0).is_err() && check_dt(f64::NAN).is_err());
+        assert!(check_dt(0.0).is_ok());
+        let e = check_at_least("melt", "k_melt", -0.5, 0.0).unwrap_err();
+        assert!(e.to_string().contains("k_melt = -0.5"), "{e}");
+    }
+}

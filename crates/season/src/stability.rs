@@ -1,0 +1,524 @@
+//! Snow state changes (Cordonnier et al. 2018, Section 5.2, after the melt equation).
+//!
+//! The paper gives the ingredients but not the equations; this module is our design.
+//! Per cell and step of `δt` days, in this order:
+//!
+//! 1. **Powder ageing.** Powder does not stay powder: a share `x/(1+x)` with
+//!    `x = k_age · δt` of it bonds into the pack. Of the aged powder, the share `σ` (the
+//!    steepness below) becomes unstable snow and the rest stable snow, the same tendency as
+//!    the unstable share of new snow in Section 5.1.
+//! 2. **Stability exchange.** A rate `r(T)` (1/day) is interpolated linearly in temperature
+//!    between `(T_warm, −k_w)`, `(T_cool, +k_c)` and `(T_freeze, 0)`, clamped outside
+//!    (`−k_w` above `T_warm`, 0 below `T_freeze`): warm snow becomes unstable, snow near
+//!    freezing is cemented by melt-freeze cycles, cold snow does not change. Slope modulates
+//!    it as the paper says ("instability increases slower on gentle slopes, stability
+//!    increases slower on steeper slopes") through the steepness
+//!    `σ = min(1, ‖∇A‖ / tan θ_ref)`: with a floor `m`, destabilisation runs at
+//!    `m + (1 − m) σ` of its rate and stabilisation at `m + (1 − m)(1 − σ)`. A positive rate
+//!    moves the share `x/(1+x)` of the unstable layer into the stable one, with
+//!    `x = r · factor · δt`; a negative rate moves stable snow into the unstable layer.
+//! 3. **Compaction.** Stable snow turns into compacted snow under its own overburden. The
+//!    load on the middle of the stable layer is `L = P + U + S/2` (m of snow); the share
+//!    `x/(1+x)` with `x = k_compaction · L · δt` of the stable layer is compacted. Mass is
+//!    kept and volume is not: compacted snow is denser, so a thickness `ΔS` of stable snow
+//!    becomes `ΔS · ρ_S/ρ_C` of compacted snow. The lost thickness `ΔS (1 − ρ_S/ρ_C)` is
+//!    reported as `densification`, the only volume this step removes.
+//!
+//! Every transfer is the implicit-Euler share `x/(1+x)` of a first-order law `dX/dt = −k X`:
+//! it lies in [0, 1) for any time step, so no layer can go negative, and it matches
+//! `1 − e^(−x)` to first order without a per-cell exponential.
+
+use crate::phenomenon::{
+    PhenomenonError, Validity, check_at_least, check_dt, check_finite, check_map,
+    row_gradient_norm, with_validity,
+};
+use crate::{VolumeChange, ordered_sum};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
+
+/// Parameters of the snow state changes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StabilityParams {
+    /// Temperature at and above which snow destabilises at the full rate `k_warm`, °C.
+    /// Cordonnier 2018 Table 2: T_warm = 5 °C.
+    pub t_warm: f64,
+    /// Temperature of the fastest stabilisation (melt-freeze cementing), °C.
+    /// Cordonnier 2018 Table 2: T_cool = −5 °C.
+    pub t_cool: f64,
+    /// Temperature at and below which stability no longer changes, °C.
+    /// Cordonnier 2018 Table 2: T_freeze = −20 °C.
+    pub t_freeze: f64,
+    /// Destabilisation rate at `t_warm`, 1/day (share of the stable layer per day).
+    /// Chosen here: 0.2 (warm spells load slopes with unstable snow within days). Table 2's
+    /// entry for k_w is garbled in the text (a thickness rate of order 1e-4 m/day, which would
+    /// change 1 cm of snow per 100 days); we use a share per day instead, so the rate does
+    /// not depend on the snow depth.
+    pub k_warm: f64,
+    /// Stabilisation rate at `t_cool`, 1/day (share of the unstable layer per day).
+    /// Chosen here: 0.1 (a week or two of cool weather bonds most unstable snow).
+    pub k_cool: f64,
+    /// Reference slope at which the steepness `σ` reaches 1, degrees. Chosen here: 45°
+    /// (slab avalanches start on 30–45° slopes; above 45° snow barely bonds).
+    pub slope_ref_deg: f64,
+    /// Floor `m` of the slope factors, in [0, 1]: the fraction of the rate that remains on
+    /// flat ground (destabilisation) or at `slope_ref_deg` (stabilisation). Chosen here: 0.1.
+    pub min_slope_factor: f64,
+    /// Powder ageing rate, 1/day. Chosen here: 0.15 (fresh powder bonds into the pack over
+    /// about a week; faster than the diffusion and wind events would leave no powder to move).
+    pub k_age: f64,
+    /// Compaction rate per metre of overburden, 1/(day·m). Chosen here: 0.005, so the base
+    /// of a 2 m snowpack turns about half its stable snow into compacted snow over a
+    /// 100-day season.
+    pub k_compaction: f64,
+    /// Density ratio ρ_stable / ρ_compacted in (0, 1]: thickness of compacted snow per unit
+    /// thickness of stable snow compacted. Chosen here: 0.6 (settled snow ≈ 300 kg/m³ into
+    /// 500 kg/m³, Table 2's snow density ρ = 0.5 g/cm³). 1 keeps volume.
+    pub compacted_density_ratio: f64,
+}
+
+impl Default for StabilityParams {
+    fn default() -> Self {
+        Self {
+            t_warm: 5.0,
+            t_cool: -5.0,
+            t_freeze: -20.0,
+            k_warm: 0.2,
+            k_cool: 0.1,
+            slope_ref_deg: 45.0,
+            min_slope_factor: 0.1,
+            k_age: 0.15,
+            k_compaction: 0.005,
+            compacted_density_ratio: 0.6,
+        }
+    }
+}
+
+impl StabilityParams {
+    /// Checks ranges: temperatures ordered `t_freeze < t_cool < t_warm`, rates non-negative,
+    /// `slope_ref_deg` in (0, 90), `min_slope_factor` in [0, 1], density ratio in (0, 1].
+    pub fn validate(&self) -> Result<(), PhenomenonError> {
+        const P: &str = "stability";
+        check_finite(P, "t_freeze", self.t_freeze)?;
+        check_at_least(P, "t_cool", self.t_cool, self.t_freeze)?;
+        check_at_least(P, "t_warm", self.t_warm, self.t_cool)?;
+        if self.t_cool == self.t_freeze || self.t_warm == self.t_cool {
+            return Err(PhenomenonError::InvalidParameter {
+                phenomenon: P,
+                name: "t_cool",
+                value: self.t_cool,
+                reason: "temperatures must be strictly ordered t_freeze < t_cool < t_warm",
+            });
+        }
+        for (name, v) in [
+            ("k_warm", self.k_warm),
+            ("k_cool", self.k_cool),
+            ("k_age", self.k_age),
+            ("k_compaction", self.k_compaction),
+        ] {
+            check_at_least(P, name, v, 0.0)?;
+        }
+        let in_range = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
+        for (name, v, lo, hi, ok) in [
+            (
+                "slope_ref_deg",
+                self.slope_ref_deg,
+                0.0,
+                90.0,
+                self.slope_ref_deg > 0.0 && self.slope_ref_deg < 90.0,
+            ),
+            ("min_slope_factor", self.min_slope_factor, 0.0, 1.0, true),
+            (
+                "compacted_density_ratio",
+                self.compacted_density_ratio,
+                0.0,
+                1.0,
+                self.compacted_density_ratio > 0.0,
+            ),
+        ] {
+            if !(ok && in_range(v, lo, hi)) {
+                return Err(PhenomenonError::InvalidParameter {
+                    phenomenon: P,
+                    name,
+                    value: v,
+                    reason: "outside its range (see the parameter's documentation)",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The stability rate `r(T)`, 1/day: positive stabilises, negative destabilises.
+    pub fn rate(&self, temperature: f32) -> f32 {
+        let t = temperature as f64;
+        let r = if t >= self.t_warm {
+            -self.k_warm
+        } else if t >= self.t_cool {
+            let f = (t - self.t_cool) / (self.t_warm - self.t_cool);
+            self.k_cool + f * (-self.k_warm - self.k_cool)
+        } else if t > self.t_freeze {
+            self.k_cool * (t - self.t_freeze) / (self.t_cool - self.t_freeze)
+        } else {
+            0.0
+        };
+        r as f32
+    }
+}
+
+/// Implicit-Euler share of a first-order decay over one step: `x / (1 + x)`, in [0, 1).
+#[inline(always)]
+pub fn implicit_share(x: f32) -> f32 {
+    x / (1.0 + x)
+}
+
+/// Volumes moved between layers by one step, m³ of snow.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StabilityReport {
+    /// Powder aged into stable snow.
+    pub aged_to_stable: f64,
+    /// Powder aged into unstable snow.
+    pub aged_to_unstable: f64,
+    /// Unstable snow turned stable.
+    pub stabilised: f64,
+    /// Stable snow turned unstable.
+    pub destabilised: f64,
+    /// Stable snow compacted (thickness before densification).
+    pub compacted: f64,
+    /// Volume lost to densification: `compacted · (1 − ρ_S/ρ_C)`. Mass is kept.
+    pub densification: f64,
+}
+
+impl StabilityReport {
+    /// The step's volume budget: densification is the only volume removed.
+    pub fn volume_change(&self) -> VolumeChange {
+        VolumeChange {
+            added: 0.0,
+            removed: self.densification,
+        }
+    }
+}
+
+/// Reusable buffers of the stability step.
+#[derive(Debug, Default)]
+pub struct StabilityScratch {
+    surface: Vec<f32>,
+}
+
+/// Per-cell constants of one step, precomputed from the parameters.
+struct Coefficients {
+    age_share: f32,
+    inv_tan_ref: f32,
+    floor: f32,
+    dt: f32,
+    k_compaction_dt: f32,
+    density_ratio: f32,
+}
+
+/// Per-row volume sums, in the order of [`StabilityReport`]'s fields.
+type RowSums = [f64; 6];
+
+/// Applies the three transfers to one cell; adds the moved thicknesses to `sums`.
+#[inline(always)]
+fn cell_update(
+    k: &Coefficients,
+    rate: f32,
+    gradient_norm: f32,
+    [c, s, u, p]: [&mut f32; 4],
+    sums: &mut RowSums,
+) {
+    let steep = (gradient_norm * k.inv_tan_ref).min(1.0);
+    // 1. Powder ageing.
+    let aged = *p * k.age_share;
+    let aged_u = aged * steep;
+    let aged_s = aged - aged_u;
+    *p -= aged;
+    *u += aged_u;
+    *s += aged_s;
+    // 2. Stability exchange.
+    if rate > 0.0 {
+        let factor = k.floor + (1.0 - k.floor) * (1.0 - steep);
+        let d = *u * implicit_share(rate * factor * k.dt);
+        *u -= d;
+        *s += d;
+        sums[2] += d as f64;
+    } else if rate < 0.0 {
+        let factor = k.floor + (1.0 - k.floor) * steep;
+        let d = *s * implicit_share(-rate * factor * k.dt);
+        *s -= d;
+        *u += d;
+        sums[3] += d as f64;
+    }
+    // 3. Compaction under the overburden.
+    let load = *p + *u + 0.5 * *s;
+    let d = *s * implicit_share(k.k_compaction_dt * load);
+    *s -= d;
+    *c += d * k.density_ratio;
+    sums[0] += aged_s as f64;
+    sums[1] += aged_u as f64;
+    sums[4] += d as f64;
+    sums[5] += (d - d * k.density_ratio) as f64;
+}
+
+/// Ages powder, exchanges stable and unstable snow and compacts stable snow over `dt_days`,
+/// at the per-cell air temperature `temperature` (°C).
+pub fn step(
+    params: &StabilityParams,
+    terrain: &mut LayeredTerrain,
+    temperature: &[f32],
+    scratch: &mut StabilityScratch,
+    dt_days: f64,
+) -> Result<StabilityReport, PhenomenonError> {
+    params.validate()?;
+    check_dt(dt_days)?;
+    let geometry = terrain.geometry().clone();
+    check_map("temperature", temperature, &geometry)?;
+    let mask = terrain.mask().clone();
+    scratch.surface.clear();
+    scratch.surface.extend(terrain.surface());
+    let k = Coefficients {
+        age_share: implicit_share((params.k_age * dt_days) as f32),
+        inv_tan_ref: (1.0 / params.slope_ref_deg.to_radians().tan()) as f32,
+        floor: params.min_slope_factor as f32,
+        dt: dt_days as f32,
+        k_compaction_dt: (params.k_compaction * dt_days) as f32,
+        density_ratio: params.compacted_density_ratio as f32,
+    };
+    let rows = with_validity!(mask, |valid| run_rows(
+        params,
+        &k,
+        terrain,
+        &scratch.surface,
+        temperature,
+        &geometry,
+        &mask,
+        valid
+    ));
+    let area = geometry.cell_area();
+    let total = |f: usize| ordered_sum(&rows.iter().map(|r| r[f]).collect::<Vec<_>>()) * area;
+    Ok(StabilityReport {
+        aged_to_stable: total(0),
+        aged_to_unstable: total(1),
+        stabilised: total(2),
+        destabilised: total(3),
+        compacted: total(4),
+        densification: total(5),
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_rows<V: Validity>(
+    params: &StabilityParams,
+    k: &Coefficients,
+    terrain: &mut LayeredTerrain,
+    surf: &[f32],
+    temperature: &[f32],
+    geometry: &GridGeometry,
+    mask: &NodataMask,
+    valid: &V,
+) -> Vec<RowSums> {
+    let w = geometry.width();
+    let [compacted, stable, unstable, powder] = &mut terrain.snow;
+    compacted
+        .par_chunks_mut(w)
+        .zip(stable.par_chunks_mut(w))
+        .zip(unstable.par_chunks_mut(w))
+        .zip(powder.par_chunks_mut(w))
+        .zip(temperature.par_chunks(w))
+        .enumerate()
+        .map_init(
+            || vec![0.0f32; w],
+            |grad, (row, ((((c, s), u), p), t))| {
+                row_gradient_norm(surf, geometry, mask, valid, row, grad);
+                let mut sums = RowSums::default();
+                for col in 0..w {
+                    if !valid.at(row * w + col) {
+                        continue;
+                    }
+                    let layers = [&mut c[col], &mut s[col], &mut u[col], &mut p[col]];
+                    cell_update(k, params.rate(t[col]), grad[col], layers, &mut sums);
+                }
+                sums
+            },
+        )
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use snowscape_terrain::{Grid, SnowLayer};
+
+    /// A plane rising eastwards at `slope_deg`, with the given layer depths everywhere.
+    fn slope(slope_deg: f64, depths: [f32; 4]) -> LayeredTerrain {
+        let geo = GridGeometry::square(6, 5, 10.0).unwrap();
+        let g = slope_deg.to_radians().tan();
+        let bed = Grid::from_fn(geo, |c, _| 1000.0 + (c as f64 * 10.0 * g) as f32);
+        let mut t = LayeredTerrain::from_bedrock(bed);
+        for (layer, d) in SnowLayer::ALL.into_iter().zip(depths) {
+            t.layer_mut(layer).fill(d);
+        }
+        t
+    }
+
+    fn share(t: &LayeredTerrain, layer: SnowLayer) -> f64 {
+        let l: f64 = t.layer(layer).iter().map(|&v| v as f64).sum();
+        let all: f64 = t.total_depth().iter().map(|&v| v as f64).sum();
+        l / all
+    }
+
+    fn run(p: &StabilityParams, t: &mut LayeredTerrain, temp: f32, days: f64) -> StabilityReport {
+        let temps = vec![temp; t.geometry().len()];
+        let mut scratch = StabilityScratch::default();
+        step(p, t, &temps, &mut scratch, days).unwrap()
+    }
+
+    #[test]
+    fn rate_interpolates_between_the_three_temperatures() {
+        let p = StabilityParams::default();
+        let close = |a: f32, b: f64| (a as f64 - b).abs() < 1e-6;
+        assert!(close(p.rate(5.0), -0.2) && close(p.rate(12.0), -0.2));
+        assert!(close(p.rate(-5.0), 0.1));
+        assert!(close(p.rate(0.0), -0.05));
+        assert!(close(p.rate(-12.5), 0.05));
+        assert!(close(p.rate(-20.0), 0.0) && close(p.rate(-35.0), 0.0));
+    }
+
+    #[test]
+    fn cold_flat_snow_stabilises() {
+        let p = StabilityParams::default();
+        let mut t = slope(0.0, [0.0, 0.5, 0.5, 0.0]);
+        let mut last = share(&t, SnowLayer::Unstable);
+        for _ in 0..20 {
+            let r = run(&p, &mut t, -5.0, 0.5);
+            assert!(r.stabilised > 0.0 && r.destabilised == 0.0);
+            let now = share(&t, SnowLayer::Unstable);
+            assert!(now < last, "{now} >= {last}");
+            last = now;
+        }
+        assert!(last < 0.25, "{last}");
+        t.check_invariants().unwrap();
+    }
+
+    #[test]
+    fn warm_steep_snow_destabilises() {
+        let p = StabilityParams::default();
+        let mut t = slope(40.0, [0.0, 1.0, 0.0, 0.0]);
+        let mut last = share(&t, SnowLayer::Unstable);
+        for _ in 0..10 {
+            let r = run(&p, &mut t, 6.0, 0.5);
+            assert!(r.destabilised > 0.0 && r.stabilised == 0.0);
+            let now = share(&t, SnowLayer::Unstable);
+            assert!(now > last, "{now} <= {last}");
+            last = now;
+        }
+        assert!(last > 0.4, "{last}");
+    }
+
+    #[test]
+    fn slope_slows_stabilisation_and_speeds_destabilisation() {
+        let p = StabilityParams::default();
+        let moved = |deg: f64, temp: f32| {
+            let mut t = slope(deg, [0.0, 0.5, 0.5, 0.0]);
+            let r = run(&p, &mut t, temp, 0.5);
+            r.stabilised + r.destabilised
+        };
+        assert!(moved(0.0, -5.0) > 3.0 * moved(40.0, -5.0));
+        assert!(moved(40.0, 8.0) > 3.0 * moved(0.0, 8.0));
+        // The floor keeps a little of each on the unfavoured side.
+        assert!(moved(60.0, -5.0) > 0.0 && moved(0.0, 8.0) > 0.0);
+    }
+
+    #[test]
+    fn powder_ages_into_stable_snow_on_flats_and_unstable_snow_on_steep_slopes() {
+        let p = StabilityParams {
+            k_compaction: 0.0,
+            ..Default::default()
+        };
+        // At T_freeze the exchange is off, so only ageing acts.
+        let mut flat = slope(0.0, [0.0, 0.0, 0.0, 1.0]);
+        let r = run(&p, &mut flat, -20.0, 2.0);
+        let expect = 1.0 - 1.0 / (1.0 + 0.3);
+        assert!((flat.layer(SnowLayer::Powder)[7] as f64 - (1.0 - expect)).abs() < 1e-6);
+        assert!(r.aged_to_unstable == 0.0 && r.aged_to_stable > 0.0);
+        let mut steep = slope(50.0, [0.0, 0.0, 0.0, 1.0]);
+        let r = run(&p, &mut steep, -20.0, 2.0);
+        assert!(r.aged_to_stable.abs() < 1e-9 && r.aged_to_unstable > 0.0);
+        let before = 1.0;
+        for _ in 0..60 {
+            run(&p, &mut flat, -20.0, 0.5);
+        }
+        assert!((flat.layer(SnowLayer::Powder)[7] as f64) < 0.02 * before);
+    }
+
+    #[test]
+    fn compaction_grows_with_overburden_and_the_volume_budget_closes() {
+        let p = StabilityParams::default();
+        let compacted_of = |depths: [f32; 4]| {
+            let mut t = slope(0.0, depths);
+            let before = t.snow_volume();
+            let r = run(&p, &mut t, -30.0, 1.0);
+            let after = t.snow_volume();
+            let budget = before - r.volume_change().removed - after;
+            assert!(budget.abs() < 1e-5 * before, "budget off by {budget}");
+            assert!((r.densification - 0.4 * r.compacted).abs() < 1e-6 * r.compacted);
+            r.compacted / t.layer(SnowLayer::Stable).iter().sum::<f32>() as f64
+        };
+        let shallow = compacted_of([0.0, 0.5, 0.0, 0.0]);
+        let deep = compacted_of([0.0, 0.5, 1.5, 0.0]);
+        assert!(shallow > 0.0 && deep > 3.0 * shallow, "{shallow} {deep}");
+    }
+
+    #[test]
+    fn budget_closes_over_a_mixed_run_and_nodata_stays_bare() {
+        let p = StabilityParams::default();
+        let geo = GridGeometry::square(9, 7, 5.0).unwrap();
+        let mut invalid = vec![false; geo.len()];
+        invalid[20] = true;
+        let bed = Grid::new(
+            geo.clone(),
+            (0..geo.len())
+                .map(|i| ((i * 7919) % 23) as f32 * 1.5)
+                .collect(),
+            NodataMask::from_invalid(invalid),
+        )
+        .unwrap();
+        let mut t = LayeredTerrain::from_bedrock(bed);
+        for (k, layer) in SnowLayer::ALL.into_iter().enumerate() {
+            for i in 0..geo.len() {
+                if i != 20 {
+                    t.layer_mut(layer)[i] = 0.1 + 0.05 * ((i + k) % 5) as f32;
+                }
+            }
+        }
+        let temps: Vec<f32> = (0..geo.len()).map(|i| -25.0 + (i % 35) as f32).collect();
+        let mut scratch = StabilityScratch::default();
+        for _ in 0..10 {
+            let before = t.snow_volume();
+            let r = step(&p, &mut t, &temps, &mut scratch, 0.5).unwrap();
+            let budget = before - r.volume_change().removed - t.snow_volume();
+            assert!(budget.abs() < 1e-5 * before, "{budget}");
+            t.check_invariants().unwrap();
+        }
+    }
+
+    #[test]
+    fn bad_parameters_are_rejected() {
+        let bad = StabilityParams {
+            t_cool: 10.0,
+            ..Default::default()
+        };
+        assert!(bad.validate().is_err());
+        let bad = StabilityParams {
+            compacted_density_ratio: 0.0,
+            ..Default::default()
+        };
+        let e = bad.validate().unwrap_err();
+        assert!(e.to_string().contains("compacted_density_ratio = 0"), "{e}");
+        assert!(StabilityParams::default().validate().is_ok());
+        let json = r#"{"k_warm": 0.3}"#;
+        let p: StabilityParams = serde_json::from_str(json).unwrap();
+        assert_eq!(p.k_warm, 0.3);
+        assert!(serde_json::from_str::<StabilityParams>(r#"{"k_wram": 1}"#).is_err());
+    }
+}
