@@ -1,0 +1,190 @@
+//! One indirect bounce of sunlight (Cordonnier et al. 2018, Section 4.1, Figure 6):
+//!
+//! `I_ind(p) = (k_ind/π) Σ_i Σ_j A_ij · I_sun(p_ij) · cos φs_ij · cos φr_ij / d_ij²`
+//!
+//! Receiver `p` samples senders `p_ij` in polar coordinates: `N` directions
+//! `θ_i = 2π(i + ξ_p)/N` (the paper's "random directions", here a stratified set rotated by a
+//! counter-based random offset `ξ_p` per cell, so the result is a pure function of the seed)
+//! and radii `r_0 < … < r_{M-1}` spaced geometrically from `min_radius_m` to `max_radius_m`.
+//! `A_ij = π(r_{j+1/2}² − r_{j−1/2}²)/N` is the horizontal area a sample stands for (the
+//! sector of angle 2π/N between the mid-radii), with `r_{j+1/2} = (r_j + r_{j+1})/2`,
+//! `r_{−1} = 0` and `r_M = r_{M−1}²/r_{M−2}` (the next geometric radius; `2r_0` when `M = 1`).
+//! The paper prints `2π(…)/N`, twice the sector area (its sectors would cover the disc twice). `φr` is the angle between the receiver's normal and
+//! `p_ij − p`, `φs` between the sender's normal and `p − p_ij` (both clamped at 90°: a surface
+//! facing away neither sends nor receives), `d_ij` the 3-D distance.
+//!
+//! Departures from the paper, documented: the sum is divided by π, the Lambertian form-factor
+//! normalisation that the paper's formula leaves out (without it a receiver surrounded by
+//! sunlit slopes would get up to π·k_ind times their exposure, more than they receive), so
+//! `k_ind` reads as the senders' albedo; senders are the nearest cell to each sample point;
+//! as in the paper, occlusion between sender and receiver is not tested. Cost: O(N·M·cells).
+//! Samples outside the grid or on nodata are skipped; nodata receivers get 0.
+
+use crate::field::TerrainField;
+use crate::{BounceParams, EnvironmentError};
+use rayon::prelude::*;
+use snowscape_terrain::random::uniform;
+use snowscape_terrain::{GridGeometry, NodataMask};
+
+/// Random stream of the per-cell rotation of the sample directions.
+const STREAM_ROTATION: u64 = 0x626f_756e_6365; // "bounce"
+
+/// Radii `r_j` and ring areas `A_ij` (per direction) of the polar sampling, metres and m².
+pub fn sample_rings(params: &BounceParams, cell_size_m: f64) -> Vec<(f64, f64)> {
+    let m = params.radii as usize;
+    let r0 = params.min_radius_m.max(cell_size_m);
+    let r1 = params.max_radius_m.max(r0);
+    let radii: Vec<f64> = (0..m)
+        .map(|j| {
+            if m == 1 {
+                r0
+            } else {
+                r0 * (r1 / r0).powf(j as f64 / (m - 1) as f64)
+            }
+        })
+        .collect();
+    let next = if m == 1 {
+        2.0 * r0
+    } else {
+        radii[m - 1] * radii[m - 1] / radii[m - 2]
+    };
+    let n = params.directions as f64;
+    (0..m)
+        .map(|j| {
+            let before = if j == 0 { 0.0 } else { radii[j - 1] };
+            let after = if j + 1 < m { radii[j + 1] } else { next };
+            let inner = 0.5 * (before + radii[j]);
+            let outer = 0.5 * (radii[j] + after);
+            (
+                radii[j],
+                std::f64::consts::PI * (outer * outer - inner * inner) / n,
+            )
+        })
+        .collect()
+}
+
+/// Indirect exposure from `sun` (the direct exposure map, any units; the result has the same).
+pub fn indirect_bounce(
+    surface: &[f32],
+    geometry: &GridGeometry,
+    mask: &NodataMask,
+    sun: &[f32],
+    params: &BounceParams,
+) -> Result<Vec<f32>, EnvironmentError> {
+    params.validate()?;
+    let field = TerrainField::new(surface, geometry, mask)?;
+    if sun.len() != field.len() {
+        return Err(EnvironmentError::LengthMismatch {
+            what: "direct sun map",
+            width: field.width,
+            height: field.height,
+            expected: field.len(),
+            actual: sun.len(),
+        });
+    }
+    Ok(bounce_field(&field, sun, params))
+}
+
+/// The contribution of one sender: `cos φs · cos φr / d²` for offset `d` (receiver to
+/// sender, metres) and the two unit normals; 0 when either surface faces away.
+#[inline(always)]
+fn form_term(d: [f32; 3], n_receiver: [f32; 3], n_sender: [f32; 3]) -> f32 {
+    let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let cos_r = n_receiver[0] * d[0] + n_receiver[1] * d[1] + n_receiver[2] * d[2];
+    let cos_s = -(n_sender[0] * d[0] + n_sender[1] * d[1] + n_sender[2] * d[2]);
+    if cos_r <= 0.0 || cos_s <= 0.0 {
+        0.0
+    } else {
+        // cos φr cos φs / d² with both cosines un-normalised by |d|.
+        cos_r * cos_s / (d2 * d2)
+    }
+}
+
+/// The bounce on a prepared field.
+pub(crate) fn bounce_field(field: &TerrainField, sun: &[f32], params: &BounceParams) -> Vec<f32> {
+    let (w, h) = (field.width, field.height);
+    let (csx, csy) = (field.csx, field.csy);
+    let rings = sample_rings(params, csx.max(csy));
+    let n = params.directions as usize;
+    let base: Vec<(f64, f64)> = (0..n)
+        .map(|i| (std::f64::consts::TAU * i as f64 / n as f64).sin_cos())
+        .collect();
+    let k = (params.k_ind / std::f64::consts::PI) as f32;
+    let layout = &field.rows;
+    let mut out = vec![0.0f32; field.len()];
+    out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
+        for (col, o) in line.iter_mut().enumerate() {
+            let p = row * w + col;
+            let zp = layout.z[p];
+            if zp == f32::NEG_INFINITY {
+                continue;
+            }
+            let np = layout.normal[p];
+            let turn =
+                std::f64::consts::TAU * uniform(params.seed, STREAM_ROTATION, p as u64) / n as f64;
+            let (st, ct) = turn.sin_cos();
+            let mut sum = 0.0f32;
+            for &(s0, c0) in &base {
+                // Rotate the base direction (sin θ east, cos θ north) by the cell's offset.
+                let (east, north) = (s0 * ct + c0 * st, c0 * ct - s0 * st);
+                for &(r, area) in &rings {
+                    let dc = (r * east / csx).round() as isize;
+                    let dr = -(r * north / csy).round() as isize;
+                    let (c, rr) = (col as isize + dc, row as isize + dr);
+                    if (dc == 0 && dr == 0)
+                        || c < 0
+                        || rr < 0
+                        || c >= w as isize
+                        || rr >= h as isize
+                    {
+                        continue;
+                    }
+                    let q = rr as usize * w + c as usize;
+                    let zq = layout.z[q];
+                    if zq == f32::NEG_INFINITY {
+                        continue;
+                    }
+                    let d = [(dc as f64 * csx) as f32, (-dr as f64 * csy) as f32, zq - zp];
+                    sum += area as f32 * sun[q] * form_term(d, np, layout.normal[q]);
+                }
+            }
+            *o = k * sum;
+        }
+    });
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rings_tile_the_disc() {
+        let p = BounceParams {
+            directions: 8,
+            radii: 4,
+            min_radius_m: 10.0,
+            max_radius_m: 80.0,
+            ..BounceParams::default()
+        };
+        let rings = sample_rings(&p, 2.0);
+        let radii: Vec<f64> = rings.iter().map(|r| r.0).collect();
+        assert!((radii[0] - 10.0).abs() < 1e-9 && (radii[3] - 80.0).abs() < 1e-9);
+        assert!((radii[1] - 20.0).abs() < 1e-9);
+        // Areas over all directions sum to the annulus from r_0/2 = 5 m to (r_3 + r_4)/2 = 120 m.
+        let total: f64 = rings.iter().map(|r| r.1).sum::<f64>() * 8.0;
+        assert!((total - std::f64::consts::PI * (120.0f64.powi(2) - 25.0)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn facing_surfaces_exchange_and_coplanar_do_not() {
+        let up = [0.0, 0.0, 1.0];
+        assert_eq!(form_term([10.0, 0.0, 0.0], up, up), 0.0);
+        // A wall facing west, 10 m east of the receiver and 10 m up.
+        let west = [-1.0, 0.0, 0.0];
+        let t = form_term([10.0, 0.0, 10.0], up, west);
+        let d = 200f32.sqrt();
+        assert!((t - (10.0 / d) * (10.0 / d) / 200.0).abs() < 1e-9);
+        assert_eq!(form_term([10.0, 0.0, 10.0], up, [1.0, 0.0, 0.0]), 0.0);
+    }
+}

@@ -1,0 +1,106 @@
+//! Wind (Cordonnier et al. 2018, Section 4.2): the horizontal wind field ([`vectors`]) and the
+//! wind-effect surface with its binary wind shadows ([`effect_surface`]).
+//!
+//! Outputs, per cell: the wind vector `W` of paper Eq. 2 (u east, v north, m/s; it is the wind
+//! at the wind-effect surface, not zeroed in shadows), the wind-effect surface `Wz` (m), and
+//! the wind shadow (1 where `Wz > A + shadow_epsilon_m`: no wind at the ground, leeward of
+//! ridges; 0 elsewhere). Consumers that need the wind at the ground multiply by `1 − shadow`.
+//! Nodata cells get 0 everywhere.
+
+pub mod effect_surface;
+pub mod vectors;
+
+use crate::field::TerrainField;
+use crate::{EnvironmentError, WindParams};
+pub use effect_surface::WindSolveStats;
+use effect_surface::{SolveSettings, build_cells, solve};
+use rayon::prelude::*;
+use snowscape_terrain::{GridGeometry, NodataMask};
+use vectors::{dominant_wind, redirect, venturi};
+
+/// The wind maps.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindMaps {
+    /// East component of the wind, m/s.
+    pub u: Vec<f32>,
+    /// North component of the wind, m/s.
+    pub v: Vec<f32>,
+    /// Wind shadow, 1 or 0.
+    pub shadow: Vec<f32>,
+    /// Wind-effect surface altitude `Wz`, m.
+    pub effect_surface: Vec<f32>,
+    /// Vertical speed of the wind-effect surface `Wsz`, m/s.
+    pub vertical_speed: Vec<f32>,
+    /// Gauss-Seidel statistics.
+    pub stats: WindSolveStats,
+}
+
+/// The wind maps of `surface` for `params`.
+pub fn wind(
+    surface: &[f32],
+    geometry: &GridGeometry,
+    mask: &NodataMask,
+    params: &WindParams,
+) -> Result<WindMaps, EnvironmentError> {
+    params.validate()?;
+    let field = TerrainField::new(surface, geometry, mask)?;
+    Ok(wind_field(&field, params))
+}
+
+/// The wind on a prepared field.
+pub(crate) fn wind_field(field: &TerrainField, params: &WindParams) -> WindMaps {
+    let layout = &field.rows;
+    let wd = dominant_wind(params);
+    let wd32 = [wd[0] as f32, wd[1] as f32];
+    let (kv, kt) = (params.k_venturi as f32, params.k_terrain as f32);
+    let wind: Vec<[f32; 2]> = layout
+        .z
+        .par_iter()
+        .zip(layout.normal.par_iter())
+        .map(|(&a, &n)| {
+            if a == f32::NEG_INFINITY {
+                [0.0, 0.0]
+            } else {
+                redirect(venturi(wd32, a, kv), n, kt)
+            }
+        })
+        .collect();
+    let cells = build_cells(
+        &layout.z,
+        &layout.grad,
+        &wind,
+        field.width,
+        field.height,
+        field.csx as f32,
+        field.csy as f32,
+    );
+    let settings = SolveSettings {
+        c: params.c_m_s2 as f32,
+        ordered_sweeps: params.ordered_sweeps,
+        max_iterations: params.max_iterations,
+        tolerance_m: params.tolerance_m as f32,
+        dominant: wd32,
+    };
+    let solved = solve(&cells, field.width, field.height, &settings);
+    let eps = params.shadow_epsilon_m as f32;
+    let shadow = solved
+        .wz
+        .par_iter()
+        .zip(layout.z.par_iter())
+        .map(|(&wz, &a)| {
+            if a != f32::NEG_INFINITY && wz > a + eps {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    WindMaps {
+        u: wind.iter().map(|w| w[0]).collect(),
+        v: wind.iter().map(|w| w[1]).collect(),
+        shadow,
+        effect_surface: solved.wz,
+        vertical_speed: solved.wsz,
+        stats: solved.stats,
+    }
+}
