@@ -8,6 +8,7 @@
 pub mod checkpoint;
 pub mod melt;
 pub mod phenomenon;
+pub mod powder_diffusion;
 pub mod scheduler;
 pub mod snowfall;
 pub mod stability;
