@@ -1,0 +1,305 @@
+//! Triangle meshes of a height field sampled on a (possibly decimated) lattice of cells.
+//!
+//! The lattice keeps every `step`-th column and row of the grid plus the last ones, so the mesh
+//! always spans the whole grid. Each lattice quad is split into two triangles; a triangle is
+//! kept only when its three corners are usable (valid cells for the terrain; valid cells with
+//! snow for the snow mesh), and only vertices used by a kept triangle are emitted.
+//!
+//! Coordinates are glTF's: metres, x east, y up, z south, x and z centred on the grid's
+//! centre, `y = (altitude - base) · exaggeration`. Triangles wind counter-clockwise seen from
+//! above, so their front faces point up. Normals come from central differences on the lattice
+//! (one-sided at borders and next to unusable vertices).
+
+use crate::RenderError;
+use snowscape_terrain::GridGeometry;
+
+/// Sampled positions `0, step, 2·step, ..., n - 1` of an axis of `n` cells.
+pub fn lattice_axis(n: usize, step: usize) -> Vec<usize> {
+    let mut axis: Vec<usize> = (0..n).step_by(step.max(1)).collect();
+    if axis.last() != Some(&(n - 1)) {
+        axis.push(n - 1);
+    }
+    axis
+}
+
+/// Vertices of the lattice of a `width x height` grid at `step`.
+pub fn lattice_vertices(width: usize, height: usize, step: usize) -> usize {
+    let samples = |n: usize| (n - 1) / step + 1 + usize::from(!(n - 1).is_multiple_of(step));
+    samples(width) * samples(height)
+}
+
+/// The smallest step at least `decimation` whose lattice has at most `budget` vertices.
+pub fn choose_step(
+    width: usize,
+    height: usize,
+    decimation: usize,
+    budget: Option<usize>,
+) -> Result<usize, RenderError> {
+    if decimation == 0 {
+        return Err(RenderError::InvalidCount {
+            name: "decimation",
+            value: 0,
+            expected: "at least 1 (1 keeps every vertex)",
+        });
+    }
+    let Some(budget) = budget else {
+        return Ok(decimation);
+    };
+    if budget < 4 {
+        return Err(RenderError::InvalidCount {
+            name: "max_vertices",
+            value: budget,
+            expected: "at least 4 vertices per mesh",
+        });
+    }
+    let mut step = decimation;
+    if lattice_vertices(width, height, step) > budget {
+        let ratio = (width as f64 * height as f64 / budget as f64).sqrt();
+        step = step.max(ratio.floor() as usize);
+        while lattice_vertices(width, height, step) > budget {
+            step += 1;
+        }
+    }
+    Ok(step)
+}
+
+/// One surface mesh: positions and unit normals per vertex, u32 triangle indices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceMesh {
+    /// Vertex positions, metres (x east, y up, z south).
+    pub positions: Vec<[f32; 3]>,
+    /// Unit vertex normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Triangle corner indices into `positions`, counter-clockwise from above.
+    pub indices: Vec<u32>,
+}
+
+impl SurfaceMesh {
+    /// Component-wise minimum and maximum of the positions.
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for p in &self.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+}
+
+/// What to mesh: altitude and usability of each grid cell.
+pub struct HeightSource<'a> {
+    /// The grid's geometry.
+    pub geometry: &'a GridGeometry,
+    /// Altitude of cell `i`, metres.
+    pub altitude: &'a dyn Fn(usize) -> f32,
+    /// Whether cell `i` may be a triangle corner.
+    pub usable: &'a dyn Fn(usize) -> bool,
+    /// Name of the surface for error messages ("bedrock altitude", "snow surface altitude").
+    pub what: &'static str,
+}
+
+/// Meshes `source` on the lattice of `step`; `None` when no triangle is usable.
+pub fn surface_mesh(
+    source: &HeightSource,
+    step: usize,
+    base: f32,
+    exaggeration: f32,
+) -> Result<Option<SurfaceMesh>, RenderError> {
+    let g = source.geometry;
+    let (cols, rows) = (
+        lattice_axis(g.width(), step),
+        lattice_axis(g.height(), step),
+    );
+    let (nc, nr) = (cols.len(), rows.len());
+    let (dx, dy) = (g.cell_size_x(), g.cell_size_y());
+    let (half_w, half_h) = (0.5 * g.width() as f64 * dx, 0.5 * g.height() as f64 * dy);
+    let xs: Vec<f32> = cols
+        .iter()
+        .map(|&c| ((c as f64 + 0.5) * dx - half_w) as f32)
+        .collect();
+    let zs: Vec<f32> = rows
+        .iter()
+        .map(|&r| ((r as f64 + 0.5) * dy - half_h) as f32)
+        .collect();
+    let mut usable = vec![false; nc * nr];
+    let mut ys = vec![0.0f32; nc * nr];
+    for (b, &r) in rows.iter().enumerate() {
+        for (a, &c) in cols.iter().enumerate() {
+            let i = g.index(c, r);
+            if !(source.usable)(i) {
+                continue;
+            }
+            let altitude = (source.altitude)(i);
+            if !altitude.is_finite() {
+                return Err(RenderError::NonFinite {
+                    what: source.what,
+                    col: c,
+                    row: r,
+                    value: altitude,
+                });
+            }
+            usable[b * nc + a] = true;
+            ys[b * nc + a] = (altitude - base) * exaggeration;
+        }
+    }
+    let lattice_triangles = kept_triangles(&usable, nc, nr);
+    if lattice_triangles.is_empty() {
+        return Ok(None);
+    }
+    // Compact: number the used lattice vertices in lattice order.
+    let mut new_index = vec![u32::MAX; nc * nr];
+    for &v in &lattice_triangles {
+        new_index[v as usize] = 0;
+    }
+    let lattice = Lattice {
+        xs: &xs,
+        zs: &zs,
+        ys: &ys,
+        usable: &usable,
+    };
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for (v, slot) in new_index.iter_mut().enumerate() {
+        if *slot == u32::MAX {
+            continue;
+        }
+        let Ok(next) = u32::try_from(positions.len()) else {
+            return Err(RenderError::InvalidCount {
+                name: "max_vertices",
+                value: positions.len(),
+                expected: "fewer than 2^32 vertices per mesh (decimate more)",
+            });
+        };
+        *slot = next;
+        let (a, b) = (v % nc, v / nc);
+        positions.push([xs[a], ys[v], zs[b]]);
+        normals.push(lattice_normal(&lattice, a, b));
+    }
+    let indices = lattice_triangles
+        .iter()
+        .map(|&v| new_index[v as usize])
+        .collect();
+    Ok(Some(SurfaceMesh {
+        positions,
+        normals,
+        indices,
+    }))
+}
+
+/// Lattice-vertex corners of every triangle whose corners are all usable.
+fn kept_triangles(usable: &[bool], nc: usize, nr: usize) -> Vec<u32> {
+    let mut out = Vec::new();
+    for b in 0..nr.saturating_sub(1) {
+        for a in 0..nc.saturating_sub(1) {
+            let v00 = b * nc + a;
+            let (v10, v01, v11) = (v00 + 1, v00 + nc, v00 + nc + 1);
+            for tri in [[v00, v01, v10], [v10, v01, v11]] {
+                if tri.iter().all(|&v| usable[v]) {
+                    out.extend(tri.map(|v| v as u32));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The lattice's coordinates and usability, for normals.
+struct Lattice<'a> {
+    xs: &'a [f32],
+    zs: &'a [f32],
+    ys: &'a [f32],
+    usable: &'a [bool],
+}
+
+/// Unit normal at lattice vertex `(a, b)` from central differences over usable neighbours.
+fn lattice_normal(l: &Lattice, a: usize, b: usize) -> [f32; 3] {
+    let nc = l.xs.len();
+    let at = |a: usize, b: usize| b * nc + a;
+    let here = at(a, b);
+    let slope = |lo: Option<usize>, hi: Option<usize>, pos: &dyn Fn(usize) -> f32| {
+        let lo = lo.filter(|&v| l.usable[v]).unwrap_or(here);
+        let hi = hi.filter(|&v| l.usable[v]).unwrap_or(here);
+        let run = pos(hi) - pos(lo);
+        if run.abs() > 0.0 {
+            (l.ys[hi] - l.ys[lo]) / run
+        } else {
+            0.0
+        }
+    };
+    let gx = slope(
+        a.checked_sub(1).map(|a| at(a, b)),
+        (a + 1 < nc).then(|| at(a + 1, b)),
+        &|v| l.xs[v % nc],
+    );
+    let gz = slope(
+        b.checked_sub(1).map(|b| at(a, b)),
+        (b + 1 < l.zs.len()).then(|| at(a, b + 1)),
+        &|v| l.zs[v / nc],
+    );
+    let inv = 1.0 / (gx * gx + gz * gz + 1.0).sqrt();
+    [-gx * inv, inv, -gz * inv]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lattice_keeps_the_last_row_and_column() {
+        assert_eq!(lattice_axis(10, 3), vec![0, 3, 6, 9]);
+        assert_eq!(lattice_axis(11, 3), vec![0, 3, 6, 9, 10]);
+        assert_eq!(lattice_axis(1, 4), vec![0]);
+        assert_eq!(lattice_vertices(11, 10, 3), 5 * 4);
+        assert_eq!(lattice_vertices(8192, 8192, 1), 8192 * 8192);
+    }
+
+    #[test]
+    fn step_meets_the_vertex_budget() {
+        let step = choose_step(8192, 8192, 1, Some(2_000_000)).unwrap();
+        assert!(lattice_vertices(8192, 8192, step) <= 2_000_000);
+        assert!(lattice_vertices(8192, 8192, step - 1) > 2_000_000);
+        assert_eq!(choose_step(100, 100, 3, Some(1_000_000)).unwrap(), 3);
+        assert!(choose_step(100, 100, 0, None).is_err());
+        assert!(choose_step(100, 100, 1, Some(3)).is_err());
+    }
+
+    #[test]
+    fn a_tilted_plane_has_its_exact_normal_and_upward_triangles() {
+        // Altitude rises 0.5 m per metre east; 2 m x 1 m cells.
+        let g = GridGeometry::new(5, 4, 2.0, 1.0).unwrap();
+        let alt = |i: usize| (i % 5) as f32 * 2.0 * 0.5;
+        let mesh = surface_mesh(
+            &HeightSource {
+                geometry: &g,
+                altitude: &alt,
+                usable: &|_| true,
+                what: "test",
+            },
+            1,
+            0.0,
+            1.0,
+        )
+        .unwrap()
+        .unwrap();
+        assert_eq!(mesh.positions.len(), 20);
+        assert_eq!(mesh.indices.len(), 4 * 3 * 2 * 3);
+        let len = (1.0f32 + 0.25).sqrt();
+        for n in &mesh.normals {
+            assert!((n[0] + 0.5 / len).abs() < 1e-6 && (n[1] - 1.0 / len).abs() < 1e-6);
+            assert!(n[2].abs() < 1e-6);
+        }
+        for t in mesh.indices.chunks_exact(3) {
+            let p: [[f32; 3]; 3] = std::array::from_fn(|k| mesh.positions[t[k] as usize]);
+            let e1 = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+            let e2 = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+            let up = e1[2] * e2[0] - e1[0] * e2[2];
+            assert!(up > 0.0, "triangle {t:?} faces down");
+        }
+        let (lo, hi) = mesh.bounds();
+        assert_eq!((lo[0], hi[0]), (-4.0, 4.0));
+        assert_eq!((lo[2], hi[2]), (-1.5, 1.5));
+    }
+}
