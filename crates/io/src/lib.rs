@@ -1,9 +1,157 @@
 //! # snowscape-io: raster input and output
 //!
+//! [`read_dem`] reads a terrain raster into a [`Grid`] (format from the extension, or
+//! [`ReadOptions::format`]); [`write_raster`] writes a grid in any format (for
+//! `snowscape convert`); [`write_geotiff`], [`write_geotiff_bands`], [`write_exr`],
+//! [`write_png16`] and [`write_splat`] write simulation outputs.
+//!
+//! | format | ext | read | write | georeferencing | nodata | options needed to read |
+//! |---|---|---|---|---|---|---|
+//! | ESRI ASCII | `.asc` | yes | yes | header; CRS from `.prj` / `CRS.txt` | `NODATA_value` (written -9999) | none |
+//! | GeoTIFF | `.tif` `.tiff` | band 1; u8..i32, f16/f32/f64; strips/tiles; none/LZW/Deflate/PackBits | f32, Deflate, 1..n bands | ModelPixelScale+Tiepoint or ModelTransformation; EPSG/WKT GeoKeys | `GDAL_NODATA` (written -9999); NaN if undeclared | `--cell-size` only without georef tags |
+//! | PNG16 | `.png` | 16-bit (or 8-bit) grayscale | 16-bit + `<file>.json` sidecar | sidecar | code 0 when the sidecar says so | `--height-range`, `--cell-size` (unless sidecar) |
+//! | RAW16 | `.raw` `.r16` | LE u16, square or `--raw-size` | LE u16 + sidecar | sidecar | as PNG16 | `--height-range`, `--cell-size` (unless sidecar) |
+//! | NumPy | `.npy` | 2-D f4/f8/i1/i2/i4/u1/u2/u4, C or Fortran order | f32, C order | none | NaN | `--cell-size` |
+//! | OpenEXR | `.exr` | channel `height`/`Y`/`Z` or first | one f32 channel per layer | custom attributes | NaN | `--cell-size` unless written by snowscape |
+//! | splat | `.png` | no | RGBA8: R compacted, G stable, B unstable, A powder, share of depth | none | all 0 | — |
+//!
+//! Rules shared by every reader:
+//! - the cell count is checked against [`ReadOptions::max_cells`] (default 2^28) before any
+//!   grid-sized allocation;
+//! - nodata follows one rule ([`cells`]): a declared nodata value is nodata; NaN is nodata only
+//!   in binary float files without a nodata declaration (NPY, EXR, float GeoTIFF without
+//!   `GDAL_NODATA`), an error elsewhere; infinity is always an error naming the cell;
+//! - [`ReadOptions::crs`] overrides whatever CRS the file declares; a geographic CRS (or a
+//!   grid whose extent and pixel size can only be degrees) gets metric cell sizes from
+//!   [`GridGeometry::from_transform`]; a geographic CRS on a grid whose extent is not in
+//!   degrees (a mislabelled file) is an error that names both and asks for `--crs`;
+//! - every error is a [`RasterError`] naming the file and the offending value.
+//!
 //! Every output is written through [`atomic::write_atomic`]: to a temporary file in the target
 //! folder, flushed and synced, then renamed over the target, so a crash or an error never leaves
-//! a half-written file behind.
+//! a half-written file behind. Sidecars (`.json`, `.prj`) are written the same way, after the
+//! main file.
 
+pub mod asc;
 pub mod atomic;
+pub mod cells;
+mod crs_sidecar;
+pub mod error;
+pub mod exr;
+pub mod format;
+pub mod geotiff;
+pub mod heightmap16;
+pub mod npy;
+pub mod png16;
+pub mod raw16;
+pub mod splat;
 
 pub use atomic::{AtomicWriteError, write_atomic, write_bytes_atomic};
+pub use error::RasterError;
+pub use exr::write_exr;
+pub use format::{DEFAULT_MAX_CELLS, ParseFormatError, RasterFormat, ReadOptions};
+pub use geotiff::{GEOTIFF_NODATA, write_geotiff, write_geotiff_bands};
+pub use heightmap16::Png16Scale;
+pub use png16::write_png16;
+pub use splat::write_splat;
+
+use snowscape_terrain::{Grid, GridGeometry};
+use std::path::Path;
+
+/// The format to read `path` as: the forced one, else the one its extension names.
+fn format_of(path: &Path, forced: Option<RasterFormat>) -> Result<RasterFormat, RasterError> {
+    forced
+        .or_else(|| RasterFormat::from_path(path))
+        .ok_or_else(|| RasterError::UnknownFormat {
+            path: path.to_path_buf(),
+            extension: path
+                .extension()
+                .map(|e| e.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        })
+}
+
+/// Fails when the grid's CRS is in degrees but its extent cannot be longitudes and latitudes.
+fn check_geographic_extent(path: &Path, g: &GridGeometry) -> Result<(), RasterError> {
+    let Some(crs) = g.crs().filter(|c| c.is_geographic()) else {
+        return Ok(());
+    };
+    let t = g.transform();
+    let (x0, x1) = (t.origin_x, t.origin_x + g.width() as f64 * t.pixel_width);
+    let (y0, y1) = (t.origin_y - g.height() as f64 * t.pixel_height, t.origin_y);
+    if x0 >= -180.0 && x1 <= 360.0 && y0 >= -90.0 && y1 <= 90.0 {
+        return Ok(());
+    }
+    Err(RasterError::GeographicExtent {
+        path: path.to_path_buf(),
+        crs: crs.to_string(),
+        x0,
+        x1,
+        y0,
+        y1,
+    })
+}
+
+/// Reads a DEM (see the crate docs for formats, options and rules).
+pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
+    let grid = read_any(path, opts)?;
+    check_geographic_extent(path, grid.geometry())?;
+    Ok(grid)
+}
+
+fn read_any(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
+    match format_of(path, opts.format)? {
+        RasterFormat::Asc => asc::read(path, opts),
+        RasterFormat::GeoTiff => geotiff::read(path, opts),
+        RasterFormat::Png16 => png16::read(path, opts),
+        RasterFormat::Raw16 => raw16::read(path, opts),
+        RasterFormat::Npy => npy::read(path, opts),
+        RasterFormat::Exr => exr::read(path, opts),
+    }
+}
+
+/// The values of `grid` with nodata cells set to NaN (the nodata of NPY and EXR).
+fn nan_for_nodata(grid: &Grid) -> Vec<f32> {
+    let mask = grid.mask();
+    grid.data()
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| if mask.is_valid(i) { v } else { f32::NAN })
+        .collect()
+}
+
+/// Writes `grid` in `format`, atomically: GeoTIFF (f32, georeferenced), ESRI ASCII, PNG16 or
+/// RAW16 (plus their JSON sidecar), NPY (f32, nodata NaN) or EXR (channel `height`, nodata
+/// NaN).
+pub fn write_raster(path: &Path, grid: &Grid, format: RasterFormat) -> Result<(), RasterError> {
+    match format {
+        RasterFormat::Asc => asc::write(path, grid),
+        RasterFormat::GeoTiff => write_geotiff(path, grid),
+        RasterFormat::Png16 => write_png16(path, grid).map(|_| ()),
+        RasterFormat::Raw16 => raw16::write(path, grid).map(|_| ()),
+        RasterFormat::Npy => npy::write(path, grid),
+        RasterFormat::Exr => {
+            let values = nan_for_nodata(grid);
+            write_exr(path, grid.geometry(), &[("height", &values)])
+        }
+    }
+}
+
+/// A short description of a grid, for `snowscape info` and logs.
+pub fn describe(grid: &Grid) -> String {
+    let g: &GridGeometry = grid.geometry();
+    let crs = g
+        .crs()
+        .map_or_else(|| "none".to_string(), |c| c.to_string());
+    let range = grid
+        .value_range()
+        .map_or_else(|| "no data".to_string(), |(a, b)| format!("{a}..{b}"));
+    format!(
+        "{}x{} cells of {:.3}x{:.3} m, CRS {crs}, values {range}, {} nodata cells",
+        g.width(),
+        g.height(),
+        g.cell_size_x(),
+        g.cell_size_y(),
+        grid.mask().count_nodata()
+    )
+}

@@ -1,0 +1,281 @@
+//! GeoTIFF reading: band 1 of the first image, georeferencing, CRS and nodata.
+
+use super::geokeys::{self, GeoKeys, RASTER_PIXEL_IS_POINT};
+use crate::ReadOptions;
+use crate::cells::{CellSink, NodataRule, check_cell_size, check_cells};
+use crate::crs_sidecar::sidecar_crs;
+use crate::error::{RasterError, Result, geometry_err, io_err, tiff_err};
+use snowscape_terrain::{GeoTransform, Grid, GridGeometry};
+use std::fs::File;
+use std::io::{BufReader, Read, Seek};
+use std::path::Path;
+use tiff::decoder::{Decoder, DecodingResult, Limits};
+use tiff::tags::Tag;
+
+type Dec = Decoder<BufReader<File>>;
+
+fn tag_err(path: &Path, tag: u16, name: &'static str, reason: String) -> RasterError {
+    RasterError::GeoTiffTag {
+        path: path.to_path_buf(),
+        tag,
+        name,
+        reason,
+    }
+}
+
+/// Reads an optional tag as f64 values; a malformed tag is an error naming it.
+fn f64_tag<R: Read + Seek>(
+    path: &Path,
+    dec: &mut Decoder<R>,
+    tag: Tag,
+    name: &'static str,
+) -> Result<Option<Vec<f64>>> {
+    let code = tag.to_u16();
+    let value = dec
+        .find_tag(tag)
+        .map_err(|e| tag_err(path, code, name, e.to_string()))?;
+    value
+        .map(|v| v.into_f64_vec())
+        .transpose()
+        .map_err(|e| tag_err(path, code, name, e.to_string()))
+}
+
+/// The GeoKeys of the image (empty when it has no key directory).
+fn read_geokeys<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -> Result<GeoKeys> {
+    let name = "GeoKeyDirectoryTag";
+    let code = Tag::GeoKeyDirectoryTag.to_u16();
+    let Some(dir) = dec
+        .find_tag(Tag::GeoKeyDirectoryTag)
+        .map_err(|e| tag_err(path, code, name, e.to_string()))?
+    else {
+        return Ok(GeoKeys::default());
+    };
+    let dir = dir
+        .into_u16_vec()
+        .map_err(|e| tag_err(path, code, name, e.to_string()))?;
+    let ascii_code = geokeys::TAG_GEO_ASCII_PARAMS;
+    let ascii = match dec.find_tag(Tag::GeoAsciiParamsTag) {
+        Ok(Some(v)) => v
+            .into_string()
+            .map_err(|e| tag_err(path, ascii_code, "GeoAsciiParamsTag", e.to_string()))?,
+        Ok(None) => String::new(),
+        Err(e) => {
+            return Err(tag_err(
+                path,
+                ascii_code,
+                "GeoAsciiParamsTag",
+                e.to_string(),
+            ));
+        }
+    };
+    geokeys::decode(&dir, &ascii).map_err(|reason| tag_err(path, code, name, reason))
+}
+
+/// The `GDAL_NODATA` value, if declared.
+fn read_gdal_nodata<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -> Result<Option<f64>> {
+    let (code, name) = (Tag::GdalNodata.to_u16(), "GDAL_NODATA");
+    let Some(v) = dec
+        .find_tag(Tag::GdalNodata)
+        .map_err(|e| tag_err(path, code, name, e.to_string()))?
+    else {
+        return Ok(None);
+    };
+    let text = v
+        .into_string()
+        .map_err(|e| tag_err(path, code, name, e.to_string()))?;
+    let t = text.trim_matches(|c: char| c == '\0' || c.is_whitespace());
+    t.parse::<f64>()
+        .map(Some)
+        .map_err(|_| tag_err(path, code, name, format!("{t:?} is not a number")))
+}
+
+/// The affine transform from ModelTransformation, or ModelPixelScale + ModelTiepoint, shifted
+/// by half a pixel for PixelIsPoint. `None` when the file has no georeferencing.
+fn read_transform<R: Read + Seek>(
+    path: &Path,
+    dec: &mut Decoder<R>,
+    keys: &GeoKeys,
+) -> Result<Option<GeoTransform>> {
+    let t = if let Some(m) = f64_tag(
+        path,
+        dec,
+        Tag::ModelTransformationTag,
+        "ModelTransformation",
+    )? {
+        from_model_transformation(path, &m)?
+    } else {
+        let scale = f64_tag(path, dec, Tag::ModelPixelScaleTag, "ModelPixelScale")?;
+        let tie = f64_tag(path, dec, Tag::ModelTiepointTag, "ModelTiepoint")?;
+        match (scale, tie) {
+            (Some(s), Some(t)) => from_scale_tiepoint(path, &s, &t)?,
+            _ => return Ok(None),
+        }
+    };
+    Ok(Some(if keys.raster_type == Some(RASTER_PIXEL_IS_POINT) {
+        GeoTransform {
+            origin_x: t.origin_x - 0.5 * t.pixel_width,
+            origin_y: t.origin_y + 0.5 * t.pixel_height,
+            ..t
+        }
+    } else {
+        t
+    }))
+}
+
+fn from_model_transformation(path: &Path, m: &[f64]) -> Result<GeoTransform> {
+    let err = |reason: String| tag_err(path, 34264, "ModelTransformation", reason);
+    let &[a, b, _, d, e, f, _, h, ..] = m else {
+        return Err(err(format!("{} values, expected 16", m.len())));
+    };
+    if b != 0.0 || e != 0.0 {
+        return Err(err(format!(
+            "rotated or sheared grids are not supported (terms {b}, {e})"
+        )));
+    }
+    let pw = check_cell_size(path, a, "ModelTransformation (tag 34264) x scale")?;
+    let ph = check_cell_size(path, -f, "ModelTransformation (tag 34264) negated y scale")?;
+    Ok(GeoTransform {
+        origin_x: d,
+        origin_y: h,
+        pixel_width: pw,
+        pixel_height: ph,
+    })
+}
+
+fn from_scale_tiepoint(path: &Path, scale: &[f64], tie: &[f64]) -> Result<GeoTransform> {
+    let (&[sx, sy, ..], &[i, j, _, x, y, ..]) = (scale, tie) else {
+        return Err(tag_err(
+            path,
+            33922,
+            "ModelTiepoint/ModelPixelScale",
+            format!(
+                "{} tiepoint and {} scale values, expected at least 6 and 2",
+                tie.len(),
+                scale.len()
+            ),
+        ));
+    };
+    let pw = check_cell_size(path, sx, "ModelPixelScale (tag 33550) x")?;
+    let ph = check_cell_size(path, sy, "ModelPixelScale (tag 33550) y")?;
+    Ok(GeoTransform {
+        origin_x: x - i * pw,
+        origin_y: y + j * ph,
+        pixel_width: pw,
+        pixel_height: ph,
+    })
+}
+
+/// How band 1 is laid out in `read_image`'s result: the step between its samples.
+fn band1_stride(path: &Path, dec: &mut Dec) -> Result<usize> {
+    let spp: u16 = dec
+        .find_tag_unsigned(Tag::SamplesPerPixel)
+        .map_err(tiff_err(path))?
+        .unwrap_or(1);
+    let planar: u16 = dec
+        .find_tag_unsigned(Tag::PlanarConfiguration)
+        .map_err(tiff_err(path))?
+        .unwrap_or(1);
+    // Planar images: read_image decodes plane 0 only, which is band 1.
+    Ok(if planar == 2 {
+        1
+    } else {
+        usize::from(spp.max(1))
+    })
+}
+
+/// Moves band 1 of `samples` into `sink`.
+fn push_band1(
+    path: &Path,
+    sink: &mut CellSink,
+    samples: DecodingResult,
+    n: usize,
+    stride: usize,
+) -> Result<()> {
+    macro_rules! each {
+        ($v:expr, $push:ident, $conv:expr) => {{
+            let v = $v;
+            if v.len() < n.saturating_mul(stride) {
+                return Err(RasterError::TiffUnsupported {
+                    path: path.to_path_buf(),
+                    what: format!(
+                        "decoded {} samples, expected {} cells x {} samples",
+                        v.len(),
+                        n,
+                        stride
+                    ),
+                });
+            }
+            for s in v.iter().step_by(stride).take(n) {
+                sink.$push($conv(*s))?;
+            }
+        }};
+    }
+    match samples {
+        DecodingResult::U8(v) => each!(v, push_f64, f64::from),
+        DecodingResult::U16(v) => each!(v, push_f64, f64::from),
+        DecodingResult::U32(v) => each!(v, push_f64, f64::from),
+        DecodingResult::U64(v) => each!(v, push_f64, |x: u64| x as f64),
+        DecodingResult::I8(v) => each!(v, push_f64, f64::from),
+        DecodingResult::I16(v) => each!(v, push_f64, f64::from),
+        DecodingResult::I32(v) => each!(v, push_f64, f64::from),
+        DecodingResult::I64(v) => each!(v, push_f64, |x: i64| x as f64),
+        DecodingResult::F16(v) => {
+            let v: Vec<f32> = v.iter().map(|x| x.to_f32()).collect();
+            each!(v, push_f32, |x: f32| x)
+        }
+        DecodingResult::F32(v) => each!(v, push_f32, |x: f32| x),
+        DecodingResult::F64(v) => each!(v, push_f64, |x: f64| x),
+    }
+    Ok(())
+}
+
+/// Opens the decoder and checks the cell count before decoding anything.
+fn open(path: &Path, max_cells: usize) -> Result<(Dec, usize, usize)> {
+    let file = File::open(path).map_err(io_err(path))?;
+    let mut dec = Decoder::new(BufReader::new(file)).map_err(tiff_err(path))?;
+    let (w, h) = dec.dimensions().map_err(tiff_err(path))?;
+    let n = check_cells(path, u64::from(w), u64::from(h), max_cells)?;
+    let mut limits = Limits::default();
+    // Band 1 of up to 16 interleaved f64 samples per cell; the cell check above comes first.
+    let need = n.saturating_mul(8 * 16);
+    limits.decoding_buffer_size = limits.decoding_buffer_size.max(need);
+    limits.intermediate_buffer_size = limits.intermediate_buffer_size.max(need);
+    Ok((dec.with_limits(limits), w as usize, h as usize))
+}
+
+/// Reads band 1 of a (Geo)TIFF as a DEM.
+pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
+    let (mut dec, w, h) = open(path, opts.max_cells)?;
+    let keys = read_geokeys(path, &mut dec)?;
+    let transform = read_transform(path, &mut dec, &keys)?;
+    let nodata = read_gdal_nodata(path, &mut dec)?;
+    let stride = band1_stride(path, &mut dec)?;
+    if stride > 16 {
+        return Err(RasterError::TiffUnsupported {
+            path: path.to_path_buf(),
+            what: format!("{stride} interleaved samples per pixel (at most 16)"),
+        });
+    }
+    let samples = dec.read_image().map_err(tiff_err(path))?;
+    let mut sink = CellSink::new(path, w, h, NodataRule::for_binary(nodata));
+    push_band1(path, &mut sink, samples, w * h, stride)?;
+    let crs = match opts.crs.clone().or_else(|| keys.crs()) {
+        Some(c) => Some(c),
+        None => sidecar_crs(path)?,
+    };
+    let geometry = match transform {
+        Some(t) => GridGeometry::from_transform(w, h, t, crs),
+        None => {
+            let cell = opts.cell_size.ok_or_else(|| RasterError::MissingOption {
+                path: path.to_path_buf(),
+                format: "TIFF without georeferencing",
+                option: "--cell-size",
+                why: "it has no ModelPixelScale or ModelTransformation tag",
+            })?;
+            let cell = check_cell_size(path, cell, "--cell-size")?;
+            GridGeometry::square(w, h, cell).map(|g| g.with_crs(crs))
+        }
+    }
+    .map_err(geometry_err(path))?;
+    sink.finish(geometry)
+}
