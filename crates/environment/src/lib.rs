@@ -14,7 +14,7 @@
 //! | [`wind`] | wind vectors, wind-effect surface, shadows | Venturi, Eq. 2, `W·∇Wz = Wsz` (4.2) |
 //! | [`precompute`](mod@precompute) | all of the above in one call | |
 //!
-//! Shadows and horizons come from directional sweeps ([`sweep`](crate::sweep) is internal):
+//! Shadows and horizons come from directional sweeps (the internal `sweep` module):
 //! O(cells) per sun position or horizon direction, parallel over lines, deterministic for any
 //! thread count. Nodata cells are transparent (lowest possible terrain, they never occlude),
 //! border for the wind, and get 0 in every output map.

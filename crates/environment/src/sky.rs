@@ -2,7 +2,9 @@
 //! view factor as SAGA GIS defines it.
 //!
 //! For `N` directions `θ_i = 2πi/N` (clockwise from north) the horizon of every cell is found
-//! by one sweep per direction ([`crate::sweep::horizon_pass`], O(N·cells) in all). Let `e_i` be
+//! by one sweep per direction (`sweep::horizon_pass`, O(N·cells) in all; the horizon tangent
+//! of a cell is the linear blend of those of the two straight rays bracketing it, exact on
+//! planes). Let `e_i` be
 //! the elevation angle of the horizon above the horizontal, and `γ_i = atan(∇A·d_i)` the
 //! elevation of the terrain's tangent plane along `d_i`.
 //!
@@ -23,7 +25,7 @@
 //! as in SAGA. Nodata cells are transparent and get 0 in both maps.
 
 use crate::field::{TerrainField, transpose};
-use crate::sweep::{LineFrame, horizon_pass};
+use crate::sweep::{LineFrame, blend, horizon_pass};
 use crate::{EnvironmentError, SkyParams};
 use snowscape_terrain::{GridGeometry, NodataMask};
 
@@ -56,11 +58,11 @@ pub fn horizon_angles(
     let mut sheared = Vec::new();
     horizon_pass(&frame, layout, &mut sheared);
     let mut out = vec![0.0f32; field.len()];
-    frame.unshear(&sheared, &mut out, |i, tau, a| {
+    frame.unshear(&sheared, &mut out, |i, v0, v1, t, a| {
         *a = if layout.z[i] == f32::NEG_INFINITY {
             0.0
         } else {
-            tau.atan()
+            blend(v0, v1, t).atan()
         };
     });
     Ok(if frame.transposed {
@@ -128,10 +130,11 @@ pub(crate) fn sky_field(field: &TerrainField, params: &SkyParams) -> SkyMaps {
         } else {
             &mut acc_rows
         };
-        frame.unshear(&sheared, acc, |c, tau, a| {
+        frame.unshear(&sheared, acc, |c, v0, v1, t, a| {
             if layout.z[c] == f32::NEG_INFINITY {
                 return;
             }
+            let tau = blend(v0, v1, t);
             let grad = layout.grad[c];
             let g = grad[0] * d[0] + grad[1] * d[1];
             a[0] += paper_cos2(tau, g);

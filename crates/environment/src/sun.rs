@@ -8,13 +8,15 @@
 //! Units: hours per day of sun at normal incidence ("sun-hours"; a flat cell under a sun at
 //! 30° elevation for 2 h gets 1 sun-hour), scaled by the dimensionless `k_sun`.
 //!
-//! Shadows come from one sweep per sun position along the sun's azimuth
-//! ([`crate::sweep::shadow_pass`]): O(cells) per position, no per-cell ray marching. Nodata
-//! cells are transparent (they never cast shadows) and receive 0.
+//! Shadows come from one sweep per sun position along the sun's azimuth (`sweep::shadow_pass`):
+//! O(cells) per position, no per-cell ray marching. The shadow term of a cell is the linear
+//! blend of the two straight rays that bracket it (see `sweep`), so `s_h` takes values in
+//! [0, 1] along shadow edges (antialiased over one cell). Nodata cells are transparent (they
+//! never cast shadows) and receive 0.
 
 use crate::field::TerrainField;
 use crate::solar::{SunSample, day_samples, schedule_days};
-use crate::sweep::{LineFrame, shadow_pass};
+use crate::sweep::{LineFrame, blend, shadow_pass};
 use crate::{EnvironmentError, SunParams};
 use rayon::prelude::*;
 use snowscape_terrain::{GridGeometry, NodataMask};
@@ -104,8 +106,10 @@ pub(crate) fn direct_sun_field(
         } else {
             &mut acc_rows
         };
-        frame.unshear(&sheared, acc, |i, lit, a| {
-            *a += lit * weight * incidence(layout.normal[i], sun);
+        frame.unshear(&sheared, acc, |i, v0, v1, t, a| {
+            if layout.z[i] != f32::NEG_INFINITY {
+                *a += blend(v0, v1, t) * weight * incidence(layout.normal[i], sun);
+            }
         });
     }
     field.add_transposed(&mut acc_rows, &acc_cols, |a, b| *a += b);
