@@ -12,6 +12,7 @@ pub mod powder_diffusion;
 pub mod scheduler;
 pub mod snowfall;
 pub mod stability;
+pub mod wind_transport;
 
 /// Snow volume a step added to and removed from the terrain, m³ of snow.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -1,0 +1,293 @@
+use super::*;
+use snowscape_terrain::random::uniform;
+use snowscape_terrain::{Grid, SnowLayer};
+
+/// Owned wind maps for tests.
+struct Wind {
+    u: Vec<f32>,
+    v: Vec<f32>,
+    shadow: Vec<f32>,
+    z: Vec<f32>,
+}
+
+impl Wind {
+    fn uniform(t: &LayeredTerrain, u: f32, v: f32) -> Self {
+        let n = t.geometry().len();
+        Wind {
+            u: vec![u; n],
+            v: vec![v; n],
+            shadow: vec![0.0; n],
+            z: t.bedrock.clone(),
+        }
+    }
+    fn maps(&self) -> WindMaps<'_> {
+        WindMaps {
+            u: &self.u,
+            v: &self.v,
+            shadow: &self.shadow,
+            effect_surface: &self.z,
+        }
+    }
+}
+
+fn run(
+    t: &mut LayeredTerrain,
+    wind: &Wind,
+    params: &WindTransportParams,
+    steps: usize,
+) -> Vec<WindReport> {
+    let mut scratch = WindScratch::default();
+    (0..steps)
+        .map(|_| {
+            let r = step(params, t, &wind.maps(), &mut scratch, 0.5).unwrap();
+            t.check_invariants().unwrap();
+            r
+        })
+        .collect()
+}
+
+/// A ridge running north-south at column 24 of a 48 x 8 grid of 5 m cells, with 0.5 m of
+/// powder everywhere.
+fn ridge() -> LayeredTerrain {
+    let geo = GridGeometry::square(48, 8, 5.0).unwrap();
+    let bed = Grid::from_fn(geo, |c, _| {
+        let x = (c as f32 - 24.0) * 5.0;
+        1000.0 + 40.0 * (-(x / 30.0).powi(2)).exp()
+    });
+    let mut t = LayeredTerrain::from_bedrock(bed);
+    t.layer_mut(SnowLayer::Powder).fill(0.5);
+    t
+}
+
+fn depth_at(t: &LayeredTerrain, col: usize) -> f32 {
+    t.depth_at(t.geometry().index(col, 4))
+}
+
+#[test]
+fn a_westerly_wind_builds_a_cornice_just_past_the_crest() {
+    let mut t = ridge();
+    // Blowing eastwards; the wind-effect surface leaves the ground on the lee side, so the
+    // eight cells east of the crest are in the wind shadow.
+    let mut wind = Wind::uniform(&t, 10.0, 0.0);
+    for r in 0..8 {
+        for c in 25..33 {
+            wind.shadow[r * 48 + c] = 1.0;
+        }
+    }
+    let reports = run(&mut t, &wind, &WindTransportParams::default(), 40);
+    let eroded: f64 = reports.iter().map(|r| r.eroded).sum();
+    assert!(eroded > 0.0);
+    // The windward side of the crest is scoured...
+    for c in 20..=23 {
+        assert!(depth_at(&t, c) < 0.4, "col {c}: {}", depth_at(&t, c));
+    }
+    // ... and the snow piles up just past the crest, in the shadow: the cornice.
+    let cornice = depth_at(&t, 25);
+    assert!(cornice > 1.5, "{cornice}");
+    let deepest = (0..48).max_by(|&a, &b| depth_at(&t, a).total_cmp(&depth_at(&t, b)));
+    assert_eq!(deepest, Some(25));
+    // Far from the crest (concave or flat ground) nothing moves.
+    for c in (0..18).chain(27..48) {
+        assert!(
+            (depth_at(&t, c) - 0.5).abs() < 1e-5,
+            "col {c}: {}",
+            depth_at(&t, c)
+        );
+    }
+    for r in &reports {
+        assert!((r.eroded - r.deposited).abs() < 1e-6 * r.eroded.max(1.0));
+        assert_eq!(r.border_outflow, 0.0);
+    }
+}
+
+#[test]
+fn without_a_shadow_the_snow_is_blown_over_the_crest_and_down_the_lee() {
+    let mut t = ridge();
+    let wind = Wind::uniform(&t, 10.0, 0.0);
+    run(&mut t, &wind, &WindTransportParams::default(), 40);
+    // The convex cap is scoured on both sides and the snow travels on down the lee to where
+    // the slope turns concave: no cornice at the crest.
+    assert!(
+        depth_at(&t, 22) < 0.1 && depth_at(&t, 25) < 0.7,
+        "{}",
+        depth_at(&t, 25)
+    );
+    let deepest = (0..48)
+        .max_by(|&a, &b| depth_at(&t, a).total_cmp(&depth_at(&t, b)))
+        .unwrap();
+    assert!((26..=29).contains(&deepest), "{deepest}");
+}
+
+#[test]
+fn deposit_is_split_between_the_two_downwind_neighbours() {
+    // One raised cell on a plane: the only convex cell. Wind (3, 4): 3/7 east, 4/7 north.
+    let geo = GridGeometry::new(7, 7, 4.0, 5.0).unwrap();
+    let bed = Grid::from_fn(
+        geo.clone(),
+        |c, r| if (c, r) == (3, 3) { 101.0 } else { 100.0 },
+    );
+    let mut t = LayeredTerrain::from_bedrock(bed);
+    t.layer_mut(SnowLayer::Powder).fill(0.5);
+    let wind = Wind::uniform(&t, 3.0, 4.0);
+    let p = WindTransportParams {
+        k_tamping: 0.0,
+        ..Default::default()
+    };
+    let r = run(&mut t, &wind, &p, 1)[0];
+    // curvW = 3·(−2/16) + 4·(−2/25) per metre of bump; k·δt = 0.05.
+    let e = 0.05 * (3.0 * 2.0 / 16.0 + 4.0 * 2.0 / 25.0);
+    let d = |c, r| t.depth_at(geo.index(c, r)) as f64 - 0.5;
+    assert!((d(3, 3) + e).abs() < 1e-6, "{} vs {e}", d(3, 3));
+    assert!((d(4, 3) - e * 3.0 / 7.0).abs() < 1e-6);
+    assert!((d(3, 2) - e * 4.0 / 7.0).abs() < 1e-6);
+    let moved: f64 = (0..49).map(|i| (t.depth_at(i) as f64 - 0.5).abs()).sum();
+    assert!((moved - 2.0 * e).abs() < 1e-5, "only three cells changed");
+    assert!((r.eroded - e * 20.0).abs() < 1e-5 && (r.deposited - r.eroded).abs() < 1e-9);
+}
+
+#[test]
+fn snow_blown_off_the_grid_is_border_outflow() {
+    // A dome whose crest is the east edge, wind blowing east: the edge cells erode.
+    let geo = GridGeometry::square(16, 4, 5.0).unwrap();
+    let bed = Grid::from_fn(geo, |c, _| 500.0 - 0.05 * ((15 - c) as f32 * 5.0).powi(2));
+    let mut t = LayeredTerrain::from_bedrock(bed);
+    t.layer_mut(SnowLayer::Powder).fill(0.2);
+    t.layer_mut(SnowLayer::Unstable).fill(0.1);
+    let wind = Wind::uniform(&t, 8.0, 0.0);
+    let before = t.snow_volume();
+    let reports = run(&mut t, &wind, &WindTransportParams::default(), 30);
+    let out: f64 = reports.iter().map(|r| r.volume_change().removed).sum();
+    assert!(out > 0.0);
+    assert!((before - out - t.snow_volume()).abs() < 1e-5 * before);
+    for r in &reports {
+        assert!((r.eroded - r.deposited - r.border_outflow).abs() < 1e-6 * before);
+    }
+    // The westmost column gets nothing from upwind: once its powder is gone the unstable
+    // layer is scoured too.
+    assert_eq!(t.depth_at(0), 0.0);
+}
+
+#[test]
+fn random_fields_conserve_snow_and_nodata_stays_bare() {
+    let geo = GridGeometry::new(21, 15, 3.0, 4.0).unwrap();
+    let n = geo.len();
+    let invalid: Vec<bool> = (0..n).map(|i| uniform(3, 9, i as u64) < 0.08).collect();
+    let bed = Grid::new(
+        geo.clone(),
+        (0..n)
+            .map(|i| (uniform(3, 0, i as u64) * 8.0) as f32)
+            .collect(),
+        snowscape_terrain::NodataMask::from_invalid(invalid.clone()),
+    )
+    .unwrap();
+    let mut t = LayeredTerrain::from_bedrock(bed);
+    for i in (0..n).filter(|&i| !invalid[i]) {
+        t.layer_mut(SnowLayer::Powder)[i] = (uniform(3, 1, i as u64) * 0.5) as f32;
+        t.layer_mut(SnowLayer::Unstable)[i] = (uniform(3, 2, i as u64) * 0.2) as f32;
+    }
+    let wind = Wind {
+        u: (0..n)
+            .map(|i| (uniform(3, 3, i as u64) * 20.0 - 10.0) as f32)
+            .collect(),
+        v: (0..n)
+            .map(|i| {
+                if i % 5 == 0 {
+                    0.0
+                } else {
+                    (uniform(3, 4, i as u64) * 20.0 - 10.0) as f32
+                }
+            })
+            .collect(),
+        shadow: (0..n)
+            .map(|i| (uniform(3, 5, i as u64) < 0.2) as u8 as f32)
+            .collect(),
+        z: (0..n)
+            .map(|i| (uniform(3, 6, i as u64) * 8.0) as f32)
+            .collect(),
+    };
+    let mut budget = 0.0;
+    let before = t.snow_volume();
+    let reports = run(&mut t, &wind, &WindTransportParams::default(), 20);
+    for r in &reports {
+        assert!((r.eroded - r.deposited - r.border_outflow).abs() < 1e-6 * before);
+        budget += r.border_outflow;
+    }
+    assert!(reports.iter().map(|r| r.eroded).sum::<f64>() > 0.05 * before);
+    assert!(reports.iter().map(|r| r.tamped).sum::<f64>() > 0.0);
+    assert!((before - budget - t.snow_volume()).abs() < 1e-5 * before);
+}
+
+#[test]
+fn tamping_turns_powder_unstable_where_the_wind_is_pushed_up() {
+    // A valley across the wind: the wind-effect surface is concave along the wind.
+    let geo = GridGeometry::square(9, 9, 10.0).unwrap();
+    let bed = Grid::from_fn(geo, |c, _| 100.0 + 0.05 * ((c as f32 - 4.0) * 10.0).powi(2));
+    let mut t = LayeredTerrain::from_bedrock(bed);
+    t.layer_mut(SnowLayer::Powder).fill(0.3);
+    let p = WindTransportParams::default();
+    let along = run(&mut t.clone(), &Wind::uniform(&t, 5.0, 0.0), &p, 1)[0];
+    // a_z = 25 m²/s² · 0.1 /m = 2.5 m/s²; x = 0.2 · 0.5 · 2.5 = 0.25; share 0.2.
+    assert!(
+        (along.tamped - 0.3 * 0.2 * 8100.0).abs() < 1.0,
+        "{}",
+        along.tamped
+    );
+    // Blowing along the valley axis the wind never rises: no tamping, and no erosion either.
+    let along_axis = Wind::uniform(&t, 0.0, 5.0);
+    let across = run(&mut t, &along_axis, &p, 1)[0];
+    assert_eq!((across.tamped, across.eroded), (0.0, 0.0));
+}
+
+#[test]
+fn deposits_on_steep_lee_slopes_land_as_unstable_wind_slabs() {
+    let mut t = ridge();
+    // A steeper ridge: the first lee cells slope above 30°.
+    let geo = t.geometry().clone();
+    t.bedrock = Grid::from_fn(geo, |c, _| {
+        let x = (c as f32 - 24.0) * 5.0;
+        1000.0 + 120.0 * (-(x / 30.0).powi(2)).exp()
+    })
+    .into_data();
+    let mut wind = Wind::uniform(&t, 10.0, 0.0);
+    for r in 0..8 {
+        for c in 25..33 {
+            wind.shadow[r * 48 + c] = 1.0;
+        }
+    }
+    let r = run(&mut t, &wind, &WindTransportParams::default(), 5);
+    let slab: f64 = r.iter().map(|r| r.deposited_unstable).sum();
+    let all: f64 = r.iter().map(|r| r.deposited).sum();
+    assert!(slab > 0.5 * all && slab < all, "{slab} of {all}");
+    // The 52° lee slope just past the crest gets a wind slab; the flat crest gets powder.
+    let unstable = t.layer(SnowLayer::Unstable);
+    assert!(unstable[4 * 48 + 25] > 0.1, "{}", unstable[4 * 48 + 25]);
+    assert_eq!(unstable[4 * 48 + 24], 0.0);
+}
+
+#[test]
+fn wrong_map_sizes_and_bad_parameters_are_errors() {
+    let mut t = ridge();
+    let wind = Wind::uniform(&t, 1.0, 0.0);
+    let short = vec![0.0f32; 3];
+    let maps = WindMaps {
+        shadow: &short,
+        ..wind.maps()
+    };
+    let e = step(
+        &WindTransportParams::default(),
+        &mut t,
+        &maps,
+        &mut WindScratch::default(),
+        0.5,
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("wind_shadow map has 3 values"),
+        "{e}"
+    );
+    let bad = WindTransportParams {
+        slab_slope_deg: 95.0,
+        ..Default::default()
+    };
+    assert!(bad.validate().is_err());
+}
