@@ -9,10 +9,12 @@ pub mod checkpoint;
 pub mod melt;
 pub mod phenomenon;
 pub mod powder_diffusion;
+pub mod scenario;
 pub mod scheduler;
 pub mod snowfall;
 pub mod stability;
 pub mod wind_transport;
+pub mod winter;
 
 /// Snow volume a step added to and removed from the terrain, m³ of snow.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -1,0 +1,433 @@
+//! Scenario files: a season described in TOML, mapping 1:1 onto the parameter structs.
+//!
+//! ```toml
+//! seed = 7
+//! days = 100
+//! start_date = "12-01"          # MM-DD (or YYYY-MM-DD): the first day, for the sun
+//! latitude_deg = 47.0           # default: from the DEM's georeferencing, else 45
+//! snapshot_every_days = 10
+//! checkpoint_every_days = 10
+//!
+//! [[weather]]                   # piecewise constant, from `from_day` until the next entry
+//! from_day = 0
+//! sea_level_temperature_c = 8.0 # T0
+//! wind_from_deg = 300           # meteorological: the direction the wind blows FROM
+//! wind_speed_m_s = 10
+//! rain_snow_altitude_m = 900    # A0precip
+//! snowfall_per_week = 1.0       # Snowfall-Start frequency
+//!
+//! [[snowfall_period]]           # forced snowfall, on top of the Poisson ones
+//! start_day = 3
+//! days = 2
+//!
+//! [events]                      # EventFrequencies (per day)
+//! wind_transport = 2.0
+//!
+//! [parameters.snowfall]         # any field of SnowfallParams, MeltParams, ...
+//! k_snow = 1.5e-4
+//! [parameters.environment.sky]
+//! directions = 32
+//! ```
+//!
+//! Unknown keys are errors, reported with the key, line and column by the TOML parser.
+
+use crate::melt::MeltParams;
+use crate::powder_diffusion::DiffusionParams;
+use crate::scheduler::EventFrequencies;
+use crate::snowfall::SnowfallParams;
+use crate::stability::StabilityParams;
+use crate::wind_transport::WindTransportParams;
+use serde::{Deserialize, Serialize};
+use snowscape_environment::EnvironmentParams;
+use thiserror::Error;
+
+/// A malformed or inconsistent scenario.
+#[derive(Debug, Error)]
+pub enum ScenarioError {
+    /// TOML syntax or a wrong key/type; the message names the key, line and column.
+    #[error("scenario {source_name}: {message}")]
+    Parse {
+        source_name: String,
+        message: String,
+    },
+    /// A value out of range.
+    #[error("scenario {source_name}: {key} = {value}: {reason}")]
+    Invalid {
+        source_name: String,
+        key: String,
+        value: String,
+        reason: &'static str,
+    },
+}
+
+/// The weather from one day until the next period starts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WeatherPeriod {
+    /// First day of the period, days since the season start.
+    pub from_day: f64,
+    /// Sea-level temperature T0, °C (Cordonnier 2018 §4.1).
+    pub sea_level_temperature_c: f64,
+    /// Direction the wind blows from, degrees clockwise from north (270 = westerly).
+    pub wind_from_deg: f64,
+    /// Sea-level wind speed |W|, m/s. Cordonnier 2018 Table 2: 10.
+    pub wind_speed_m_s: f64,
+    /// Rain-snow limit A0precip, m.
+    pub rain_snow_altitude_m: f64,
+    /// Mean number of snowfall periods starting per week. Cordonnier 2018 §5.1: 1.
+    pub snowfall_per_week: f64,
+}
+
+/// A forced snowfall period.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SnowfallPeriod {
+    /// Day the period starts.
+    pub start_day: f64,
+    /// Length, days.
+    pub days: f64,
+}
+
+/// Every phenomenon's parameters.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Parameters {
+    pub environment: EnvironmentParams,
+    pub snowfall: SnowfallParams,
+    pub melt: MeltParams,
+    pub stability: StabilityParams,
+    pub powder_diffusion: DiffusionParams,
+    pub wind_transport: WindTransportParams,
+}
+
+/// A whole season.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Scenario {
+    /// Random seed: same seed, same bytes.
+    pub seed: u64,
+    /// Length of the season, days.
+    pub days: f64,
+    /// First day, `MM-DD` or `YYYY-MM-DD`.
+    pub start_date: String,
+    /// Latitude, degrees north; `None`: from the DEM's georeferencing, else 45.
+    pub latitude_deg: Option<f64>,
+    /// Take a snapshot (frame) every this many days; 0 = none.
+    pub snapshot_every_days: f64,
+    /// Explicit snapshot days (added to the regular ones).
+    pub snapshot_days: Vec<f64>,
+    /// Write a checkpoint every this many days; 0 = never.
+    pub checkpoint_every_days: f64,
+    /// The weather timeline; empty = the default winter for the terrain's altitudes.
+    pub weather: Vec<WeatherPeriod>,
+    /// Forced snowfall periods.
+    #[serde(rename = "snowfall_period")]
+    pub snowfall_periods: Vec<SnowfallPeriod>,
+    /// Mean event frequencies.
+    pub events: EventFrequencies,
+    /// Parameter overrides.
+    pub parameters: Parameters,
+}
+
+impl Default for Scenario {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            days: 100.0,
+            start_date: "12-01".into(),
+            latitude_deg: None,
+            snapshot_every_days: 10.0,
+            snapshot_days: Vec::new(),
+            checkpoint_every_days: 10.0,
+            weather: Vec::new(),
+            snowfall_periods: Vec::new(),
+            events: EventFrequencies::default(),
+            parameters: Parameters::default(),
+        }
+    }
+}
+
+/// Day of year (1..=365) of `MM-DD` or `YYYY-MM-DD` (no leap day: Feb 29 counts as Mar 1).
+pub fn day_of_year(date: &str) -> Option<u32> {
+    let parts: Vec<&str> = date.trim().split('-').collect();
+    let (m, d) = match parts.as_slice() {
+        [m, d] => (m, d),
+        [y, m, d] if y.len() == 4 && y.parse::<u32>().is_ok() => (m, d),
+        _ => return None,
+    };
+    let (m, d): (u32, u32) = (m.parse().ok()?, d.parse().ok()?);
+    const DAYS: [u32; 12] = [31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
+    if !(1..=12).contains(&m) || d == 0 || d > DAYS[m as usize - 1] + u32::from(m == 2) {
+        return None;
+    }
+    let before: u32 = DAYS[..m as usize - 1].iter().sum();
+    Some((before + d).min(365))
+}
+
+impl Scenario {
+    /// Parses a scenario; `source_name` (a file path) goes into error messages.
+    pub fn from_toml(text: &str, source_name: &str) -> Result<Self, ScenarioError> {
+        let s: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Parse {
+            source_name: source_name.to_string(),
+            message: e.to_string(),
+        })?;
+        s.validate(source_name)?;
+        Ok(s)
+    }
+
+    /// Checks ranges the types cannot express.
+    pub fn validate(&self, source_name: &str) -> Result<(), ScenarioError> {
+        let bad = |key: &str, value: String, reason| ScenarioError::Invalid {
+            source_name: source_name.to_string(),
+            key: key.to_string(),
+            value,
+            reason,
+        };
+        if !(self.days.is_finite() && self.days > 0.0 && self.days <= 3650.0) {
+            return Err(bad(
+                "days",
+                self.days.to_string(),
+                "must be within (0, 3650]",
+            ));
+        }
+        if day_of_year(&self.start_date).is_none() {
+            return Err(bad(
+                "start_date",
+                self.start_date.clone(),
+                "must be MM-DD or YYYY-MM-DD",
+            ));
+        }
+        if let Some(l) = self.latitude_deg
+            && !(l.is_finite() && l.abs() <= 90.0)
+        {
+            return Err(bad(
+                "latitude_deg",
+                l.to_string(),
+                "must be within [-90, 90]",
+            ));
+        }
+        for (key, v) in [
+            ("snapshot_every_days", self.snapshot_every_days),
+            ("checkpoint_every_days", self.checkpoint_every_days),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad(
+                    key,
+                    v.to_string(),
+                    "must be a non-negative number of days",
+                ));
+            }
+        }
+        let mut last = f64::NEG_INFINITY;
+        for (k, w) in self.weather.iter().enumerate() {
+            let key = |f: &str| format!("weather[{k}].{f}");
+            if !(w.from_day.is_finite() && w.from_day >= 0.0 && w.from_day > last) {
+                return Err(bad(
+                    &key("from_day"),
+                    w.from_day.to_string(),
+                    "must be >= 0 and increasing",
+                ));
+            }
+            last = w.from_day;
+            for (f, v, ok, reason) in [
+                (
+                    "sea_level_temperature_c",
+                    w.sea_level_temperature_c,
+                    w.sea_level_temperature_c.abs() < 80.0,
+                    "must be a plausible temperature (|T0| < 80 °C)",
+                ),
+                (
+                    "wind_from_deg",
+                    w.wind_from_deg,
+                    w.wind_from_deg.is_finite(),
+                    "must be finite",
+                ),
+                (
+                    "wind_speed_m_s",
+                    w.wind_speed_m_s,
+                    (0.0..=100.0).contains(&w.wind_speed_m_s),
+                    "must be within [0, 100] m/s",
+                ),
+                (
+                    "rain_snow_altitude_m",
+                    w.rain_snow_altitude_m,
+                    w.rain_snow_altitude_m.abs() < 20_000.0,
+                    "must be a plausible altitude",
+                ),
+                (
+                    "snowfall_per_week",
+                    w.snowfall_per_week,
+                    (0.0..=100.0).contains(&w.snowfall_per_week),
+                    "must be within [0, 100]",
+                ),
+            ] {
+                if !(v.is_finite() && ok) {
+                    return Err(bad(&key(f), v.to_string(), reason));
+                }
+            }
+        }
+        if let Some(first) = self.weather.first()
+            && first.from_day != 0.0
+        {
+            return Err(bad(
+                "weather[0].from_day",
+                first.from_day.to_string(),
+                "the first period must start at day 0",
+            ));
+        }
+        for (k, p) in self.snowfall_periods.iter().enumerate() {
+            if !(p.start_day.is_finite()
+                && p.start_day >= 0.0
+                && p.days.is_finite()
+                && p.days > 0.0)
+            {
+                return Err(bad(
+                    &format!("snowfall_period[{k}]"),
+                    format!("start_day {} days {}", p.start_day, p.days),
+                    "needs start_day >= 0 and days > 0",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The weather timeline, or the default winter for a terrain with these valid altitudes.
+    pub fn weather_or_default(&self, altitudes: &[f32]) -> Vec<WeatherPeriod> {
+        if self.weather.is_empty() {
+            default_winter(altitudes, self.days)
+        } else {
+            self.weather.clone()
+        }
+    }
+}
+
+/// Altitude at quantile `q` (0..1) of `altitudes`.
+fn quantile(altitudes: &[f32], q: f64) -> f64 {
+    if altitudes.is_empty() {
+        return 0.0;
+    }
+    let mut v: Vec<f32> = altitudes.to_vec();
+    v.sort_by(f32::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize] as f64
+}
+
+/// A plausible winter for any terrain: four periods (early winter, deep winter, late winter,
+/// spring) whose temperatures are set at the terrain's median altitude (−4, −9, −6, +1 °C)
+/// with the Table 2 lapse rate (−0.01 °C/m), and whose rain-snow limit sits at the 15th, 5th,
+/// 10th and 45th altitude percentile, so snow always lies deeper up high, whatever the DEM's
+/// altitude range. Westerly to north-westerly winds of 8-14 m/s, one snowfall a week.
+pub fn default_winter(altitudes: &[f32], days: f64) -> Vec<WeatherPeriod> {
+    let median = quantile(altitudes, 0.5);
+    let t0 = |t_median: f64| t_median + 0.01 * median;
+    let periods = [
+        (0.0, -4.0, 300.0, 10.0, 0.15, 1.0),
+        (0.3, -9.0, 280.0, 14.0, 0.05, 1.2),
+        (0.6, -6.0, 300.0, 8.0, 0.10, 0.8),
+        (0.85, 1.0, 250.0, 10.0, 0.45, 0.5),
+    ];
+    periods
+        .iter()
+        .map(|&(f, t, dir, speed, q, per_week)| WeatherPeriod {
+            from_day: (f * days).round(),
+            sea_level_temperature_c: t0(t),
+            wind_from_deg: dir,
+            wind_speed_m_s: speed,
+            rain_snow_altitude_m: quantile(altitudes, q),
+            snowfall_per_week: per_week,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn full_scenario_parses() {
+        let text = r#"
+seed = 7
+days = 60
+start_date = "2026-12-15"
+latitude_deg = 46.5
+[[weather]]
+from_day = 0
+sea_level_temperature_c = 8.0
+wind_from_deg = 300
+wind_speed_m_s = 10
+rain_snow_altitude_m = 900
+snowfall_per_week = 1.0
+[[weather]]
+from_day = 30
+sea_level_temperature_c = 12.0
+wind_from_deg = 270
+wind_speed_m_s = 5
+rain_snow_altitude_m = 1500
+snowfall_per_week = 0.5
+[[snowfall_period]]
+start_day = 2
+days = 3
+[events]
+wind_transport = 3.0
+[parameters.snowfall]
+k_snow = 2e-4
+[parameters.environment.sky]
+directions = 8
+"#;
+        let s = Scenario::from_toml(text, "test.toml").unwrap();
+        assert_eq!(s.seed, 7);
+        assert_eq!(s.weather.len(), 2);
+        assert_eq!(s.parameters.snowfall.k_snow, 2e-4);
+        assert_eq!(s.parameters.environment.sky.directions, 8);
+        assert_eq!(s.events.wind_transport, 3.0);
+        assert_eq!(s.events.melt_and_state, 2.0);
+        assert_eq!(day_of_year(&s.start_date), Some(349));
+    }
+
+    #[test]
+    fn errors_name_the_key_and_line() {
+        let e = Scenario::from_toml("days = 10\n[parameters.melt]\nk_mlet = 0.1\n", "s.toml")
+            .unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.contains("s.toml") && m.contains("k_mlet") && m.contains("line 3"),
+            "{m}"
+        );
+        let e = Scenario::from_toml("days = \"ten\"\n", "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 1") && e.contains("days"), "{e}");
+        let e = Scenario::from_toml("days = -3\n", "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("days = -3"), "{e}");
+        let e = Scenario::from_toml(
+            "[[weather]]\nfrom_day = 0\nsea_level_temperature_c = 5\nwind_from_deg = 0\nwind_speed_m_s = 500\nrain_snow_altitude_m = 0\nsnowfall_per_week = 1\n",
+            "s.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("weather[0].wind_speed_m_s = 500"), "{e}");
+        assert!(Scenario::from_toml("start_date = \"02-30\"\n", "s").is_err());
+    }
+
+    #[test]
+    fn default_winter_follows_the_terrain() {
+        let alts: Vec<f32> = (0..1000).map(|i| 200.0 + i as f32).collect();
+        let w = default_winter(&alts, 100.0);
+        assert_eq!(w.len(), 4);
+        assert_eq!(w[0].from_day, 0.0);
+        // −4 °C at the median altitude (700 m) with −0.01 °C/m.
+        assert!((w[0].sea_level_temperature_c - 3.0).abs() < 0.01);
+        assert!(w[0].rain_snow_altitude_m > 200.0 && w[0].rain_snow_altitude_m < 700.0);
+        assert!(w[3].rain_snow_altitude_m > w[1].rain_snow_altitude_m);
+    }
+
+    #[test]
+    fn dates() {
+        assert_eq!(day_of_year("01-01"), Some(1));
+        assert_eq!(day_of_year("12-31"), Some(365));
+        assert_eq!(day_of_year("03-01"), Some(60));
+        assert_eq!(day_of_year("13-01"), None);
+        assert_eq!(day_of_year("x"), None);
+    }
+}

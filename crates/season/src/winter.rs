@@ -1,0 +1,421 @@
+//! A season run: the scenario's weather timeline, the environment precompute, the Poisson
+//! scheduler and the Section 5 phenomena, stepped event by event (Cordonnier 2018, §3-5).
+//!
+//! The environment (sun, sky, bounce, temperature, wind) is computed on the bedrock, as the
+//! paper does (§4.1: `A = B` "allows precomputation"): sun, sky and bounce once for the season's
+//! dates, temperature and wind again at each weather change. The state that evolves — the snow
+//! layers, the scheduler, the budget — is plain data, so a checkpoint captures a run exactly
+//! and a resumed run ends bit-identical to an uninterrupted one.
+
+use crate::checkpoint::{self, CheckpointError, bedrock_fingerprint};
+use crate::melt;
+use crate::phenomenon::PhenomenonError;
+use crate::powder_diffusion::{self, DiffusionScratch};
+use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
+use crate::scheduler::{Event, EventKind, Scheduler};
+use crate::snowfall::{self, SnowfallScratch};
+use crate::stability::{self, StabilityScratch};
+use crate::wind_transport::{self, WindMaps, WindScratch};
+use serde::{Deserialize, Serialize};
+use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams, precompute};
+use snowscape_terrain::{LayeredTerrain, TerrainError};
+use std::collections::BTreeMap;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Why a season could not run.
+#[derive(Debug, Error)]
+pub enum SeasonError {
+    #[error("environment precompute: {0}")]
+    Environment(#[from] EnvironmentError),
+    #[error("{phenomenon} at day {day:.3}: {source}")]
+    Phenomenon {
+        phenomenon: &'static str,
+        day: f64,
+        #[source]
+        source: PhenomenonError,
+    },
+    #[error("invariant broken after {phenomenon} at day {day:.3}: {source}")]
+    Invariant {
+        phenomenon: &'static str,
+        day: f64,
+        #[source]
+        source: TerrainError,
+    },
+    #[error("checkpoint: {0}")]
+    Checkpoint(#[from] CheckpointError),
+    #[error(
+        "checkpoint was written for other inputs (bedrock fingerprint {found:016x}, expected {expected:016x}) or another scenario"
+    )]
+    CheckpointMismatch { expected: u64, found: u64 },
+}
+
+/// The snow budget of a season, m³ of snow (densification changes volume, not mass: it is
+/// listed as a sink of volume).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SeasonBudget {
+    /// Snow on the terrain at the start.
+    pub initial_store: f64,
+    /// Added by snowfall.
+    pub snowfall: f64,
+    /// Removed by melt.
+    pub melt: f64,
+    /// Volume lost as stable snow compacts into denser compacted snow.
+    pub densification: f64,
+    /// Powder that diffused out of the grid.
+    pub diffusion_outflow: f64,
+    /// Snow blown out of the grid.
+    pub wind_outflow: f64,
+}
+
+impl SeasonBudget {
+    /// `initial + inputs − outputs`: what the store should hold.
+    pub fn expected_store(&self) -> f64 {
+        self.initial_store + self.snowfall
+            - self.melt
+            - self.densification
+            - self.diffusion_outflow
+            - self.wind_outflow
+    }
+}
+
+/// The evolving state, checkpointed as the header of a checkpoint file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct RunState {
+    scheduler: Scheduler,
+    budget: SeasonBudget,
+    event_counts: BTreeMap<EventKind, u64>,
+    weather_index: usize,
+    forced_index: usize,
+    fingerprint: u64,
+    scenario_digest: u64,
+}
+
+/// A season in progress.
+pub struct Winter {
+    scenario: Scenario,
+    weather: Vec<WeatherPeriod>,
+    /// The terrain and its snow layers.
+    pub terrain: LayeredTerrain,
+    state: RunState,
+    environment: EnvironmentMaps,
+    base_environment: EnvironmentParams,
+    /// Wall-clock seconds per phenomenon (not part of the state: it differs between runs).
+    pub wall_seconds: BTreeMap<&'static str, f64>,
+    snowfall_scratch: SnowfallScratch,
+    stability_scratch: StabilityScratch,
+    diffusion_scratch: DiffusionScratch,
+    wind_scratch: WindScratch,
+}
+
+fn scenario_digest(s: &Scenario, weather: &[WeatherPeriod]) -> u64 {
+    let text = serde_json::to_string(&(s, weather)).unwrap_or_default();
+    text.bytes().fold(0x243f_6a88_85a3_08d3, |h, b| {
+        snowscape_terrain::random::mix64(h ^ b as u64)
+    })
+}
+
+impl Winter {
+    /// Prepares a season on `terrain`: resolves the weather timeline (the default winter when
+    /// the scenario has none) and latitude, and precomputes the environment for day 0.
+    pub fn new(scenario: Scenario, terrain: LayeredTerrain) -> Result<Self, SeasonError> {
+        let valid: Vec<f32> = terrain
+            .bedrock
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| terrain.mask().is_valid(*i))
+            .map(|(_, &z)| z)
+            .collect();
+        let weather = scenario.weather_or_default(&valid);
+        let mut env = scenario.parameters.environment.clone();
+        env.sun.latitude_deg = scenario
+            .latitude_deg
+            .or_else(|| terrain.geometry().centre_latitude_deg())
+            .unwrap_or(env.sun.latitude_deg);
+        env.sun.start_day = day_of_year(&scenario.start_date).unwrap_or(env.sun.start_day);
+        env.sun.num_days = (scenario.days.ceil() as u32).clamp(1, 365);
+        let mut scheduler = Scheduler::new(scenario.seed, &scenario.events);
+        let state = RunState {
+            scheduler: {
+                scheduler.set_rate(
+                    EventKind::SnowfallStart,
+                    weather[0].snowfall_per_week / 7.0,
+                    true,
+                );
+                scheduler
+            },
+            budget: SeasonBudget {
+                initial_store: terrain.snow_volume(),
+                ..SeasonBudget::default()
+            },
+            event_counts: BTreeMap::new(),
+            weather_index: 0,
+            forced_index: 0,
+            fingerprint: bedrock_fingerprint(&terrain),
+            scenario_digest: scenario_digest(&scenario, &weather),
+        };
+        let t = Instant::now();
+        let params = weather_params(&env, &weather[0]);
+        let environment = precompute(
+            &terrain.bedrock,
+            terrain.geometry(),
+            terrain.mask(),
+            &params,
+        )?;
+        let mut w = Self {
+            scenario,
+            weather,
+            terrain,
+            state,
+            environment,
+            base_environment: env,
+            wall_seconds: BTreeMap::new(),
+            snowfall_scratch: SnowfallScratch::default(),
+            stability_scratch: StabilityScratch::default(),
+            diffusion_scratch: DiffusionScratch::default(),
+            wind_scratch: WindScratch::default(),
+        };
+        w.wall_seconds
+            .insert("environment", t.elapsed().as_secs_f64());
+        w.environment.store(&mut w.terrain)?;
+        Ok(w)
+    }
+
+    /// The scenario being run.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+    /// The resolved weather timeline.
+    pub fn weather(&self) -> &[WeatherPeriod] {
+        &self.weather
+    }
+    /// The current environment maps.
+    pub fn environment(&self) -> &EnvironmentMaps {
+        &self.environment
+    }
+    /// Simulated time, days since the season start.
+    pub fn day(&self) -> f64 {
+        self.state.scheduler.time_days()
+    }
+    /// The snow budget so far.
+    pub fn budget(&self) -> &SeasonBudget {
+        &self.state.budget
+    }
+    /// Number of events of each kind so far.
+    pub fn event_counts(&self) -> &BTreeMap<EventKind, u64> {
+        &self.state.event_counts
+    }
+    /// Whether the season is over.
+    pub fn finished(&self) -> bool {
+        self.day() >= self.scenario.days
+    }
+
+    /// Runs events until the clock reaches `day` (or the season ends).
+    pub fn run_until(&mut self, day: f64) -> Result<(), SeasonError> {
+        let end = day.min(self.scenario.days);
+        while self.day() < end {
+            self.apply_timeline()?;
+            let Some(event) = self.state.scheduler.next_event() else {
+                break;
+            };
+            self.apply(event)?;
+        }
+        Ok(())
+    }
+
+    /// Starts weather periods and forced snowfall periods whose day has come.
+    fn apply_timeline(&mut self) -> Result<(), SeasonError> {
+        let now = self.day();
+        let next = self.state.weather_index + 1;
+        if next < self.weather.len() && now >= self.weather[next].from_day {
+            self.state.weather_index = next;
+            let w = self.weather[next].clone();
+            self.state.scheduler.set_rate(
+                EventKind::SnowfallStart,
+                w.snowfall_per_week / 7.0,
+                true,
+            );
+            self.refresh_weather_maps()?;
+        }
+        while let Some(p) = self.scenario.snowfall_periods.get(self.state.forced_index) {
+            if now < p.start_day {
+                break;
+            }
+            let remaining = p.start_day + p.days - now;
+            if remaining > 0.0 {
+                self.state.scheduler.force_snowfall(remaining);
+            }
+            self.state.forced_index += 1;
+        }
+        Ok(())
+    }
+
+    /// Recomputes temperature and wind for the current weather period (sun, sky and bounce do
+    /// not depend on the weather and are kept).
+    fn refresh_weather_maps(&mut self) -> Result<(), SeasonError> {
+        let t = Instant::now();
+        let w = &self.weather[self.state.weather_index];
+        let params = weather_params(&self.base_environment, w);
+        let g = self.terrain.geometry();
+        self.environment.temperature = snowscape_environment::temperature(
+            &self.terrain.bedrock,
+            &self.environment.irradiance,
+            self.terrain.mask(),
+            &params.temperature,
+        )?;
+        let wind = snowscape_environment::wind(
+            &self.terrain.bedrock,
+            g,
+            self.terrain.mask(),
+            &params.wind,
+        )?;
+        self.environment.wind_u = wind.u;
+        self.environment.wind_v = wind.v;
+        self.environment.wind_shadow = wind.shadow;
+        self.environment.wind_effect_surface = wind.effect_surface;
+        self.environment.wind_stats = wind.stats;
+        self.environment.store(&mut self.terrain)?;
+        *self.wall_seconds.entry("environment").or_default() += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    fn apply(&mut self, event: Event) -> Result<(), SeasonError> {
+        let t = Instant::now();
+        let day = event.time_days;
+        let name = phenomenon_name(event.kind);
+        let err = |source| SeasonError::Phenomenon {
+            phenomenon: name,
+            day,
+            source,
+        };
+        let p = &self.scenario.parameters;
+        let temperature = &self.environment.temperature;
+        let b = &mut self.state.budget;
+        match event.kind {
+            EventKind::SnowfallStep => {
+                let mut params = p.snowfall.clone();
+                params.a0_precip = self.weather[self.state.weather_index].rain_snow_altitude_m;
+                let v = snowfall::step(
+                    &params,
+                    &mut self.terrain,
+                    temperature,
+                    &mut self.snowfall_scratch,
+                    event.dt_days,
+                );
+                b.snowfall += v.added;
+            }
+            EventKind::MeltAndStateStep => {
+                let v = melt::step(&p.melt, &mut self.terrain, temperature, event.dt_days)
+                    .map_err(err)?;
+                b.melt += v.removed;
+                let r = stability::step(
+                    &p.stability,
+                    &mut self.terrain,
+                    temperature,
+                    &mut self.stability_scratch,
+                    event.dt_days,
+                )
+                .map_err(err)?;
+                b.densification += r.densification;
+            }
+            EventKind::PowderDiffusionStep => {
+                let r = powder_diffusion::step(
+                    &p.powder_diffusion,
+                    &mut self.terrain,
+                    &mut self.diffusion_scratch,
+                    event.dt_days,
+                )
+                .map_err(err)?;
+                b.diffusion_outflow += r.border_outflow;
+            }
+            EventKind::WindTransportStep => {
+                let e = &self.environment;
+                let maps = WindMaps {
+                    u: &e.wind_u,
+                    v: &e.wind_v,
+                    shadow: &e.wind_shadow,
+                    effect_surface: &e.wind_effect_surface,
+                };
+                let r = wind_transport::step(
+                    &p.wind_transport,
+                    &mut self.terrain,
+                    &maps,
+                    &mut self.wind_scratch,
+                    event.dt_days,
+                )
+                .map_err(err)?;
+                b.wind_outflow += r.border_outflow;
+            }
+            // Period starts are handled by the scheduler; avalanches and skiers are driven by
+            // their own modules when enabled.
+            _ => {}
+        }
+        *self.state.event_counts.entry(event.kind).or_default() += 1;
+        if cfg!(debug_assertions) || event.index.is_multiple_of(64) {
+            self.terrain
+                .check_invariants()
+                .map_err(|source| SeasonError::Invariant {
+                    phenomenon: name,
+                    day,
+                    source,
+                })?;
+        }
+        *self.wall_seconds.entry(name).or_default() += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Writes a checkpoint of the whole run state to `w`.
+    pub fn write_checkpoint(&self, w: &mut impl std::io::Write) -> Result<(), SeasonError> {
+        checkpoint::write(w, &self.state, &self.terrain)?;
+        Ok(())
+    }
+
+    /// Restores a run from a checkpoint written by a run of the same scenario on the same
+    /// terrain (anything else is refused).
+    pub fn resume(
+        scenario: Scenario,
+        terrain: LayeredTerrain,
+        r: &mut impl std::io::Read,
+    ) -> Result<Self, SeasonError> {
+        let mut w = Self::new(scenario, terrain)?;
+        let state: RunState = checkpoint::read(r, &mut w.terrain)?;
+        if state.fingerprint != w.state.fingerprint
+            || state.scenario_digest != w.state.scenario_digest
+        {
+            return Err(SeasonError::CheckpointMismatch {
+                expected: w.state.fingerprint,
+                found: state.fingerprint,
+            });
+        }
+        let weather_changed = state.weather_index != 0;
+        w.state = state;
+        if weather_changed {
+            w.refresh_weather_maps()?;
+        }
+        Ok(w)
+    }
+}
+
+/// The environment parameters of one weather period.
+fn weather_params(base: &EnvironmentParams, w: &WeatherPeriod) -> EnvironmentParams {
+    let mut p = base.clone();
+    p.temperature.t0_c = w.sea_level_temperature_c;
+    p.wind.direction_deg = w.wind_from_deg;
+    p.wind.speed_m_s = w.wind_speed_m_s;
+    p
+}
+
+/// Stable names of the phenomena, for timings and reports.
+pub fn phenomenon_name(kind: EventKind) -> &'static str {
+    match kind {
+        EventKind::SnowfallStart => "snowfall_start",
+        EventKind::SnowfallStep => "snowfall",
+        EventKind::MeltAndStateStep => "melt_and_stability",
+        EventKind::PowderDiffusionStep => "powder_diffusion",
+        EventKind::WindTransportStep => "wind_transport",
+        EventKind::AvalancheStart => "avalanche_start",
+        EventKind::AvalancheStep => "avalanche",
+        EventKind::SkierStart => "skier_start",
+        EventKind::SkierStep => "skier",
+    }
+}

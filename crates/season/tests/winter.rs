@@ -1,0 +1,95 @@
+//! Whole-season tests: budget closure, determinism across thread counts, checkpoint/resume
+//! bit-identical to an uninterrupted run, and snow that follows altitude.
+
+use snowscape_season::scenario::Scenario;
+use snowscape_season::scheduler::EventKind;
+use snowscape_season::winter::Winter;
+use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain};
+
+/// A 96x96 terrain of 20 m cells: a mountain rising from 600 m to 2600 m, with a ridge.
+fn mountain() -> LayeredTerrain {
+    let n = 96;
+    let g = GridGeometry::square(n, n, 20.0).unwrap();
+    LayeredTerrain::from_bedrock(Grid::from_fn(g, |c, r| {
+        let (x, y) = (c as f32 / n as f32 - 0.5, r as f32 / n as f32 - 0.5);
+        let d = (x * x + y * y).sqrt();
+        let ridge = (-(x * 8.0).powi(2)).exp() * 300.0;
+        600.0 + 2000.0 * (1.0 - 2.0 * d).max(0.0).powf(1.5) + ridge
+    }))
+}
+
+fn scenario(days: f64) -> Scenario {
+    let mut s = Scenario {
+        days,
+        ..Scenario::default()
+    };
+    s.parameters.environment.sky.directions = 8;
+    s.parameters.environment.sun.day_step = 30;
+    s
+}
+
+fn run(days: f64, threads: usize) -> Winter {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut w = Winter::new(scenario(days), mountain()).unwrap();
+        w.run_until(days).unwrap();
+        w
+    })
+}
+
+#[test]
+fn budget_closes_and_snow_follows_altitude() {
+    let w = run(60.0, 2);
+    let b = w.budget();
+    let store = w.terrain.snow_volume();
+    let rel = (store - b.expected_store()).abs() / b.snowfall.max(1.0);
+    assert!(b.snowfall > 0.0);
+    assert!(
+        rel < 1e-5,
+        "closure error {rel}: store {store}, budget {b:?}"
+    );
+    w.terrain.check_invariants().unwrap();
+    let counts = w.event_counts();
+    assert!(counts[&EventKind::WindTransportStep] > 60);
+    assert!(counts[&EventKind::MeltAndStateStep] > 60);
+    // Deeper up high: mean depth of the top quarter of altitudes beats the bottom quarter.
+    let depth = w.terrain.total_depth();
+    let mut idx: Vec<usize> = (0..depth.len()).collect();
+    idx.sort_by(|&a, &b| w.terrain.bedrock[a].total_cmp(&w.terrain.bedrock[b]));
+    let q = idx.len() / 4;
+    let mean = |s: &[usize]| s.iter().map(|&i| depth[i] as f64).sum::<f64>() / s.len() as f64;
+    let (low, high) = (mean(&idx[..q]), mean(&idx[idx.len() - q..]));
+    assert!(high > 2.0 * low + 0.05, "high {high} low {low}");
+}
+
+#[test]
+fn bit_identical_for_any_thread_count() {
+    let a = run(20.0, 1);
+    for threads in [2, 4] {
+        let b = run(20.0, threads);
+        assert_eq!(a.terrain, b.terrain, "{threads} threads differ from 1");
+        assert_eq!(a.budget(), b.budget());
+    }
+}
+
+#[test]
+fn resumed_run_ends_bit_identical() {
+    let full = run(30.0, 2);
+    let mut first = Winter::new(scenario(30.0), mountain()).unwrap();
+    first.run_until(12.0).unwrap();
+    let mut bytes = Vec::new();
+    first.write_checkpoint(&mut bytes).unwrap();
+    drop(first);
+    let mut resumed = Winter::resume(scenario(30.0), mountain(), &mut bytes.as_slice()).unwrap();
+    resumed.run_until(30.0).unwrap();
+    assert_eq!(resumed.terrain, full.terrain);
+    assert_eq!(resumed.budget(), full.budget());
+    assert_eq!(resumed.event_counts(), full.event_counts());
+    // A checkpoint of another scenario is refused.
+    let mut other = scenario(30.0);
+    other.seed = 99;
+    assert!(Winter::resume(other, mountain(), &mut bytes.as_slice()).is_err());
+}
