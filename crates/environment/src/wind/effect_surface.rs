@@ -7,28 +7,32 @@
 //! W·∇Wz  = Wsz,      Wz >= A
 //! ```
 //!
-//! Discretisation: first-order upwind differences along the local wind `W = (Wx, Wy)`,
+//! Discretisation: first-order upwind differences along the transport wind `W = (Wx, Wy)`,
 //! `W·∇f ≈ ax (f − f_x) + ay (f − f_y)` with `ax = |Wx|/dx`, `ay = |Wy|/dy` and `f_x`, `f_y` the
 //! upwind neighbours. Solving each equation for the cell gives the local update
 //! ([`relax`]), applied exactly as the paper orders it: `Wsz` first (as if detached), then `Wz`
 //! from the new `Wsz`, then, if `Wz <= A`, the cell is attached: `Wz = A` and `Wsz = W·∇A`
 //! (the same upwind differences of `A`, so a planar slope stays attached exactly).
 //!
-//! Solver: Gauss-Seidel. The upwind system is triangular in wind order, so Gauss-Seidel sweeps
-//! that visit cells along the wind (rows and columns in the wind's order) converge in one
-//! sweep where the local wind keeps the dominant wind's quadrant, and the sweeps cycle through
-//! the four row/column orders for cells where Eq. 2 turned it (the fast-sweeping idea, Zhao
-//! 2005, "A fast sweeping method for Eikonal equations", Math. Comp. 74). They are sequential.
-//! Then the paper's red-black (checkerboard) Gauss-Seidel iterates to the tolerance: every
-//! neighbour of a red cell is black, so each half-step updates one colour in parallel from the
-//! other, with a result independent of the thread count; the residual is the largest change of
-//! `Wz` in an iteration (a maximum, exact in any order). With `ordered_sweeps = 0` the
-//! iteration starts from the paper's `Wz = A`, `Wsz = W·∇A`.
+//! The caller chooses the transport wind; [`crate::wind`] passes Eq. 2's wind projected on the
+//! dominant direction, so every cell's upwind neighbours lie on the same side and the system
+//! is triangular in wind order (see there for why).
+//!
+//! Solver: Gauss-Seidel. A sweep that visits rows and columns in wind order solves a
+//! triangular upwind system exactly; `ordered_sweeps` such sweeps run first (cycling through
+//! the four row/column orders, the fast-sweeping idea of Zhao 2005, "A fast sweeping method for
+//! Eikonal equations", Math. Comp. 74, for transport winds that are not one-signed). They are
+//! sequential. Then the paper's red-black (checkerboard) Gauss-Seidel iterates to the
+//! tolerance: every neighbour of a red cell is black, so each half-step updates one colour in
+//! parallel from the other, with a result independent of the thread count; the residual is the
+//! largest change of `Wz` in an iteration (a maximum, exact in any order). With
+//! `ordered_sweeps = 0` it starts from the paper's `Wz = A`, `Wsz = W·∇A` and converges in at
+//! most as many iterations as the longest upwind chain of detached cells.
 //!
 //! Boundaries: a missing upwind neighbour (outside the grid, or nodata: nodata cells act as
-//! border) is replaced by a ghost cell attached to the ground, its height extrapolated on the
-//! cell's tangent plane: the wind enters the grid attached to the terrain. Where `W = 0` (the
-//! paper's undefined case) the cell is attached (`Wz = A`, `Wsz = 0`). Nodata cells get 0.
+//! border) drops its term, i.e. a zero derivative across the border; a cell with no upwind
+//! neighbour left (the inflow corner) or no wind (`W = 0`, the paper's undefined case) is
+//! attached (`Wz = A`, `Wsz = W·∇A`). Nodata cells get 0.
 
 use rayon::prelude::*;
 
@@ -45,10 +49,6 @@ pub(crate) struct Cell {
     wy: f32,
     /// `W·∇A` by upwind differences, m/s.
     ground: f32,
-    /// Ghost height of the x-upwind neighbour (used when it is missing), m.
-    ghost_zx: f32,
-    /// Ghost height of the y-upwind neighbour, m.
-    ghost_zy: f32,
     /// Column step to the x-upwind neighbour (−1 west, +1 east, 0 none).
     up_x: i8,
     /// Row step to the y-upwind neighbour (−1 north, +1 south, 0 none).
@@ -91,7 +91,7 @@ pub(crate) struct EffectSurface {
 #[inline(always)]
 pub(crate) fn relax(cell: &Cell, nx: (f32, f32), ny: (f32, f32), c: f32) -> (f32, f32) {
     if cell.inv_sum == 0.0 {
-        return (cell.a, 0.0);
+        return (cell.a, cell.ground);
     }
     let s = -c * cell.inv_sum + cell.wx * nx.1 + cell.wy * ny.1;
     let z = s * cell.inv_sum + cell.wx * nx.0 + cell.wy * ny.0;
@@ -102,7 +102,8 @@ pub(crate) fn relax(cell: &Cell, nx: (f32, f32), ny: (f32, f32), c: f32) -> (f32
     }
 }
 
-/// Builds the per-cell coefficients from altitudes (`-inf` on nodata), gradients and winds.
+/// Builds the per-cell coefficients from altitudes (`-inf` on nodata), gradients and the
+/// transport winds.
 pub(crate) fn build_cells(
     z: &[f32],
     grad: &[[f32; 2]],
@@ -128,7 +129,6 @@ pub(crate) fn build_cells(
             }
             let a = z[i];
             let [we, wn] = wind[i];
-            let [gx, gy] = grad[i];
             let (ax, ay) = (we.abs() / csx, wn.abs() / csy);
             let up_x: i8 = if we > 0.0 {
                 -1
@@ -148,31 +148,31 @@ pub(crate) fn build_cells(
             let (cx, ry) = (col as isize + up_x as isize, row as isize + up_y as isize);
             let has_x = up_x != 0 && valid(cx, row as isize);
             let has_y = up_y != 0 && valid(col as isize, ry);
-            let ghost_zx = a + up_x as f32 * gx * csx;
-            let ghost_zy = a - up_y as f32 * gy * csy;
-            let zx = if has_x {
-                z[row * w + cx as usize]
+            // A missing upwind neighbour drops its term (zero derivative across the border).
+            let (ex, ey) = (if has_x { ax } else { 0.0 }, if has_y { ay } else { 0.0 });
+            let sum = ex + ey;
+            *cell = if sum > 1e-6 * (ax + ay) && sum > 0.0 {
+                let zx = if has_x { z[row * w + cx as usize] } else { a };
+                let zy = if has_y { z[ry as usize * w + col] } else { a };
+                Cell {
+                    a,
+                    inv_sum: 1.0 / sum,
+                    wx: ex / sum,
+                    wy: ey / sum,
+                    ground: ex * (a - zx) + ey * (a - zy),
+                    up_x,
+                    up_y,
+                    flags: VALID | if has_x { HAS_X } else { 0 } | if has_y { HAS_Y } else { 0 },
+                }
             } else {
-                ghost_zx
-            };
-            let zy = if has_y {
-                z[ry as usize * w + col]
-            } else {
-                ghost_zy
-            };
-            let sum = ax + ay;
-            let calm = sum < 1e-9;
-            *cell = Cell {
-                a,
-                inv_sum: if calm { 0.0 } else { 1.0 / sum },
-                wx: if calm { 0.0 } else { ax / sum },
-                wy: if calm { 0.0 } else { ay / sum },
-                ground: ax * (a - zx) + ay * (a - zy),
-                ghost_zx,
-                ghost_zy,
-                up_x,
-                up_y,
-                flags: VALID | if has_x { HAS_X } else { 0 } | if has_y { HAS_Y } else { 0 },
+                // Calm, or inflow with no upwind neighbour: attached, Wsz = W·∇A.
+                let [gx, gy] = grad[i];
+                Cell {
+                    a,
+                    ground: we * gx + wn * gy,
+                    flags: VALID,
+                    ..Cell::default()
+                }
             };
         }
     });
@@ -220,7 +220,7 @@ impl Checkerboard {
     }
 
     /// Upwind neighbour values `(x-neighbour, y-neighbour)` of cell `(x, y)` read from the
-    /// other colour's arrays (ghosts where missing).
+    /// other colour's arrays.
     #[inline(always)]
     fn neighbours(
         cell: &Cell,
@@ -230,17 +230,18 @@ impl Checkerboard {
         z: &[f32],
         s: &[f32],
     ) -> ((f32, f32), (f32, f32)) {
+        // A missing neighbour has weight 0: its value is never used.
         let nx = if cell.flags & HAS_X != 0 {
             let j = y * hw + (x as isize + cell.up_x as isize) as usize / 2;
             (z[j], s[j])
         } else {
-            (cell.ghost_zx, cell.ground)
+            (0.0, 0.0)
         };
         let ny = if cell.flags & HAS_Y != 0 {
             let j = (y as isize + cell.up_y as isize) as usize * hw + x / 2;
             (z[j], s[j])
         } else {
-            (cell.ghost_zy, cell.ground)
+            (0.0, 0.0)
         };
         (nx, ny)
     }

@@ -1,6 +1,15 @@
 //! Wind (Cordonnier et al. 2018, Section 4.2): the horizontal wind field ([`vectors`]) and the
 //! wind-effect surface with its binary wind shadows ([`effect_surface`]).
 //!
+//! Transport wind of the wind-effect surface: the paper advects `Wz` along Eq. 2's `W`. Its
+//! contour-following part turns the wind in opposite directions on facing slopes, so cells
+//! become each other's upwind neighbours; with the attach/detach switch the paper's red-black
+//! iteration then has no fixed point (we observed a period-6 limit cycle on rough terrain).
+//! We advect `Wz` along the dominant direction `Ŵd` at the local along-wind speed
+//! `max(0, W·Ŵd)` (Eq. 2 keeps `W·Ŵd >= 0`; Venturi and the `1 − |n_xy|` slow-down are kept,
+//! the cross-wind deflection is not): the upwind graph is then acyclic, one ordered sweep
+//! solves it and red-black converges.
+//!
 //! Outputs, per cell: the wind vector `W` of paper Eq. 2 (u east, v north, m/s; it is the wind
 //! at the wind-effect surface, not zeroed in shadows), the wind-effect surface `Wz` (m), and
 //! the wind shadow (1 where `Wz > A + shadow_epsilon_m`: no wind at the ground, leeward of
@@ -65,10 +74,23 @@ pub(crate) fn wind_field(field: &TerrainField, params: &WindParams) -> WindMaps 
             }
         })
         .collect();
+    let speed = (wd[0] * wd[0] + wd[1] * wd[1]).sqrt();
+    let dir = if speed > 0.0 {
+        [(wd[0] / speed) as f32, (wd[1] / speed) as f32]
+    } else {
+        [0.0, 0.0]
+    };
+    let transport: Vec<[f32; 2]> = wind
+        .par_iter()
+        .map(|w| {
+            let along = (w[0] * dir[0] + w[1] * dir[1]).max(0.0);
+            [along * dir[0], along * dir[1]]
+        })
+        .collect();
     let cells = build_cells(
         &layout.z,
         &layout.grad,
-        &wind,
+        &transport,
         field.width,
         field.height,
         field.csx as f32,
