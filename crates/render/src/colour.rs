@@ -103,13 +103,17 @@ fn ramp_lookup(stops: &[(f32, Rgb)], t: f32) -> Rgb {
     prev.1
 }
 
-/// Ground colour at `relative_altitude` (0 = lowest cell, 1 = highest) on a slope in radians.
-pub fn ground_colour(relative_altitude: f32, slope_rad: f32) -> Rgb {
+/// Ground colour at `relative_altitude` (0 = lowest cell, 1 = highest) on a slope given by its
+/// cosine (the up component of the unit normal; 1 on flat ground).
+pub fn ground_colour(relative_altitude: f32, cos_slope: f32) -> Rgb {
     let tint = ramp_lookup(&GROUND_RAMP, relative_altitude);
+    // Smoothstep over the tangent of the slope, tan² = 1/cos² - 1 (no trigonometry per cell).
+    let tan2 = |deg: f32| deg.to_radians().tan().powi(2);
+    let c2 = (cos_slope * cos_slope).max(1e-12);
     let cliff = smoothstep(
-        CLIFF_SLOPE_START_DEG.to_radians(),
-        CLIFF_SLOPE_FULL_DEG.to_radians(),
-        slope_rad,
+        tan2(CLIFF_SLOPE_START_DEG),
+        tan2(CLIFF_SLOPE_FULL_DEG),
+        1.0 / c2 - 1.0,
     );
     mix(tint, CLIFF_ROCK, cliff)
 }
@@ -174,7 +178,12 @@ pub fn viridis(t: f32) -> Rgb {
 /// Rounds a [0, 1] colour to bytes (clamping; NaN becomes 0).
 #[inline]
 pub fn to_bytes(rgb: Rgb) -> [u8; 3] {
-    rgb.map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)
+    #[inline(always)]
+    fn byte(v: f32) -> u8 {
+        // A NaN stays NaN through clamp and casts to 0.
+        (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+    }
+    [byte(rgb[0]), byte(rgb[1]), byte(rgb[2])]
 }
 
 #[cfg(test)]
@@ -192,14 +201,18 @@ mod tests {
 
     #[test]
     fn ground_gets_greyer_with_altitude_and_darker_on_cliffs() {
-        let low = ground_colour(0.0, 0.0);
-        let high = ground_colour(1.0, 0.0);
+        let low = ground_colour(0.0, 1.0);
+        let high = ground_colour(1.0, 1.0);
         assert!(low[1] > low[2] + 0.1, "low ground is green: {low:?}");
         assert!(
             (high[0] - high[2]).abs() < 0.05,
             "high ground is grey: {high:?}"
         );
-        let cliff = ground_colour(0.5, 70f32.to_radians());
+        let cliff = ground_colour(0.5, 70f32.to_radians().cos());
+        assert_eq!(
+            ground_colour(0.5, 30f32.to_radians().cos()),
+            ground_colour(0.5, 1.0)
+        );
         assert_eq!(cliff, CLIFF_ROCK);
     }
 
@@ -219,6 +232,12 @@ mod tests {
         for k in 0..3 {
             assert!((half[k] - expect[k]).abs() < 1e-6);
         }
+    }
+
+    #[test]
+    fn bytes_round_and_clamp() {
+        assert_eq!(to_bytes([0.0, 1.0, 0.5]), [0, 255, 128]);
+        assert_eq!(to_bytes([-3.0, 7.0, f32::NAN]), [0, 255, 0]);
     }
 
     #[test]

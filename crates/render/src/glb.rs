@@ -205,7 +205,7 @@ impl Document {
         );
         let normals = self.push_accessor(vec3_bytes(&mesh.normals), n, (C::F32, T::Vec3), None);
         let indices = self.push_accessor(
-            mesh.indices.iter().flat_map(|v| v.to_le_bytes()).collect(),
+            u32_bytes(&mesh.indices),
             mesh.indices.len(),
             (C::U32, T::Scalar),
             None,
@@ -273,10 +273,22 @@ impl Document {
 
 /// Little-endian bytes of packed f32 triples.
 fn vec3_bytes(values: &[[f32; 3]]) -> Vec<u8> {
-    values
-        .iter()
-        .flat_map(|v| v.iter().flat_map(|c| c.to_le_bytes()))
-        .collect()
+    let mut out = Vec::with_capacity(values.len() * 12);
+    for v in values {
+        for c in v {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// Little-endian bytes of u32 indices.
+fn u32_bytes(values: &[u32]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(values.len() * 4);
+    for v in values {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out
 }
 
 /// GLB chunk type of the JSON chunk ("JSON").

@@ -168,6 +168,7 @@ impl Blocks<'_> {
     /// Mean of the valid cells of each block (0 where none is valid).
     fn average(&self, values: &[f32]) -> Vec<f32> {
         let (ow, oh) = self.output_size();
+        let f = self.factor;
         let mut out = vec![0.0f32; ow * oh];
         out.par_chunks_mut(ow).enumerate().for_each(|(or, line)| {
             let mut sums = vec![0.0f64; ow];
@@ -175,11 +176,21 @@ impl Blocks<'_> {
             let (_, rows) = self.extent(0, or);
             for r in rows {
                 let src = &values[r * self.width..(r + 1) * self.width];
-                for (c, &v) in src.iter().enumerate() {
-                    if self.mask.is_valid(r * self.width + c) {
-                        sums[c / self.factor] += v as f64;
-                        counts[c / self.factor] += 1;
-                    }
+                let invalid = self
+                    .mask
+                    .invalid_cells()
+                    .map(|m| &m[r * self.width..(r + 1) * self.width]);
+                for (oc, block) in src.chunks(f).enumerate() {
+                    let (sum, n) = match invalid {
+                        None => (block.iter().sum::<f32>(), block.len() as u32),
+                        Some(m) => block
+                            .iter()
+                            .zip(&m[oc * f..])
+                            .filter(|&(_, &bad)| !bad)
+                            .fold((0.0f32, 0u32), |(s, n), (&v, _)| (s + v, n + 1)),
+                    };
+                    sums[oc] += sum as f64;
+                    counts[oc] += n;
                 }
             }
             for ((o, s), n) in line.iter_mut().zip(sums).zip(counts) {

@@ -167,11 +167,20 @@ fn named_map<'a>(terrain: &'a LayeredTerrain, name: &str) -> Result<&'a [f32], R
 
 /// Minimum and maximum of the finite values of valid cells.
 fn finite_range(values: &[f32], planes: &Planes) -> Option<(f32, f32)> {
+    let w = planes.geometry.width();
     values
-        .par_iter()
+        .par_chunks(w)
         .enumerate()
-        .filter(|&(i, v)| planes.mask.is_valid(i) && v.is_finite())
-        .map(|(_, &v)| (v, v))
+        .filter_map(|(row, line)| {
+            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+            for (col, &v) in line.iter().enumerate() {
+                if v.is_finite() && planes.mask.is_valid(row * w + col) {
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
+            }
+            (lo <= hi).then_some((lo, hi))
+        })
         .reduce_with(|a, b| (a.0.min(b.0), a.1.max(b.1)))
 }
 
@@ -233,9 +242,10 @@ fn draw(planes: &Planes, opts: &PreviewOptions) -> Result<RgbaImage, RenderError
     pixels
         .par_chunks_mut(w * 4)
         .enumerate()
-        .for_each(|(row, line)| {
-            for (col, px) in line.chunks_exact_mut(4).enumerate() {
-                px.copy_from_slice(&scene.pixel(col, row));
+        .for_each_init(Vec::new, |normals, (row, line)| {
+            row_normals(&scene.surface, planes, row, normals);
+            for ((col, px), &normal) in line.chunks_exact_mut(4).enumerate().zip(normals.iter()) {
+                px.copy_from_slice(&scene.pixel(row * w + col, normal));
             }
         });
     RgbaImage::from_raw(w32, h32, pixels).ok_or(RenderError::ImageTooLarge {
@@ -248,14 +258,20 @@ fn draw(planes: &Planes, opts: &PreviewOptions) -> Result<RgbaImage, RenderError
 /// `(bedrock + total snow depth) · exaggeration` per cell.
 fn exaggerated_surface(planes: &Planes, exaggeration: f32) -> Vec<f32> {
     let mut z: Vec<f32> = planes.bedrock.to_vec();
-    if let Some(snow) = &planes.snow {
-        z.par_iter_mut().enumerate().for_each(|(i, v)| {
-            *v += snow[0][i] + snow[1][i] + snow[2][i] + snow[3][i];
-        });
-    }
-    if exaggeration != 1.0 {
-        z.par_iter_mut().for_each(|v| *v *= exaggeration);
-    }
+    let w = planes.geometry.width();
+    z.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
+        let cells = row * w..(row + 1) * w;
+        if let Some([c, s, u, p]) = &planes.snow {
+            let layers = c[cells.clone()].iter().zip(&s[cells.clone()]);
+            let layers = layers.zip(u[cells.clone()].iter().zip(&p[cells]));
+            for (v, ((c, s), (u, p))) in line.iter_mut().zip(layers) {
+                *v += c + s + u + p;
+            }
+        }
+        if exaggeration != 1.0 {
+            line.iter_mut().for_each(|v| *v *= exaggeration);
+        }
+    });
     z
 }
 
@@ -267,15 +283,11 @@ impl Scene<'_, '_> {
         }
     }
 
-    fn pixel(&self, col: usize, row: usize) -> [u8; 4] {
-        let g = &self.planes.geometry;
-        let i = g.index(col, row);
+    /// The RGBA pixel of cell `i` whose surface has unit `normal`.
+    fn pixel(&self, i: usize, normal: [f32; 3]) -> [u8; 4] {
         if !self.planes.mask.is_valid(i) || !self.surface[i].is_finite() {
             return [0, 0, 0, 0];
         }
-        let (gx, gy) = surface::gradient(&self.surface, g, &self.planes.mask, col, row);
-        let inv = 1.0 / (gx * gx + gy * gy + 1.0).sqrt();
-        let normal = [-gx * inv, -gy * inv, inv];
         let light = shade::illumination(normal, self.sun, self.visibility[i]);
         let rgb = match self.mode {
             ColourMode::Snow | ColourMode::Layers => {
@@ -283,7 +295,7 @@ impl Scene<'_, '_> {
                 let depth: f32 = layers.iter().sum();
                 let ground = colour::ground_colour(
                     normalise(self.planes.bedrock[i], self.altitude_range),
-                    inv.clamp(-1.0, 1.0).acos(),
+                    normal[2],
                 );
                 let snow = match self.mode {
                     ColourMode::Layers => colour::layer_tint(layers),
@@ -305,6 +317,42 @@ impl Scene<'_, '_> {
     }
 }
 
+/// Unit upward normals (x east, y north, z up) of one row of the surface. Central differences
+/// as in `snowscape_terrain::surface::gradient` (which handles rows next to nodata); rows of an
+/// all-valid grid take a fast path with the same result.
+fn row_normals(z: &[f32], planes: &Planes, row: usize, out: &mut Vec<[f32; 3]>) {
+    let g = &planes.geometry;
+    let (w, h) = (g.width(), g.height());
+    out.clear();
+    let normal = |gx: f32, gy: f32| {
+        let inv = 1.0 / (gx * gx + gy * gy + 1.0).sqrt();
+        [-gx * inv, -gy * inv, inv]
+    };
+    if planes.mask.has_nodata() || w < 2 {
+        out.extend((0..w).map(|col| {
+            let (gx, gy) = surface::gradient(z, g, &planes.mask, col, row);
+            normal(gx, gy)
+        }));
+        return;
+    }
+    let (dx, dy) = (g.cell_size_x() as f32, g.cell_size_y() as f32);
+    let line = &z[row * w..(row + 1) * w];
+    let north = &z[row.saturating_sub(1) * w..][..w];
+    let south = &z[(row + 1).min(h - 1) * w..][..w];
+    let rows_apart = ((row + 1).min(h - 1) - row.saturating_sub(1)) as f32;
+    let inv_dy = if rows_apart > 0.0 {
+        1.0 / (rows_apart * dy)
+    } else {
+        0.0
+    };
+    for col in 0..w {
+        let (west, east) = (col.saturating_sub(1), (col + 1).min(w - 1));
+        let gx = (line[east] - line[west]) / ((east - west) as f32 * dx);
+        let gy = (north[col] - south[col]) * inv_dy;
+        out.push(normal(gx, gy));
+    }
+}
+
 /// Albedo times light, per channel.
 #[inline]
 fn lit(albedo: Rgb, light: Rgb) -> Rgb {
@@ -320,5 +368,6 @@ fn lit(albedo: Rgb, light: Rgb) -> Rgb {
 #[inline]
 fn softly_lit(albedo: Rgb, light: Rgb) -> Rgb {
     let brightness = (0.2126 * light[0] + 0.7152 * light[1] + 0.0722 * light[2]).min(1.0);
-    albedo.map(|a| a * (0.45 + 0.55 * brightness))
+    let k = 0.45 + 0.55 * brightness;
+    [albedo[0] * k, albedo[1] * k, albedo[2] * k]
 }
