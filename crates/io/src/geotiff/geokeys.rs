@@ -9,9 +9,11 @@
 //!
 //! | key  | name                  | meaning                                          |
 //! |------|-----------------------|--------------------------------------------------|
-//! | 1024 | GTModelTypeGeoKey     | 1 projected, 2 geographic                        |
+//! | 1024 | GTModelTypeGeoKey     | 1 projected, 2 geographic, 32767 user-defined    |
 //! | 1025 | GTRasterTypeGeoKey    | 1 PixelIsArea, 2 PixelIsPoint                    |
-//! | 1026 | GTCitationGeoKey      | free text; snowscape writes a WKT CRS here       |
+//! | 1026 | GTCitationGeoKey      | free text (`EPSG:n` for codes above 65535)       |
+//! | 3073 | PCSCitationGeoKey     | with model type 32767: `ESRI PE String = <WKT>`, |
+//! |      |                       | GDAL's way to carry a WKT-only CRS               |
 //! | 2048 | GeographicTypeGeoKey  | EPSG code of a geographic CRS                    |
 //! | 3072 | ProjectedCSTypeGeoKey | EPSG code of a projected CRS                     |
 
@@ -28,6 +30,9 @@ const KEY_PROJECTED_TYPE: u16 = 3072;
 const KEY_PCS_CITATION: u16 = 3073;
 /// GeoTIFF's "user-defined" code; 0 is "undefined".
 const USER_DEFINED: u16 = 32767;
+
+/// The citation prefix GDAL writes and reads for a CRS given only as WKT.
+const ESRI_PE: &str = "ESRI PE String = ";
 
 /// GTRasterTypeGeoKey value for PixelIsPoint.
 pub(crate) const RASTER_PIXEL_IS_POINT: u16 = 2;
@@ -58,6 +63,7 @@ impl GeoKeys {
             return Some(Crs::Epsg(c));
         }
         let cit = self.citation.as_deref()?.trim();
+        let cit = cit.strip_prefix(ESRI_PE).unwrap_or(cit).trim();
         let is_code = cit.to_ascii_uppercase().starts_with("EPSG:");
         (looks_like_wkt(cit) || is_code)
             .then(|| parse_crs_text(cit))
@@ -120,25 +126,33 @@ pub(crate) fn decode(dir: &[u16], ascii: &str) -> Result<GeoKeys, String> {
 pub(crate) fn encode(crs: Option<&Crs>) -> (Vec<u16>, Option<String>) {
     let mut keys: Vec<[u16; 4]> = Vec::new();
     let mut ascii = None;
-    if let Some(crs) = crs {
-        let model = if crs.is_geographic() { 2 } else { 1 };
-        keys.push([KEY_MODEL_TYPE, 0, 1, model]);
-        keys.push([KEY_RASTER_TYPE, 0, 1, 1]);
-        match crs {
-            Crs::Epsg(code) => match u16::try_from(*code) {
-                Ok(c) if crs.is_geographic() => keys.push([KEY_GEOGRAPHIC_TYPE, 0, 1, c]),
-                Ok(c) => keys.push([KEY_PROJECTED_TYPE, 0, 1, c]),
-                Err(_) => ascii = Some(format!("EPSG:{code}")),
-            },
-            Crs::Wkt(wkt) => ascii = Some(wkt.replace(['|', '\0'], "/")),
+    match crs {
+        Some(Crs::Wkt(wkt)) => {
+            // GDAL's convention: a user-defined model type and the WKT as an "ESRI PE String"
+            // in PCSCitationGeoKey.
+            keys.push([KEY_MODEL_TYPE, 0, 1, USER_DEFINED]);
+            keys.push([KEY_RASTER_TYPE, 0, 1, 1]);
+            ascii = Some((
+                KEY_PCS_CITATION,
+                format!("{ESRI_PE}{}", wkt.replace(['|', '\0'], "/")),
+            ));
         }
-    } else {
-        keys.push([KEY_RASTER_TYPE, 0, 1, 1]);
+        Some(crs @ Crs::Epsg(code)) => {
+            let geographic = crs.is_geographic();
+            keys.push([KEY_MODEL_TYPE, 0, 1, if geographic { 2 } else { 1 }]);
+            keys.push([KEY_RASTER_TYPE, 0, 1, 1]);
+            match u16::try_from(*code) {
+                Ok(c) if geographic => keys.push([KEY_GEOGRAPHIC_TYPE, 0, 1, c]),
+                Ok(c) => keys.push([KEY_PROJECTED_TYPE, 0, 1, c]),
+                Err(_) => ascii = Some((KEY_CITATION, format!("EPSG:{code}"))),
+            }
+        }
+        None => keys.push([KEY_RASTER_TYPE, 0, 1, 1]),
     }
-    let ascii = ascii.map(|text| {
+    let ascii = ascii.map(|(key, text)| {
         let text: String = text.chars().filter(char::is_ascii).take(65_000).collect();
         let count = u16::try_from(text.len() + 1).unwrap_or(u16::MAX);
-        keys.push([KEY_CITATION, TAG_GEO_ASCII_PARAMS, count, 0]);
+        keys.push([key, TAG_GEO_ASCII_PARAMS, count, 0]);
         format!("{text}|")
     });
     keys.sort_by_key(|k| k[0]);
@@ -177,6 +191,18 @@ mod tests {
             dir,
             vec![1, 1, 0, 3, 1024, 0, 1, 2, 1025, 0, 1, 1, 2048, 0, 1, 4326]
         );
+    }
+
+    #[test]
+    fn wkt_uses_gdal_esri_pe_convention() {
+        let (dir, ascii) = encode(Some(&Crs::Wkt("PROJCS[\"a|b\"]".into())));
+        assert_eq!(
+            dir,
+            vec![
+                1, 1, 0, 3, 1024, 0, 1, 32767, 1025, 0, 1, 1, 3073, 34737, 31, 0
+            ]
+        );
+        assert_eq!(ascii.as_deref(), Some("ESRI PE String = PROJCS[\"a/b\"]|"));
     }
 
     #[test]
