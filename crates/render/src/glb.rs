@@ -91,34 +91,32 @@ pub fn terrain_glb(terrain: &LayeredTerrain, opts: &GlbOptions) -> Result<Vec<u8
             height: g.height(),
         })?;
     let bedrock = |i: usize| terrain.bedrock[i];
-    let rock = surface_mesh(
-        &HeightSource {
-            geometry: g,
-            altitude: &bedrock,
-            usable: &valid,
-            what: "bedrock altitude",
+    let rock_source = HeightSource {
+        geometry: g,
+        altitude: &bedrock,
+        usable: &valid,
+        what: "bedrock altitude",
+    };
+    let snowy = |i: usize| valid(i) && terrain.depth_at(i) > SNOW_MESH_MIN_DEPTH_M;
+    let top = |i: usize| terrain.bedrock[i] + terrain.depth_at(i);
+    let snow_source = HeightSource {
+        geometry: g,
+        altitude: &top,
+        usable: &snowy,
+        what: "snow surface altitude",
+    };
+    let (rock, snow) = rayon::join(
+        || surface_mesh(&rock_source, step, base, ex as f32),
+        || match opts.include_snow {
+            true => surface_mesh(&snow_source, step, base, ex as f32),
+            false => Ok(None),
         },
-        step,
-        base,
-        ex as f32,
-    )?
-    .ok_or(RenderError::EmptyMesh {
+    );
+    let rock = rock?.ok_or(RenderError::EmptyMesh {
         width: g.width(),
         height: g.height(),
     })?;
-    let snow = if opts.include_snow {
-        let snowy = |i: usize| valid(i) && terrain.depth_at(i) > SNOW_MESH_MIN_DEPTH_M;
-        let top = |i: usize| terrain.bedrock[i] + terrain.depth_at(i);
-        let source = HeightSource {
-            geometry: g,
-            altitude: &top,
-            usable: &snowy,
-            what: "snow surface altitude",
-        };
-        surface_mesh(&source, step, base, ex as f32)?
-    } else {
-        None
-    };
+    let snow = snow?;
     let mut doc = Document::default();
     doc.add_surface("terrain", &rock, "rock", ROCK_BASE_COLOUR, ROCK_ROUGHNESS);
     if let Some(snow) = &snow {
@@ -136,31 +134,32 @@ struct Document {
 }
 
 impl Document {
-    /// Appends `bytes` as a buffer view (4-byte aligned) for `target`.
+    /// Appends the bytes `write` produces as a buffer view (4-byte aligned) for `target`.
     fn push_view(
         &mut self,
-        bytes: Vec<u8>,
+        write: impl FnOnce(&mut Vec<u8>),
         target: json::buffer::Target,
     ) -> json::Index<json::buffer::View> {
         debug_assert!(self.bin.len().is_multiple_of(4));
+        let offset = self.bin.len();
+        write(&mut self.bin);
         let view = json::buffer::View {
             buffer: json::Index::new(0),
-            byte_length: USize64::from(bytes.len()),
-            byte_offset: Some(USize64::from(self.bin.len())),
+            byte_length: USize64::from(self.bin.len() - offset),
+            byte_offset: Some(USize64::from(offset)),
             byte_stride: None,
             name: None,
             target: Some(Valid(target)),
             extensions: None,
             extras: Default::default(),
         };
-        self.bin.extend_from_slice(&bytes);
         self.root.push(view)
     }
 
     /// Appends an accessor over a fresh buffer view.
     fn push_accessor(
         &mut self,
-        bytes: Vec<u8>,
+        write: impl FnOnce(&mut Vec<u8>),
         count: usize,
         shape: (json::accessor::ComponentType, json::accessor::Type),
         bounds: Option<([f32; 3], [f32; 3])>,
@@ -169,7 +168,7 @@ impl Document {
             json::accessor::Type::Scalar => json::buffer::Target::ElementArrayBuffer,
             _ => json::buffer::Target::ArrayBuffer,
         };
-        let view = self.push_view(bytes, target);
+        let view = self.push_view(write, target);
         self.root.push(json::Accessor {
             buffer_view: Some(view),
             byte_offset: None,
@@ -198,14 +197,19 @@ impl Document {
         use json::accessor::{ComponentType as C, Type as T};
         let n = mesh.positions.len();
         let positions = self.push_accessor(
-            vec3_bytes(&mesh.positions),
+            |bin| write_vec3s(bin, &mesh.positions),
             n,
             (C::F32, T::Vec3),
             Some(mesh.bounds()),
         );
-        let normals = self.push_accessor(vec3_bytes(&mesh.normals), n, (C::F32, T::Vec3), None);
+        let normals = self.push_accessor(
+            |bin| write_vec3s(bin, &mesh.normals),
+            n,
+            (C::F32, T::Vec3),
+            None,
+        );
         let indices = self.push_accessor(
-            u32_bytes(&mesh.indices),
+            |bin| write_u32s(bin, &mesh.indices),
             mesh.indices.len(),
             (C::U32, T::Scalar),
             None,
@@ -271,24 +275,22 @@ impl Document {
     }
 }
 
-/// Little-endian bytes of packed f32 triples.
-fn vec3_bytes(values: &[[f32; 3]]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(values.len() * 12);
+/// Appends packed f32 triples, little-endian.
+fn write_vec3s(bin: &mut Vec<u8>, values: &[[f32; 3]]) {
+    bin.reserve(values.len() * 12);
     for v in values {
         for c in v {
-            out.extend_from_slice(&c.to_le_bytes());
+            bin.extend_from_slice(&c.to_le_bytes());
         }
     }
-    out
 }
 
-/// Little-endian bytes of u32 indices.
-fn u32_bytes(values: &[u32]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(values.len() * 4);
+/// Appends u32 values, little-endian.
+fn write_u32s(bin: &mut Vec<u8>, values: &[u32]) {
+    bin.reserve(values.len() * 4);
     for v in values {
-        out.extend_from_slice(&v.to_le_bytes());
+        bin.extend_from_slice(&v.to_le_bytes());
     }
-    out
 }
 
 /// GLB chunk type of the JSON chunk ("JSON").

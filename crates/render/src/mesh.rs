@@ -94,9 +94,9 @@ pub struct HeightSource<'a> {
     /// The grid's geometry.
     pub geometry: &'a GridGeometry,
     /// Altitude of cell `i`, metres.
-    pub altitude: &'a dyn Fn(usize) -> f32,
+    pub altitude: &'a (dyn Fn(usize) -> f32 + Sync),
     /// Whether cell `i` may be a triangle corner.
-    pub usable: &'a dyn Fn(usize) -> bool,
+    pub usable: &'a (dyn Fn(usize) -> bool + Sync),
     /// Name of the surface for error messages ("bedrock altitude", "snow surface altitude").
     pub what: &'static str,
 }
