@@ -48,6 +48,9 @@ impl<R: BufRead> Lines<R> {
             return Ok(false);
         }
         self.line += 1;
+        if self.line == 1 && self.buf.starts_with(b"\xEF\xBB\xBF") {
+            self.buf.drain(..3);
+        }
         Ok(true)
     }
 
@@ -72,7 +75,7 @@ fn lossy(token: &[u8]) -> String {
 struct Header {
     ncols: Option<usize>,
     nrows: Option<usize>,
-    /// (value, is centre, line)
+    /// (value, whether it is a cell centre)
     x: Option<(f64, bool)>,
     y: Option<(f64, bool)>,
     cellsize: Option<(f64, usize)>,
@@ -228,6 +231,7 @@ fn read_values<R: BufRead>(
 /// Reads an ESRI ASCII grid.
 pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
     let file = std::fs::File::open(path).map_err(io_err(path))?;
+    let file_len = file.metadata().map_err(io_err(path))?.len();
     let mut lines = Lines {
         reader: BufReader::with_capacity(1 << 16, file),
         buf: Vec::new(),
@@ -236,12 +240,11 @@ pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
     let (header, has_data) = read_header(path, &mut lines)?;
     let lay = layout(path, &header, lines.line)?;
     check_cells(path, lay.ncols as u64, lay.nrows as u64, opts.max_cells)?;
-    let mut sink = CellSink::new(
-        path,
-        lay.ncols,
-        lay.nrows,
-        NodataRule::declared(header.nodata),
-    );
+    // Each value takes at least two bytes: a lying header cannot reserve more than the file.
+    let room = usize::try_from(file_len / 2 + 1).unwrap_or(usize::MAX);
+    let n = (lay.ncols * lay.nrows).min(room);
+    let rule = NodataRule::declared(header.nodata);
+    let mut sink = CellSink::with_capacity(path, lay.ncols, n, rule);
     if has_data {
         read_values(path, &mut lines, &mut sink, &lay)?;
     } else {
@@ -330,6 +333,15 @@ mod tests {
         let t = g.geometry().transform();
         assert_eq!((t.origin_x, t.origin_y), (9.0, 23.0));
         assert_eq!(g.geometry().cell_size_x(), 2.0);
+    }
+
+    #[test]
+    fn byte_order_mark_and_crlf() {
+        let g = read_text(
+            "\u{feff}ncols 2\r\nnrows 1\r\nxllcorner 0\r\nyllcorner 0\r\ncellsize 1\r\n4 5\r\n",
+        )
+        .unwrap();
+        assert_eq!(g.data(), &[4.0, 5.0]);
     }
 
     #[test]

@@ -61,7 +61,12 @@ pub(crate) struct CellSink<'p> {
 impl<'p> CellSink<'p> {
     /// A sink for `width * height` cells. The caller has checked the cell count already.
     pub fn new(path: &'p Path, width: usize, height: usize, rule: NodataRule) -> Self {
-        let n = width.saturating_mul(height);
+        Self::with_capacity(path, width, width.saturating_mul(height), rule)
+    }
+
+    /// A sink for rows of `width` cells that reserves room for `n` cells up front (it grows
+    /// as cells arrive), for readers whose header may promise more than the file holds.
+    pub fn with_capacity(path: &'p Path, width: usize, n: usize, rule: NodataRule) -> Self {
         Self {
             path,
             width: width.max(1),
