@@ -4,7 +4,8 @@
 //!
 //! Receiver `p` samples senders `p_ij` in polar coordinates: `N` directions
 //! `θ_i = 2π(i + ξ_p)/N` (the paper's "random directions", here a stratified set rotated by a
-//! counter-based random offset `ξ_p` per cell, so the result is a pure function of the seed)
+//! counter-based random offset `ξ_p ∈ {(j + 1/2)/64}` per cell, so the result is a pure
+//! function of the seed; the 64 rotated patterns are tabulated once)
 //! and radii `r_0 < … < r_{M-1}` spaced geometrically from `min_radius_m` to `max_radius_m`.
 //! `A_ij = π(r_{j+1/2}² − r_{j−1/2}²)/N` is the horizontal area a sample stands for (the
 //! sector of angle 2π/N between the mid-radii), with `r_{j+1/2} = (r_j + r_{j+1})/2`,
@@ -23,7 +24,7 @@
 use crate::field::TerrainField;
 use crate::{BounceParams, EnvironmentError};
 use rayon::prelude::*;
-use snowscape_terrain::random::uniform;
+use snowscape_terrain::random::hash3;
 use snowscape_terrain::{GridGeometry, NodataMask};
 
 /// Random stream of the per-cell rotation of the sample directions.
@@ -100,57 +101,89 @@ fn form_term(d: [f32; 3], n_receiver: [f32; 3], n_sender: [f32; 3]) -> f32 {
     }
 }
 
-/// The bounce on a prepared field.
-pub(crate) fn bounce_field(field: &TerrainField, sun: &[f32], params: &BounceParams) -> Vec<f32> {
-    let (w, h) = (field.width, field.height);
-    let (csx, csy) = (field.csx, field.csy);
+/// Number of precomputed rotations of the sample pattern; each cell picks one by a keyed
+/// random number (a stratified rotation quantised to 1/ROTATIONS of the sector).
+const ROTATIONS: usize = 64;
+
+/// One polar sample: grid offset, metric offset and area.
+#[derive(Debug, Clone, Copy)]
+struct Offset {
+    dc: i32,
+    dr: i32,
+    east: f32,
+    north: f32,
+    area: f32,
+}
+
+/// The sample offsets of every rotation: `ROTATIONS` blocks of `directions × radii`.
+fn offsets(params: &BounceParams, csx: f64, csy: f64) -> Vec<Offset> {
     let rings = sample_rings(params, csx.max(csy));
     let n = params.directions as usize;
-    let base: Vec<(f64, f64)> = (0..n)
-        .map(|i| (std::f64::consts::TAU * i as f64 / n as f64).sin_cos())
-        .collect();
+    let mut out = Vec::with_capacity(ROTATIONS * n * rings.len());
+    for rot in 0..ROTATIONS {
+        for i in 0..n {
+            let theta = std::f64::consts::TAU * (i as f64 + (rot as f64 + 0.5) / ROTATIONS as f64)
+                / n as f64;
+            let (se, cn) = theta.sin_cos();
+            for &(r, area) in &rings {
+                let dc = (r * se / csx).round() as i32;
+                let dr = -(r * cn / csy).round() as i32;
+                out.push(Offset {
+                    dc,
+                    dr,
+                    east: (dc as f64 * csx) as f32,
+                    north: (-dr as f64 * csy) as f32,
+                    area: area as f32,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The bounce on a prepared field.
+pub(crate) fn bounce_field(field: &TerrainField, sun: &[f32], params: &BounceParams) -> Vec<f32> {
+    let (w, h) = (field.width as i64, field.height as i64);
+    let table = offsets(params, field.csx, field.csy);
+    let per_cell = table.len() / ROTATIONS;
     let k = (params.k_ind / std::f64::consts::PI) as f32;
     let layout = &field.rows;
+    // Sender records packed for one memory access per sample: height, sun, normal.
+    let senders: Vec<[f32; 5]> = (0..field.len())
+        .into_par_iter()
+        .map(|i| {
+            let n = layout.normal[i];
+            [layout.z[i], sun[i], n[0], n[1], n[2]]
+        })
+        .collect();
     let mut out = vec![0.0f32; field.len()];
-    out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
-        for (col, o) in line.iter_mut().enumerate() {
-            let p = row * w + col;
-            let zp = layout.z[p];
-            if zp == f32::NEG_INFINITY {
-                continue;
-            }
-            let np = layout.normal[p];
-            let turn =
-                std::f64::consts::TAU * uniform(params.seed, STREAM_ROTATION, p as u64) / n as f64;
-            let (st, ct) = turn.sin_cos();
-            let mut sum = 0.0f32;
-            for &(s0, c0) in &base {
-                // Rotate the base direction (sin θ east, cos θ north) by the cell's offset.
-                let (east, north) = (s0 * ct + c0 * st, c0 * ct - s0 * st);
-                for &(r, area) in &rings {
-                    let dc = (r * east / csx).round() as isize;
-                    let dr = -(r * north / csy).round() as isize;
-                    let (c, rr) = (col as isize + dc, row as isize + dr);
-                    if (dc == 0 && dr == 0)
-                        || c < 0
-                        || rr < 0
-                        || c >= w as isize
-                        || rr >= h as isize
-                    {
-                        continue;
-                    }
-                    let q = rr as usize * w + c as usize;
-                    let zq = layout.z[q];
-                    if zq == f32::NEG_INFINITY {
-                        continue;
-                    }
-                    let d = [(dc as f64 * csx) as f32, (-dr as f64 * csy) as f32, zq - zp];
-                    sum += area as f32 * sun[q] * form_term(d, np, layout.normal[q]);
+    out.par_chunks_mut(field.width)
+        .enumerate()
+        .for_each(|(row, line)| {
+            for (col, o) in line.iter_mut().enumerate() {
+                let p = row * field.width + col;
+                let [zp, _, nx, ny, nz] = senders[p];
+                if zp == f32::NEG_INFINITY {
+                    continue;
                 }
+                let rot =
+                    (hash3(params.seed, STREAM_ROTATION, p as u64) % ROTATIONS as u64) as usize;
+                let mut sum = 0.0f32;
+                for s in &table[rot * per_cell..(rot + 1) * per_cell] {
+                    let (c, r) = (col as i64 + s.dc as i64, row as i64 + s.dr as i64);
+                    if (s.dc == 0 && s.dr == 0) || c < 0 || r < 0 || c >= w || r >= h {
+                        continue;
+                    }
+                    let [zq, sq, mx, my, mz] = senders[(r * w + c) as usize];
+                    if zq == f32::NEG_INFINITY || sq == 0.0 {
+                        continue;
+                    }
+                    let d = [s.east, s.north, zq - zp];
+                    sum += s.area * sq * form_term(d, [nx, ny, nz], [mx, my, mz]);
+                }
+                *o = k * sum;
             }
-            *o = k * sum;
-        }
-    });
+        });
     out
 }
 

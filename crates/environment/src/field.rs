@@ -23,7 +23,7 @@ pub(crate) struct Layout {
     pub z: Vec<f32>,
     /// Height gradient `(∂z/∂x east, ∂z/∂y north)`, dimensionless; 0 on nodata cells.
     pub grad: Vec<[f32; 2]>,
-    /// Unit upward normal (east, north, up); straight up on nodata cells.
+    /// Unit upward normal (east, north, up); zero on nodata cells (so they receive no light).
     pub normal: Vec<[f32; 3]>,
 }
 
@@ -108,7 +108,7 @@ impl TerrainField {
         let (w, h) = (geometry.width(), geometry.height());
         let mut z = vec![0.0f32; w * h];
         let mut grad = vec![[0.0f32; 2]; w * h];
-        let mut normal = vec![[0.0f32, 0.0, 1.0]; w * h];
+        let mut normal = vec![[0.0f32; 3]; w * h];
         z.par_chunks_mut(w)
             .zip(grad.par_chunks_mut(w))
             .zip(normal.par_chunks_mut(w))

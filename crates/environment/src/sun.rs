@@ -16,7 +16,7 @@
 
 use crate::field::TerrainField;
 use crate::solar::{SunSample, day_samples, schedule_days};
-use crate::sweep::{LineFrame, blend, shadow_pass};
+use crate::sweep::{LineFrame, shadow_pass};
 use crate::{EnvironmentError, SunParams};
 use rayon::prelude::*;
 use snowscape_terrain::{GridGeometry, NodataMask};
@@ -68,10 +68,22 @@ pub fn direct_sun_for(
     Ok(direct_sun_field(&field, samples, k_sun))
 }
 
-/// Lambert term of one cell: `max(0, n·i)`.
+/// Lambert term of one cell: `max(0, n·i)` (0 for the zero normal of nodata cells).
 #[inline(always)]
 fn incidence(n: [f32; 3], sun: [f32; 3]) -> f32 {
     (n[0] * sun[0] + n[1] * sun[1] + n[2] * sun[2]).max(0.0)
+}
+
+/// `acc += weight · lit · max(0, n·sun)` over a layout, in parallel.
+fn accumulate(acc: &mut [f32], lit: &[f32], normal: &[[f32; 3]], sun: [f32; 3], weight: f32) {
+    acc.par_chunks_mut(4096)
+        .zip(lit.par_chunks(4096))
+        .zip(normal.par_chunks(4096))
+        .for_each(|((a, l), n)| {
+            for ((a, &l), &n) in a.iter_mut().zip(l).zip(n) {
+                *a += weight * l * incidence(n, sun);
+            }
+        });
 }
 
 /// The sweep-based exposure on a prepared field.
@@ -82,6 +94,7 @@ pub(crate) fn direct_sun_field(
 ) -> Vec<f32> {
     let mut acc_rows = vec![0.0f32; field.len()];
     let mut acc_cols = vec![0.0f32; field.len()];
+    let mut lit = vec![0.0f32; field.len()];
     let mut sheared = Vec::new();
     for sample in samples.iter().filter(|s| s.direction[2] > 0.0) {
         let [e, n, u] = sample.direction;
@@ -90,27 +103,20 @@ pub(crate) fn direct_sun_field(
         let horizontal = (e * e + n * n).sqrt();
         if horizontal < 1e-9 {
             // Sun at the zenith: nothing casts a shadow.
-            let layout = &field.rows;
-            acc_rows.par_iter_mut().enumerate().for_each(|(i, a)| {
-                if layout.z[i] != f32::NEG_INFINITY {
-                    *a += weight * incidence(layout.normal[i], sun);
-                }
-            });
+            lit.fill(1.0);
+            accumulate(&mut acc_rows, &lit, &field.rows.normal, sun, weight);
             continue;
         }
         let frame = LineFrame::new(field, e, n);
         let layout = field.layout(frame.transposed);
         shadow_pass(&frame, layout, (u / horizontal) as f32, &mut sheared);
+        frame.unshear(&sheared, &mut lit, 0.0);
         let acc = if frame.transposed {
             &mut acc_cols
         } else {
             &mut acc_rows
         };
-        frame.unshear(&sheared, acc, |i, v0, v1, t, a| {
-            if layout.z[i] != f32::NEG_INFINITY {
-                *a += blend(v0, v1, t) * weight * incidence(layout.normal[i], sun);
-            }
-        });
+        accumulate(acc, &lit, &layout.normal, sun, weight);
     }
     field.add_transposed(&mut acc_rows, &acc_cols, |a, b| *a += b);
     let k = k_sun as f32;

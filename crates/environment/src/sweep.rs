@@ -119,53 +119,69 @@ impl LineFrame {
         }
     }
 
-    /// Runs `visit(k, xs, out)` for every line `k` in parallel, with `xs` its columns in sweep
-    /// order (points ahead along `d` first) and `out` its row of the sheared buffer (indexed by
-    /// column, pre-filled with [`MISSING`]). `init` makes per-thread scratch.
+    /// Columns `[lo, hi)` of line `k` whose lower bracketing row `k + floor(x·m)` lies in
+    /// `[-1, h-1]` (contiguous, as `floor(x·m)` is monotone); samples outside are never read.
+    fn line_range(&self, k: i32) -> (usize, usize) {
+        let (lo_fl, hi_fl) = (-1 - k, self.h as i32 - 1 - k);
+        if self.fl.last().copied().unwrap_or(0) >= self.fl[0] {
+            let lo = self.fl.partition_point(|&f| f < lo_fl);
+            let hi = self.fl.partition_point(|&f| f <= hi_fl);
+            (lo, hi.max(lo))
+        } else {
+            let lo = self.fl.partition_point(|&f| f > hi_fl);
+            let hi = self.fl.partition_point(|&f| f >= lo_fl);
+            (lo, hi.max(lo))
+        }
+    }
+
+    /// Runs `visit(scratch, k, lo, hi, out)` for every line `k` in parallel, with `[lo, hi)`
+    /// its useful columns and `out` its row of the sheared buffer (indexed by column; every
+    /// useful column must be written). `init` makes per-thread scratch. Passes visit the
+    /// columns ahead first: `x = hi − 1 − n` when [`LineFrame::backwards`], else `lo + n`.
     pub fn for_each_line<S, I, F>(&self, sheared: &mut Vec<f32>, init: I, visit: F)
     where
         I: Fn() -> S + Sync + Send,
-        F: Fn(&mut S, i32, &mut dyn Iterator<Item = usize>, &mut [f32]) + Sync + Send,
+        F: Fn(&mut S, i32, usize, usize, &mut [f32]) + Sync + Send,
     {
-        sheared.clear();
-        sheared.resize(self.sheared_len(), MISSING);
-        let w = self.w;
-        let backwards = self.step > 0.0;
-        sheared
-            .par_chunks_mut(w)
+        // Entries outside the useful columns are never read: the buffer is not cleared.
+        let len = self.sheared_len();
+        if sheared.len() < len {
+            sheared.resize(len, MISSING);
+        }
+        sheared[..len]
+            .par_chunks_mut(self.w)
             .enumerate()
             .for_each_init(init, |scratch, (li, out)| {
                 let k = li as i32 + self.kmin;
-                if backwards {
-                    visit(scratch, k, &mut (0..w).rev(), out);
-                } else {
-                    visit(scratch, k, &mut (0..w), out);
-                }
+                let (lo, hi) = self.line_range(k);
+                visit(scratch, k, lo, hi, out);
             });
     }
 
-    /// Un-shears: calls `f(layout index, v0, v1, weight of v1, &mut acc[layout index])` for
-    /// every cell with the values `v0`, `v1` of the two lines bracketing it (either may be
-    /// [`MISSING`]; `v1 == v0` when the cell lies on a line); parallel over rows of `acc`.
-    pub fn unshear<T, F>(&self, sheared: &[f32], acc: &mut [T], f: F)
-    where
-        T: Send,
-        F: Fn(usize, f32, f32, f32, &mut T) + Sync + Send,
-    {
+    /// Whether cells ahead along `d` have larger `x` (lines are then walked backwards).
+    #[inline(always)]
+    pub fn backwards(&self) -> bool {
+        self.step > 0.0
+    }
+
+    /// Un-shears into `out` (the frame's layout): every cell gets [`blend`] of the values of
+    /// the two lines bracketing it, or `fill` when both are [`MISSING`] (nodata cells);
+    /// parallel over rows.
+    pub fn unshear(&self, sheared: &[f32], out: &mut [f32], fill: f32) {
         let w = self.w;
-        acc.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, a) in row.iter_mut().enumerate() {
+        out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, o) in row.iter_mut().enumerate() {
                 let t = self.frac[x];
                 // y − x·m = y − fl − t: on line y − fl when t = 0, else between y − fl − 1
                 // (weight t) and y − fl (weight 1 − t).
-                let k_on = y as i32 - self.fl[x] - self.kmin;
-                let v_on = sheared[k_on as usize * w + x];
-                if t == 0.0 {
-                    f(y * w + x, v_on, v_on, 0.0, a);
+                let k_on = (y as i32 - self.fl[x] - self.kmin) as usize;
+                let v_on = sheared[k_on * w + x];
+                let v = if t == 0.0 {
+                    v_on
                 } else {
-                    let v_below = sheared[(k_on - 1) as usize * w + x];
-                    f(y * w + x, v_below, v_on, 1.0 - t, a);
-                }
+                    blend(sheared[(k_on - 1) * w + x], v_on, 1.0 - t)
+                };
+                *o = if v.is_nan() { fill } else { v };
             }
         });
     }
@@ -194,17 +210,21 @@ pub(crate) fn blend(v0: f32, v1: f32, f: f32) -> f32 {
 /// and popped at most once, amortised O(1) (Stewart 1998, "Fast horizon computation at all
 /// points of a terrain with visibility and shading applications", IEEE TVCG 4(1)).
 pub(crate) fn horizon_pass(frame: &LineFrame, layout: &Layout, sheared: &mut Vec<f32>) {
-    let step = frame.step.abs();
-    frame.for_each_line(sheared, Vec::<(f32, f32)>::new, |hull, k, xs, out| {
+    let step = frame.step;
+    let backwards = frame.backwards();
+    frame.for_each_line(sheared, Vec::<(f32, f32)>::new, |hull, k, lo, hi, out| {
         hull.clear();
-        // Position along d: the sweep starts at the far end, so it decreases.
-        for (n, x) in xs.enumerate() {
-            let Some(z) = frame.sample(layout, k, x) else {
-                continue;
-            };
-            let s = -(n as f32) * step;
-            out[x] = hull_tangent(hull, s, z);
-            hull.push((s, z));
+        for n in 0..hi - lo {
+            let x = if backwards { hi - 1 - n } else { lo + n };
+            match frame.sample(layout, k, x) {
+                // Position along d: x·step grows towards the points ahead.
+                Some(z) => {
+                    let s = x as f32 * step;
+                    out[x] = hull_tangent(hull, s, z);
+                    hull.push((s, z));
+                }
+                None => out[x] = MISSING,
+            }
         }
     });
 }
@@ -238,20 +258,24 @@ pub(crate) fn shadow_pass(
     tan_elevation: f32,
     sheared: &mut Vec<f32>,
 ) {
-    let rise = frame.step.abs() * tan_elevation;
+    let rise = frame.step * tan_elevation;
+    let backwards = frame.backwards();
     frame.for_each_line(
         sheared,
         || (),
-        |_, k, xs, out| {
+        |_, k, lo, hi, out| {
             let mut highest = f32::NEG_INFINITY;
-            for (n, x) in xs.enumerate() {
-                let Some(z) = frame.sample(layout, k, x) else {
-                    continue;
-                };
-                // s = −n·step, so z − s·tanα = z + n·rise.
-                let v = z + n as f32 * rise;
-                out[x] = if v >= highest { 1.0 } else { 0.0 };
-                highest = highest.max(v);
+            for n in 0..hi - lo {
+                let x = if backwards { hi - 1 - n } else { lo + n };
+                match frame.sample(layout, k, x) {
+                    Some(z) => {
+                        // z − s·tanα with s = x·step.
+                        let v = z - x as f32 * rise;
+                        out[x] = if v >= highest { 1.0 } else { 0.0 };
+                        highest = highest.max(v);
+                    }
+                    None => out[x] = MISSING,
+                }
             }
         },
     );
@@ -279,7 +303,7 @@ mod tests {
             let mut sheared = Vec::new();
             horizon_pass(&frame, layout, &mut sheared);
             let mut acc = vec![0.0f32; layout.z.len()];
-            frame.unshear(&sheared, &mut acc, |_, v0, v1, t, a| *a = blend(v0, v1, t));
+            frame.unshear(&sheared, &mut acc, f32::NAN);
             for (i, v) in acc.iter().enumerate() {
                 // Flat ground: the horizon is 0 or open (−inf at the far edge), never missing.
                 assert!(
@@ -301,20 +325,16 @@ mod tests {
             let layout = f.layout(frame.transposed);
             let mut sheared = Vec::new();
             horizon_pass(&frame, layout, &mut sheared);
-            let step = frame.step.abs();
-            let order: Vec<usize> = if frame.step > 0.0 {
-                (0..frame.w).rev().collect()
-            } else {
-                (0..frame.w).collect()
-            };
             for li in 0..frame.nlines {
                 let k = li as i32 + frame.kmin;
-                for (n, &x) in order.iter().enumerate() {
+                let (lo, hi) = frame.line_range(k);
+                for x in lo..hi {
                     let Some(zi) = frame.sample(layout, k, x) else { continue };
                     let mut best = f32::NEG_INFINITY;
-                    for (m, &xj) in order[..n].iter().enumerate() {
-                        if let Some(zj) = frame.sample(layout, k, xj) {
-                            best = best.max((zj - zi) / ((n - m) as f32 * step));
+                    for xj in lo..hi {
+                        let ahead = (xj as f32 - x as f32) * frame.step;
+                        if ahead > 0.0 && let Some(zj) = frame.sample(layout, k, xj) {
+                            best = best.max((zj - zi) / ahead);
                         }
                     }
                     let got = sheared[li * frame.w + x];
@@ -324,6 +344,7 @@ mod tests {
                     );
                 }
             }
+
         }
     }
 }
