@@ -176,21 +176,6 @@ pub enum RasterError {
         #[source]
         source: TerrainError,
     },
-    /// A CRS in degrees declared for a grid whose extent cannot be in degrees (a mislabelled
-    /// file): its metric cell sizes would be absurd.
-    #[error(
-        "{path}: the CRS {crs} is geographic (degrees) but the grid spans x {x0}..{x1}, \
-         y {y0}..{y1}, which are not longitudes and latitudes; the file's CRS is wrong: give \
-         the right one (e.g. --crs EPSG:31254)"
-    )]
-    GeographicExtent {
-        path: PathBuf,
-        crs: String,
-        x0: f64,
-        x1: f64,
-        y0: f64,
-        y1: f64,
-    },
     /// A sidecar file (JSON scale, CRS) that cannot be read or written.
     #[error("{path}: sidecar error: {reason}")]
     Sidecar { path: PathBuf, reason: String },

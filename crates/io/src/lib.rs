@@ -71,32 +71,50 @@ fn format_of(path: &Path, forced: Option<RasterFormat>) -> Result<RasterFormat, 
         })
 }
 
-/// Fails when the grid's CRS is in degrees but its extent cannot be longitudes and latitudes.
-fn check_geographic_extent(path: &Path, g: &GridGeometry) -> Result<(), RasterError> {
-    let Some(crs) = g.crs().filter(|c| c.is_geographic()) else {
-        return Ok(());
-    };
+/// Whether the grid's CRS is in degrees while its extent cannot be longitudes and latitudes
+/// (a mislabelled file, such as a metric DEM tagged EPSG:4326).
+fn impossible_geographic_extent(g: &GridGeometry) -> bool {
+    if !g.crs().is_some_and(|c| c.is_geographic()) {
+        return false;
+    }
     let t = g.transform();
     let (x0, x1) = (t.origin_x, t.origin_x + g.width() as f64 * t.pixel_width);
     let (y0, y1) = (t.origin_y - g.height() as f64 * t.pixel_height, t.origin_y);
-    if x0 >= -180.0 && x1 <= 360.0 && y0 >= -90.0 && y1 <= 90.0 {
-        return Ok(());
-    }
-    Err(RasterError::GeographicExtent {
-        path: path.to_path_buf(),
-        crs: crs.to_string(),
-        x0,
-        x1,
-        y0,
-        y1,
-    })
+    !(x0 >= -180.0 && x1 <= 360.0 && y0 >= -90.0 && y1 <= 90.0)
 }
 
 /// Reads a DEM (see the crate docs for formats, options and rules).
+///
+/// A file whose CRS is in degrees but whose extent cannot be longitudes and latitudes (a
+/// metric DEM mislabelled EPSG:4326) loads with its coordinates taken as metres and its CRS
+/// dropped, with a warning naming the file, the CRS and the extent; `--crs` sets the right one.
 pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
     let grid = read_any(path, opts)?;
-    check_geographic_extent(path, grid.geometry())?;
-    Ok(grid)
+    if !impossible_geographic_extent(grid.geometry()) {
+        return Ok(grid);
+    }
+    let g = grid.geometry();
+    let t = *g.transform();
+    tracing::warn!(
+        "{}: declares {} (degrees) but spans x {:.1}..{:.1}, y {:.1}..{:.1}: taking the coordinates as metres with no CRS; pass --crs to set the right one",
+        path.display(),
+        g.crs().map(|c| c.to_string()).unwrap_or_default(),
+        t.origin_x,
+        t.origin_x + g.width() as f64 * t.pixel_width,
+        t.origin_y - g.height() as f64 * t.pixel_height,
+        t.origin_y
+    );
+    let metric = GridGeometry::from_transform(g.width(), g.height(), t, None).map_err(|e| {
+        RasterError::Geometry {
+            path: path.to_path_buf(),
+            source: e,
+        }
+    })?;
+    let mask = grid.mask().clone();
+    Grid::new(metric, grid.into_data(), mask).map_err(|e| RasterError::Geometry {
+        path: path.to_path_buf(),
+        source: e,
+    })
 }
 
 fn read_any(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
