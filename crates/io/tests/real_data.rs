@@ -1,7 +1,7 @@
 //! Every DEM in the shared data folder reads with the right size, value range, CRS, metric cell
 //! size and nodata share. These tests need the real files: they fail if the folder is missing.
 
-use snowscape_io::{RasterError, ReadOptions, read_dem};
+use snowscape_io::{ReadOptions, read_dem};
 use snowscape_terrain::{Crs, Grid};
 use std::path::PathBuf;
 
