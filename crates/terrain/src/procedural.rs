@@ -28,7 +28,6 @@ mod tests;
 
 use crate::{Grid, GridGeometry, NodataMask, TerrainError};
 use landform::AlpineLandform;
-use noise::Fbm;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -129,43 +128,28 @@ impl AlpineParams {
     }
 }
 
-/// Layer of the regional rock-band mask (independent of the landform's layers).
-const ROCK_BAND_LAYER: u64 = 200;
-
 /// The procedural alpine terrain of `params`: a `size`² grid of bedrock altitudes (m) with
 /// `cell_size` m cells, every cell valid, altitudes within
 /// `[base_altitude, base_altitude + relief]`.
 pub fn alpine(params: &AlpineParams) -> Result<Grid, TerrainError> {
     params.validate()?;
     let geometry = GridGeometry::square(params.size, params.size, params.cell_size)?;
-    let heights = landform_heights(params);
+    let field = AlpineLandform::new(params);
+    let heights = landform_heights(&field, params);
+    let cell = params.cell_size;
     let heights = cliffs::add_cliff_bands(
         heights,
         params.size,
         params.cell_size,
         params.cliff_band_height,
-        rock_band_mask(params),
+        |col, row| field.rock_band((col as f64 + 0.5) * cell, (row as f64 + 0.5) * cell),
     );
     let heights = clamp_to_range(heights, params);
     Grid::new(geometry, heights, NodataMask::all_valid())
 }
 
-/// Where rock bands outcrop: a regional mask in [0, 0.7] (about a third of the area is
-/// non-zero), a function of `(col, row)`.
-fn rock_band_mask(params: &AlpineParams) -> impl Fn(usize, usize) -> f32 + Sync {
-    let bands = Fbm::new(params.seed, ROCK_BAND_LAYER, 2);
-    let scale = 3.0 / (params.size as f64 * params.cell_size);
-    let cell = params.cell_size;
-    move |col, row| {
-        let (x, y) = ((col as f64 + 0.5) * cell, (row as f64 + 0.5) * cell);
-        let v = bands.value(x * scale + 3.0, y * scale - 7.0);
-        (0.7 * ((v - 0.1) * 4.0).clamp(0.0, 1.0)) as f32
-    }
-}
-
 /// Altitudes (m) of the landform, row by row in parallel.
-fn landform_heights(params: &AlpineParams) -> Vec<f32> {
-    let field = AlpineLandform::new(params);
+fn landform_heights(field: &AlpineLandform, params: &AlpineParams) -> Vec<f32> {
     let relief = params.effective_relief();
     let (size, cell) = (params.size, params.cell_size);
     let mut z = vec![0.0f32; size * size];

@@ -14,6 +14,7 @@
 //! rescales heights. Every pass runs in a fixed order, so the result is exactly reproducible.
 
 use crate::random::{hash3, uniform};
+use rayon::prelude::*;
 
 /// Parameters of the dimensionless stream-power erosion.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,38 +55,53 @@ fn on_edge(col: usize, row: usize, side: usize) -> bool {
 /// flow-direction rule: over many steps flow spreads like a multiple-flow model and channels
 /// meander instead of following the grid axes). `draw(node)` is a uniform number in [0, 1).
 /// A node that is on the edge or has no lower neighbour is its own receiver.
-fn receivers(h: &[f64], side: usize, draw: impl Fn(usize) -> f64) -> (Vec<u32>, Vec<f64>) {
+fn receivers(h: &[f64], side: usize, draw: impl Fn(usize) -> f64 + Sync) -> (Vec<u32>, Vec<f64>) {
     let mut rec: Vec<u32> = (0..h.len() as u32).collect();
     let mut dist = vec![1.0; h.len()];
+    rec.par_chunks_mut(side)
+        .zip(dist.par_chunks_mut(side))
+        .enumerate()
+        .filter(|(row, _)| *row > 0 && *row + 1 < side)
+        .for_each(|(row, (rec_row, dist_row))| {
+            for col in 1..side - 1 {
+                if let Some((j, len)) = draw_receiver(h, side, col, row, draw(row * side + col)) {
+                    rec_row[col] = j as u32;
+                    dist_row[col] = len;
+                }
+            }
+        });
+    (rec, dist)
+}
+
+/// The receiver (index, distance in cells) of interior node `(col, row)` for the uniform
+/// number `u`, or `None` when no neighbour is lower.
+#[inline]
+fn draw_receiver(h: &[f64], side: usize, col: usize, row: usize, u: f64) -> Option<(usize, f64)> {
+    let i = row * side + col;
+    let neighbour =
+        |dc: isize, dr: isize| (row as isize + dr) as usize * side + (col as isize + dc) as usize;
     let mut slopes = [0.0f64; 8];
-    for row in 1..side.saturating_sub(1) {
-        for col in 1..side - 1 {
-            let i = row * side + col;
-            let mut total = 0.0;
-            for (k, &(dc, dr, len)) in NEIGHBOURS.iter().enumerate() {
-                let j = (row as isize + dr) as usize * side + (col as isize + dc) as usize;
-                slopes[k] = ((h[i] - h[j]) / len).max(0.0);
-                total += slopes[k];
-            }
-            if total <= 0.0 {
-                continue;
-            }
-            let mut pick = draw(i) * total;
-            for (k, &(dc, dr, len)) in NEIGHBOURS.iter().enumerate() {
-                if slopes[k] <= 0.0 {
-                    continue;
-                }
-                rec[i] =
-                    ((row as isize + dr) as usize * side + (col as isize + dc) as usize) as u32;
-                dist[i] = len;
-                pick -= slopes[k];
-                if pick < 0.0 {
-                    break;
-                }
-            }
+    let mut total = 0.0;
+    for (k, &(dc, dr, len)) in NEIGHBOURS.iter().enumerate() {
+        slopes[k] = ((h[i] - h[neighbour(dc, dr)]) / len).max(0.0);
+        total += slopes[k];
+    }
+    if total <= 0.0 {
+        return None;
+    }
+    let mut pick = u * total;
+    let mut chosen = None;
+    for (k, &(dc, dr, len)) in NEIGHBOURS.iter().enumerate() {
+        if slopes[k] <= 0.0 {
+            continue;
+        }
+        chosen = Some((neighbour(dc, dr), len));
+        pick -= slopes[k];
+        if pick < 0.0 {
+            break;
         }
     }
-    (rec, dist)
+    chosen
 }
 
 /// Nodes ordered so that every node comes after its receiver (outlets and pits first).
@@ -139,17 +155,22 @@ fn drainage_area(stack: &[u32], rec: &[u32]) -> Vec<f64> {
 /// One explicit diffusion step of the interior of `h` into `out`; edges and nodes with a zero
 /// uplift share (base levels) are copied unchanged.
 fn diffuse(h: &[f64], uplift: &[f64], out: &mut [f64], side: usize, diffusivity: f64) {
-    out.copy_from_slice(h);
-    for row in 1..side.saturating_sub(1) {
-        for col in 1..side - 1 {
-            let i = row * side + col;
-            if uplift[i] <= 0.0 {
-                continue;
+    out.par_chunks_mut(side)
+        .enumerate()
+        .for_each(|(row, line)| {
+            let start = row * side;
+            line.copy_from_slice(&h[start..start + side]);
+            if row == 0 || row + 1 == side {
+                return;
             }
-            let laplacian = h[i - 1] + h[i + 1] + h[i - side] + h[i + side] - 4.0 * h[i];
-            out[i] = h[i] + diffusivity * laplacian;
-        }
-    }
+            for (col, out) in line.iter_mut().enumerate().take(side - 1).skip(1) {
+                let i = start + col;
+                if uplift[i] > 0.0 {
+                    let laplacian = h[i - 1] + h[i + 1] + h[i - side] + h[i + side] - 4.0 * h[i];
+                    *out = h[i] + diffusivity * laplacian;
+                }
+            }
+        });
 }
 
 /// Runs `params.iterations` steps of uplift, implicit stream-power incision and hillslope
@@ -159,6 +180,10 @@ fn diffuse(h: &[f64], uplift: &[f64], out: &mut [f64], side: usize, diffusivity:
 pub fn erode(h: &mut [f64], uplift: &[f64], side: usize, params: &StreamPower, seed: u64) {
     let diffusivity = params.diffusivity.clamp(0.0, 0.25);
     let mut scratch = vec![0.0; h.len()];
+    // Drainage areas are whole cell counts: their powers are looked up, not recomputed.
+    let area_power: Vec<f64> = (0..=h.len())
+        .map(|a| (a as f64).powf(params.area_exponent))
+        .collect();
     for step in 0..params.iterations {
         let key = hash3(seed, FLOW_STREAM, step as u64);
         let (rec, dist) = receivers(h, side, |node| uniform(key, 0, node as u64));
@@ -174,7 +199,7 @@ pub fn erode(h: &mut [f64], uplift: &[f64], side: usize, params: &StreamPower, s
             h[i] = if r == i {
                 raised
             } else {
-                let f = params.erodibility * area[i].powf(params.area_exponent) / dist[i];
+                let f = params.erodibility * area_power[area[i] as usize] / dist[i];
                 (raised + f * h[r]) / (1.0 + f)
             };
         }

@@ -8,8 +8,10 @@
 //!    [`super::erosion`]: dendritic valleys, concave river profiles, rounded divides. The
 //!    normalised result is raised to a power > 1, which widens and flattens valley floors and
 //!    steepens the upper slopes, as glaciers did.
-//! 2. **Plateaus.** Where a low-frequency mask is high, the relief is cut by a soft minimum,
-//!    leaving flat tablelands whose edges the cliff pass steepens.
+//! 2. **Plateaus.** Where a low-frequency mask is high, the coarse relief is cut by a soft
+//!    minimum, leaving flat tablelands whose edges the cliff pass steepens. The mask of rock
+//!    bands used by [`super::cliffs`] is also computed on the coarse grid (both vary over
+//!    kilometres, so sampling them per cell would waste time).
 //! 3. **Detail.** Swiss turbulence ([`super::noise::SwissTurbulence`]), first wavelength 4
 //!    coarse cells, octaves down to about 4 fine cells: sharp arêtes, couloirs and rock ribs
 //!    running down the slopes. It fades out towards the valley floors so they stay smooth.
@@ -26,6 +28,7 @@ use crate::random::uniform;
 mod layer {
     pub const UPLIFT: u64 = 0;
     pub const PLATEAUS: u64 = 10;
+    pub const ROCK_BANDS: u64 = 15;
     pub const INITIAL: u64 = 20;
     pub const DETAIL: u64 = 100;
     /// Random stream of the initial roughness of the coarse grid.
@@ -69,6 +72,11 @@ const EROSION: StreamPower = StreamPower {
     area_exponent: 0.45,
     diffusivity: 0.12,
 };
+
+/// Level (share of the relief) at which plateaus cut the summits.
+const PLATEAU_LEVEL: f64 = 0.55;
+/// Width of the soft minimum that rounds plateau edges, as a share of the relief.
+const PLATEAU_SOFTNESS: f64 = 0.05;
 
 /// Hermite smoothstep of `x` between `edge0` and `edge1`.
 #[inline(always)]
@@ -120,6 +128,19 @@ struct CoarseRelief {
     /// Metres from the coarse grid's west/north edge to the terrain's.
     margin: f64,
     heights: Vec<f64>,
+    /// Rock-band outcrop weight in [0, 0.7] (about a third of the area is non-zero).
+    rock_bands: Vec<f64>,
+}
+
+/// The plateau mask in [0, 1] for an fBm value (roughly normal, σ ≈ 0.3) and a target share.
+fn plateau_mask(value: f64, share: f64) -> f64 {
+    let threshold = 0.3 * (1.0 - 2.0 * share) * 1.5;
+    smoothstep(threshold - 0.04, threshold + 0.04, value)
+}
+
+/// The rock-band weight for an fBm value.
+fn rock_band_weight(value: f64) -> f64 {
+    0.7 * ((value - 0.1) * 4.0).clamp(0.0, 1.0)
 }
 
 impl CoarseRelief {
@@ -155,12 +176,42 @@ impl CoarseRelief {
         heights
             .iter_mut()
             .for_each(|h| *h = (h.max(0.0) / max).powf(VALLEY_FLATTENING));
+        let plateaus = Fbm::new(params.seed, layer::PLATEAUS, 2);
+        let bands = Fbm::new(params.seed, layer::ROCK_BANDS, 2);
+        let mask_scale = 1.0 / (0.35 * extent);
+        let mut rock_bands = vec![0.0; side * side];
+        for (i, (h, band)) in heights.iter_mut().zip(rock_bands.iter_mut()).enumerate() {
+            let (col, row) = (i % side, i / side);
+            let x = ((col as f64 + 0.5) * cell - margin) * mask_scale;
+            let y = ((row as f64 + 0.5) * cell - margin) * mask_scale;
+            let mask = plateau_mask(plateaus.value(x + 17.0, y - 5.0), params.plateau_share);
+            if params.plateau_share > 0.0 && mask > 0.0 {
+                *h += mask * (soft_min(*h, PLATEAU_LEVEL, PLATEAU_SOFTNESS) - *h);
+            }
+            *band = rock_band_weight(bands.value(x + 3.0, y - 7.0));
+        }
         Self {
             side,
             cell,
             margin,
             heights,
+            rock_bands,
         }
+    }
+
+    /// Bilinear rock-band weight at `(x, y)` metres from the terrain's north-west corner.
+    #[inline]
+    fn rock_band(&self, x: f64, y: f64) -> f64 {
+        let last = self.side - 1;
+        let cx = ((x + self.margin) / self.cell - 0.5).clamp(0.0, last as f64);
+        let cy = ((y + self.margin) / self.cell - 0.5).clamp(0.0, last as f64);
+        let (c0, r0) = (cx.floor() as usize, cy.floor() as usize);
+        let (c1, r1) = ((c0 + 1).min(last), (r0 + 1).min(last));
+        let (fx, fy) = (cx - c0 as f64, cy - r0 as f64);
+        let at = |c: usize, r: usize| self.rock_bands[r * self.side + c];
+        let top = at(c0, r0) + fx * (at(c1, r0) - at(c0, r0));
+        let bottom = at(c0, r1) + fx * (at(c1, r1) - at(c0, r1));
+        top + fy * (bottom - top)
     }
 
     /// Bicubic (Catmull-Rom) height at `(x, y)` metres from the terrain's north-west corner.
@@ -190,11 +241,6 @@ impl CoarseRelief {
 #[derive(Debug, Clone)]
 pub struct AlpineLandform {
     coarse: CoarseRelief,
-    plateaus: Fbm,
-    /// Metres per lattice unit of the plateau mask.
-    plateau_wavelength: f64,
-    /// Share of the area covered by plateaus, 0..1.
-    plateau_share: f64,
     detail: SwissTurbulence,
     detail_max: f64,
     /// Metres per lattice unit of the first detail octave.
@@ -211,10 +257,7 @@ impl AlpineLandform {
         let octaves = detail_octaves(detail_wavelength, params.cell_size);
         let detail = SwissTurbulence::new(params.seed, layer::DETAIL, octaves);
         Self {
-            plateau_wavelength: 0.35 * params.size as f64 * params.cell_size,
             coarse,
-            plateaus: Fbm::new(params.seed, layer::PLATEAUS, 2),
-            plateau_share: params.plateau_share,
             detail_max: detail.max_value(),
             detail,
             detail_wavelength,
@@ -227,27 +270,16 @@ impl AlpineLandform {
     /// [0, 1].
     #[inline]
     pub fn height(&self, x: f64, y: f64) -> f64 {
-        let base = self.plateau(self.coarse.height(x, y), x, y);
+        let base = self.coarse.height(x, y);
         let rock = smoothstep(0.02, 0.3, base);
         let (u, v) = (x / self.detail_wavelength, y / self.detail_wavelength);
         let ridges = self.detail.value(u, v) / self.detail_max - 0.5;
         base + self.detail_amplitude * rock * ridges
     }
 
-    /// Flattens summits into plateaus where the plateau mask is high.
-    #[inline(always)]
-    fn plateau(&self, h: f64, x: f64, y: f64) -> f64 {
-        if self.plateau_share <= 0.0 {
-            return h;
-        }
-        let (u, v) = (x / self.plateau_wavelength, y / self.plateau_wavelength);
-        let mask_value = self.plateaus.value(u + 17.0, v - 5.0);
-        // fBm values are roughly normal with σ ≈ 0.3: the threshold keeps about `share`.
-        let threshold = 0.3 * (1.0 - 2.0 * self.plateau_share) * 1.5;
-        let mask = smoothstep(threshold - 0.04, threshold + 0.04, mask_value);
-        if mask <= 0.0 {
-            return h;
-        }
-        h + mask * (soft_min(h, 0.55, 0.05) - h)
+    /// Rock-band outcrop weight in [0, 0.7] at `(x, y)` metres (the cliff pass's mask).
+    #[inline]
+    pub fn rock_band(&self, x: f64, y: f64) -> f32 {
+        self.coarse.rock_band(x, y) as f32
     }
 }
