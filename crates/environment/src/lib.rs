@@ -10,8 +10,8 @@
 //! | [`sun`] | direct sun with topographic shadows | `I_sun = k_sun Σ_h s_h max(0, n·i_h)` (4.1) |
 //! | [`sky`] | horizon angles, sky exposure, sky view factor | `I_sky = k_sky π/N Σ cos² φ_i` (4.1) |
 //! | [`bounce`] | one indirect bounce | `I_ind = k_ind/π Σ A_ij I_sun cos φs cos φr / d²` (4.1) |
-//! | [`temperature`] | temperature | `T = T0 + kt·A + ki·I` (4.1) |
-//! | [`wind`] | wind vectors, wind-effect surface, shadows | Venturi, Eq. 2, `W·∇Wz = Wsz` (4.2) |
+//! | [`temperature`](mod@temperature) | temperature | `T = T0 + kt·A + ki·I` (4.1) |
+//! | [`wind`](mod@wind) | wind vectors, wind-effect surface, shadows | Venturi, Eq. 2, `W·∇Wz = Wsz` (4.2) |
 //! | [`precompute`](mod@precompute) | all of the above in one call | |
 //!
 //! Shadows and horizons come from directional sweeps (the internal `sweep` module):

@@ -306,3 +306,23 @@ fn declination_formulas_agree_within_one_and_a_half_degrees() {
         assert!((a - b).abs() < 1.5, "day {day}: {a} vs {b}");
     }
 }
+
+#[test]
+fn anisotropic_cells_keep_plane_horizons_exact() {
+    // 2 m × 5 m cells; a plane rising 0.4 eastwards and 0.2 northwards.
+    let g = snowscape_terrain::GridGeometry::new(50, 30, 2.0, 5.0).unwrap();
+    let z: Vec<f32> = (0..50 * 30)
+        .map(|i| {
+            let (c, r) = ((i % 50) as f64, (i / 50) as f64);
+            (0.4 * c * 2.0 - 0.2 * r * 5.0) as f32
+        })
+        .collect();
+    let all = NodataMask::all_valid();
+    let c = 15 * 50 + 25;
+    for az in [0.0f64, 30.0, 75.0, 100.0, 160.0, 200.0, 250.0, 290.0, 340.0] {
+        let (se, cn) = az.to_radians().sin_cos();
+        let exact = (0.4 * se + 0.2 * cn).atan() as f32;
+        let phi = horizon_angles(&z, &g, &all, az).unwrap()[c];
+        assert!((phi - exact).abs() < 1e-4, "azimuth {az}: {phi} vs {exact}");
+    }
+}

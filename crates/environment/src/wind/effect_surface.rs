@@ -10,11 +10,11 @@
 //! Discretisation: first-order upwind differences along the transport wind `W = (Wx, Wy)`,
 //! `W·∇f ≈ ax (f − f_x) + ay (f − f_y)` with `ax = |Wx|/dx`, `ay = |Wy|/dy` and `f_x`, `f_y` the
 //! upwind neighbours. Solving each equation for the cell gives the local update
-//! ([`relax`]), applied exactly as the paper orders it: `Wsz` first (as if detached), then `Wz`
+//! (`relax`), applied exactly as the paper orders it: `Wsz` first (as if detached), then `Wz`
 //! from the new `Wsz`, then, if `Wz <= A`, the cell is attached: `Wz = A` and `Wsz = W·∇A`
 //! (the same upwind differences of `A`, so a planar slope stays attached exactly).
 //!
-//! The caller chooses the transport wind; [`crate::wind`] passes Eq. 2's wind projected on the
+//! The caller chooses the transport wind; [`crate::wind`](mod@crate::wind) passes Eq. 2's wind projected on the
 //! dominant direction, so every cell's upwind neighbours lie on the same side and the system
 //! is triangular in wind order (see there for why).
 //!
