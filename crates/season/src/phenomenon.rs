@@ -6,7 +6,8 @@
 //! (every validity test folds to `true`, so interior loops carry no mask branch) and with
 //! [`Masked`] (the terrain's per-cell nodata flags).
 
-use snowscape_terrain::{GridGeometry, NodataMask, surface};
+use rayon::prelude::*;
+use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask, surface};
 use thiserror::Error;
 
 /// A bad input to a phenomenon step: a map of the wrong size, a parameter out of range or a
@@ -138,6 +139,24 @@ macro_rules! with_validity {
 }
 pub(crate) use with_validity;
 
+/// Writes the snow-surface altitude `A = B + C + S + U + P` of every cell into `out`
+/// (row-parallel, reusing `out`'s allocation; the same sum, in the same order, as
+/// [`LayeredTerrain::surface`]).
+pub(crate) fn fill_surface(terrain: &LayeredTerrain, out: &mut Vec<f32>) {
+    let w = terrain.geometry().width();
+    out.resize(terrain.geometry().len(), 0.0);
+    let [c, s, u, p] = &terrain.snow;
+    out.par_chunks_mut(w)
+        .zip(terrain.bedrock.par_chunks(w))
+        .zip(c.par_chunks(w).zip(s.par_chunks(w)))
+        .zip(u.par_chunks(w).zip(p.par_chunks(w)))
+        .for_each(|(((a, b), (c, s)), (u, p))| {
+            for (k, a) in a.iter_mut().enumerate() {
+                *a = b[k] + (c[k] + s[k] + u[k] + p[k]);
+            }
+        });
+}
+
 /// Norm of the surface gradient `‖∇A‖` (tan of the slope) along one row, into `out`.
 ///
 /// Central differences in the interior (the stencil of [`surface::gradient`], written without
@@ -229,6 +248,18 @@ mod tests {
                 assert!((o - expect).abs() < 1e-5, "({col},{row}) {o} vs {expect}");
             }
         }
+    }
+
+    #[test]
+    fn fill_surface_matches_the_terrain() {
+        let geo = GridGeometry::square(5, 3, 1.0).unwrap();
+        let mut t = LayeredTerrain::from_bedrock(Grid::from_fn(geo, |c, r| (c * r) as f32));
+        for (k, layer) in snowscape_terrain::SnowLayer::ALL.into_iter().enumerate() {
+            t.layer_mut(layer)[k + 3] = 0.1 * (k + 1) as f32;
+        }
+        let mut out = vec![9.0; 2];
+        fill_surface(&t, &mut out);
+        assert_eq!(out, t.surface());
     }
 
     #[test]

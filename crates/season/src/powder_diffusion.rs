@@ -36,7 +36,9 @@
 //! [`DiffusionBorder::Closed`] has no flux across the border.
 
 use crate::VolumeChange;
-use crate::phenomenon::{PhenomenonError, Validity, check_at_least, check_dt, with_validity};
+use crate::phenomenon::{
+    PhenomenonError, Validity, check_at_least, check_dt, fill_surface, with_validity,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
@@ -158,17 +160,31 @@ const NORTH: usize = 2;
 const SOUTH: usize = 3;
 
 impl<V: Validity> Stencil<'_, V> {
-    /// Outward fluxes (E, W, N, S) of an interior cell (not on the grid border).
+    /// Outward fluxes (E, W, N, S) of the interior cell `col` (in `1..w-1`) of a row, from
+    /// the surface rows above, at and below it; `i` is its flat index. All zero for a nodata
+    /// cell.
     #[inline(always)]
-    fn interior(&self, i: usize) -> [f32; 4] {
-        let (a, w) = (self.a, self.w);
-        let ap = a[i];
-        let face = |j: usize, f: f32| if self.valid.at(j) { f } else { 0.0 };
+    fn interior(&self, [up, mid, dn]: [&[f32]; 3], col: usize, i: usize) -> [f32; 4] {
+        let w = self.w;
+        let ap = mid[col];
+        let own = self.valid.at(i);
+        let face = |j: usize, f: f32| if own && self.valid.at(j) { f } else { 0.0 };
         [
-            face(i + 1, face_flux(ap, a[i + 1], self.tx, self.c)),
-            face(i - 1, -face_flux(a[i - 1], ap, self.tx, self.c)),
-            face(i - w, -face_flux(a[i - w], ap, self.ty, self.c)),
-            face(i + w, face_flux(ap, a[i + w], self.ty, self.c)),
+            face(i + 1, face_flux(ap, mid[col + 1], self.tx, self.c)),
+            face(i - 1, -face_flux(mid[col - 1], ap, self.tx, self.c)),
+            face(i - w, -face_flux(up[col], ap, self.ty, self.c)),
+            face(i + w, face_flux(ap, dn[col], self.ty, self.c)),
+        ]
+    }
+
+    /// The surface rows above, at and below interior row `row`, each `w` long.
+    #[inline(always)]
+    fn rows(&self, row: usize) -> [&[f32]; 3] {
+        let (w, base) = (self.w, row * self.w);
+        [
+            &self.a[base - w..base],
+            &self.a[base..base + w],
+            &self.a[base + w..base + 2 * w],
         ]
     }
 
@@ -205,32 +221,49 @@ impl<V: Validity> Stencil<'_, V> {
         }
         (flux, inside.map(|x| !x))
     }
-
-    /// Whether `(col, row)` has all four neighbours inside the grid.
-    #[inline(always)]
-    fn is_interior(&self, col: usize, row: usize) -> bool {
-        col > 0 && col + 1 < self.w && row > 0 && row + 1 < self.h
-    }
 }
 
-/// Pass 1: the share `min(1, P/o)` of its outgoing fluxes each cell can afford.
+/// Rows whose cells `1..w-1` take the interior fast path (`None`: the whole row is border).
+#[inline(always)]
+fn interior_span(w: usize, h: usize, row: usize) -> Option<std::ops::Range<usize>> {
+    (row > 0 && row + 1 < h && w >= 3).then(|| 1..w - 1)
+}
+
+/// The share `min(1, P/o)` of its outgoing fluxes `f` a cell holding `p` can afford.
+#[inline(always)]
+fn limiter(f: [f32; 4], p: f32) -> f32 {
+    let out = f[0].max(0.0) + f[1].max(0.0) + f[2].max(0.0) + f[3].max(0.0);
+    if out > p { p / out } else { 1.0 }
+}
+
+/// Pass 1: every cell's limiter.
 fn limiter_pass<V: Validity>(st: &Stencil<V>, powder: &[f32], scale: &mut [f32]) {
     let w = st.w;
     scale.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
-        for (col, s) in line.iter_mut().enumerate() {
-            let i = row * w + col;
-            if !st.valid.at(i) {
-                *s = 0.0;
-                continue;
-            }
-            let flux = if st.is_interior(col, row) {
-                st.interior(i)
+        let base = row * w;
+        let p = &powder[base..base + w];
+        let general = |col: usize| {
+            if st.valid.at(base + col) {
+                limiter(st.general(col, row).0, p[col])
             } else {
-                st.general(col, row).0
-            };
-            let out: f32 = flux.iter().map(|f| f.max(0.0)).sum();
-            let p = powder[i];
-            *s = if out > p { p / out } else { 1.0 };
+                0.0
+            }
+        };
+        match interior_span(w, st.h, row) {
+            Some(span) => {
+                line[0] = general(0);
+                line[w - 1] = general(w - 1);
+                let rows = st.rows(row);
+                for col in span {
+                    let s = limiter(st.interior(rows, col, base + col), p[col]);
+                    line[col] = if st.valid.at(base + col) { s } else { 0.0 };
+                }
+            }
+            None => {
+                for (col, s) in line.iter_mut().enumerate() {
+                    *s = general(col);
+                }
+            }
         }
     });
 }
@@ -247,32 +280,24 @@ fn update_pass<V: Validity>(
         .par_chunks_mut(w)
         .zip(a_next.par_chunks_mut(w))
         .enumerate()
-        .map(|(row, (p_line, a_line))| {
-            let (mut moved, mut border) = (0.0f64, 0.0f64);
-            for col in 0..w {
-                let i = row * w + col;
-                if !st.valid.at(i) {
-                    a_line[col] = st.a[i];
-                    continue;
-                }
-                let sp = scale[i];
-                let (mut out, mut inflow, mut ghost_out) = (0.0f32, 0.0f32, 0.0f32);
-                if st.is_interior(col, row) {
-                    let f = st.interior(i);
-                    let nb = [i + 1, i - 1, i - w, i + w];
-                    for k in 0..4 {
-                        out += f[k].max(0.0) * sp;
-                        inflow += (-f[k]).max(0.0) * scale[nb[k]];
+        .map_init(
+            || vec![0.0f32; w],
+            |moved_row, (row, (p_line, a_line))| {
+                let base = row * w;
+                let a = &st.a[base..base + w];
+                let mut border = 0.0f64;
+                let mut general = |col: usize, p: &mut f32, a_new: &mut f32, moved: &mut f32| {
+                    let i = base + col;
+                    if !st.valid.at(i) {
+                        (*a_new, *moved) = (a[col], 0.0);
+                        return;
                     }
-                } else {
                     let (f, ghost) = st.general(col, row);
+                    let sp = scale[i];
+                    let (mut out, mut inflow, mut ghost_out) = (0.0f32, 0.0f32, 0.0f32);
                     for k in 0..4 {
                         if f[k] > 0.0 {
-                            if ghost[k] {
-                                ghost_out += f[k] * sp;
-                            } else {
-                                out += f[k] * sp;
-                            }
+                            *(if ghost[k] { &mut ghost_out } else { &mut out }) += f[k] * sp;
                         } else if f[k] < 0.0 {
                             let j = match k {
                                 EAST => i + 1,
@@ -283,16 +308,53 @@ fn update_pass<V: Validity>(
                             inflow += -f[k] * scale[j];
                         }
                     }
+                    let p_new = (*p - out - ghost_out + inflow).max(0.0);
+                    *a_new = a[col] + (p_new - *p);
+                    *p = p_new;
+                    *moved = out;
+                    border += ghost_out as f64;
+                };
+                match interior_span(w, st.h, row) {
+                    Some(span) => {
+                        general(0, &mut p_line[0], &mut a_line[0], &mut moved_row[0]);
+                        let last = w - 1;
+                        general(
+                            last,
+                            &mut p_line[last],
+                            &mut a_line[last],
+                            &mut moved_row[last],
+                        );
+                        let s_up = &scale[base - w..base];
+                        let s_mid = &scale[base..base + w];
+                        let s_dn = &scale[base + w..base + 2 * w];
+                        let (p_line, a_line) = (&mut p_line[..w], &mut a_line[..w]);
+                        let moved_row = &mut moved_row[..w];
+                        let rows = st.rows(row);
+                        for col in span {
+                            let f = st.interior(rows, col, base + col);
+                            let sp = s_mid[col];
+                            let out = f.iter().map(|f| f.max(0.0)).sum::<f32>() * sp;
+                            let inflow = (-f[EAST]).max(0.0) * s_mid[col + 1]
+                                + (-f[WEST]).max(0.0) * s_mid[col - 1]
+                                + (-f[NORTH]).max(0.0) * s_up[col]
+                                + (-f[SOUTH]).max(0.0) * s_dn[col];
+                            let p_old = p_line[col];
+                            let p_new = (p_old - out + inflow).max(0.0);
+                            p_line[col] = p_new;
+                            a_line[col] = a[col] + (p_new - p_old);
+                            moved_row[col] = out;
+                        }
+                    }
+                    None => {
+                        for col in 0..w {
+                            general(col, &mut p_line[col], &mut a_line[col], &mut moved_row[col]);
+                        }
+                    }
                 }
-                let p_old = p_line[col];
-                let p_new = (p_old - out - ghost_out + inflow).max(0.0);
-                p_line[col] = p_new;
-                a_line[col] = st.a[i] + (p_new - p_old);
-                moved += out as f64;
-                border += ghost_out as f64;
-            }
-            (moved, border)
-        })
+                let moved = moved_row.iter().map(|&m| m as f64).sum::<f64>();
+                (moved, border)
+            },
+        )
         .collect()
 }
 
@@ -316,8 +378,7 @@ pub fn step(
     let geometry = terrain.geometry().clone();
     let mask = terrain.mask().clone();
     let n = geometry.len();
-    scratch.surface.clear();
-    scratch.surface.extend(terrain.surface());
+    fill_surface(terrain, &mut scratch.surface);
     scratch.surface_next.resize(n, 0.0);
     scratch.scale.resize(n, 0.0);
     let c = (params.k_m * dt_days / substeps as f64 / 2.0) as f32;

@@ -29,7 +29,7 @@
 //! `1 − e^(−x)` to first order without a per-cell exponential.
 
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, check_finite, check_map,
+    PhenomenonError, Validity, check_at_least, check_dt, check_finite, check_map, fill_surface,
     row_gradient_norm, with_validity,
 };
 use crate::{VolumeChange, ordered_sum};
@@ -151,18 +151,39 @@ impl StabilityParams {
 
     /// The stability rate `r(T)`, 1/day: positive stabilises, negative destabilises.
     pub fn rate(&self, temperature: f32) -> f32 {
-        let t = temperature as f64;
-        let r = if t >= self.t_warm {
-            -self.k_warm
-        } else if t >= self.t_cool {
-            let f = (t - self.t_cool) / (self.t_warm - self.t_cool);
-            self.k_cool + f * (-self.k_warm - self.k_cool)
-        } else if t > self.t_freeze {
-            self.k_cool * (t - self.t_freeze) / (self.t_cool - self.t_freeze)
-        } else {
-            0.0
-        };
-        r as f32
+        RateCurve::new(self).at(temperature)
+    }
+}
+
+/// The piecewise-linear `r(T)` in a branch-free form:
+/// `r = k_c (T_c − T_freeze)/(T_cool − T_freeze) + (T_w − T_cool) (−k_w − k_c)/(T_warm − T_cool)`
+/// with `T_c = clamp(T, T_freeze, T_cool)` and `T_w = clamp(T, T_cool, T_warm)`. A NaN
+/// temperature clamps to a finite rate.
+#[derive(Debug, Clone, Copy)]
+struct RateCurve {
+    t_freeze: f32,
+    t_cool: f32,
+    t_warm: f32,
+    cold_slope: f32,
+    warm_slope: f32,
+}
+
+impl RateCurve {
+    fn new(p: &StabilityParams) -> Self {
+        Self {
+            t_freeze: p.t_freeze as f32,
+            t_cool: p.t_cool as f32,
+            t_warm: p.t_warm as f32,
+            cold_slope: (p.k_cool / (p.t_cool - p.t_freeze)) as f32,
+            warm_slope: ((-p.k_warm - p.k_cool) / (p.t_warm - p.t_cool)) as f32,
+        }
+    }
+
+    #[inline(always)]
+    fn at(&self, t: f32) -> f32 {
+        let tc = t.max(self.t_freeze).min(self.t_cool);
+        let tw = t.max(self.t_cool).min(self.t_warm);
+        (tc - self.t_freeze) * self.cold_slope + (tw - self.t_cool) * self.warm_slope
     }
 }
 
@@ -207,6 +228,7 @@ pub struct StabilityScratch {
 
 /// Per-cell constants of one step, precomputed from the parameters.
 struct Coefficients {
+    rate: RateCurve,
     age_share: f32,
     inv_tan_ref: f32,
     floor: f32,
@@ -215,49 +237,87 @@ struct Coefficients {
     density_ratio: f32,
 }
 
-/// Per-row volume sums, in the order of [`StabilityReport`]'s fields.
-type RowSums = [f64; 6];
+/// Per-thread row buffers of the thicknesses each cell transferred, m.
+#[derive(Default)]
+struct RowTransfers {
+    gradient: Vec<f32>,
+    aged_stable: Vec<f32>,
+    aged_unstable: Vec<f32>,
+    /// Unstable → stable (> 0) or stable → unstable (< 0).
+    exchanged: Vec<f32>,
+    compacted: Vec<f32>,
+}
 
-/// Applies the three transfers to one cell; adds the moved thicknesses to `sums`.
-#[inline(always)]
-fn cell_update(
-    k: &Coefficients,
-    rate: f32,
-    gradient_norm: f32,
-    [c, s, u, p]: [&mut f32; 4],
-    sums: &mut RowSums,
-) {
-    let steep = (gradient_norm * k.inv_tan_ref).min(1.0);
-    // 1. Powder ageing.
-    let aged = *p * k.age_share;
-    let aged_u = aged * steep;
-    let aged_s = aged - aged_u;
-    *p -= aged;
-    *u += aged_u;
-    *s += aged_s;
-    // 2. Stability exchange.
-    if rate > 0.0 {
-        let factor = k.floor + (1.0 - k.floor) * (1.0 - steep);
-        let d = *u * implicit_share(rate * factor * k.dt);
-        *u -= d;
-        *s += d;
-        sums[2] += d as f64;
-    } else if rate < 0.0 {
-        let factor = k.floor + (1.0 - k.floor) * steep;
-        let d = *s * implicit_share(-rate * factor * k.dt);
-        *s -= d;
-        *u += d;
-        sums[3] += d as f64;
+impl RowTransfers {
+    fn new(w: usize) -> Self {
+        let z = || vec![0.0f32; w];
+        Self {
+            gradient: z(),
+            aged_stable: z(),
+            aged_unstable: z(),
+            exchanged: z(),
+            compacted: z(),
+        }
     }
-    // 3. Compaction under the overburden.
-    let load = *p + *u + 0.5 * *s;
-    let d = *s * implicit_share(k.k_compaction_dt * load);
-    *s -= d;
-    *c += d * k.density_ratio;
-    sums[0] += aged_s as f64;
-    sums[1] += aged_u as f64;
-    sums[4] += d as f64;
-    sums[5] += (d - d * k.density_ratio) as f64;
+
+    /// Row totals in the order of [`StabilityReport`]'s first five fields, m.
+    fn sums(&self) -> [f64; 5] {
+        let mut sums = [0.0f64; 5];
+        for k in 0..self.exchanged.len() {
+            let e = self.exchanged[k];
+            sums[0] += self.aged_stable[k] as f64;
+            sums[1] += self.aged_unstable[k] as f64;
+            sums[2] += e.max(0.0) as f64;
+            sums[3] += (-e).max(0.0) as f64;
+            sums[4] += self.compacted[k] as f64;
+        }
+        sums
+    }
+}
+
+/// Applies the three transfers to one row of cells (branch-free, so it vectorises) and
+/// records them in `out`. Nodata cells hold no snow and a zero gradient, so every transfer
+/// there is a share of nothing: they need no test (and a NaN temperature clamps to a finite
+/// rate).
+fn row_update(
+    k: &Coefficients,
+    [c, s, u, p]: [&mut [f32]; 4],
+    temp: &[f32],
+    out: &mut RowTransfers,
+) {
+    let w = temp.len();
+    let (c, s, u, p) = (&mut c[..w], &mut s[..w], &mut u[..w], &mut p[..w]);
+    let grad = &out.gradient[..w];
+    let aged_stable = &mut out.aged_stable[..w];
+    let aged_unstable = &mut out.aged_unstable[..w];
+    let exchanged = &mut out.exchanged[..w];
+    let compacted = &mut out.compacted[..w];
+    for i in 0..w {
+        let steep = (grad[i] * k.inv_tan_ref).min(1.0);
+        // 1. Powder ageing.
+        let aged = p[i] * k.age_share;
+        let aged_u = aged * steep;
+        let aged_s = aged - aged_u;
+        p[i] -= aged;
+        u[i] += aged_u;
+        s[i] += aged_s;
+        // 2. Stability exchange (one of the two shares is zero).
+        let rate = k.rate.at(temp[i]);
+        let x_stab = rate.max(0.0) * (k.floor + (1.0 - k.floor) * (1.0 - steep)) * k.dt;
+        let x_destab = (-rate).max(0.0) * (k.floor + (1.0 - k.floor) * steep) * k.dt;
+        let e = u[i] * implicit_share(x_stab) - s[i] * implicit_share(x_destab);
+        u[i] -= e;
+        s[i] += e;
+        // 3. Compaction under the overburden.
+        let load = p[i] + u[i] + 0.5 * s[i];
+        let d = s[i] * implicit_share(k.k_compaction_dt * load);
+        s[i] -= d;
+        c[i] += d * k.density_ratio;
+        aged_stable[i] = aged_s;
+        aged_unstable[i] = aged_u;
+        exchanged[i] = e;
+        compacted[i] = d;
+    }
 }
 
 /// Ages powder, exchanges stable and unstable snow and compacts stable snow over `dt_days`,
@@ -274,9 +334,9 @@ pub fn step(
     let geometry = terrain.geometry().clone();
     check_map("temperature", temperature, &geometry)?;
     let mask = terrain.mask().clone();
-    scratch.surface.clear();
-    scratch.surface.extend(terrain.surface());
+    fill_surface(terrain, &mut scratch.surface);
     let k = Coefficients {
+        rate: RateCurve::new(params),
         age_share: implicit_share((params.k_age * dt_days) as f32),
         inv_tan_ref: (1.0 / params.slope_ref_deg.to_radians().tan()) as f32,
         floor: params.min_slope_factor as f32,
@@ -285,7 +345,6 @@ pub fn step(
         density_ratio: params.compacted_density_ratio as f32,
     };
     let rows = with_validity!(mask, |valid| run_rows(
-        params,
         &k,
         terrain,
         &scratch.surface,
@@ -296,19 +355,18 @@ pub fn step(
     ));
     let area = geometry.cell_area();
     let total = |f: usize| ordered_sum(&rows.iter().map(|r| r[f]).collect::<Vec<_>>()) * area;
+    let compacted = total(4);
     Ok(StabilityReport {
         aged_to_stable: total(0),
         aged_to_unstable: total(1),
         stabilised: total(2),
         destabilised: total(3),
-        compacted: total(4),
-        densification: total(5),
+        compacted,
+        densification: compacted * (1.0 - k.density_ratio as f64),
     })
 }
 
-#[allow(clippy::too_many_arguments)]
 fn run_rows<V: Validity>(
-    params: &StabilityParams,
     k: &Coefficients,
     terrain: &mut LayeredTerrain,
     surf: &[f32],
@@ -316,7 +374,7 @@ fn run_rows<V: Validity>(
     geometry: &GridGeometry,
     mask: &NodataMask,
     valid: &V,
-) -> Vec<RowSums> {
+) -> Vec<[f64; 5]> {
     let w = geometry.width();
     let [compacted, stable, unstable, powder] = &mut terrain.snow;
     compacted
@@ -327,18 +385,11 @@ fn run_rows<V: Validity>(
         .zip(temperature.par_chunks(w))
         .enumerate()
         .map_init(
-            || vec![0.0f32; w],
-            |grad, (row, ((((c, s), u), p), t))| {
-                row_gradient_norm(surf, geometry, mask, valid, row, grad);
-                let mut sums = RowSums::default();
-                for col in 0..w {
-                    if !valid.at(row * w + col) {
-                        continue;
-                    }
-                    let layers = [&mut c[col], &mut s[col], &mut u[col], &mut p[col]];
-                    cell_update(k, params.rate(t[col]), grad[col], layers, &mut sums);
-                }
-                sums
+            || RowTransfers::new(w),
+            |buf, (row, ((((c, s), u), p), t))| {
+                row_gradient_norm(surf, geometry, mask, valid, row, &mut buf.gradient);
+                row_update(k, [c, s, u, p], t, buf);
+                buf.sums()
             },
         )
         .collect()

@@ -37,7 +37,7 @@
 
 use crate::VolumeChange;
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, check_map, with_validity,
+    PhenomenonError, Validity, check_at_least, check_dt, check_map, fill_surface, with_validity,
 };
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
@@ -170,8 +170,7 @@ pub fn step(
     wind.check(&geometry)?;
     let mask = terrain.mask().clone();
     let n = geometry.len();
-    scratch.surface.clear();
-    scratch.surface.extend(terrain.surface());
+    fill_surface(terrain, &mut scratch.surface);
     scratch.out_x.resize(n, 0.0);
     scratch.out_y.resize(n, 0.0);
     let ctx = Context {

@@ -6,6 +6,14 @@ use crate::phenomenon::{Validity, row_gradient_norm};
 use rayon::prelude::*;
 use snowscape_terrain::LayeredTerrain;
 
+/// Per-thread row buffers.
+struct Row {
+    gradient: Vec<f32>,
+    deposited: Vec<f32>,
+    slab: Vec<f32>,
+    tamped: Vec<f32>,
+}
+
 /// Updates the powder and unstable layers; returns per-row
 /// `[deposited, deposited as unstable, tamped]`, m.
 pub(super) fn run<V: Validity>(
@@ -17,32 +25,28 @@ pub(super) fn run<V: Validity>(
     let w = ctx.geometry.width();
     let h = ctx.geometry.height();
     let (a, ox, oy) = (&scratch.surface, &scratch.out_x, &scratch.out_y);
+    let z = ctx.wind.effect_surface;
     let [_, _, unstable, powder] = &mut terrain.snow;
     unstable
         .par_chunks_mut(w)
         .zip(powder.par_chunks_mut(w))
         .enumerate()
         .map_init(
-            || vec![0.0f32; w],
-            |grad, (row, (un, pw))| {
-                row_gradient_norm(a, ctx.geometry, ctx.mask, valid, row, grad);
-                let mut sums = [0.0f64; 3];
-                for col in 0..w {
-                    let i = row * w + col;
+            || Row {
+                gradient: vec![0.0; w],
+                deposited: vec![0.0; w],
+                slab: vec![0.0; w],
+                tamped: vec![0.0; w],
+            },
+            |buf, (row, (un, pw))| {
+                row_gradient_norm(a, ctx.geometry, ctx.mask, valid, row, &mut buf.gradient);
+                let base = row * w;
+                let general = |col: usize, buf: &mut Row, un: &mut f32, pw: &mut f32| {
+                    let i = base + col;
                     if !valid.at(i) {
-                        continue;
+                        (buf.deposited[col], buf.slab[col], buf.tamped[col]) = (0.0, 0.0, 0.0);
+                        return;
                     }
-                    // Own erosion: powder first, then unstable snow.
-                    let e = ox[i].abs() + oy[i].abs();
-                    let from_powder = e.min(pw[col]);
-                    pw[col] -= from_powder;
-                    un[col] -= (e - from_powder).min(un[col]);
-                    // Tamping.
-                    let tamped = pw[col]
-                        * tamping_share(vertical_change(ctx, valid, col, row), ctx.tamping_dt);
-                    pw[col] -= tamped;
-                    un[col] += tamped;
-                    // Gather from the four neighbours.
                     let mut d = 0.0f32;
                     if col > 0 {
                         d += ox[i - 1].max(0.0);
@@ -56,14 +60,82 @@ pub(super) fn run<V: Validity>(
                     if row + 1 < h {
                         d += oy[i + w].max(0.0);
                     }
-                    if grad[col] > ctx.slab_gradient {
-                        un[col] += d;
-                        sums[1] += d as f64;
-                    } else {
-                        pw[col] += d;
+                    let a_z = general_vertical_change(ctx, valid, col, row);
+                    let e = ox[i].abs() + oy[i].abs();
+                    let (slab, tamped) = cell_update(ctx, e, a_z, d, buf.gradient[col], pw, un);
+                    (buf.deposited[col], buf.slab[col], buf.tamped[col]) = (d, slab, tamped);
+                };
+                if row > 0 && row + 1 < h && w >= 3 {
+                    general(0, buf, &mut un[0], &mut pw[0]);
+                    general(w - 1, buf, &mut un[w - 1], &mut pw[w - 1]);
+                    let ox_mid = &ox[base..base + w];
+                    let (oy_up, oy_mid, oy_dn) = (
+                        &oy[base - w..base],
+                        &oy[base..base + w],
+                        &oy[base + w..base + 2 * w],
+                    );
+                    let (z_up, z_mid, z_dn) = (
+                        &z[base - w..base],
+                        &z[base..base + w],
+                        &z[base + w..base + 2 * w],
+                    );
+                    let (un, pw) = (&mut un[..w], &mut pw[..w]);
+                    let u_row = &ctx.wind.u[base..base + w];
+                    let v_row = &ctx.wind.v[base..base + w];
+                    let grad = &buf.gradient[..w];
+                    let deposited = &mut buf.deposited[..w];
+                    let slabs = &mut buf.slab[..w];
+                    let tamps = &mut buf.tamped[..w];
+                    let mut masked_cells = Vec::new();
+                    for col in 1..w - 1 {
+                        let i = base + col;
+                        let ring = [
+                            i - w - 1,
+                            i - w,
+                            i - w + 1,
+                            i - 1,
+                            i + 1,
+                            i + w - 1,
+                            i + w,
+                            i + w + 1,
+                        ];
+                        if !valid.at(i) || !ring.iter().all(|&j| valid.at(j)) {
+                            // Nodata or next to it: redone by the general path below.
+                            masked_cells.push(col);
+                            continue;
+                        }
+                        let d = ox_mid[col - 1].max(0.0)
+                            + (-ox_mid[col + 1]).max(0.0)
+                            + (-oy_up[col]).max(0.0)
+                            + oy_dn[col].max(0.0);
+                        let z_xx = second_difference(z_mid[col - 1], z_mid[col], z_mid[col + 1]);
+                        let z_yy = second_difference(z_up[col], z_mid[col], z_dn[col]);
+                        let z_xy = z_up[col + 1] - z_up[col - 1] - z_dn[col + 1] + z_dn[col - 1];
+                        let a_z = vertical_wind_change(
+                            z_xx * ctx.inv_dx2,
+                            z_xy * ctx.inv_4dxdy,
+                            z_yy * ctx.inv_dy2,
+                            u_row[col],
+                            v_row[col],
+                        );
+                        let e = ox_mid[col].abs() + oy_mid[col].abs();
+                        let (slab, tamped) =
+                            cell_update(ctx, e, a_z, d, grad[col], &mut pw[col], &mut un[col]);
+                        (deposited[col], slabs[col], tamps[col]) = (d, slab, tamped);
                     }
-                    sums[0] += d as f64;
-                    sums[2] += tamped as f64;
+                    for col in masked_cells {
+                        general(col, buf, &mut un[col], &mut pw[col]);
+                    }
+                } else {
+                    for col in 0..w {
+                        general(col, buf, &mut un[col], &mut pw[col]);
+                    }
+                }
+                let mut sums = [0.0f64; 3];
+                for k in 0..w {
+                    sums[0] += buf.deposited[k] as f64;
+                    sums[1] += buf.slab[k] as f64;
+                    sums[2] += buf.tamped[k] as f64;
                 }
                 sums
             },
@@ -71,38 +143,36 @@ pub(super) fn run<V: Validity>(
         .collect()
 }
 
-/// `a_z` at a valid cell from the wind-effect surface (see [`vertical_wind_change`]).
+/// One cell's update: removes its erosion `e` (powder first, then unstable snow), tamps
+/// its powder by `a_z`, and adds the deposit `d` as powder, or as unstable snow where the
+/// surface gradient exceeds the slab slope. Returns `(deposit landed as unstable, tamped)`.
 #[inline(always)]
-fn vertical_change<V: Validity>(ctx: &Context, valid: &V, col: usize, row: usize) -> f32 {
-    let w = ctx.geometry.width();
-    let i = row * w + col;
+fn cell_update(
+    ctx: &Context,
+    e: f32,
+    a_z: f32,
+    d: f32,
+    gradient: f32,
+    powder: &mut f32,
+    unstable: &mut f32,
+) -> (f32, f32) {
+    let from_powder = e.min(*powder);
+    *powder -= from_powder;
+    *unstable -= (e - from_powder).min(*unstable);
+    let tamped = *powder * tamping_share(a_z, ctx.tamping_dt);
+    *powder -= tamped;
+    *unstable += tamped;
+    let slab = if gradient > ctx.slab_gradient { d } else { 0.0 };
+    *unstable += slab;
+    *powder += d - slab;
+    (slab, tamped)
+}
+
+/// `a_z` at any valid cell, with the border rules of the module docs.
+fn general_vertical_change<V: Validity>(ctx: &Context, valid: &V, col: usize, row: usize) -> f32 {
+    let i = row * ctx.geometry.width() + col;
     let z = ctx.wind.effect_surface;
-    let (u, v) = (ctx.wind.u[i], ctx.wind.v[i]);
-    let fast = row > 0
-        && row + 1 < ctx.geometry.height()
-        && col > 0
-        && col + 1 < w
-        && [
-            i - w - 1,
-            i - w,
-            i - w + 1,
-            i - 1,
-            i + 1,
-            i + w - 1,
-            i + w,
-            i + w + 1,
-        ]
-        .iter()
-        .all(|&j| valid.at(j));
-    let (z_xx, z_xy, z_yy) = if fast {
-        (
-            second_difference(z[i - 1], z[i], z[i + 1]) * ctx.inv_dx2,
-            (z[i - w + 1] - z[i - w - 1] - z[i + w + 1] + z[i + w - 1]) * ctx.inv_4dxdy,
-            second_difference(z[i - w], z[i], z[i + w]) * ctx.inv_dy2,
-        )
-    } else {
-        let (xx, yy) = ctx.second_differences(valid, z, col, row);
-        (xx, ctx.cross_difference(valid, z, col, row), yy)
-    };
-    vertical_wind_change(z_xx, z_xy, z_yy, u, v)
+    let (z_xx, z_yy) = ctx.second_differences(valid, z, col, row);
+    let z_xy = ctx.cross_difference(valid, z, col, row);
+    vertical_wind_change(z_xx, z_xy, z_yy, ctx.wind.u[i], ctx.wind.v[i])
 }

@@ -19,58 +19,148 @@ pub(super) fn run<V: Validity>(
     let a = &scratch.surface;
     let powder = terrain.layer(SnowLayer::Powder);
     let unstable = terrain.layer(SnowLayer::Unstable);
-    let wind = ctx.wind;
     scratch
         .out_x
         .par_chunks_mut(w)
         .zip(scratch.out_y.par_chunks_mut(w))
         .enumerate()
         .map(|(row, (ox, oy))| {
-            let mut sums = [0.0f64; 2];
-            let inner_row = row > 0 && row + 1 < h;
-            for col in 0..w {
-                let i = row * w + col;
-                ox[col] = 0.0;
-                oy[col] = 0.0;
-                if !valid.at(i) {
-                    continue;
+            let base = row * w;
+            let cell = Cell {
+                ctx,
+                powder: &powder[base..base + w],
+                unstable: &unstable[base..base + w],
+                u: &ctx.wind.u[base..base + w],
+                v: &ctx.wind.v[base..base + w],
+                shadow: &ctx.wind.shadow[base..base + w],
+                base,
+            };
+            let mut border = 0.0f64;
+            let mut general = |col: usize, ox: &mut f32, oy: &mut f32| {
+                border += cell.general(valid, a, row, col, ox, oy) as f64;
+            };
+            if row > 0 && row + 1 < h && w >= 3 {
+                general(0, &mut ox[0], &mut oy[0]);
+                general(w - 1, &mut ox[w - 1], &mut oy[w - 1]);
+                let up = &a[base - w..base];
+                let mid = &a[base..base + w];
+                let dn = &a[base + w..base + 2 * w];
+                let (ox, oy) = (&mut ox[..w], &mut oy[..w]);
+                let (u_row, v_row) = (&cell.u[..w], &cell.v[..w]);
+                let shadow = &cell.shadow[..w];
+                let (powder, unstable) = (&cell.powder[..w], &cell.unstable[..w]);
+                let mut masked_cells = Vec::new();
+                for col in 1..w - 1 {
+                    let i = base + col;
+                    let inner = [i - 1, i + 1, i - w, i + w].iter().all(|&j| valid.at(j));
+                    if !valid.at(i) || !inner {
+                        // Nodata or next to it: done by the general path below.
+                        masked_cells.push(col);
+                        continue;
+                    }
+                    let a_xx = second_difference(mid[col - 1], mid[col], mid[col + 1]);
+                    let a_yy = second_difference(up[col], mid[col], dn[col]);
+                    let (ex, ey) = amounts(
+                        ctx,
+                        a_xx * ctx.inv_dx2,
+                        a_yy * ctx.inv_dy2,
+                        [u_row[col], v_row[col], shadow[col]],
+                        [powder[col], unstable[col]],
+                    );
+                    ox[col] = ex.copysign(u_row[col]);
+                    oy[col] = ey.copysign(v_row[col]);
                 }
-                let (u, v) = (wind.u[i], wind.v[i]);
-                let fast = inner_row
-                    && col > 0
-                    && col + 1 < w
-                    && valid.at(i - 1)
-                    && valid.at(i + 1)
-                    && valid.at(i - w)
-                    && valid.at(i + w);
-                let (a_xx, a_yy) = if fast {
-                    (
-                        second_difference(a[i - 1], a[i], a[i + 1]) * ctx.inv_dx2,
-                        second_difference(a[i - w], a[i], a[i + w]) * ctx.inv_dy2,
-                    )
-                } else {
-                    ctx.second_differences(valid, a, col, row)
-                };
-                let available = powder[i] + if ctx.erode_unstable { unstable[i] } else { 0.0 };
-                let curv = erosion_curvature(a_xx, a_yy, u, v);
-                let e = eroded_depth(curv, wind.shadow[i] > 0.5, available, ctx.erosion_dt);
-                if e <= 0.0 {
-                    continue;
+                for col in masked_cells {
+                    general(col, &mut ox[col], &mut oy[col]);
                 }
-                let ex = e * downwind_split(u, v);
-                let ey = e - ex;
-                let dc = if u > 0.0 { 1 } else { -1 };
-                let dr = if v > 0.0 { -1 } else { 1 };
-                let (sx, bx) = route(ctx, valid, col, row, dc, 0, ex);
-                let (sy, by) = route(ctx, valid, col, row, 0, dr, ey);
-                ox[col] = sx.copysign(dc as f32);
-                oy[col] = sy.copysign(-dr as f32);
-                sums[0] += (sx + sy) as f64;
-                sums[1] += (bx + by) as f64;
+            } else {
+                for col in 0..w {
+                    general(col, &mut ox[col], &mut oy[col]);
+                }
             }
-            sums
+            let eroded = ox.iter().zip(oy.iter());
+            let eroded = eroded.map(|(x, y)| (x.abs() + y.abs()) as f64).sum::<f64>();
+            [eroded, border]
         })
         .collect()
+}
+
+/// One row's view of the layers, for the per-cell erosion.
+struct Cell<'a> {
+    ctx: &'a Context<'a>,
+    powder: &'a [f32],
+    unstable: &'a [f32],
+    u: &'a [f32],
+    v: &'a [f32],
+    shadow: &'a [f32],
+    base: usize,
+}
+
+impl Cell<'_> {
+    /// Any cell (border, next to nodata, or nodata): writes its signed outgoing depths and
+    /// returns the depth that leaves the grid.
+    fn general<V: Validity>(
+        &self,
+        valid: &V,
+        a: &[f32],
+        row: usize,
+        col: usize,
+        ox: &mut f32,
+        oy: &mut f32,
+    ) -> f32 {
+        (*ox, *oy) = (0.0, 0.0);
+        if !valid.at(self.base + col) {
+            return 0.0;
+        }
+        let (a_xx, a_yy) = self.ctx.second_differences(valid, a, col, row);
+        let (ex, ey) = amounts(
+            self.ctx,
+            a_xx,
+            a_yy,
+            [self.u[col], self.v[col], self.shadow[col]],
+            [self.powder[col], self.unstable[col]],
+        );
+        let i = self.base + col;
+        let (u, v) = (self.ctx.wind.u[i], self.ctx.wind.v[i]);
+        let (sx, bx) = route(
+            self.ctx,
+            valid,
+            col,
+            row,
+            if u > 0.0 { 1 } else { -1 },
+            0,
+            ex,
+        );
+        let (sy, by) = route(
+            self.ctx,
+            valid,
+            col,
+            row,
+            0,
+            if v > 0.0 { -1 } else { 1 },
+            ey,
+        );
+        *ox = sx.copysign(u);
+        *oy = sy.copysign(v);
+        bx + by
+    }
+}
+
+/// Unsigned depths `(east/west, north/south)` a cell sends downwind, m, from its
+/// curvatures (1/m), its wind `[u, v, shadow]` and its `[powder, unstable]` depths.
+#[inline(always)]
+fn amounts(
+    ctx: &Context,
+    a_xx: f32,
+    a_yy: f32,
+    [u, v, shadow]: [f32; 3],
+    [p, un]: [f32; 2],
+) -> (f32, f32) {
+    let available = p + if ctx.erode_unstable { un } else { 0.0 };
+    let curv = erosion_curvature(a_xx, a_yy, u, v);
+    let e = eroded_depth(curv, shadow > 0.5, available, ctx.erosion_dt);
+    let ex = e * downwind_split(u, v);
+    (ex, e - ex)
 }
 
 /// Where `amount` sent from `(col, row)` towards `(dc, dr)` goes: `(sent, of which out of the

@@ -24,19 +24,16 @@ pub fn erosion_curvature(a_xx: f32, a_yy: f32, u: f32, v: f32) -> f32 {
 /// the cell is out of the wind shadow, else 0. `erosion_dt = k_erosion · δt`.
 #[inline(always)]
 pub fn eroded_depth(curv_w: f32, in_shadow: bool, available: f32, erosion_dt: f32) -> f32 {
-    if in_shadow || curv_w >= 0.0 || curv_w.is_nan() {
-        0.0
-    } else {
-        (-erosion_dt * curv_w).min(available)
-    }
+    // Branch-free (the kernels vectorise): max(NaN, 0) is 0.
+    let e = (-erosion_dt * curv_w).max(0.0).min(available);
+    if in_shadow { 0.0 } else { e }
 }
 
 /// Share of a cell's eroded snow sent to its east/west neighbour, `|u| / (|u| + |v|)`; the
 /// rest goes to its north/south neighbour. 0 in calm air.
 #[inline(always)]
 pub fn downwind_split(u: f32, v: f32) -> f32 {
-    let sum = u.abs() + v.abs();
-    if sum > 0.0 { u.abs() / sum } else { 0.0 }
+    u.abs() / (u.abs() + v.abs()).max(f32::MIN_POSITIVE)
 }
 
 /// Change of the vertical wind speed along the wind, `a_z = W · ∇(W · ∇Wz)` for a locally
