@@ -8,6 +8,9 @@ const EXAMPLES: &str = "\
 Examples:
   snowscape demo                                  # procedural terrain, every output in out/demo
   snowscape demo --size 1024 --seed 7 --out out/s7
+  snowscape run --dem ../shared/data/dem/avaframe_avaMal/avaMal.asc --out out/mal
+  snowscape run --dem dem.tif --scenario winter.toml --days 60 --seed 3
+  snowscape run --dem dem.tif --resume out/run     # continue an interrupted run
   snowscape info ../shared/data/dem/avaframe_avaMal/avaMal.asc
   snowscape render dem.tif --out relief.png --sun-azimuth 300
   snowscape convert dem.asc dem.tif               # any readable format to GeoTIFF/EXR/PNG16/ASC/NPY
@@ -42,8 +45,10 @@ pub struct GlobalArgs {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Generate the procedural alpine terrain, cover it with snow, write every output.
+    /// Run a winter on the procedural alpine terrain and write every output.
     Demo(DemoArgs),
+    /// Run a winter on a terrain file (a scenario file sets the weather timeline).
+    Run(RunArgs),
     /// Describe a terrain file: grid size, cell size, CRS, value range, nodata share.
     Info(InfoArgs),
     /// Render a shaded-relief preview of a terrain file to PNG.
@@ -68,12 +73,43 @@ pub struct DemoArgs {
     /// Cell size of the procedural terrain, metres.
     #[arg(long, default_value_t = 10.0)]
     pub cell_size: f64,
-    /// Days of snowfall to accumulate before the outputs are written.
-    #[arg(long, default_value_t = 30)]
-    pub days: u32,
-    /// Frames in the time-lapse (one per snapshot day, spread over the run).
+    /// Length of the winter, days.
+    #[arg(long, default_value_t = 100.0)]
+    pub days: f64,
+    /// Frames in the time-lapse (snapshots spread evenly over the season).
     #[arg(long, default_value_t = 10)]
     pub frames: usize,
+}
+
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Terrain raster (.asc, .tif, .png, .raw/.r16, .npy).
+    #[arg(long)]
+    pub dem: PathBuf,
+    /// Scenario file (TOML): dates, latitude, weather timeline, parameters. Default: a
+    /// 100-day winter fitted to the terrain's altitudes.
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// Length of the season, days (overrides the scenario).
+    #[arg(long)]
+    pub days: Option<f64>,
+    /// Random seed (overrides the scenario).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Output folder (default out/run, or the --resume folder).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Resume an interrupted run from the checkpoint in this folder (same DEM and options).
+    #[arg(long)]
+    pub resume: Option<PathBuf>,
+    /// Stop at this day, write a checkpoint and exit (continue later with --resume): splits
+    /// a long season into parts.
+    #[arg(long, value_name = "DAY")]
+    pub stop_at: Option<f64>,
+    #[command(flatten)]
+    pub dem_input: DemInputArgs,
+    #[command(flatten)]
+    pub view: ViewArgs,
 }
 
 #[derive(Debug, Args)]
@@ -153,4 +189,15 @@ pub struct BenchArgs {
     /// Where to write the JSON report.
     #[arg(long, default_value = "bench.json")]
     pub out: PathBuf,
+}
+
+impl Default for ViewArgs {
+    fn default() -> Self {
+        Self {
+            sun_azimuth: 315.0,
+            sun_elevation: 35.0,
+            exaggeration: 1.0,
+            max_size: 2048,
+        }
+    }
 }

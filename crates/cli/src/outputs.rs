@@ -102,16 +102,10 @@ pub fn write_glb(out: &mut Written, terrain: &LayeredTerrain) -> Result<()> {
     Ok(())
 }
 
-/// Writes `frames/frame_NNNN.png` and `timelapse.gif`.
+/// Writes `timelapse.gif` from the frames (written as `frames/` while the run went on).
 pub fn write_timelapse(out: &mut Written, frames: &[RgbaImage], delay_ms: u32) -> Result<()> {
     if frames.is_empty() {
         return Ok(());
-    }
-    let frame_dir = out.dir.join("frames");
-    std::fs::create_dir_all(&frame_dir)
-        .with_context(|| format!("cannot create {}", frame_dir.display()))?;
-    for (k, f) in frames.iter().enumerate() {
-        write_png(&out.path(&format!("frames/frame_{k:04}.png")), f)?;
     }
     let gif = encode_gif(frames, delay_ms)?;
     write_bytes_atomic(&out.path("timelapse.gif"), &gif)?;

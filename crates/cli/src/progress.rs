@@ -45,14 +45,23 @@ impl Stages {
         }
     }
 
-    /// Extends the bar's length by `n` stages.
-    pub fn add_stages(&self, n: u64) {
-        self.bar.inc_length(n);
-    }
-
     /// Closes the bar and returns the timings in the order the stages first ran.
     pub fn finish(self) -> Vec<(String, f64)> {
         self.bar.finish_and_clear();
         self.timings
     }
+}
+
+/// A bar counting simulated days (in tenths), hidden when `quiet`.
+pub fn day_bar(days: f64, quiet: bool) -> ProgressBar {
+    let bar = ProgressBar::new((days * 10.0).ceil() as u64);
+    if quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    if let Ok(style) = ProgressStyle::with_template(
+        "{elapsed_precise:.dim} season [{bar:30.cyan/blue}] day {msg} ({per_sec}, eta {eta})",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
 }

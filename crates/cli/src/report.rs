@@ -86,6 +86,9 @@ pub struct Report {
     pub threads: usize,
     /// Seconds per stage, in the order the stages ran.
     pub timings: serde_json::Map<String, serde_json::Value>,
+    /// Events of each kind the scheduler drew (season runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub event_counts: Option<serde_json::Map<String, serde_json::Value>>,
     pub mass_budget: MassBudget,
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,

@@ -2,14 +2,16 @@
 //! with the `exr` crate.
 //!
 //! Format: OpenEXR 2 (ILM / ASWF), single part, scan lines of the data window, RLE-compressed
-//! 64x64 tiles (`Encoding::FAST_LOSSLESS`), lossless f32 samples. Channel names are sorted
+//! 64x64 tiles (`Encoding::FAST_LOSSLESS`, in increasing line order so the bytes are deterministic), lossless f32 samples. Channel names are sorted
 //! alphabetically in the file, as the format requires. Nodata: EXR has no nodata declaration,
 //! so nodata is NaN (written as NaN by [`crate::write_raster`], read as nodata; see
 //! [`crate::cells`]). [`write_exr`] writes the values it is given as they are.
 //!
-//! Georeferencing travels in custom layer attributes (doubles `snowscape.origin_x`,
-//! `snowscape.origin_y`, `snowscape.pixel_width`, `snowscape.pixel_height`, text
-//! `snowscape.crs` as `EPSG:n` or WKT); other tools ignore them. Reading takes `--cell-size`
+//! Georeferencing travels in ONE custom text attribute, `snowscape.georeference`: a first line
+//! `origin_x origin_y pixel_width pixel_height` (shortest round-trip decimal f64s), then the
+//! CRS (`EPSG:n` or WKT, possibly empty) on the following lines; other tools ignore it. One
+//! attribute, because the exr crate keeps custom attributes in a `HashMap` and writes them in
+//! its random order: several attributes would make identical runs write different bytes. Reading takes `--cell-size`
 //! if given, else these attributes, else fails naming `--cell-size`. The channel read is the
 //! one named `height`, `Y` or `Z` (case-insensitive), else the first.
 
@@ -23,13 +25,7 @@ use snowscape_terrain::{Crs, GeoTransform, Grid, GridGeometry};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-const ATTR_TRANSFORM: [&str; 4] = [
-    "snowscape.origin_x",
-    "snowscape.origin_y",
-    "snowscape.pixel_width",
-    "snowscape.pixel_height",
-];
-const ATTR_CRS: &str = "snowscape.crs";
+const ATTR_GEOREFERENCE: &str = "snowscape.georeference";
 
 fn exr_err(path: &Path) -> impl FnOnce(exr::error::Error) -> RasterError + '_ {
     move |source| RasterError::Exr {
@@ -78,23 +74,45 @@ fn check_channels(path: &Path, geometry: &GridGeometry, channels: &[(&str, &[f32
     Ok(())
 }
 
-/// The custom attributes that carry the georeferencing.
+/// The custom attribute that carries the georeferencing (see the module docs).
 fn geo_attributes(geometry: &GridGeometry) -> HashMap<Text, AttributeValue> {
     let t = geometry.transform();
-    let values = [t.origin_x, t.origin_y, t.pixel_width, t.pixel_height];
-    let mut out: HashMap<Text, AttributeValue> = ATTR_TRANSFORM
-        .iter()
-        .zip(values)
-        .filter_map(|(k, v)| Some((Text::new_or_none(k)?, AttributeValue::F64(v))))
-        .collect();
-    let crs = geometry.crs().map(|c| match c {
+    let crs = geometry.crs().map_or(String::new(), |c| match c {
         Crs::Epsg(code) => format!("EPSG:{code}"),
         Crs::Wkt(w) => w.clone(),
     });
-    if let (Some(k), Some(v)) = (Text::new_or_none(ATTR_CRS), crs.and_then(Text::new_or_none)) {
+    let text = format!(
+        "{} {} {} {}\n{crs}",
+        t.origin_x, t.origin_y, t.pixel_width, t.pixel_height
+    );
+    let mut out = HashMap::new();
+    if let (Some(k), Some(v)) = (
+        Text::new_or_none(ATTR_GEOREFERENCE),
+        Text::new_or_none(text),
+    ) {
         out.insert(k, AttributeValue::Text(v));
     }
     out
+}
+
+/// The transform and CRS text of a `snowscape.georeference` attribute.
+fn parse_georeference(text: &str) -> Option<(GeoTransform, Option<Crs>)> {
+    let (numbers, crs) = text.split_once('\n').unwrap_or((text, ""));
+    let v: Vec<f64> = numbers
+        .split_whitespace()
+        .map(str::parse)
+        .collect::<std::result::Result<_, _>>()
+        .ok()?;
+    let &[origin_x, origin_y, pixel_width, pixel_height] = v.as_slice() else {
+        return None;
+    };
+    let transform = GeoTransform {
+        origin_x,
+        origin_y,
+        pixel_width,
+        pixel_height,
+    };
+    Some((transform, parse_crs_text(crs)))
 }
 
 /// Writes one f32 channel per `(name, values)` pair, atomically, with the georeferencing in
@@ -115,21 +133,18 @@ pub fn write_exr(path: &Path, geometry: &GridGeometry, channels: &[(&str, &[f32]
     let layer = Layer::new(
         (geometry.width(), geometry.height()),
         attributes,
-        Encoding::FAST_LOSSLESS,
+        // Increasing line order makes the parallel compressor write chunks in a fixed order
+        // (with `Unspecified` it writes them as threads finish: same image, different bytes).
+        Encoding {
+            line_order: LineOrder::Increasing,
+            ..Encoding::FAST_LOSSLESS
+        },
         AnyChannels::sort(list),
     );
     let image = Image::from_layer(layer);
     write_atomic(path, |w| {
         image.write().to_buffered(w).map_err(exr_err(path))
     })
-}
-
-fn f64_attr(attrs: &HashMap<Text, AttributeValue>, key: &str) -> Option<f64> {
-    match attrs.get(&Text::new_or_none(key)?)? {
-        AttributeValue::F64(v) => Some(*v),
-        AttributeValue::F32(v) => Some(f64::from(*v)),
-        _ => None,
-    }
 }
 
 /// The geometry: `--cell-size`, else the snowscape attributes.
@@ -145,26 +160,19 @@ fn geometry_of(
             .map(|g| g.with_crs(opts.crs.clone()))
             .map_err(geometry_err(path));
     }
-    let t: Option<Vec<f64>> = ATTR_TRANSFORM.iter().map(|k| f64_attr(attrs, k)).collect();
-    let Some(&[origin_x, origin_y, pixel_width, pixel_height]) = t.as_deref() else {
+    let georeference = Text::new_or_none(ATTR_GEOREFERENCE).and_then(|k| match attrs.get(&k) {
+        Some(AttributeValue::Text(t)) => parse_georeference(&t.to_string()),
+        _ => None,
+    });
+    let Some((transform, file_crs)) = georeference else {
         return Err(RasterError::MissingOption {
             path: path.to_path_buf(),
             format: "EXR",
             option: "--cell-size",
-            why: "it has no snowscape georeferencing attributes",
+            why: "it has no snowscape georeferencing attribute",
         });
     };
-    let file_crs = Text::new_or_none(ATTR_CRS).and_then(|k| match attrs.get(&k) {
-        Some(AttributeValue::Text(t)) => parse_crs_text(&t.to_string()),
-        _ => None,
-    });
     let crs = opts.crs.clone().or(file_crs);
-    let transform = GeoTransform {
-        origin_x,
-        origin_y,
-        pixel_width,
-        pixel_height,
-    };
     GridGeometry::from_transform(w, h, transform, crs).map_err(geometry_err(path))
 }
 

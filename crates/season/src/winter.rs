@@ -193,6 +193,10 @@ impl Winter {
     pub fn environment(&self) -> &EnvironmentMaps {
         &self.environment
     }
+    /// Latitude the sun was computed for, degrees north.
+    pub fn latitude_deg(&self) -> f64 {
+        self.base_environment.sun.latitude_deg
+    }
     /// Simulated time, days since the season start.
     pub fn day(&self) -> f64 {
         self.state.scheduler.time_days()

@@ -5,6 +5,8 @@ mod convert;
 mod demo;
 mod info;
 mod render;
+mod run;
+mod season;
 
 use crate::cli::{Cli, Command};
 use crate::failure::Failure;
@@ -14,6 +16,7 @@ pub fn dispatch(cli: Cli) -> Result<(), Failure> {
     let g = &cli.global;
     match &cli.command {
         Command::Demo(a) => demo::run(a, g),
+        Command::Run(a) => run::run(a, g),
         Command::Info(a) => info::run(a),
         Command::Render(a) => render::run(a),
         Command::Convert(a) => convert::run(a),

@@ -1,0 +1,71 @@
+//! `snowscape run --dem FILE`: a season on a real terrain.
+
+use crate::cli::{GlobalArgs, RunArgs};
+use crate::commands::render::preview_options;
+use crate::commands::season::{SeasonJob, run_season};
+use crate::failure::{ExitCodeExt, Failure};
+use anyhow::{Context, anyhow};
+use serde_json::json;
+use snowscape_io::write_bytes_atomic;
+use snowscape_render::ColourMode;
+use snowscape_season::scenario::Scenario;
+use std::path::Path;
+
+/// File name of the resolved scenario written beside the outputs (what `--resume` reuses).
+const RESOLVED_SCENARIO: &str = "scenario.toml";
+
+fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read scenario {}", path.display()))?;
+    Ok(Scenario::from_toml(&text, &path.display().to_string())?)
+}
+
+pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
+    let out = args
+        .out
+        .clone()
+        .or_else(|| args.resume.clone())
+        .unwrap_or_else(|| "out/run".into());
+    let scenario_path = match (&args.scenario, &args.resume) {
+        (Some(p), _) => Some(p.clone()),
+        (None, Some(dir)) => Some(dir.join(RESOLVED_SCENARIO)),
+        (None, None) => None,
+    };
+    let mut scenario = match &scenario_path {
+        Some(p) => load_scenario(p).bad_input()?,
+        None => Scenario::default(),
+    };
+    if let Some(d) = args.days {
+        scenario.days = d;
+    }
+    if let Some(s) = args.seed {
+        scenario.seed = s;
+    }
+    scenario
+        .validate("the command line")
+        .context("--days/--seed")
+        .bad_input()?;
+    let bedrock = args.dem_input.read(&args.dem).bad_input()?;
+    if args.resume.is_none() {
+        crate::outputs::prepare_dir(&out).bad_input()?;
+        let text = toml::to_string(&scenario)
+            .map_err(|e| anyhow!("cannot write the resolved scenario: {e}"))
+            .job_failed()?;
+        write_bytes_atomic(&out.join(RESOLVED_SCENARIO), text.as_bytes()).job_failed()?;
+    }
+    let view = preview_options(&args.view, ColourMode::Snow).bad_input()?;
+    run_season(SeasonJob {
+        command: "run",
+        source: args.dem.display().to_string(),
+        bedrock,
+        scenario,
+        extra_parameters: json!({
+            "scenario_file": scenario_path.map(|p| p.display().to_string()),
+        }),
+        out,
+        resume: args.resume.clone(),
+        stop_at: args.stop_at,
+        view,
+        quiet: global.quiet,
+    })
+}
