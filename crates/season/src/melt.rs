@@ -6,7 +6,9 @@
 //! snow, so it goes first). Melt water leaves the model, as in the paper: the step reports the
 //! removed volume.
 
-use crate::phenomenon::{PhenomenonError, check_at_least, check_dt, check_finite, check_map};
+use crate::phenomenon::{
+    PhenomenonError, Validity, check_at_least, check_dt, check_finite, check_map, with_validity,
+};
 use crate::{VolumeChange, ordered_sum};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -41,15 +43,15 @@ impl MeltParams {
 }
 
 /// Depth of snow melted over `dt_days` at `temperature` °C, m (degree-day law).
-#[inline]
+#[inline(always)]
 pub fn melt_depth(params: &MeltParams, temperature: f32, dt_days: f64) -> f32 {
     let rate = (dt_days * params.k_melt) as f32;
     rate * (temperature - params.t0_melt as f32).max(0.0)
 }
 
 /// Removes up to `depth` metres from the column `layers` (bottom to top: compacted, stable,
-/// unstable, powder), top layer first. Returns the depth actually removed.
-#[inline]
+/// unstable, powder), top layer first. Returns the depth actually removed. Branch-free.
+#[inline(always)]
 pub fn remove_top_down(layers: [&mut f32; 4], depth: f32) -> f32 {
     let mut left = depth;
     for layer in layers.into_iter().rev() {
@@ -72,34 +74,55 @@ pub fn step(
     let geometry = terrain.geometry().clone();
     check_map("temperature", temperature, &geometry)?;
     let mask = terrain.mask().clone();
-    let w = geometry.width();
+    let row_removed = with_validity!(mask, |valid| melt_rows(
+        params,
+        terrain,
+        temperature,
+        valid,
+        dt_days
+    ));
+    Ok(VolumeChange {
+        added: 0.0,
+        removed: ordered_sum(&row_removed) * geometry.cell_area(),
+    })
+}
+
+/// Melts every row; returns the depth removed per row, m.
+fn melt_rows<V: Validity>(
+    params: &MeltParams,
+    terrain: &mut LayeredTerrain,
+    temperature: &[f32],
+    valid: &V,
+    dt_days: f64,
+) -> Vec<f64> {
+    let w = terrain.geometry().width();
     let [compacted, stable, unstable, powder] = &mut terrain.snow;
-    let row_removed: Vec<f64> = compacted
+    compacted
         .par_chunks_mut(w)
         .zip(stable.par_chunks_mut(w))
         .zip(unstable.par_chunks_mut(w))
         .zip(powder.par_chunks_mut(w))
         .zip(temperature.par_chunks(w))
         .enumerate()
-        .map(|(row, ((((c, s), u), p), t))| {
-            let mut removed = 0.0f64;
-            for col in 0..w {
-                if !mask.is_valid(row * w + col) {
-                    continue;
-                }
-                let depth = melt_depth(params, t[col], dt_days);
-                if depth > 0.0 {
+        .map_init(
+            || vec![0.0f32; w],
+            |removed, (row, ((((c, s), u), p), t))| {
+                let (c, s, u, p, t) = (&mut c[..w], &mut s[..w], &mut u[..w], &mut p[..w], &t[..w]);
+                let removed = &mut removed[..w];
+                for col in 0..w {
+                    // A nodata cell melts nothing (its temperature may be anything).
+                    let depth = if valid.at(row * w + col) {
+                        melt_depth(params, t[col], dt_days)
+                    } else {
+                        0.0
+                    };
                     let layers = [&mut c[col], &mut s[col], &mut u[col], &mut p[col]];
-                    removed += remove_top_down(layers, depth) as f64;
+                    removed[col] = remove_top_down(layers, depth);
                 }
-            }
-            removed
-        })
-        .collect();
-    Ok(VolumeChange {
-        added: 0.0,
-        removed: ordered_sum(&row_removed) * geometry.cell_area(),
-    })
+                removed.iter().map(|&r| r as f64).sum::<f64>()
+            },
+        )
+        .collect()
 }
 
 #[cfg(test)]
