@@ -146,6 +146,12 @@ pub struct WindParams {
     pub speed_m_s: f64,
     /// Venturi speed-up with altitude kventuri, per m. Default 1e-3: Cordonnier 2018 Table 2.
     pub k_venturi: f64,
+    /// Altitude at which the wind blows at `|Wd|`, metres: the Venturi term is
+    /// `1 + kventuri·(A − venturi_base_m)`. Default 0: sea level, as in the paper. On high
+    /// terrain the paper's kventuri triples the wind at 2000 m, and the wind-effect surface
+    /// then detaches at almost every convexity (its curvature threshold is c/|W|²); setting
+    /// this to the valley floor keeps |W| near |Wd|.
+    pub venturi_base_m: f64,
     /// Topography effect on wind kterrain, dimensionless. Default 0.5: Cordonnier 2018 Table 2.
     pub k_terrain: f64,
     /// Decrease of the wind-effect surface's vertical speed c, m/s² (> 0). Default 0.7:
@@ -175,6 +181,7 @@ impl Default for WindParams {
             direction_deg: 270.0,
             speed_m_s: 10.0,
             k_venturi: 1e-3,
+            venturi_base_m: 0.0,
             k_terrain: 0.5,
             c_m_s2: 0.7,
             shadow_epsilon_m: 0.05,
@@ -304,6 +311,12 @@ impl WindParams {
         let s = self.speed_m_s;
         check_param("wind.speed_m_s", s, s >= 0.0, "must be >= 0")?;
         check_param("wind.k_venturi", self.k_venturi, true, "must be finite")?;
+        check_param(
+            "wind.venturi_base_m",
+            self.venturi_base_m,
+            true,
+            "must be finite",
+        )?;
         check_param("wind.k_terrain", self.k_terrain, true, "must be finite")?;
         check_param("wind.c_m_s2", self.c_m_s2, self.c_m_s2 > 0.0, "must be > 0")?;
         let e = self.shadow_epsilon_m;

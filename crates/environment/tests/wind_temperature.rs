@@ -107,6 +107,14 @@ fn wind_speeds_up_with_altitude() {
             "A = {a}: {speed} vs {expect}"
         );
     }
+    // Measured from a base altitude instead of sea level: |Wd| at the base.
+    let (z, g) = terrain(20, 20, 10.0, |_, _| 1500.0);
+    let based = WindParams {
+        venturi_base_m: 1000.0,
+        ..p.clone()
+    };
+    let m = wind(&z, &g, &all, &based).unwrap();
+    assert!((m.u[210].hypot(m.v[210]) - 15.0).abs() < 1e-3);
     // On a uniform ramp (same slope everywhere) the speed grows monotonically with altitude.
     let (z, g) = terrain(60, 10, 10.0, |x, _| 100.0 + 0.1 * x);
     let m = wind(&z, &g, &all, &p).unwrap();

@@ -62,6 +62,7 @@ pub(crate) fn wind_field(field: &TerrainField, params: &WindParams) -> WindMaps 
     let wd = dominant_wind(params);
     let wd32 = [wd[0] as f32, wd[1] as f32];
     let (kv, kt) = (params.k_venturi as f32, params.k_terrain as f32);
+    let base = params.venturi_base_m as f32;
     let wind: Vec<[f32; 2]> = layout
         .z
         .par_iter()
@@ -70,7 +71,7 @@ pub(crate) fn wind_field(field: &TerrainField, params: &WindParams) -> WindMaps 
             if a == f32::NEG_INFINITY {
                 [0.0, 0.0]
             } else {
-                redirect(venturi(wd32, a, kv), n, kt)
+                redirect(venturi(wd32, a - base, kv), n, kt)
             }
         })
         .collect();
