@@ -15,10 +15,14 @@
 //! on slopes between 25° and 45° is increasingly unstable — the slopes where slab avalanches
 //! start in practice. The tests check the behaviour these values produce.
 
+use crate::phenomenon::{
+    PhenomenonError, Validity, check_at_least, check_dt, check_finite, check_map, fill_surface,
+    row_gradient_norm, with_validity,
+};
 use crate::{VolumeChange, ordered_sum};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::{LayeredTerrain, surface};
+use snowscape_terrain::LayeredTerrain;
 
 /// Parameters of snowfall.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -61,6 +65,20 @@ impl Default for SnowfallParams {
     }
 }
 
+impl SnowfallParams {
+    /// Checks the parameters are finite and the rates non-negative.
+    pub fn validate(&self) -> Result<(), PhenomenonError> {
+        check_at_least("snowfall", "k_snow", self.k_snow, 0.0)?;
+        check_finite("snowfall", "a0_precip", self.a0_precip)?;
+        check_at_least("snowfall", "k_powdery", self.k_powdery, 0.0)?;
+        check_finite("snowfall", "sc0", self.sc0)?;
+        check_at_least("snowfall", "k_sc_powdery", self.k_sc_powdery, 0.0)?;
+        check_finite("snowfall", "t0_powdery", self.t0_powdery)?;
+        check_at_least("snowfall", "k_unstable", self.k_unstable, 0.0)?;
+        check_finite("snowfall", "s_u_deg", self.s_u_deg)
+    }
+}
+
 /// Reusable buffers of the snowfall step.
 #[derive(Debug, Default)]
 pub struct SnowfallScratch {
@@ -88,45 +106,50 @@ pub fn step(
     temperature: &[f32],
     scratch: &mut SnowfallScratch,
     dt_days: f64,
-) -> VolumeChange {
+) -> Result<VolumeChange, PhenomenonError> {
+    params.validate()?;
+    check_dt(dt_days)?;
     let geometry = terrain.geometry().clone();
+    check_map("temperature", temperature, &geometry)?;
     let mask = terrain.mask().clone();
     let w = geometry.width();
-    scratch.surface.clear();
-    scratch.surface.extend(terrain.surface());
+    fill_surface(terrain, &mut scratch.surface);
     let surf = &scratch.surface;
+    let rate = dt_days * params.k_snow;
     let [_, stable, unstable, powder] = &mut terrain.snow;
-    let row_added: Vec<f64> = stable
-        .par_chunks_mut(w)
-        .zip(unstable.par_chunks_mut(w))
-        .zip(powder.par_chunks_mut(w))
-        .enumerate()
-        .map(|(row, ((st, un), pw))| {
-            let mut added = 0.0f64;
-            for col in 0..w {
-                let i = row * w + col;
-                if !mask.is_valid(i) {
-                    continue;
-                }
-                let depth = dt_days * params.k_snow * (surf[i] as f64 - params.a0_precip).max(0.0);
-                if depth <= 0.0 {
-                    continue;
-                }
-                let (gx, gy) = surface::gradient(surf, &geometry, &mask, col, row);
-                let g = ((gx * gx + gy * gy) as f64).sqrt();
-                let (xp, xu, xs) = layer_shares(params, g, temperature[i] as f64);
-                pw[col] += (depth * xp) as f32;
-                un[col] += (depth * xu) as f32;
-                st[col] += (depth * xs) as f32;
-                added += depth;
-            }
-            added
-        })
-        .collect();
-    VolumeChange {
+    let row_added: Vec<f64> = with_validity!(mask, |valid| {
+        stable
+            .par_chunks_mut(w)
+            .zip(unstable.par_chunks_mut(w))
+            .zip(powder.par_chunks_mut(w))
+            .enumerate()
+            .map_init(
+                || vec![0.0f32; w],
+                |gradient, (row, ((st, un), pw))| {
+                    row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
+                    let mut added = 0.0f64;
+                    for col in 0..w {
+                        let i = row * w + col;
+                        let depth = rate * (surf[i] as f64 - params.a0_precip).max(0.0);
+                        if depth <= 0.0 || !valid.at(i) {
+                            continue;
+                        }
+                        let (xp, xu, xs) =
+                            layer_shares(params, gradient[col] as f64, temperature[i] as f64);
+                        pw[col] += (depth * xp) as f32;
+                        un[col] += (depth * xu) as f32;
+                        st[col] += (depth * xs) as f32;
+                        added += depth;
+                    }
+                    added
+                },
+            )
+            .collect()
+    });
+    Ok(VolumeChange {
         added: ordered_sum(&row_added) * geometry.cell_area(),
         removed: 0.0,
-    }
+    })
 }
 
 #[cfg(test)]
@@ -143,7 +166,7 @@ mod tests {
         let p = SnowfallParams::default();
         let mut t = plane(1800.0);
         let temp = vec![-8.0f32; 64];
-        let v = step(&p, &mut t, &temp, &mut SnowfallScratch::default(), 1.0);
+        let v = step(&p, &mut t, &temp, &mut SnowfallScratch::default(), 1.0).unwrap();
         let expect = 1e-4 * 1000.0;
         for i in 0..64 {
             assert!((t.layer(SnowLayer::Stable)[i] as f64 - expect).abs() < 1e-6);
@@ -162,7 +185,8 @@ mod tests {
             &[0.0; 64],
             &mut SnowfallScratch::default(),
             1.0,
-        );
+        )
+        .unwrap();
         assert_eq!(v.added, 0.0);
         assert_eq!(t.total_depth().iter().sum::<f32>(), 0.0);
     }

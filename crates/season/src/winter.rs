@@ -305,7 +305,8 @@ impl Winter {
                     temperature,
                     &mut self.snowfall_scratch,
                     event.dt_days,
-                );
+                )
+                .map_err(err)?;
                 b.snowfall += v.added;
             }
             EventKind::MeltAndStateStep => {

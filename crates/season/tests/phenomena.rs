@@ -82,7 +82,7 @@ fn season(s: &mut Scene, events: usize) -> Result<Vec<VolumeChange>, PhenomenonE
     for k in 0..events {
         let t = &mut s.terrain;
         let change = match k % 5 {
-            0 => snowfall::step(&fall, t, &s.temperature, &mut fall_scratch, 1.0),
+            0 => snowfall::step(&fall, t, &s.temperature, &mut fall_scratch, 1.0)?,
             1 => melt::step(&melt::MeltParams::default(), t, &s.temperature, 0.5)?,
             2 => stability::step(&Default::default(), t, &s.temperature, &mut st_scratch, 0.5)?
                 .volume_change(),
