@@ -12,7 +12,7 @@
 //! | PNG16 | `.png` | 16-bit (or 8-bit) grayscale | 16-bit + `<file>.json` sidecar | sidecar | code 0 when the sidecar says so | `--height-range`, `--cell-size` (unless sidecar) |
 //! | RAW16 | `.raw` `.r16` | LE u16, square or `--raw-size` | LE u16 + sidecar | sidecar | as PNG16 | `--height-range`, `--cell-size` (unless sidecar) |
 //! | NumPy | `.npy` | 2-D f4/f8/i1/i2/i4/u1/u2/u4, C or Fortran order | f32, C order | none | NaN | `--cell-size` |
-//! | OpenEXR | `.exr` | channel `height`/`Y`/`Z` or first | one f32 channel per layer | custom attributes | NaN | `--cell-size` unless written by snowscape |
+//! | OpenEXR | `.exr` | channel `height`/`Y`/`Z` or first | one f32 channel per layer | custom attribute `snowscape.georeference` | NaN | `--cell-size` unless written by snowscape |
 //! | splat | `.png` | no | RGBA8: R compacted, G stable, B unstable, A powder, share of depth | none | all 0 | — |
 //!
 //! Rules shared by every reader:
@@ -24,7 +24,8 @@
 //! - [`ReadOptions::crs`] overrides whatever CRS the file declares; a geographic CRS (or a
 //!   grid whose extent and pixel size can only be degrees) gets metric cell sizes from
 //!   [`GridGeometry::from_transform`]; a geographic CRS on a grid whose extent is not in
-//!   degrees (a mislabelled file) is an error that names both and asks for `--crs`;
+//!   degrees (a mislabelled file) is dropped with a warning naming both, and the coordinates
+//!   are taken as metres (`--crs` sets the right CRS);
 //! - every error is a [`RasterError`] naming the file and the offending value.
 //!
 //! Every output is written through [`atomic::write_atomic`]: to a temporary file in the target
