@@ -70,8 +70,9 @@ pub struct DemoArgs {
     /// Random seed: the same seed gives the same bytes.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Cell size of the procedural terrain, metres.
-    #[arg(long, default_value_t = 10.0)]
+    /// Cell size of the procedural terrain, metres (512 cells of 20 m: a 10 km range with
+    /// the generator's full relief).
+    #[arg(long, default_value_t = 20.0)]
     pub cell_size: f64,
     /// Length of the winter, days.
     #[arg(long, default_value_t = 100.0)]

@@ -34,6 +34,14 @@ pub enum TerrainError {
     /// A non-finite georeferencing value (origin or pixel size).
     #[error("invalid georeferencing: {what} = {value}")]
     InvalidTransform { what: &'static str, value: f64 },
+    /// A parameter outside its valid range.
+    #[error("invalid parameter {name} = {value}: must be within {lo}..={hi}")]
+    InvalidParameter {
+        name: &'static str,
+        value: f64,
+        lo: f64,
+        hi: f64,
+    },
     /// Two grids that must share a geometry do not.
     #[error("geometry mismatch: {0}")]
     GeometryMismatch(String),

@@ -78,13 +78,17 @@ impl Default for AlpineParams {
 }
 
 /// Checks `value` is finite and within `[lo, hi]`; the error names the parameter and carries
-/// the value. (TerrainError has no variant for a generic parameter; `InvalidTransform` carries
-/// a name and a value, and the vertical datum is part of a terrain's georeferencing.)
-fn check_finite_in(what: &'static str, value: f64, lo: f64, hi: f64) -> Result<(), TerrainError> {
+/// the value.
+fn check_finite_in(name: &'static str, value: f64, lo: f64, hi: f64) -> Result<(), TerrainError> {
     if value.is_finite() && (lo..=hi).contains(&value) {
         Ok(())
     } else {
-        Err(TerrainError::InvalidTransform { what, value })
+        Err(TerrainError::InvalidParameter {
+            name,
+            value,
+            lo,
+            hi,
+        })
     }
 }
 
@@ -104,16 +108,16 @@ impl AlpineParams {
                 value: self.cell_size,
             });
         }
-        check_finite_in("alpine relief (m, 0..=9000)", self.relief, 0.0, 9000.0)?;
+        check_finite_in("alpine relief (m)", self.relief, 0.0, 9000.0)?;
         check_finite_in(
-            "alpine base altitude (m, -11000..=9000)",
+            "alpine base altitude (m)",
             self.base_altitude,
             -11_000.0,
             9000.0,
         )?;
-        check_finite_in("alpine plateau share (0..=1)", self.plateau_share, 0.0, 1.0)?;
+        check_finite_in("alpine plateau share", self.plateau_share, 0.0, 1.0)?;
         check_finite_in(
-            "alpine cliff band height (m, 0..=10000)",
+            "alpine cliff band height (m)",
             self.cliff_band_height,
             0.0,
             10_000.0,

@@ -140,13 +140,13 @@ fn invalid_parameters_are_errors_with_their_values() {
         ..params(64, 0)
     })
     .unwrap_err();
-    assert!(matches!(e, TerrainError::InvalidTransform { value, .. } if value.is_nan()));
+    assert!(matches!(e, TerrainError::InvalidParameter { value, .. } if value.is_nan()));
     let e = alpine(&AlpineParams {
         plateau_share: 1.5,
         ..params(64, 0)
     })
     .unwrap_err();
-    assert!(matches!(e, TerrainError::InvalidTransform { value, .. } if value == 1.5));
+    assert!(matches!(e, TerrainError::InvalidParameter { value, .. } if value == 1.5));
 }
 
 #[test]
