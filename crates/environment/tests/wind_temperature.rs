@@ -59,8 +59,10 @@ fn ridge() -> (Vec<f32>, snowscape_terrain::GridGeometry) {
 #[test]
 fn ridge_casts_a_wind_shadow_leeward_only() {
     let (z, g) = ridge();
+    // The paper's c (0.7 m/s²): a cap longer than the 10-cell window checked below.
     let p = WindParams {
         direction_deg: 270.0,
+        c_m_s2: 0.7,
         ..WindParams::default()
     };
     let m = wind(&z, &g, &NodataMask::all_valid(), &p).unwrap();
@@ -95,7 +97,11 @@ fn ridge_casts_a_wind_shadow_leeward_only() {
 #[test]
 fn wind_speeds_up_with_altitude() {
     let all = NodataMask::all_valid();
-    let p = WindParams::default();
+    // Measured from sea level, as in the paper.
+    let p = WindParams {
+        venturi_base_m: Some(0.0),
+        ..WindParams::default()
+    };
     // Flat plateaus: |W| = (1 + kventuri A)|Wd| exactly.
     for a in [0.0f64, 500.0, 2000.0] {
         let (z, g) = terrain(20, 20, 10.0, |_, _| a);
@@ -110,11 +116,14 @@ fn wind_speeds_up_with_altitude() {
     // Measured from a base altitude instead of sea level: |Wd| at the base.
     let (z, g) = terrain(20, 20, 10.0, |_, _| 1500.0);
     let based = WindParams {
-        venturi_base_m: 1000.0,
+        venturi_base_m: Some(1000.0),
         ..p.clone()
     };
     let m = wind(&z, &g, &all, &based).unwrap();
     assert!((m.u[210].hypot(m.v[210]) - 15.0).abs() < 1e-3);
+    // By default from the terrain's lowest altitude: a flat plateau at any altitude gets |Wd|.
+    let m = wind(&z, &g, &all, &WindParams::default()).unwrap();
+    assert!((m.u[210].hypot(m.v[210]) - 10.0).abs() < 1e-3);
     // On a uniform ramp (same slope everywhere) the speed grows monotonically with altitude.
     let (z, g) = terrain(60, 10, 10.0, |x, _| 100.0 + 0.1 * x);
     let m = wind(&z, &g, &all, &p).unwrap();
@@ -134,6 +143,7 @@ fn red_black_gauss_seidel_converges_and_ignores_thread_count() {
         ordered_sweeps: 0,
         max_iterations: 3000,
         tolerance_m: 1e-4,
+        c_m_s2: 0.7,
         ..WindParams::default()
     };
     let run = |threads: usize, p: &WindParams| {

@@ -312,7 +312,8 @@ fn quantile(altitudes: &[f32], q: f64) -> f64 {
 }
 
 /// A plausible winter for any terrain: four periods (early winter, deep winter, late winter,
-/// spring) whose temperatures are set at the terrain's median altitude (−4, −9, −6, +1 °C)
+/// spring) whose temperatures are set at the terrain's median altitude (−2, −6, −3, +3 °C:
+/// the snow line hovers around the median altitude, higher on sunny slopes)
 /// with the Table 2 lapse rate (−0.01 °C/m), and whose rain-snow limit sits at the 15th, 5th,
 /// 10th and 45th altitude percentile, so snow always lies deeper up high, whatever the DEM's
 /// altitude range. Westerly to north-westerly winds of 8-14 m/s, one snowfall a week.
@@ -320,10 +321,10 @@ pub fn default_winter(altitudes: &[f32], days: f64) -> Vec<WeatherPeriod> {
     let median = quantile(altitudes, 0.5);
     let t0 = |t_median: f64| t_median + 0.01 * median;
     let periods = [
-        (0.0, -4.0, 300.0, 10.0, 0.15, 1.0),
-        (0.3, -9.0, 280.0, 14.0, 0.05, 1.2),
-        (0.6, -6.0, 300.0, 8.0, 0.10, 0.8),
-        (0.85, 1.0, 250.0, 10.0, 0.45, 0.5),
+        (0.0, -2.0, 300.0, 10.0, 0.15, 1.0),
+        (0.3, -6.0, 280.0, 14.0, 0.05, 1.2),
+        (0.6, -3.0, 300.0, 8.0, 0.10, 0.8),
+        (0.85, 3.0, 250.0, 10.0, 0.45, 0.5),
     ];
     periods
         .iter()
@@ -416,8 +417,8 @@ directions = 8
         let w = default_winter(&alts, 100.0);
         assert_eq!(w.len(), 4);
         assert_eq!(w[0].from_day, 0.0);
-        // −4 °C at the median altitude (700 m) with −0.01 °C/m.
-        assert!((w[0].sea_level_temperature_c - 3.0).abs() < 0.01);
+        // −2 °C at the median altitude (700 m) with −0.01 °C/m.
+        assert!((w[0].sea_level_temperature_c - 5.0).abs() < 0.01);
         assert!(w[0].rain_snow_altitude_m > 200.0 && w[0].rain_snow_altitude_m < 700.0);
         assert!(w[3].rain_snow_altitude_m > w[1].rain_snow_altitude_m);
     }

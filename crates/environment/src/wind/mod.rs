@@ -62,7 +62,18 @@ pub(crate) fn wind_field(field: &TerrainField, params: &WindParams) -> WindMaps 
     let wd = dominant_wind(params);
     let wd32 = [wd[0] as f32, wd[1] as f32];
     let (kv, kt) = (params.k_venturi as f32, params.k_terrain as f32);
-    let base = params.venturi_base_m as f32;
+    let base = params.venturi_base_m.map_or_else(
+        || {
+            layout
+                .z
+                .iter()
+                .copied()
+                .filter(|z| z.is_finite())
+                .fold(f32::INFINITY, f32::min)
+        },
+        |b| b as f32,
+    );
+    let base = if base.is_finite() { base } else { 0.0 };
     let wind: Vec<[f32; 2]> = layout
         .z
         .par_iter()

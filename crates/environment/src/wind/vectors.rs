@@ -2,7 +2,7 @@
 //!
 //! 1. Venturi speed-up with altitude: `W_venturi = (1 + kventuri·A)·Wd` (the factor is clamped
 //!    at 0, so terrain far below sea level cannot reverse the wind; `A` is measured from
-//!    `WindParams::venturi_base_m`, sea level by default as in the paper);
+//!    `WindParams::venturi_base_m`: the terrain's lowest altitude by default, sea level in the paper);
 //! 2. slope redirection (paper Eq. 2): `W = W_venturi (1 − |n_xy|) + kterrain |W_venturi| n⊥_xy`,
 //!    with `n_xy` the horizontal part of the unit normal and `n⊥_xy` its 90° rotation chosen
 //!    on the side of the wind (`W_venturi · n⊥_xy >= 0`): on steep slopes the wind turns to
