@@ -21,6 +21,15 @@ pub enum KernelError {
     /// Rendering failed.
     #[error(transparent)]
     Render(#[from] snowscape_render::RenderError),
+    /// The environment precompute failed.
+    #[error(transparent)]
+    Environment(#[from] snowscape_environment::EnvironmentError),
+    /// A season phenomenon step failed.
+    #[error(transparent)]
+    Phenomenon(#[from] snowscape_season::phenomenon::PhenomenonError),
+    /// A season run failed.
+    #[error(transparent)]
+    Season(#[from] snowscape_season::winter::SeasonError),
     /// A file-system operation (temporary directory) failed.
     #[error("{what}: {source}")]
     Io {

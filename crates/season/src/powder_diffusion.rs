@@ -123,7 +123,7 @@ impl DiffusionReport {
 }
 
 /// Reusable buffers of the diffusion step.
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct DiffusionScratch {
     surface: Vec<f32>,
     surface_next: Vec<f32>,

@@ -221,7 +221,7 @@ impl StabilityReport {
 }
 
 /// Reusable buffers of the stability step.
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct StabilityScratch {
     surface: Vec<f32>,
 }

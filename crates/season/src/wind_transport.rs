@@ -147,7 +147,7 @@ impl WindReport {
 }
 
 /// Reusable buffers of the wind-transport step.
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct WindScratch {
     surface: Vec<f32>,
     /// Depth each cell sends east (> 0) or west (< 0), m.

@@ -91,7 +91,8 @@ struct RunState {
     scenario_digest: u64,
 }
 
-/// A season in progress.
+/// A season in progress. Cloning it forks the run (the clone continues identically).
+#[derive(Debug, Clone)]
 pub struct Winter {
     scenario: Scenario,
     weather: Vec<WeatherPeriod>,

@@ -4,10 +4,12 @@
 
 mod io;
 mod render;
+mod season;
 mod terrain;
 
 pub use io::io_kernels;
 pub use render::render_kernels;
+pub use season::season_kernels;
 pub use terrain::{sample_terrain, terrain_kernels};
 
 use crate::kernel::{Kernel, KernelError};
@@ -18,5 +20,6 @@ pub fn all_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
     let mut kernels = terrain_kernels(&terrain, size)?;
     kernels.extend(io_kernels(&terrain)?);
     kernels.extend(render_kernels(&terrain)?);
+    kernels.extend(season_kernels(&terrain)?);
     Ok(kernels)
 }
