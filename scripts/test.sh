@@ -4,6 +4,7 @@
 # criterion benchmark once in test mode (so none rots), then the `bench` subcommand and the
 # demo at a reduced size.
 set -euo pipefail
+shopt -s inherit_errexit 2>/dev/null || true
 cd "$(dirname "$0")/.."
 
 if [ ! -d ../shared/data/dem ]; then
@@ -12,14 +13,18 @@ if [ ! -d ../shared/data/dem ]; then
 fi
 
 export SNOWSCAPE_BENCH_SIZE="${SNOWSCAPE_BENCH_SIZE:-128}"
+log=$(mktemp)
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch" "$log"' EXIT
 cargo build --release --workspace --all-targets
-cargo test --release --workspace --all-targets
-cargo test --release --workspace --doc
+cargo test --release --workspace --all-targets 2>&1 | tee -a "$log"
+cargo test --release --workspace --doc 2>&1 | tee -a "$log"
 
 bin=target/release/snowscape
-scratch=$(mktemp -d)
-trap 'rm -rf "$scratch"' EXIT
 "$bin" --quiet bench --size 256 --repeats 2 --out "$scratch/bench.json"
 "$bin" --quiet demo --size 128 --days 5 --frames 3 --out "$scratch/demo"
 test -s "$scratch/demo/report.json"
-echo "scripts/test.sh: all checks passed"
+passed=$(grep -Eo '^test result: ok\. [0-9]+ passed' "$log" | awk '{s += $4} END {print s + 0}')
+failed=$(grep -Eo '[0-9]+ failed' "$log" | awk '{s += $1} END {print s + 0}')
+echo "scripts/test.sh: all checks passed (unit, integration, property, real-data, doc tests; benchmarks in test mode; bench and demo at reduced size)"
+echo "$passed passed, $failed failed"

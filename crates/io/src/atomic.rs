@@ -66,6 +66,13 @@ where
     };
     writer.flush().map_err(werr)?;
     let file = writer.into_inner().map_err(|e| werr(e.into_error()))?;
+    // Temporary files are created private (0600); an output is an ordinary file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        file.set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(werr)?;
+    }
     file.sync_all().map_err(werr)?;
     tmp_path.persist(path).map_err(|e| werr(e.error))?;
     Ok(())
@@ -93,6 +100,12 @@ mod tests {
         write_bytes_atomic(&p, b"hello").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"hello");
         assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 1);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, 0o644, "outputs are readable by others");
+        }
     }
 
     #[test]
