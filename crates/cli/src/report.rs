@@ -20,6 +20,8 @@ pub struct InputSummary {
     pub crs: Option<String>,
     /// Map coordinates of the north-west corner, CRS units.
     pub origin: [f64; 2],
+    /// Latitude of the grid centre, degrees north, when the georeferencing tells it.
+    pub latitude_deg: Option<f64>,
     /// Lowest and highest valid altitude, metres.
     pub altitude_range: Option<[f32; 2]>,
     /// Share of cells that are nodata, 0..1.
@@ -39,6 +41,7 @@ impl InputSummary {
             cell_size_y: g.cell_size_y(),
             crs: g.crs().map(|c| c.to_string()),
             origin: [t.origin_x, t.origin_y],
+            latitude_deg: g.latitude_deg(),
             altitude_range: grid.value_range().map(|(a, b)| [a, b]),
             nodata_fraction: grid.mask().count_nodata() as f64 / g.len() as f64,
         }

@@ -131,7 +131,7 @@ impl Winter {
         let mut env = scenario.parameters.environment.clone();
         env.sun.latitude_deg = scenario
             .latitude_deg
-            .or_else(|| terrain.geometry().centre_latitude_deg())
+            .or_else(|| terrain.geometry().latitude_deg())
             .unwrap_or(env.sun.latitude_deg);
         env.sun.start_day = day_of_year(&scenario.start_date).unwrap_or(env.sun.start_day);
         env.sun.num_days = (scenario.days.ceil() as u32).clamp(1, 365);

@@ -222,6 +222,19 @@ impl GridGeometry {
         self.is_geographic().then_some(centre)
     }
 
+    /// Latitude of the grid centre in degrees north, when the georeferencing tells it: a grid
+    /// in degrees, or a projected CRS that [`crate::crs_latitude`] can invert.
+    pub fn latitude_deg(&self) -> Option<f64> {
+        if let Some(lat) = self.centre_latitude_deg() {
+            return Some(lat);
+        }
+        let (x, y) = (
+            self.transform.origin_x + 0.5 * self.width as f64 * self.transform.pixel_width,
+            self.transform.origin_y - 0.5 * self.height as f64 * self.transform.pixel_height,
+        );
+        crate::crs_latitude::latitude_deg(self.crs.as_ref()?, x, y)
+    }
+
     /// Number of columns.
     pub fn width(&self) -> usize {
         self.width

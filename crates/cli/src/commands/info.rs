@@ -40,6 +40,12 @@ pub fn run(args: &InfoArgs) -> Result<(), Failure> {
         s.origin[0], s.origin[1]
     );
     println!("crs         {}", s.crs.as_deref().unwrap_or("unknown"));
+    match s.latitude_deg {
+        Some(lat) => println!("latitude    {lat:.4}° (grid centre)"),
+        None => println!(
+            "latitude    unknown (no CRS the sun model can invert; scenarios default to 45°)"
+        ),
+    }
     match s.altitude_range {
         Some([lo, hi]) => println!(
             "values      {lo:.2} .. {hi:.2} m (mean {:.2} m)",
