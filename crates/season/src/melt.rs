@@ -107,6 +107,12 @@ fn melt_rows<V: Validity>(
         .map_init(
             || vec![0.0f32; w],
             |removed, (row, ((((c, s), u), p), t))| {
+                // A row where nothing is warm enough melts nothing: skip it without touching
+                // (and dirtying) its four layer rows, which is most rows in a cold spell.
+                let t0 = params.t0_melt as f32;
+                if t.iter().all(|&x| x <= t0) {
+                    return 0.0;
+                }
                 let (c, s, u, p, t) = (&mut c[..w], &mut s[..w], &mut u[..w], &mut p[..w], &t[..w]);
                 let removed = &mut removed[..w];
                 for col in 0..w {
