@@ -1,0 +1,20 @@
+//! # snowscape-avalanche: the avalanche flow core
+//!
+//! Cordonnier et al. 2018, Section 6.1 move released snow with a hydrostatic *virtual pipe*
+//! model (O'Brien & Hodgins 1995, Šťava et al. 2008) on the 8-neighbour (Moore) stencil, with a
+//! Coulomb yield term `g·tanθc` (static friction), a viscous term `−kv·U·φ` and a dry/wet mix
+//! `α`. [`flow`] holds the flowing state and the pure [`flow::step`]; [`convert`] turns snow
+//! layers into flowing snow ([`convert::release`]) and back ([`convert::deposit`]).
+//!
+//! The scheme departs from the paper where DESIGN.md §4 says it must (a depth-dependent face
+//! cross-section and momentum advection, so that waves travel at `sqrt(g·h)` and the dam-break
+//! front follows Ritter's `2·sqrt(g·h0)`); [`flow`]'s module documentation states the equations.
+
+pub mod convert;
+pub mod flow;
+
+pub use convert::{deposit, release};
+pub use flow::{
+    AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, Border,
+    cfl_dt, step,
+};
