@@ -529,10 +529,12 @@ struct PipeGeometry {
     dx: f64,
     dy: f64,
     area: f64,
+    /// Padded height of the grid, cells.
+    ph: usize,
 }
 
 impl PipeGeometry {
-    fn new(geometry: &GridGeometry) -> Self {
+    fn new(geometry: &GridGeometry, ph: usize) -> Self {
         let (dx, dy) = (geometry.cell_size_x(), geometry.cell_size_y());
         let ld = (dx * dx + dy * dy).sqrt();
         Self {
@@ -552,6 +554,7 @@ impl PipeGeometry {
             dx,
             dy,
             area: dx * dy,
+            ph,
         }
     }
 }
@@ -584,7 +587,7 @@ pub fn step(
         scratch.flux = vec![[0.0; 4]; n];
         scratch.factor = vec![1.0; n];
     }
-    let pg = PipeGeometry::new(&state.geometry);
+    let pg = PipeGeometry::new(&state.geometry, state.ph);
     let dmin = pg.dx.min(pg.dy);
     let mut report = AvalancheReport::default();
     let mut elapsed = 0.0;
@@ -688,8 +691,7 @@ fn substep(
     let p1 = bx.grown(pw, ph);
     let p2 = p1.grown(pw, ph);
     let mu_g = params.rest_angle_deg.to_radians().tan() * G;
-    let is_wall = |nodata: &[bool], k: usize| {
-        let (r, c) = (k / pw, k % pw);
+    let is_wall = |nodata: &[bool], k: usize, c: usize, r: usize| {
         nodata[k] || (closed && (r == 0 || c == 0 || r == ph - 1 || c == pw - 1))
     };
     let neighbour = |c: usize, r: usize, d: usize| -> Option<usize> {
@@ -759,11 +761,23 @@ fn substep(
                 let r = p1.r0 + ri;
                 for c in p1.c0..=p1.c1 {
                     let k = r * pw + c;
+                    let wall_k = is_wall(nodata, k, c, r);
                     for d in 0..4 {
+                        let (dc, dr) = DIRS[d];
                         let (u, f) = match neighbour(c, r, d) {
-                            Some(j) if !is_wall(nodata, k) && !is_wall(nodata, j) => pipe_update(
-                                params, pg, mu_g, dt, pw, k, j, d, c, r, h, bed, pipes, vel,
-                            ),
+                            Some(j)
+                                if !wall_k
+                                    && !is_wall(
+                                        nodata,
+                                        j,
+                                        (c as isize + dc) as usize,
+                                        r + dr as usize,
+                                    ) =>
+                            {
+                                pipe_update(
+                                    params, pg, mu_g, dt, pw, k, j, d, c, r, h, bed, pipes, vel,
+                                )
+                            }
                             _ => (0.0, 0.0),
                         };
                         urow[c][d] = u;
@@ -991,7 +1005,7 @@ fn advection(
     if hbar <= DRY {
         return 0.0;
     }
-    let ph = h.len() / pw;
+    let ph = pg.ph;
     let u0 = pipes[k][d];
     let (dc, dr) = DIRS[d];
     let qp = [0.5 * (vel[k][2] + vel[j][2]), 0.5 * (vel[k][3] + vel[j][3])];
