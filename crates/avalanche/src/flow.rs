@@ -1019,25 +1019,31 @@ fn advection(
     let mut lam = [0.0f64; 4];
     let mut un = [0.0f64; 4];
     let mut total = 0.0;
+    let rate = [dt / (pg.dx * hbar), dt / (pg.dy * hbar)];
+    let interior = c >= 2 && c + 2 < pw && r >= 1 && r + 2 < ph;
+    let jk = j as isize - k as isize;
     for (m, &(oc, or, axis, side)) in nbs.iter().enumerate() {
-        let (cc, rr) = (c as isize + oc, r as isize + or);
-        let (jc, jr) = (cc + dc, rr + dr);
-        if cc < 0 || rr < 0 || jc < 0 || jr < 0 {
-            continue;
-        }
-        let (cc, rr, jc, jr) = (cc as usize, rr as usize, jc as usize, jr as usize);
-        if cc >= pw || jc >= pw || rr >= ph || jr >= ph {
-            continue;
-        }
-        let kn = rr * pw + cc;
-        let jn = jr * pw + jc;
+        let (kn, jn) = if interior {
+            let kn = (k as isize + oc + or * pw as isize) as usize;
+            (kn, (kn as isize + jk) as usize)
+        } else {
+            let (cc, rr) = (c as isize + oc, r as isize + or);
+            let (jc, jr) = (cc + dc, rr + dr);
+            if cc < 0 || rr < 0 || jc < 0 || jr < 0 {
+                continue;
+            }
+            let (cc, rr, jc, jr) = (cc as usize, rr as usize, jc as usize, jr as usize);
+            if cc >= pw || jc >= pw || rr >= ph || jr >= ph {
+                continue;
+            }
+            (rr * pw + cc, jr * pw + jc)
+        };
         let qn = 0.5 * (vel[kn][2 + axis] + vel[jn][2 + axis]);
         let q_face = 0.5 * (qp[axis] + qn);
         // Inflow through the + face is q < 0, through the − face q > 0.
         let inflow = -side * q_face;
         if inflow > 0.0 {
-            let delta = if axis == 0 { pg.dx } else { pg.dy };
-            lam[m] = dt * inflow / (delta * hbar);
+            lam[m] = rate[axis] * inflow;
             un[m] = pipes[kn][d];
             total += lam[m];
         }
