@@ -16,11 +16,14 @@
 //! momentum advection the paper omits (needed for Ritter's dam-break front, DESIGN.md §4): each
 //! pipe direction forms a regular lattice, `u` is advected by the velocity `v` at the pipe (mean
 //! of the two cells' velocities, reconstructed from their 8 pipes) with first-order upwind
-//! differences on that lattice. The third is the Coulomb yield force of norm `g·tanθc` opposing
-//! the flow, projected on the pipe (full `g·tanθc` on every pipe of a cell at rest); as in the
-//! paper, if the flow is null or applying the force would reverse it, the pipe velocity is set to
-//! zero (static friction), so a slope `|∂A/∂s| ≤ tanθc` holds still. The fourth is the viscous
-//! term `−kv·U·φ` of the paper written for the velocity (`h_face` = mean depth of the two
+//! differences on that lattice. The third is the Coulomb yield force of norm `g·tanθc`,
+//! applied as one vector: the trial velocity at the pipe `v + δt·(−g∇A)` (mean of the two
+//! cells' reconstructed velocities and central-difference surface gradients) is slowed by
+//! `g·tanθc·δt` along its own direction and each pipe takes its projection `e·v̂`. As in the
+//! paper, where the flow is null or the force would reverse it, the velocity is set to zero
+//! (static friction): snow at rest holds while `|∇A| ≤ tanθc`, the same criterion in every
+//! direction, and a sheet on a plane of slope `tanθ > tanθc` accelerates at `g·(tanθ − tanθc)`
+//! (tests/validation.rs). The fourth is the viscous term `−kv·U·φ` of the paper written for the velocity (`h_face` = mean depth of the two
 //! cells), applied implicitly. `α ∈ [0, 1]` mixes dry (Coulomb) and wet (viscous) snow.
 //!
 //! **Mass (per cell).** The volume through a pipe in a sub-step is `F = w · h_up · u · δt`, with
@@ -61,6 +64,9 @@ use thiserror::Error;
 
 /// Gravitational acceleration, m/s² (the paper's `g = 9.81`).
 pub const G: f64 = 9.81;
+
+/// Per-cell flow quantities of a sub-step: `[vx, vy, h·vx, h·vy, ∂A/∂x, ∂A/∂y]`.
+type CellFlow = [f64; 6];
 
 /// A depth below which a cell is treated as dry for the upwind face cross-section, m.
 const DRY: f64 = 1e-12;
@@ -474,6 +480,22 @@ impl AvalancheState {
         out
     }
 
+    /// Velocity of the snow in a grid cell (m/s; x east, y south), reconstructed from its 8
+    /// pipes as in the advection step.
+    pub fn velocity_at(&self, col: usize, row: usize) -> [f64; 2] {
+        let pg = PipeGeometry::new(&self.geometry, self.ph);
+        let k = self.pad(col, row);
+        let mut p = [0.0; 4];
+        for (d, pd) in p.iter_mut().enumerate() {
+            let (dc, dr) = DIRS[d];
+            let kb = (k as isize - dr * self.pw as isize - dc) as usize;
+            *pd = 0.5 * (self.pipes[k][d] + self.pipes[kb][d]);
+        }
+        let vx_d = (p[2] - p[3]) / (2.0 * pg.e[2][0]);
+        let vy_d = (p[2] + p[3]) / (2.0 * pg.e[2][1]);
+        [0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d)]
+    }
+
     /// Whether a grid cell and all 8 pipes touching it are at rest.
     pub fn at_rest(&self, col: usize, row: usize) -> bool {
         let k = self.pad(col, row);
@@ -515,7 +537,9 @@ impl AvalancheState {
 /// Reusable work buffers for [`step`] (allocated on first use).
 #[derive(Debug, Clone, Default)]
 pub struct AvalancheScratch {
-    vel: Vec<[f64; 4]>,
+    /// Per padded cell: velocity (vx, vy), discharge (h·vx, h·vy) and surface gradient
+    /// (∂A/∂x, ∂A/∂y; NaN on the ghost ring and nodata cells).
+    vel: Vec<CellFlow>,
     new_pipes: Vec<[f64; 4]>,
     flux: Vec<[f64; 4]>,
     factor: Vec<f64>,
@@ -582,7 +606,7 @@ pub fn step(
     }
     let n = state.pw * state.ph;
     if scratch.vel.len() != n {
-        scratch.vel = vec![[0.0; 4]; n];
+        scratch.vel = vec![[0.0; 6]; n];
         scratch.new_pipes = vec![[0.0; 4]; n];
         scratch.flux = vec![[0.0; 4]; n];
         scratch.factor = vec![1.0; n];
@@ -718,7 +742,7 @@ fn substep(
     // Pass 1: cell velocities from the 8 pipes touching each cell (box grown by 2).
     {
         let pipes = &state.pipes;
-        let hh = &state.h;
+        let (hh, bed, nodata) = (&state.h, &state.bed, &state.nodata);
         let e = &pg.e;
         scratch.vel[p2.r0 * pw..(p2.r1 + 1) * pw]
             .par_chunks_mut(pw)
@@ -738,7 +762,9 @@ fn substep(
                     let vx_d = (p[2] - p[3]) / (2.0 * e[2][0]);
                     let vy_d = (p[2] + p[3]) / (2.0 * e[2][1]);
                     let (vx, vy) = (0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d));
-                    *v = [vx, vy, hh[k] * vx, hh[k] * vy];
+                    let [gx, gy] = surface_gradient(pg, hh, bed, nodata, pw, k)
+                        .unwrap_or([f64::NAN, f64::NAN]);
+                    *v = [vx, vy, hh[k] * vx, hh[k] * vy, gx, gy];
                 }
             });
     }
@@ -945,7 +971,7 @@ fn pipe_update(
     h: &[f64],
     bed: &[f64],
     pipes: &[[f64; 4]],
-    vel: &[[f64; 4]],
+    vel: &[CellFlow],
 ) -> (f64, f64) {
     let (hi, hj) = (h[k], h[j]);
     if hi <= DRY && hj <= DRY {
@@ -958,15 +984,28 @@ fn pipe_update(
     if params.momentum_advection {
         u += advection(pg, pipes, vel, h, pw, k, j, d, c, r, dt);
     }
-    // Coulomb friction, projected on the pipe; static friction at rest or on reversal.
-    let vnorm = (vp[0] * vp[0] + vp[1] * vp[1]).sqrt();
-    let proj = if vnorm > 1e-9 {
-        ((pg.e[d][0] * vp[0] + pg.e[d][1] * vp[1]) / vnorm).abs()
+    // Coulomb friction as one vector: the trial velocity at the pipe, `v + δt·(−g∇A)` (cell
+    // velocities and surface gradients averaged over the pipe's two cells), is slowed by
+    // `g·tanθc·δt` along its own direction and each pipe takes its share `e·v̂`; where the
+    // trial speed is below `g·tanθc·δt` the snow is held (static friction: the yield
+    // criterion `|∇A| ≤ tanθc` at rest, the same in every direction), and a pipe the force
+    // would reverse is set to zero.
+    let grad = match (vel[k][4].is_nan(), vel[j][4].is_nan()) {
+        (false, false) => [0.5 * (vel[k][4] + vel[j][4]), 0.5 * (vel[k][5] + vel[j][5])],
+        (false, true) => [vel[k][4], vel[k][5]],
+        (true, false) => [vel[j][4], vel[j][5]],
+        (true, true) => [0.0, 0.0],
+    };
+    let trial = [vp[0] - dt * G * grad[0], vp[1] - dt * G * grad[1]];
+    let tnorm = (trial[0] * trial[0] + trial[1] * trial[1]).sqrt();
+    let yield_dt = params.alpha * mu_g * dt;
+    let proj = if tnorm > 0.0 {
+        ((pg.e[d][0] * trial[0] + pg.e[d][1] * trial[1]) / tnorm).abs()
     } else {
         1.0
     };
-    let fric = params.alpha * mu_g * proj * dt;
-    if (u0 == 0.0 && u.abs() <= params.alpha * mu_g * dt) || u.abs() <= fric {
+    let fric = yield_dt * proj;
+    if (params.alpha > 0.0 && tnorm <= yield_dt) || u.abs() <= fric {
         u = 0.0;
     } else {
         u -= fric * u.signum();
@@ -980,6 +1019,28 @@ fn pipe_update(
     (u, pg.width[d] * hup * u * dt)
 }
 
+/// Central-difference gradient of the surface `A = B + h` at padded cell `k` (one-sided next
+/// to nodata cells); `None` on the ghost ring.
+fn surface_gradient(
+    pg: &PipeGeometry,
+    h: &[f64],
+    bed: &[f64],
+    nodata: &[bool],
+    pw: usize,
+    k: usize,
+) -> Option<[f64; 2]> {
+    let (r, c) = (k / pw, k % pw);
+    if r == 0 || c == 0 || r + 1 >= pg.ph || c + 1 >= pw || nodata[k] {
+        return None;
+    }
+    let a = |i: usize| bed[i] + h[i];
+    let ak = a(k);
+    let side = |i: usize| if nodata[i] { ak } else { a(i) };
+    let gx = (side(k + 1) - side(k - 1)) / (2.0 * pg.dx);
+    let gy = (side(k + pw) - side(k - pw)) / (2.0 * pg.dy);
+    Some([gx, gy])
+}
+
 /// Momentum-conservative upwind advection of the pipe velocity (Stelling & Duinmeijer 2003,
 /// generalised to the lattice of pipes sharing direction `d`): returns the change of `u` over
 /// `dt`, `Σ_f λ_f (u_f − u)` over the lattice neighbours `f` whose face brings momentum in,
@@ -991,7 +1052,7 @@ fn pipe_update(
 fn advection(
     pg: &PipeGeometry,
     pipes: &[[f64; 4]],
-    vel: &[[f64; 4]],
+    vel: &[CellFlow],
     h: &[f64],
     pw: usize,
     k: usize,

