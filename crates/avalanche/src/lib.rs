@@ -12,9 +12,11 @@
 
 pub mod convert;
 pub mod flow;
+pub mod run;
 
 pub use convert::{deposit, release};
 pub use flow::{
     AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, Border,
     cfl_dt, step,
 };
+pub use run::{AvalancheRun, RunOptions, RunSummary, StopReason};

@@ -1,0 +1,431 @@
+//! One avalanche from release to rest: stepping, peak fields, stop criterion and the runout
+//! figures practitioners compare.
+//!
+//! [`AvalancheRun`] advances an [`AvalancheState`] by record intervals (the paper's temporal
+//! zoom: Section 3.1 steps an avalanche every ~0.1 s of simulated time) and, after each, updates
+//! per cell the **peak flow thickness** and **peak speed** (only over the active box, so the
+//! cost follows the footprint). The run stops when
+//! - the snow is at rest (no moving pipe), or
+//! - its kinetic energy `E = Σ ½·h·|v|²·dx·dy` (per unit density, m⁵/s²) has fallen below
+//!   `stop_energy_fraction` of its peak (AvaFrame com1DFA's `stopCrit`, default 1 %: the tail of a
+//!   Coulomb flow creeps for a long time while nothing visible changes), or
+//! - the simulated time reaches `duration_s`.
+//!
+//! **Figures** ([`RunSummary`]): the *footprint* is where the peak thickness exceeded
+//! `footprint_threshold_m` (1 cm, AvaFrame's convention for peak-flow-thickness maps); the
+//! *travel angle* is `atan(Δz / L)` of the mass centre between release and stop (`z` the bed
+//! altitude under the snow, volume-weighted; for a Coulomb slider it tends to θc); the *runout
+//! length* is the horizontal distance from the release's highest cell to the footprint cell
+//! farthest from it, and the *α angle* the angle from that release top down to that runout
+//! point (the practitioners' "alpha angle").
+
+use crate::flow::{
+    AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, step,
+};
+use serde::{Deserialize, Serialize};
+
+/// When an avalanche run records and stops.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RunOptions {
+    /// Longest simulated time, s. Default 600 (chosen here: large avalanche paths run out in
+    /// 1–3 minutes; AvaFrame's reference avaKot run takes 118 s).
+    pub duration_s: f64,
+    /// Simulated time between records (peak fields, frames, stop test), s. Default 0.1 (the
+    /// paper's avalanche step, Section 3.1).
+    pub record_interval_s: f64,
+    /// Stop once the kinetic energy falls below this fraction of its peak. Default 0.01
+    /// (AvaFrame com1DFA `stopCrit`); 0 runs until the snow is at rest or `duration_s`.
+    pub stop_energy_fraction: f64,
+    /// Peak thickness above which a cell belongs to the footprint, m. Default 0.01 (AvaFrame's
+    /// peak-flow-thickness convention).
+    pub footprint_threshold_m: f64,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            duration_s: 600.0,
+            record_interval_s: 0.1,
+            stop_energy_fraction: 0.01,
+            footprint_threshold_m: 0.01,
+        }
+    }
+}
+
+impl RunOptions {
+    /// Checks every field, naming the offending one.
+    pub fn validate(&self) -> Result<(), AvalancheError> {
+        let positive = |name: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(AvalancheError::InvalidParameter {
+                    name,
+                    value: v,
+                    expected: "finite and > 0",
+                })
+            }
+        };
+        positive("duration_s", self.duration_s)?;
+        positive("record_interval_s", self.record_interval_s)?;
+        if !(self.stop_energy_fraction.is_finite()
+            && (0.0..1.0).contains(&self.stop_energy_fraction))
+        {
+            return Err(AvalancheError::InvalidParameter {
+                name: "stop_energy_fraction",
+                value: self.stop_energy_fraction,
+                expected: "in [0, 1)",
+            });
+        }
+        if !(self.footprint_threshold_m.is_finite() && self.footprint_threshold_m >= 0.0) {
+            return Err(AvalancheError::InvalidParameter {
+                name: "footprint_threshold_m",
+                value: self.footprint_threshold_m,
+                expected: "finite and >= 0",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Why a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// No pipe moves.
+    AtRest,
+    /// Kinetic energy below `stop_energy_fraction` of its peak.
+    EnergyCriterion,
+    /// `duration_s` reached.
+    Duration,
+    /// No snow left on the grid (all of it flowed across an open border).
+    Empty,
+}
+
+/// The figures of a finished (or interrupted) run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// Released volume, m³.
+    pub released_volume_m3: f64,
+    /// Volume on the grid at the end (in motion plus deposit), m³.
+    pub final_volume_m3: f64,
+    /// Volume that left the grid across an open border, m³.
+    pub border_outflow_m3: f64,
+    /// `|released − final − outflow| / released`.
+    pub volume_closure_rel: f64,
+    /// Simulated time, s.
+    pub simulated_s: f64,
+    /// Flow sub-steps taken.
+    pub substeps: usize,
+    /// Why the run ended (`None` while it goes on).
+    pub stop: Option<StopReason>,
+    /// Largest speed reached anywhere, m/s.
+    pub max_speed_m_s: f64,
+    /// Largest flow thickness reached anywhere, m.
+    pub max_thickness_m: f64,
+    /// Footprint area (peak thickness above the threshold), m².
+    pub footprint_area_m2: f64,
+    /// Horizontal distance from the release top to the farthest footprint cell, m.
+    pub runout_length_m: f64,
+    /// Drop from the release top to that runout point, m.
+    pub runout_drop_m: f64,
+    /// `atan(runout_drop / runout_length)`, degrees.
+    pub alpha_angle_deg: f64,
+    /// Horizontal travel of the mass centre, m.
+    pub centre_travel_m: f64,
+    /// Drop of the mass centre, m.
+    pub centre_drop_m: f64,
+    /// `atan(centre_drop / centre_travel)`, degrees (90 when the centre did not move).
+    pub travel_angle_deg: f64,
+    /// Release top and runout point, map coordinates (x, y, z), m.
+    pub release_top: [f64; 3],
+    /// The footprint cell farthest from the release top, map coordinates (x, y, z), m.
+    pub runout_point: [f64; 3],
+}
+
+/// An avalanche in progress, with its peak fields.
+#[derive(Debug, Clone)]
+pub struct AvalancheRun {
+    /// The flowing snow.
+    pub state: AvalancheState,
+    scratch: AvalancheScratch,
+    peak_thickness: Vec<f64>,
+    peak_speed: Vec<f64>,
+    released_volume: f64,
+    border_outflow: f64,
+    time: f64,
+    substeps: usize,
+    energy: f64,
+    peak_energy: f64,
+    moving: bool,
+    stop: Option<StopReason>,
+    start_centre: [f64; 3],
+    release_top: Option<(usize, usize)>,
+}
+
+impl AvalancheRun {
+    /// Starts a run from released snow (the state's flowing thickness).
+    pub fn new(state: AvalancheState) -> Self {
+        let n = state.geometry.width() * state.geometry.height();
+        let released_volume = state.flowing_volume();
+        let start_centre = mass_centre(&state);
+        let mut top: Option<(usize, usize, f64)> = None;
+        let w = state.geometry.width();
+        for r in 0..state.geometry.height() {
+            for c in 0..w {
+                if state.thickness_at(c, r) > 0.0 {
+                    let z = state.bed_at(c, r);
+                    if top.is_none_or(|t| z > t.2) {
+                        top = Some((c, r, z));
+                    }
+                }
+            }
+        }
+        let mut run = Self {
+            scratch: AvalancheScratch::default(),
+            peak_thickness: vec![0.0; n],
+            peak_speed: vec![0.0; n],
+            released_volume,
+            border_outflow: 0.0,
+            time: 0.0,
+            substeps: 0,
+            energy: 0.0,
+            peak_energy: 0.0,
+            moving: true,
+            stop: None,
+            start_centre,
+            release_top: top.map(|t| (t.0, t.1)),
+            state,
+        };
+        run.record();
+        if released_volume == 0.0 {
+            run.stop = Some(StopReason::Empty);
+        }
+        run
+    }
+
+    /// Simulated time since the release, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Why the run ended, or `None` while it goes on.
+    pub fn stop_reason(&self) -> Option<StopReason> {
+        self.stop
+    }
+
+    /// Peak flow thickness per grid cell (row-major), m.
+    pub fn peak_thickness(&self) -> &[f64] {
+        &self.peak_thickness
+    }
+
+    /// Peak speed per grid cell (row-major), m/s.
+    pub fn peak_speed(&self) -> &[f64] {
+        &self.peak_speed
+    }
+
+    /// Kinetic energy per unit density at the last record, m⁵/s².
+    pub fn kinetic_energy(&self) -> f64 {
+        self.energy
+    }
+
+    /// Footprint: peak thickness above `threshold` m (row-major).
+    pub fn footprint(&self, threshold: f64) -> Vec<bool> {
+        self.peak_thickness.iter().map(|&h| h > threshold).collect()
+    }
+
+    /// Advances by one record interval (or less, to end exactly at `duration_s`), updates the
+    /// peak fields and the stop test. Does nothing once the run has stopped.
+    pub fn advance(
+        &mut self,
+        params: &AvalancheParams,
+        options: &RunOptions,
+    ) -> Result<AvalancheReport, AvalancheError> {
+        options.validate()?;
+        if self.stop.is_some() {
+            return Ok(AvalancheReport::default());
+        }
+        let dt = options
+            .record_interval_s
+            .min(options.duration_s - self.time);
+        let report = step(params, &mut self.state, &mut self.scratch, dt)?;
+        self.time += dt;
+        self.substeps += report.substeps;
+        self.border_outflow += report.border_outflow;
+        self.record();
+        self.stop = if self.state.active.is_none() {
+            Some(StopReason::Empty)
+        } else if !self.moving {
+            Some(StopReason::AtRest)
+        } else if options.stop_energy_fraction > 0.0
+            && self.energy <= options.stop_energy_fraction * self.peak_energy
+        {
+            Some(StopReason::EnergyCriterion)
+        } else if self.time >= options.duration_s * (1.0 - 1e-12) {
+            Some(StopReason::Duration)
+        } else {
+            None
+        };
+        Ok(report)
+    }
+
+    /// Advances until the run stops, calling `on_record` after every record interval (frames,
+    /// progress, cancellation: an error from it ends the run and is returned).
+    pub fn run<E: From<AvalancheError>>(
+        &mut self,
+        params: &AvalancheParams,
+        options: &RunOptions,
+        mut on_record: impl FnMut(&AvalancheRun) -> Result<(), E>,
+    ) -> Result<RunSummary, E> {
+        options.validate()?;
+        while self.stop.is_none() {
+            self.advance(params, options)?;
+            on_record(self)?;
+        }
+        Ok(self.summary(options))
+    }
+
+    /// Updates peaks, energy and the moving flag over the active box.
+    fn record(&mut self) {
+        let Some(bx) = self.state.active else {
+            self.energy = 0.0;
+            self.moving = false;
+            return;
+        };
+        let s = &self.state;
+        let (w, h) = (s.geometry.width(), s.geometry.height());
+        let area = s.geometry.cell_area();
+        let mut energy = 0.0;
+        let mut moving = false;
+        let rows = bx.r0.max(1) - 1..bx.r1.min(h);
+        let cols = bx.c0.max(1) - 1..bx.c1.min(w);
+        for r in rows {
+            for c in cols.clone() {
+                let k = s.pad(c, r);
+                let hk = s.h[k];
+                let i = r * w + c;
+                if hk > self.peak_thickness[i] {
+                    self.peak_thickness[i] = hk;
+                }
+                if !s.at_rest(c, r) {
+                    moving = true;
+                }
+                if hk > 0.0 {
+                    let v = s.velocity_at(c, r);
+                    let sp2 = v[0] * v[0] + v[1] * v[1];
+                    energy += 0.5 * hk * sp2 * area;
+                    let sp = sp2.sqrt();
+                    if sp > self.peak_speed[i] {
+                        self.peak_speed[i] = sp;
+                    }
+                }
+            }
+        }
+        self.energy = energy;
+        self.peak_energy = self.peak_energy.max(energy);
+        self.moving = moving;
+    }
+
+    /// The run's figures so far.
+    pub fn summary(&self, options: &RunOptions) -> RunSummary {
+        let g = &self.state.geometry;
+        let w = g.width();
+        let final_volume = self.state.flowing_volume();
+        let closure = if self.released_volume > 0.0 {
+            (self.released_volume - final_volume - self.border_outflow).abs() / self.released_volume
+        } else {
+            0.0
+        };
+        // Distances in local metres (the grid may be in degrees); reported points in map units.
+        let point = |c: usize, r: usize| {
+            let (x, y) = g.local_metres(c, r);
+            [x, y, self.state.bed_at(c, r)]
+        };
+        let top_cell = self.release_top;
+        let top = top_cell.map(|(c, r)| point(c, r));
+        let mut runout = top;
+        let mut runout_cell = top_cell;
+        let mut footprint_cells = 0usize;
+        let mut best = -1.0;
+        for (i, &p) in self.peak_thickness.iter().enumerate() {
+            if p > options.footprint_threshold_m {
+                footprint_cells += 1;
+                if let Some(t) = top {
+                    let q = point(i % w, i / w);
+                    let d = (q[0] - t[0]).hypot(q[1] - t[1]);
+                    if d > best {
+                        best = d;
+                        runout = Some(q);
+                        runout_cell = Some((i % w, i / w));
+                    }
+                }
+            }
+        }
+        let (top, runout) = (top.unwrap_or([0.0; 3]), runout.unwrap_or([0.0; 3]));
+        let map_point = |cell: Option<(usize, usize)>, z: f64| match cell {
+            Some((c, r)) => {
+                let (x, y) = g.cell_centre(c, r);
+                [x, y, z]
+            }
+            None => [0.0; 3],
+        };
+        let runout_length = (runout[0] - top[0]).hypot(runout[1] - top[1]);
+        let runout_drop = top[2] - runout[2];
+        let end = mass_centre(&self.state);
+        let start = self.start_centre;
+        let travel = (end[0] - start[0]).hypot(end[1] - start[1]);
+        let drop = start[2] - end[2];
+        let angle = |dz: f64, l: f64| {
+            if l > 0.0 {
+                dz.atan2(l).to_degrees()
+            } else {
+                90.0
+            }
+        };
+        RunSummary {
+            released_volume_m3: self.released_volume,
+            final_volume_m3: final_volume,
+            border_outflow_m3: self.border_outflow,
+            volume_closure_rel: closure,
+            simulated_s: self.time,
+            substeps: self.substeps,
+            stop: self.stop,
+            max_speed_m_s: self.peak_speed.iter().fold(0.0, |m, &v| m.max(v)),
+            max_thickness_m: self.peak_thickness.iter().fold(0.0, |m, &v| m.max(v)),
+            footprint_area_m2: footprint_cells as f64 * g.cell_area(),
+            runout_length_m: runout_length,
+            runout_drop_m: runout_drop,
+            alpha_angle_deg: angle(runout_drop, runout_length),
+            centre_travel_m: travel,
+            centre_drop_m: drop,
+            travel_angle_deg: angle(drop, travel),
+            release_top: map_point(top_cell, top[2]),
+            runout_point: map_point(runout_cell, runout[2]),
+        }
+    }
+}
+
+/// Volume-weighted centre of the flowing snow: local metres east and south of the grid's
+/// north-west corner and the bed altitude under it, m.
+fn mass_centre(state: &AvalancheState) -> [f64; 3] {
+    let g = &state.geometry;
+    let (mut sx, mut sy, mut sz, mut sv) = (0.0, 0.0, 0.0, 0.0);
+    for r in 0..g.height() {
+        for c in 0..g.width() {
+            let h = state.thickness_at(c, r);
+            if h > 0.0 {
+                let (x, y) = g.local_metres(c, r);
+                sx += h * x;
+                sy += h * y;
+                sz += h * state.bed_at(c, r);
+                sv += h;
+            }
+        }
+    }
+    if sv > 0.0 {
+        [sx / sv, sy / sv, sz / sv]
+    } else {
+        [0.0; 3]
+    }
+}

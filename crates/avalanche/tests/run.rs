@@ -1,0 +1,138 @@
+//! The run driver: stop criteria, peak fields and runout figures.
+
+use snowscape_avalanche::{
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, RunOptions, StopReason,
+};
+use snowscape_terrain::{GridGeometry, NodataMask};
+
+/// A 40° slope (rows 0..60) running out onto flat ground (rows 60..160), 2 m cells, with a
+/// 2 m thick block of snow released near the top.
+fn slope_runout() -> AvalancheRun {
+    let (w, h, dx) = (40usize, 160usize, 2.0);
+    let g = GridGeometry::square(w, h, dx).unwrap();
+    let tan = 40f64.to_radians().tan();
+    let bed: Vec<f64> = (0..w * h)
+        .map(|i| {
+            let r = (i / w) as f64;
+            tan * dx * (60.0 - r).max(0.0)
+        })
+        .collect();
+    let mut s = AvalancheState::new(&g, &NodataMask::all_valid(), &bed).unwrap();
+    let hv: Vec<f64> = (0..w * h)
+        .map(|i| {
+            let (c, r) = (i % w, i / w);
+            if (15..25).contains(&c) && (5..15).contains(&r) {
+                2.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    s.set_thickness(&hv).unwrap();
+    AvalancheRun::new(s)
+}
+
+#[test]
+fn runs_to_rest_with_consistent_peaks_and_figures() {
+    let mut run = slope_runout();
+    let params = AvalancheParams::default();
+    let opts = RunOptions::default();
+    let mut records = 0;
+    let summary = run
+        .run::<AvalancheError>(&params, &opts, |r| {
+            records += 1;
+            assert!(r.kinetic_energy().is_finite());
+            Ok(())
+        })
+        .unwrap();
+    eprintln!("{summary:#?}");
+    assert!(matches!(
+        summary.stop,
+        Some(StopReason::AtRest | StopReason::EnergyCriterion)
+    ));
+    assert_eq!(records as f64, (summary.simulated_s / 0.1).round());
+    assert!(summary.volume_closure_rel < 1e-9);
+    assert_eq!(summary.released_volume_m3, 10.0 * 10.0 * 4.0 * 2.0);
+    // Peaks bound the final thickness; the release lies in the footprint.
+    let h = run.state.thickness();
+    for (i, (&p, &hf)) in run.peak_thickness().iter().zip(&h).enumerate() {
+        assert!(p >= hf, "cell {i}: peak {p} < final {hf}");
+    }
+    let fp = run.footprint(0.01);
+    assert!(fp[10 * 40 + 20]);
+    assert!(summary.max_thickness_m >= 2.0);
+    assert!(
+        summary.max_speed_m_s > 5.0,
+        "max speed {}",
+        summary.max_speed_m_s
+    );
+    // The snow leaves the slope (foot 110 m south of the release top) and runs out on the flat.
+    assert!(
+        summary.release_top[1] - summary.runout_point[1] > 110.0,
+        "{:?} -> {:?}",
+        summary.release_top,
+        summary.runout_point
+    );
+    assert_eq!(summary.runout_point[2], 0.0);
+    assert!(summary.runout_length_m > summary.centre_travel_m);
+    // The mass centre's travel angle lies between θc-ish and the slope angle.
+    assert!(
+        summary.travel_angle_deg > 15.0 && summary.travel_angle_deg < 40.0,
+        "travel angle {}",
+        summary.travel_angle_deg
+    );
+    assert!(summary.alpha_angle_deg < summary.travel_angle_deg + 10.0);
+}
+
+#[test]
+fn duration_bounds_the_run() {
+    let mut run = slope_runout();
+    let opts = RunOptions {
+        duration_s: 1.05,
+        ..RunOptions::default()
+    };
+    let s = run
+        .run::<AvalancheError>(&AvalancheParams::default(), &opts, |_| Ok(()))
+        .unwrap();
+    assert_eq!(s.stop, Some(StopReason::Duration));
+    assert!((s.simulated_s - 1.05).abs() < 1e-9, "{}", s.simulated_s);
+}
+
+#[test]
+fn an_empty_release_stops_at_once() {
+    let g = GridGeometry::square(8, 8, 1.0).unwrap();
+    let s = AvalancheState::new(&g, &NodataMask::all_valid(), &[0.0; 64]).unwrap();
+    let run = AvalancheRun::new(s);
+    assert_eq!(run.stop_reason(), Some(StopReason::Empty));
+}
+
+#[test]
+fn bad_options_are_named() {
+    let mut run = slope_runout();
+    for (opts, name) in [
+        (
+            RunOptions {
+                duration_s: -1.0,
+                ..RunOptions::default()
+            },
+            "duration_s",
+        ),
+        (
+            RunOptions {
+                record_interval_s: f64::NAN,
+                ..RunOptions::default()
+            },
+            "record_interval_s",
+        ),
+        (
+            RunOptions {
+                stop_energy_fraction: 1.5,
+                ..RunOptions::default()
+            },
+            "stop_energy_fraction",
+        ),
+    ] {
+        let err = run.advance(&AvalancheParams::default(), &opts).unwrap_err();
+        assert!(err.to_string().contains(name), "{err}");
+    }
+}
