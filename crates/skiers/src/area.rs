@@ -27,7 +27,7 @@ use snowscape_terrain::random::uniform;
 use snowscape_terrain::{GridGeometry, LayeredTerrain, SnowLayer};
 
 /// Key purpose of spawn draws.
-const SPAWN: u64 = 0x5350_4157_4e;
+const SPAWN: u64 = 0x0053_5041_574e;
 /// Draws tried per weighted spawn before giving up on a skier.
 const SPAWN_TRIES: u64 = 64;
 
@@ -264,7 +264,7 @@ impl SkiArea {
             });
         }
         let depth = f64::from(terrain.depth_at(i));
-        if !(depth > params.min_snow_depth_m) && !self.terminus.is_terminus(i) {
+        if depth <= params.min_snow_depth_m && !self.terminus.is_terminus(i) {
             return Err(SkiError::NotEnoughSnow {
                 col,
                 row,
@@ -399,7 +399,7 @@ pub fn step(
                     let recent = area.recent.at(cell, time_s, params.recent_decay_s);
                     let unstable = f64::from(terrain.layer(SnowLayer::Unstable)[cell]);
                     let slope = view.slope(col, row);
-                    let p = trigger_probability(params, unstable, slope, recent);
+                    let p = trigger_probability(params, unstable, slope, recent, length_m);
                     if p > 0.0 && uniform(area.seed ^ TRIGGER, id, pass) < p {
                         let (cx, cy) = view.centre(col, row);
                         let (x, y) = local_to_map(&area.geometry, cx, cy);

@@ -23,14 +23,17 @@
 //! `τ = recent_decay_s`. It is stored as (value, time of last pass) and decayed when read, so
 //! keeping it costs nothing per grid cell and step.
 //!
-//! **Triggers.** A pass over a cell holding unstable snow `U > 0` whose surface slope is at
-//! least `trigger_min_slope_deg` triggers it with probability
+//! **Triggers.** A pass with `L` metres of refined track over a cell holding unstable snow
+//! `U > 0` whose surface slope is at least `trigger_min_slope_deg` triggers it with probability
 //!
 //! ```text
-//! p = min(1, trigger_probability · min(1, U / trigger_unstable_ref_m) · (1 + gain · r))
+//! p10 = min(1, trigger_probability · min(1, U / trigger_unstable_ref_m) · (1 + gain · r))
+//! p   = 1 − (1 − p10)^(L / 10 m)
 //! ```
 //!
-//! with `r` the recent-skier count before this pass. The draw is the keyed uniform
+//! with `r` the recent-skier count before this pass: `p10` is the probability per 10 m of track
+//! (the paper's cell size), and the exponent makes the chance of crossing a slope unharmed
+//! independent of the grid resolution. The draw is the keyed uniform
 //! `uniform(seed ^ TRIGGER, skier id, pass index) < p`. The unstable depth and slope are read
 //! before this pass packs the cell. A triggered cell is reported as a [`TriggerCandidate`] for
 //! the season to start an avalanche there; the skier carries on.
@@ -40,7 +43,7 @@ use serde::{Deserialize, Serialize};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
 
 /// Key purpose of trigger draws.
-pub(crate) const TRIGGER: u64 = 0x5452_4947_4745_52;
+pub(crate) const TRIGGER: u64 = 0x0054_5249_4747_4552;
 
 /// Snow moved between layers by skiers, m³ of the source layer.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -109,20 +112,31 @@ pub fn snow_water_equivalent(params: &SkiParams, terrain: &LayeredTerrain) -> f6
     sum / 1000.0 * terrain.geometry().cell_area()
 }
 
-/// The probability that one pass triggers the unstable snow of a cell (see the module docs):
-/// `unstable_m` of unstable snow, surface slope `slope_rad`, `recent` passes before this one.
+/// Track length the trigger probability is given for, m (the paper's 10 m cell).
+pub const TRIGGER_REFERENCE_LENGTH_M: f64 = 10.0;
+
+/// The probability that a pass with `length_m` of track triggers the unstable snow of a cell
+/// (see the module docs): `unstable_m` of unstable snow, surface slope `slope_rad`, `recent`
+/// passes before this one.
 pub fn trigger_probability(
     params: &SkiParams,
     unstable_m: f64,
     slope_rad: f64,
     recent: f64,
+    length_m: f64,
 ) -> f64 {
-    if unstable_m <= 0.0 || slope_rad < params.trigger_min_slope_deg.to_radians() {
+    if unstable_m <= 0.0 || length_m <= 0.0 || slope_rad < params.trigger_min_slope_deg.to_radians()
+    {
         return 0.0;
     }
     let load = (unstable_m / params.trigger_unstable_ref_m).min(1.0);
-    (params.trigger_probability * load * (1.0 + params.trigger_recent_gain * recent.max(0.0)))
-        .min(1.0)
+    let p10 =
+        (params.trigger_probability * load * (1.0 + params.trigger_recent_gain * recent.max(0.0)))
+            .min(1.0);
+    if p10 >= 1.0 {
+        return 1.0;
+    }
+    1.0 - (1.0 - p10).powf(length_m / TRIGGER_REFERENCE_LENGTH_M)
 }
 
 /// A cell where a skier released unstable snow: where the season may start an avalanche.

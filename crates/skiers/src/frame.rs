@@ -26,6 +26,9 @@ pub fn map_extent(geometry: &GridGeometry) -> (f64, f64, f64, f64) {
     (t.origin_x, x_max, y_min, t.origin_y)
 }
 
+/// A local position (m) and the cell `(col, row)` holding it.
+pub type LocalPoint = ((f64, f64), (usize, usize));
+
 /// The local position (m) and cell `(col, row)` of the map point `(X, Y)`; the error names
 /// `what` and the grid's extent when the point lies outside.
 pub fn map_to_local(
@@ -33,7 +36,7 @@ pub fn map_to_local(
     what: &'static str,
     x: f64,
     y: f64,
-) -> Result<((f64, f64), (usize, usize)), SkiError> {
+) -> Result<LocalPoint, SkiError> {
     let t = geometry.transform();
     let cx = (x - t.origin_x) / t.pixel_width;
     let cy = (t.origin_y - y) / t.pixel_height;

@@ -76,10 +76,11 @@ pub struct SkiParams {
     /// (Table 2's rest angle θc: snow on gentler slopes cannot slide; also the practitioners'
     /// 30° threshold for slab avalanches).
     pub trigger_min_slope_deg: f64,
-    /// Probability that crossing one steep cell of `trigger_unstable_ref_m` of unstable snow
-    /// triggers it, in [0, 1]. Default 0.05 (chosen here: crossing a 200 m loaded slope, about
-    /// 20 cells of 10 m, then triggers it with probability 1 − 0.95²⁰ ≈ 64 %: the paper's
-    /// storytelling case, "skiers triggering avalanches when they cross unstable snow").
+    /// Probability that 10 m of track (the paper's cell) across steep ground with
+    /// `trigger_unstable_ref_m` of unstable snow triggers it, in [0, 1]. Default 0.05 (chosen
+    /// here: crossing a 200 m loaded slope then triggers it with probability
+    /// 1 − 0.95²⁰ ≈ 64 %, the paper's storytelling case, "ski-tracks triggering immediate
+    /// avalanches when they cross unstable snow layers", made a chance rather than a certainty).
     pub trigger_probability: f64,
     /// Unstable snow depth at which the trigger probability is full, m; below it the
     /// probability scales linearly. Default 0.3 (chosen here: a typical slab thickness).
