@@ -425,20 +425,14 @@ pub fn step(
     }
     report.distance_m = scratch.moved[..n].iter().sum();
     area.time_s = time0 + dt;
-    let mut kept = Vec::with_capacity(n);
-    for skier in std::mem::take(&mut area.skiers) {
-        if let Some(stop) = skier.track().stop {
-            report.finished.push(FinishedSkier {
-                id: skier.id(),
-                stop,
-                length_m: skier.track().length_m,
-            });
-            area.finished.push(skier.track);
-        } else {
-            kept.push(skier);
-        }
+    for skier in area.skiers.extract_if(.., |s| s.stopped()) {
+        report.finished.push(FinishedSkier {
+            id: skier.id(),
+            stop: skier.track.stop.unwrap_or(StopReason::Stuck),
+            length_m: skier.track.length_m,
+        });
+        area.finished.push(skier.track);
     }
-    area.skiers = kept;
     report.active = area.skiers.len();
     Ok(report)
 }

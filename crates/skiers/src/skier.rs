@@ -265,7 +265,7 @@ impl Skier {
             let delta = remaining.min(max_sub);
             let (tx, ty) = view.centre(self.target.0, self.target.1);
             let (vx, vy) = (tx - self.pos.0, ty - self.pos.1);
-            let len = vx.hypot(vy);
+            let len = (vx * vx + vy * vy).sqrt();
             let mut h = self.heading;
             if len > 1e-9 {
                 let (dx, dy) = (vx / len, vy / len);
@@ -300,14 +300,16 @@ impl Skier {
             let fine_old = self.fine;
             self.sine.advance(delta);
             self.fine = self.sine.point(next.0, next.1, h.0, h.1);
-            let seg = (self.fine.0 - fine_old.0).hypot(self.fine.1 - fine_old.1);
+            let (sx, sy) = (self.fine.0 - fine_old.0, self.fine.1 - fine_old.1);
+            let seg = (sx * sx + sy * sy).sqrt();
             events.push(Event::Segment(fine_old, self.fine));
             self.track.length_m += seg;
             self.track.coarse_length_m += delta;
             self.in_cell_length += seg;
             self.in_cell_travel += delta;
             let (lx, ly) = self.last_vertex;
-            if (self.fine.0 - lx).hypot(self.fine.1 - ly) >= ctx.vertex_spacing {
+            let (ex, ey) = (self.fine.0 - lx, self.fine.1 - ly);
+            if ex * ex + ey * ey >= ctx.vertex_spacing * ctx.vertex_spacing {
                 self.track.vertices.push([self.fine.0, self.fine.1]);
                 self.last_vertex = self.fine;
             }

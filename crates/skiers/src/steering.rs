@@ -133,7 +133,7 @@ pub(crate) fn choose(
             }
             let (cx, cy) = view.centre(c, rr);
             let (vx, vy) = (cx - pos.0, cy - pos.1);
-            let len = vx.hypot(vy);
+            let len = (vx * vx + vy * vy).sqrt();
             if len <= 0.0 {
                 continue;
             }
@@ -141,7 +141,8 @@ pub(crate) fn choose(
             if wt == 0.0 {
                 continue;
             }
-            let run = (dc as f64 * view.dx).hypot(dr as f64 * view.dy);
+            let (rx, ry) = (dc as f64 * view.dx, dr as f64 * view.dy);
+            let run = (rx * rx + ry * ry).sqrt();
             let slope = ((a_here - f64::from(view.surface(j))) / run).atan();
             let delta = (slope - rule.target).abs();
             let p = (-delta * delta * rule.inv_two_sigma2).exp() * wt * wr;

@@ -100,6 +100,20 @@ impl Field {
         let i = row * self.width + col;
         let a = self.surface[i];
         let mut best = d[i];
+        if col > 0 && row > 0 && col + 1 < self.width && row + 1 < self.height {
+            // Interior: no bounds tests.
+            let w = self.width as isize;
+            for (k, &(dc, dr)) in N8.iter().enumerate() {
+                let j = (i as isize + dr * w + dc) as usize;
+                if self.enterable[j] && self.surface[j] <= a {
+                    let cand = d[j] + self.lengths[k];
+                    if cand < best {
+                        best = cand;
+                    }
+                }
+            }
+            return best;
+        }
         for (k, &(dc, dr)) in N8.iter().enumerate() {
             let (c, r) = (col as isize + dc, row as isize + dr);
             if c < 0 || r < 0 || c as usize >= self.width || r as usize >= self.height {

@@ -43,9 +43,9 @@ fn overlap(a: f64, b: f64, c: f64, d: f64) -> f64 {
     (b.min(d) - a.max(c)).max(0.0)
 }
 
-/// Distance from `(px, py)` to the segment `(ax, ay)–(bx, by)`.
+/// Squared distance from `(px, py)` to the segment `(ax, ay)–(bx, by)`.
 #[inline(always)]
-fn segment_distance(px: f64, py: f64, ax: f64, ay: f64, bx: f64, by: f64) -> f64 {
+fn segment_distance2(px: f64, py: f64, ax: f64, ay: f64, bx: f64, by: f64) -> f64 {
     let (vx, vy) = (bx - ax, by - ay);
     let (wx, wy) = (px - ax, py - ay);
     let len2 = vx * vx + vy * vy;
@@ -54,7 +54,8 @@ fn segment_distance(px: f64, py: f64, ax: f64, ay: f64, bx: f64, by: f64) -> f64
     } else {
         0.0
     };
-    (wx - t * vx).hypot(wy - t * vy)
+    let (dx, dy) = (wx - t * vx, wy - t * vy);
+    dx * dx + dy * dy
 }
 
 impl TrackTexture {
@@ -161,6 +162,7 @@ impl TrackTexture {
         let s = (self.texel_x * self.texel_y).sqrt();
         let half = 0.5 * width_m;
         let reach = half + s;
+        let reach2 = (half + 0.5 * s) * (half + 0.5 * s);
         let range = |lo: f64, hi: f64, size: f64, n: usize| -> Option<(usize, usize)> {
             let (lo, hi) = ((lo / size).floor(), (hi / size).floor());
             if hi < 0.0 || lo >= n as f64 || !(lo.is_finite() && hi.is_finite()) {
@@ -188,10 +190,11 @@ impl TrackTexture {
             let py = (v as f64 + 0.5) * self.texel_y;
             for u in u0..=u1 {
                 let px = (u as f64 + 0.5) * self.texel_x;
-                let d = segment_distance(px, py, a.0, a.1, b.0, b.1);
-                if d >= half + 0.5 * s {
+                let d2 = segment_distance2(px, py, a.0, a.1, b.0, b.1);
+                if d2 >= reach2 {
                     continue;
                 }
+                let d = d2.sqrt();
                 let cov = (overlap(d - half, d + half, -0.5 * s, 0.5 * s) / s) as f32;
                 let t = self.texel_mut(u, v);
                 if cov > *t {
