@@ -127,7 +127,10 @@ impl SkiArea {
         })
     }
 
-    /// Recomputes the distance map with the same termini rule (after the snow changed).
+    /// Recomputes the distance map with the same termini rule. The map is a snapshot of the
+    /// snow cover: skiers always test the live snow before entering a cell, but their route
+    /// guide and the spawn weights follow the map, so the season refreshes it when the snow has
+    /// changed (after a snowfall or melt event, say).
     pub fn refresh_terminus(
         &mut self,
         params: &SkiParams,

@@ -136,3 +136,55 @@ fn chosen_slopes_track_the_target_slope() {
     // On gentle ground nothing reaches st: they take nearly the fall line.
     assert!(gentle_gap < 6.0, "{gentle_gap}");
 }
+
+#[test]
+fn skiers_stop_when_stuck_or_too_far_and_are_removed() {
+    let params = SkiParams::default();
+    // Snow only on a 4x4 island in the middle of a 30° slope; the terminus (bottom row) cannot
+    // be reached from it.
+    let mut t = common::plane(20, 30, 10.0, 30.0);
+    for i in 0..600 {
+        let (c, r) = (i % 20, i / 20);
+        if !((8..12).contains(&c) && (10..14).contains(&r)) {
+            t.layer_mut(SnowLayer::Stable)[i] = 0.0;
+            t.layer_mut(SnowLayer::Unstable)[i] = 0.0;
+        }
+    }
+    let mut area = SkiArea::new(&params, &t, Terminus::Cells((580..600).collect()), 4).unwrap();
+    area.spawn_at(&params, &t, 95.0, 185.0).unwrap();
+    let mut scratch = SkiScratch::default();
+    let mut steps = 0;
+    while !area.skiers().is_empty() {
+        let r = step(&params, &mut area, &mut t, &mut scratch, 0.5).unwrap();
+        steps += 1;
+        assert!(steps < 1000, "skier never stopped");
+        if let Some(f) = r.finished.first() {
+            assert_eq!(f.stop, StopReason::Stuck);
+        }
+    }
+    let tr = &area.finished_tracks()[0];
+    assert_eq!(tr.stop, Some(StopReason::Stuck));
+    for &c in &tr.cells {
+        assert!(
+            (8..12).contains(&(c % 20)) && (10..14).contains(&(c / 20)),
+            "left the island: {c}"
+        );
+    }
+    // A run capped at 150 m stops there.
+    let capped = SkiParams {
+        max_run_length_m: 150.0,
+        ..SkiParams::default()
+    };
+    let mut t = common::plane(20, 60, 10.0, 30.0);
+    let mut area = SkiArea::new(&capped, &t, Terminus::Cells((1180..1200).collect()), 4).unwrap();
+    area.spawn_at(&capped, &t, 100.0, 595.0).unwrap();
+    run_out(&capped, &mut area, &mut t, 1.0, 1000);
+    let tr = &area.finished_tracks()[0];
+    assert_eq!(tr.stop, Some(StopReason::MaxLength));
+    assert!(
+        (150.0..155.0).contains(&tr.coarse_length_m),
+        "{}",
+        tr.coarse_length_m
+    );
+    assert!(tr.end_time_s.unwrap() - tr.start_time_s >= 150.0 / capped.speed_m_s - 1e-9);
+}
