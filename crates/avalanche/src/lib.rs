@@ -5,6 +5,9 @@
 //! Coulomb yield term `g·tanθc` (static friction), a viscous term `−kv·U·φ` and a dry/wet mix
 //! `α`. [`flow`] holds the flowing state and the pure [`flow::step`]; [`convert`] turns snow
 //! layers into flowing snow ([`convert::release`]) and back ([`convert::deposit`]).
+//! [`release_area`] says where an avalanche starts (shapefile polygons, raster masks, the
+//! paper's rupture at a point); [`validation`] runs the validation cases that
+//! `examples/validation.rs` tabulates.
 //!
 //! The scheme departs from the paper where DESIGN.md §4 says it must (a depth-dependent face
 //! cross-section and momentum advection, so that waves travel at `sqrt(g·h)` and the dam-break
@@ -12,11 +15,17 @@
 
 pub mod convert;
 pub mod flow;
+pub mod release_area;
 pub mod run;
+pub mod validation;
 
 pub use convert::{deposit, release};
 pub use flow::{
     AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, Border,
     cfl_dt, step,
+};
+pub use release_area::{
+    MapExtent, RasterRelease, ReleaseAreaError, ReleaseMask, Rupture, RuptureParams,
+    release_at_point, release_from_raster, release_from_shapefile,
 };
 pub use run::{AvalancheRun, RunOptions, RunSummary, StopReason};
