@@ -30,6 +30,9 @@ pub enum KernelError {
     /// A season run failed.
     #[error(transparent)]
     Season(#[from] snowscape_season::winter::SeasonError),
+    /// An avalanche step failed.
+    #[error(transparent)]
+    Avalanche(#[from] snowscape_avalanche::AvalancheError),
     /// A file-system operation (temporary directory) failed.
     #[error("{what}: {source}")]
     Io {

@@ -15,6 +15,9 @@ Examples:
   snowscape render dem.tif --out relief.png --sun-azimuth 300
   snowscape convert dem.asc dem.tif               # any readable format to GeoTIFF/EXR/PNG16/ASC/NPY
   snowscape convert height.png dem.tif --cell-size 2 --height-range 1000,2500
+  snowscape avalanche --dem ../shared/data/dem/avaframe_avaWog/avaWog.asc \
+      --release ../shared/data/dem/avaframe_avaWog/REL/relWog.shp --out out/wog
+  snowscape avalanche --dem dem.tif --release 631250,5220400 --thickness 0.8
   snowscape bench --size 1024                     # kernel throughput and memory-bandwidth share
 
 Exit codes: 0 success, 1 the job failed, 2 bad input (usage, file or parameter).";
@@ -57,6 +60,8 @@ pub enum Command {
     Convert(ConvertArgs),
     /// Measure memory bandwidth and kernel throughput; write bench.json.
     Bench(BenchArgs),
+    /// Run one avalanche from a release area or point to rest; write peak maps and a report.
+    Avalanche(AvalancheArgs),
 }
 
 #[derive(Debug, Args)]
@@ -177,6 +182,47 @@ pub struct ConvertArgs {
     /// Output format, when the extension does not say it.
     #[arg(long)]
     pub to: Option<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct AvalancheArgs {
+    /// Terrain raster (.asc, .tif, .png, .raw/.r16, .npy): the avalanche bed.
+    #[arg(long)]
+    pub dem: PathBuf,
+    /// Release: a shapefile of polygons (.shp), a raster mask in the DEM's grid (nonzero =
+    /// release), or X,Y map coordinates of a rupture point (a uniform unstable cover of
+    /// --thickness breaks there and everything down-slope within reach moves).
+    #[arg(long, value_name = "FILE|X,Y", allow_hyphen_values = true)]
+    pub release: String,
+    /// Release thickness, metres (default: the shapefile's thickness field, else 1 m).
+    #[arg(long)]
+    pub thickness: Option<f64>,
+    /// Rest (friction) angle θc of the snow, degrees (default 30, Cordonnier 2018 Table 2).
+    #[arg(long)]
+    pub friction_angle: Option<f64>,
+    /// Viscous coefficient kv, 1/(m·s) (default 5e-4, Cordonnier 2018 Table 2); acts with
+    /// weight 1 - dry-fraction.
+    #[arg(long)]
+    pub viscosity: Option<f64>,
+    /// Dry/wet mix α in [0, 1]: 1 dry (Coulomb friction only), 0 wet (viscous only).
+    #[arg(long)]
+    pub dry_fraction: Option<f64>,
+    /// Longest simulated time, seconds (the run stops earlier once the snow is at rest).
+    #[arg(long, default_value_t = 600.0)]
+    pub duration: f64,
+    /// Simulated seconds between playback frames.
+    #[arg(long, default_value_t = 1.0)]
+    pub frame_interval: f64,
+    /// Random seed (recorded; the flow itself is deterministic).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "out/avalanche")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub dem_input: DemInputArgs,
+    #[command(flatten)]
+    pub view: ViewArgs,
 }
 
 #[derive(Debug, Args)]

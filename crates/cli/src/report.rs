@@ -92,6 +92,9 @@ pub struct Report {
     /// Events of each kind the scheduler drew (season runs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub event_counts: Option<serde_json::Map<String, serde_json::Value>>,
+    /// Every avalanche of the season, in order (season runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub avalanches: Option<Vec<snowscape_season::avalanches::AvalancheRecord>>,
     pub mass_budget: MassBudget,
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,

@@ -3,7 +3,8 @@
 //!
 //! Layout (little-endian): the magic `SNOWCKPT`, a u32 format version, a u64 length and that
 //! many bytes of JSON header (the caller's run state: scheduler, budget, time, and a
-//! fingerprint of the inputs), then the four snow layers as raw f32, bottom to top. The file
+//! fingerprint of the inputs), then the four snow layers as raw f32, bottom to top, then the
+//! caller's extra per-cell f32 maps (version 2: the season's avalanche scour and deposit). The file
 //! is written atomically by the caller (temporary name, then rename), so a crash mid-write
 //! leaves the previous checkpoint intact.
 
@@ -13,7 +14,7 @@ use std::io::{Read, Write};
 use thiserror::Error;
 
 const MAGIC: &[u8; 8] = b"SNOWCKPT";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// Why a checkpoint could not be written or read.
 #[derive(Debug, Error)]
@@ -46,11 +47,12 @@ pub fn bedrock_fingerprint(terrain: &LayeredTerrain) -> u64 {
     h
 }
 
-/// Writes `header` and the snow layers of `terrain` to `w`.
+/// Writes `header`, the snow layers of `terrain` and the `extra` per-cell maps to `w`.
 pub fn write<H: Serialize>(
     w: &mut impl Write,
     header: &H,
     terrain: &LayeredTerrain,
+    extra: &[&[f32]],
 ) -> Result<(), CheckpointError> {
     let json = serde_json::to_vec(header)?;
     w.write_all(MAGIC)?;
@@ -58,7 +60,12 @@ pub fn write<H: Serialize>(
     w.write_all(&(json.len() as u64).to_le_bytes())?;
     w.write_all(&json)?;
     let mut buf = Vec::with_capacity(terrain.geometry().len() * 4);
-    for layer in &terrain.snow {
+    for layer in terrain
+        .snow
+        .iter()
+        .map(|l| l.as_slice())
+        .chain(extra.iter().copied())
+    {
         buf.clear();
         for v in layer {
             buf.extend_from_slice(&v.to_le_bytes());
@@ -68,12 +75,14 @@ pub fn write<H: Serialize>(
     Ok(())
 }
 
-/// Reads a checkpoint written by [`write`]: returns the header and overwrites the snow layers
-/// of `terrain` (whose bedrock and geometry come from the inputs, as in the original run).
+/// Reads a checkpoint written by [`write`] with `extra` extra maps: returns the header and the
+/// extra maps and overwrites the snow layers of `terrain` (whose bedrock and geometry come from
+/// the inputs, as in the original run).
 pub fn read<H: DeserializeOwned>(
     r: &mut impl Read,
     terrain: &mut LayeredTerrain,
-) -> Result<H, CheckpointError> {
+    extra: usize,
+) -> Result<(H, Vec<Vec<f32>>), CheckpointError> {
     let mut magic = [0u8; 8];
     r.read_exact(&mut magic)?;
     if &magic != MAGIC {
@@ -97,10 +106,11 @@ pub fn read<H: DeserializeOwned>(
     let n = terrain.geometry().len();
     let mut raw = Vec::new();
     r.read_to_end(&mut raw)?;
-    if raw.len() != 16 * n {
+    let maps = 4 + extra;
+    if raw.len() != 4 * maps * n {
         return Err(CheckpointError::SizeMismatch {
             expected: n,
-            found: raw.len() / 16,
+            found: raw.len() / (4 * maps),
         });
     }
     for (k, layer) in terrain.snow.iter_mut().enumerate() {
@@ -109,7 +119,15 @@ pub fn read<H: DeserializeOwned>(
             *v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
         }
     }
-    Ok(header)
+    let extra_maps = (4..maps)
+        .map(|k| {
+            raw[k * 4 * n..(k + 1) * 4 * n]
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect()
+        })
+        .collect();
+    Ok((header, extra_maps))
 }
 
 #[cfg(test)]
@@ -132,11 +150,12 @@ mod tests {
     fn round_trip_is_bit_exact() {
         let t = terrain();
         let mut bytes = Vec::new();
-        write(&mut bytes, &("day", 42u32), &t).unwrap();
+        write(&mut bytes, &("day", 42u32), &t, &[&[7.0f32; 15]]).unwrap();
         let mut back = LayeredTerrain::from_bedrock(Grid::from_fn(t.geometry().clone(), |c, r| {
             (c * 7 + r) as f32
         }));
-        let h: (String, u32) = read(&mut bytes.as_slice(), &mut back).unwrap();
+        let (h, extra): ((String, u32), _) = read(&mut bytes.as_slice(), &mut back, 1).unwrap();
+        assert_eq!(extra, vec![vec![7.0f32; 15]]);
         assert_eq!(h, ("day".to_string(), 42));
         assert_eq!(back, t);
         assert_eq!(bedrock_fingerprint(&back), bedrock_fingerprint(&t));
@@ -146,19 +165,19 @@ mod tests {
     fn corrupt_or_truncated_files_are_typed_errors() {
         let t = terrain();
         let mut bytes = Vec::new();
-        write(&mut bytes, &1u8, &t).unwrap();
+        write(&mut bytes, &1u8, &t, &[]).unwrap();
         let mut target = t.clone();
         let cut = &bytes[..bytes.len() - 3];
         assert!(matches!(
-            read::<u8>(&mut &cut[..], &mut target),
+            read::<u8>(&mut &cut[..], &mut target, 0),
             Err(CheckpointError::SizeMismatch { .. })
         ));
         let mut bad = bytes.clone();
         bad[0] = b'X';
         assert!(matches!(
-            read::<u8>(&mut bad.as_slice(), &mut target),
+            read::<u8>(&mut bad.as_slice(), &mut target, 0),
             Err(CheckpointError::BadMagic { .. })
         ));
-        assert!(read::<u8>(&mut &bytes[..10], &mut target).is_err());
+        assert!(read::<u8>(&mut &bytes[..10], &mut target, 0).is_err());
     }
 }

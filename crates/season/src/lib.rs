@@ -5,6 +5,7 @@
 //! Every step reports the snow volume it added, removed or moved, so a run's mass budget is
 //! tracked rather than hoped for.
 
+pub mod avalanches;
 pub mod checkpoint;
 pub mod melt;
 pub mod phenomenon;

@@ -88,6 +88,18 @@ pub struct SnowfallPeriod {
     pub days: f64,
 }
 
+/// An avalanche the user triggers: a rupture at a map position on a given day.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UserAvalanche {
+    /// Season day of the rupture.
+    pub day: f64,
+    /// Map x of the rupture point (CRS units).
+    pub x: f64,
+    /// Map y of the rupture point (CRS units).
+    pub y: f64,
+}
+
 /// Every phenomenon's parameters.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -98,6 +110,7 @@ pub struct Parameters {
     pub stability: StabilityParams,
     pub powder_diffusion: DiffusionParams,
     pub wind_transport: WindTransportParams,
+    pub avalanche: crate::avalanches::AvalancheParameters,
 }
 
 /// A whole season.
@@ -123,6 +136,9 @@ pub struct Scenario {
     /// Forced snowfall periods.
     #[serde(rename = "snowfall_period")]
     pub snowfall_periods: Vec<SnowfallPeriod>,
+    /// Avalanches the user triggers at given days and map positions.
+    #[serde(rename = "avalanche")]
+    pub avalanches: Vec<UserAvalanche>,
     /// Mean event frequencies.
     pub events: EventFrequencies,
     /// Parameter overrides.
@@ -141,6 +157,7 @@ impl Default for Scenario {
             checkpoint_every_days: 10.0,
             weather: Vec::new(),
             snowfall_periods: Vec::new(),
+            avalanches: Vec::new(),
             events: EventFrequencies::default(),
             parameters: Parameters::default(),
         }
@@ -287,6 +304,22 @@ impl Scenario {
                     "needs start_day >= 0 and days > 0",
                 ));
             }
+        }
+        for (k, a) in self.avalanches.iter().enumerate() {
+            if !(a.day.is_finite() && a.day >= 0.0 && a.x.is_finite() && a.y.is_finite()) {
+                return Err(bad(
+                    &format!("avalanche[{k}]"),
+                    format!("day {} x {} y {}", a.day, a.x, a.y),
+                    "needs day >= 0 and finite map coordinates x, y",
+                ));
+            }
+        }
+        if let Err(e) = self.parameters.avalanche.validate() {
+            return Err(bad(
+                "parameters.avalanche",
+                e.to_string(),
+                "is out of range",
+            ));
         }
         Ok(())
     }

@@ -170,6 +170,12 @@ impl Scheduler {
         }
     }
 
+    /// Advances the clock by `days` without drawing an event: the temporal zoom of a phenomenon
+    /// that runs to its end inside one event (an avalanche, §3.1 Fig. 4).
+    pub fn advance_clock(&mut self, days: f64) {
+        self.time_days += days.max(0.0);
+    }
+
     /// Starts a snowfall period of `days` now (scenario-forced snowfall).
     pub fn force_snowfall(&mut self, days: f64) {
         let until = self.time_days + days.max(0.0);

@@ -7,16 +7,18 @@
 //! layers, the scheduler, the budget — is plain data, so a checkpoint captures a run exactly
 //! and a resumed run ends bit-identical to an uninterrupted one.
 
+use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, Trigger};
 use crate::checkpoint::{self, CheckpointError, bedrock_fingerprint};
 use crate::melt;
 use crate::phenomenon::PhenomenonError;
 use crate::powder_diffusion::{self, DiffusionScratch};
 use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
-use crate::scheduler::{Event, EventKind, Scheduler};
+use crate::scheduler::{Event, EventKind, SECONDS_PER_DAY, Scheduler};
 use crate::snowfall::{self, SnowfallScratch};
 use crate::stability::{self, StabilityScratch};
 use crate::wind_transport::{self, WindMaps, WindScratch};
 use serde::{Deserialize, Serialize};
+use snowscape_avalanche::release_area::release_at_point;
 use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams, precompute};
 use snowscape_terrain::{LayeredTerrain, TerrainError};
 use std::collections::BTreeMap;
@@ -42,6 +44,14 @@ pub enum SeasonError {
         #[source]
         source: TerrainError,
     },
+    #[error("avalanche at day {day:.3}: {source}")]
+    Avalanche {
+        day: f64,
+        #[source]
+        source: snowscape_avalanche::AvalancheError,
+    },
+    #[error("avalanche at map position ({x}, {y}): {reason}")]
+    AvalanchePosition { x: f64, y: f64, reason: String },
     #[error("checkpoint: {0}")]
     Checkpoint(#[from] CheckpointError),
     #[error(
@@ -66,6 +76,8 @@ pub struct SeasonBudget {
     pub diffusion_outflow: f64,
     /// Snow blown out of the grid.
     pub wind_outflow: f64,
+    /// Avalanche snow that flowed out of the grid.
+    pub avalanche_outflow: f64,
 }
 
 impl SeasonBudget {
@@ -76,6 +88,7 @@ impl SeasonBudget {
             - self.densification
             - self.diffusion_outflow
             - self.wind_outflow
+            - self.avalanche_outflow
     }
 }
 
@@ -89,6 +102,10 @@ struct RunState {
     forced_index: usize,
     fingerprint: u64,
     scenario_digest: u64,
+    /// Every avalanche so far.
+    avalanches: Vec<AvalancheRecord>,
+    /// Next scenario avalanche to trigger.
+    user_avalanche_index: usize,
 }
 
 /// A season in progress. Cloning it forks the run (the clone continues identically).
@@ -107,6 +124,12 @@ pub struct Winter {
     stability_scratch: StabilityScratch,
     diffusion_scratch: DiffusionScratch,
     wind_scratch: WindScratch,
+    /// Bedrock slope per cell, degrees (for the avalanche hazard).
+    slope_deg: Vec<f32>,
+    /// Avalanche hazard per cell, 1/day (recomputed when the snow changes).
+    hazard: Vec<f64>,
+    /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
+    avalanche_maps: AvalancheMaps,
 }
 
 fn scenario_digest(s: &Scenario, weather: &[WeatherPeriod]) -> u64 {
@@ -154,6 +177,8 @@ impl Winter {
             forced_index: 0,
             fingerprint: bedrock_fingerprint(&terrain),
             scenario_digest: scenario_digest(&scenario, &weather),
+            avalanches: Vec::new(),
+            user_avalanche_index: 0,
         };
         let t = Instant::now();
         let params = weather_params(&env, &weather[0]);
@@ -175,10 +200,20 @@ impl Winter {
             stability_scratch: StabilityScratch::default(),
             diffusion_scratch: DiffusionScratch::default(),
             wind_scratch: WindScratch::default(),
+            slope_deg: Vec::new(),
+            hazard: Vec::new(),
+            avalanche_maps: AvalancheMaps::default(),
         };
         w.wall_seconds
             .insert("environment", t.elapsed().as_secs_f64());
         w.environment.store(&mut w.terrain)?;
+        w.slope_deg = avalanches::bedrock_slopes_deg(&w.terrain);
+        let n = w.terrain.geometry().len();
+        w.avalanche_maps = AvalancheMaps {
+            scour: vec![0.0; n],
+            deposit: vec![0.0; n],
+        };
+        w.update_avalanche_rate();
         Ok(w)
     }
 
@@ -209,6 +244,18 @@ impl Winter {
     /// Number of events of each kind so far.
     pub fn event_counts(&self) -> &BTreeMap<EventKind, u64> {
         &self.state.event_counts
+    }
+    /// Every avalanche of the season so far, in order.
+    pub fn avalanches(&self) -> &[AvalancheRecord] {
+        &self.state.avalanches
+    }
+    /// Snow thickness the season's avalanches scoured and deposited so far, per cell, m.
+    pub fn avalanche_maps(&self) -> &AvalancheMaps {
+        &self.avalanche_maps
+    }
+    /// The current avalanche hazard per cell, 1/day (Σ is the Avalanche-Start rate).
+    pub fn avalanche_hazard(&self) -> &[f64] {
+        &self.hazard
     }
     /// Whether the season is over.
     pub fn finished(&self) -> bool {
@@ -252,7 +299,103 @@ impl Winter {
             }
             self.state.forced_index += 1;
         }
+        while let Some(a) = self
+            .scenario
+            .avalanches
+            .get(self.state.user_avalanche_index)
+            .cloned()
+        {
+            if now < a.day {
+                break;
+            }
+            self.state.user_avalanche_index += 1;
+            match self.trigger_avalanche(a.x, a.y) {
+                Ok(_) | Err(SeasonError::AvalanchePosition { .. }) => {}
+                Err(e) => return Err(e),
+            }
+        }
         Ok(())
+    }
+
+    /// Recomputes the avalanche hazard and the Avalanche-Start rate.
+    fn update_avalanche_rate(&mut self) {
+        let total = avalanches::hazard(
+            &self.scenario.parameters.avalanche,
+            &self.terrain,
+            &self.slope_deg,
+            None,
+            &mut self.hazard,
+        );
+        self.state
+            .scheduler
+            .set_rate(EventKind::AvalancheStart, total, total > 0.0);
+    }
+
+    /// Triggers an avalanche now at a map position (the user's rupture point, §3.2): the
+    /// unstable snow within reach and down-slope of it runs to rest and deposits as stable
+    /// snow. An error names the position when it lies outside the grid or holds no unstable
+    /// snow (scenario avalanches that find no snow are skipped).
+    pub fn trigger_avalanche(&mut self, x: f64, y: f64) -> Result<AvalancheRecord, SeasonError> {
+        let g = self.terrain.geometry();
+        let Some((c, r)) = g.map_to_cell(x, y) else {
+            return Err(SeasonError::AvalanchePosition {
+                x,
+                y,
+                reason: "outside the grid".into(),
+            });
+        };
+        let cell = g.index(c.round() as usize, r.round() as usize);
+        let t = Instant::now();
+        let rec = self.start_avalanche(cell, Trigger::User);
+        *self.wall_seconds.entry("avalanche").or_default() += t.elapsed().as_secs_f64();
+        rec
+    }
+
+    /// Ruptures at `cell`, runs the avalanche to rest (temporal zoom) and records it.
+    fn start_avalanche(
+        &mut self,
+        cell: usize,
+        trigger: Trigger,
+    ) -> Result<AvalancheRecord, SeasonError> {
+        let day = self.day();
+        let params = &self.scenario.parameters.avalanche;
+        let (col, row) = self.terrain.geometry().col_row(cell);
+        let err = |source| SeasonError::Avalanche { day, source };
+        let (x, y) = self.terrain.geometry().cell_centre(col, row);
+        let cells = match release_at_point(&self.terrain, x, y, &params.rupture) {
+            Ok(r) => r.mask.cells,
+            Err(e) => {
+                return Err(SeasonError::AvalanchePosition {
+                    x,
+                    y,
+                    reason: e.to_string(),
+                });
+            }
+        };
+        let outcome = avalanches::run_avalanche(
+            params,
+            &mut self.terrain,
+            &self.environment.temperature,
+            &cells,
+            day,
+            trigger,
+            cell,
+            &mut self.avalanche_maps,
+        )
+        .map_err(err)?;
+        let rec = outcome.record;
+        self.state.budget.avalanche_outflow += rec.outflow_m3;
+        self.state
+            .scheduler
+            .advance_clock(rec.simulated_s / SECONDS_PER_DAY);
+        *self
+            .state
+            .event_counts
+            .entry(EventKind::AvalancheStep)
+            .or_default() += rec.steps;
+        self.state.avalanches.push(rec.clone());
+        self.update_avalanche_rate();
+        Ok(rec)
     }
 
     /// Recomputes temperature and wind for the current weather period (sun, sky and bounce do
@@ -287,7 +430,11 @@ impl Winter {
     fn apply(&mut self, event: Event) -> Result<(), SeasonError> {
         let t = Instant::now();
         let day = event.time_days;
-        let name = phenomenon_name(event.kind);
+        // An avalanche runs inside its start event: its time is the avalanche's.
+        let name = match event.kind {
+            EventKind::AvalancheStart => phenomenon_name(EventKind::AvalancheStep),
+            kind => phenomenon_name(kind),
+        };
         let err = |source| SeasonError::Phenomenon {
             phenomenon: name,
             day,
@@ -352,9 +499,31 @@ impl Winter {
                 .map_err(err)?;
                 b.wind_outflow += r.border_outflow;
             }
-            // Period starts are handled by the scheduler; avalanches and skiers are driven by
-            // their own modules when enabled.
+            EventKind::AvalancheStart => {
+                let u = snowscape_terrain::random::uniform(
+                    self.scenario.seed,
+                    STREAM_AVALANCHE_CELL,
+                    event.index,
+                );
+                // A fresh hazard map: the snow may have moved since the rate was set.
+                self.update_avalanche_rate();
+                let total: f64 = self.hazard.iter().sum();
+                if let Some(cell) = avalanches::pick_cell(&self.hazard, total, u) {
+                    match self.start_avalanche(cell, Trigger::Natural) {
+                        Ok(_) | Err(SeasonError::AvalanchePosition { .. }) => {}
+                        Err(e) => return Err(e),
+                    }
+                }
+            }
+            // Period starts are handled by the scheduler; skiers are driven by their own module
+            // when enabled.
             _ => {}
+        }
+        if matches!(
+            event.kind,
+            EventKind::MeltAndStateStep | EventKind::SnowfallStep
+        ) {
+            self.update_avalanche_rate();
         }
         *self.state.event_counts.entry(event.kind).or_default() += 1;
         if cfg!(debug_assertions) || event.index.is_multiple_of(64) {
@@ -372,7 +541,8 @@ impl Winter {
 
     /// Writes a checkpoint of the whole run state to `w`.
     pub fn write_checkpoint(&self, w: &mut impl std::io::Write) -> Result<(), SeasonError> {
-        checkpoint::write(w, &self.state, &self.terrain)?;
+        let m = &self.avalanche_maps;
+        checkpoint::write(w, &self.state, &self.terrain, &[&m.scour, &m.deposit])?;
         Ok(())
     }
 
@@ -384,7 +554,9 @@ impl Winter {
         r: &mut impl std::io::Read,
     ) -> Result<Self, SeasonError> {
         let mut w = Self::new(scenario, terrain)?;
-        let state: RunState = checkpoint::read(r, &mut w.terrain)?;
+        let (state, mut extra): (RunState, _) = checkpoint::read(r, &mut w.terrain, 2)?;
+        w.avalanche_maps.deposit = extra.pop().unwrap_or_default();
+        w.avalanche_maps.scour = extra.pop().unwrap_or_default();
         if state.fingerprint != w.state.fingerprint
             || state.scenario_digest != w.state.scenario_digest
         {
@@ -398,9 +570,21 @@ impl Winter {
         if weather_changed {
             w.refresh_weather_maps()?;
         }
+        // The hazard map of the restored snow (for `avalanche_hazard`; a start recomputes it);
+        // the scheduler's rate is the checkpointed one.
+        avalanches::hazard(
+            &w.scenario.parameters.avalanche,
+            &w.terrain,
+            &w.slope_deg,
+            None,
+            &mut w.hazard,
+        );
         Ok(w)
     }
 }
+
+/// Random stream of the avalanche start cells.
+const STREAM_AVALANCHE_CELL: u64 = 0xa7a1_a4c3;
 
 /// The environment parameters of one weather period.
 fn weather_params(base: &EnvironmentParams, w: &WeatherPeriod) -> EnvironmentParams {

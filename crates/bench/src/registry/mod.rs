@@ -2,11 +2,13 @@
 //! for a grid size. To add a kernel, push one [`Kernel::new`] line in its crate's function (or
 //! add a function for a new crate and chain it in [`all_kernels`]).
 
+mod avalanche;
 mod io;
 mod render;
 mod season;
 mod terrain;
 
+pub use avalanche::avalanche_kernels;
 pub use io::io_kernels;
 pub use render::render_kernels;
 pub use season::season_kernels;
@@ -21,5 +23,6 @@ pub fn all_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
     kernels.extend(io_kernels(&terrain)?);
     kernels.extend(render_kernels(&terrain)?);
     kernels.extend(season_kernels(&terrain)?);
+    kernels.extend(avalanche_kernels(size)?);
     Ok(kernels)
 }

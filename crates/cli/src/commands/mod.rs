@@ -1,5 +1,6 @@
 //! One module per verb; [`dispatch`] is the only entry point.
 
+mod avalanche;
 mod bench;
 mod convert;
 mod demo;
@@ -21,5 +22,6 @@ pub fn dispatch(cli: Cli) -> Result<(), Failure> {
         Command::Render(a) => render::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Bench(a) => bench::run(a, g),
+        Command::Avalanche(a) => avalanche::run(a, g),
     }
 }

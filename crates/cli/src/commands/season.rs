@@ -206,6 +206,11 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
             write_environment(&mut out, &winter.terrain)
         })
         .job_failed()?;
+    stages
+        .run("write_avalanches", || {
+            write_avalanche_maps(&mut out, &winter)
+        })
+        .job_failed()?;
     write_checkpoint(&job.out, &winter).job_failed()?;
     out.files.push(CHECKPOINT.into());
 
@@ -265,6 +270,22 @@ fn write_environment(out: &mut Written, terrain: &LayeredTerrain) -> anyhow::Res
     Ok(())
 }
 
+/// Writes `avalanche_scour.tif` and `avalanche_deposit.tif`: snow thickness the season's
+/// avalanches took away and laid down, m.
+fn write_avalanche_maps(out: &mut Written, winter: &Winter) -> anyhow::Result<()> {
+    let m = winter.avalanche_maps();
+    let t = &winter.terrain;
+    write_geotiff(
+        &out.path("avalanche_scour.tif"),
+        &t.to_grid(m.scour.clone())?,
+    )?;
+    write_geotiff(
+        &out.path("avalanche_deposit.tif"),
+        &t.to_grid(m.deposit.clone())?,
+    )?;
+    Ok(())
+}
+
 fn season_report(
     command: &'static str,
     extra_parameters: &serde_json::Value,
@@ -286,7 +307,7 @@ fn season_report(
         .insert("densification".into(), b.densification);
     budget.outputs.insert(
         "border_outflow".into(),
-        b.diffusion_outflow + b.wind_outflow,
+        b.diffusion_outflow + b.wind_outflow + b.avalanche_outflow,
     );
     let mut timings_json = timings_object(&timings);
     let phenomena: serde_json::Map<String, serde_json::Value> = winter
@@ -314,6 +335,7 @@ fn season_report(
         threads: rayon::current_num_threads(),
         timings: timings_json,
         event_counts: Some(counts),
+        avalanches: Some(winter.avalanches().to_vec()),
         mass_budget: budget.close(),
         outputs,
     }

@@ -1,0 +1,330 @@
+//! `snowscape avalanche --dem FILE --release FILE|X,Y`: one avalanche from release to rest on a
+//! terrain, with the maps practitioners compare (peak thickness and velocity, deposit,
+//! footprint), playback frames and a report.
+
+use crate::cli::{AvalancheArgs, GlobalArgs};
+use crate::commands::render::preview_options;
+use crate::failure::{ExitCodeExt, Failure};
+use crate::outputs::{Written, prepare_dir, write_png};
+use crate::report::InputSummary;
+use anyhow::{Context, anyhow, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::json;
+use snowscape_avalanche::release_area::{
+    RasterRelease, ReleaseMask, RuptureParams, release_at_point, release_from_raster,
+    release_from_shapefile,
+};
+use snowscape_avalanche::{
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, RunOptions,
+};
+use snowscape_io::ReadOptions;
+use snowscape_io::{write_bytes_atomic, write_geotiff};
+use snowscape_render::{ColourMode, PreviewOptions, encode_gif, render_preview};
+use snowscape_terrain::{Grid, LayeredTerrain, SnowLayer};
+use std::time::Instant;
+
+/// What `--release` names.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ReleaseSpec {
+    /// A map position (CRS units): the rupture point.
+    Point(f64, f64),
+    /// A shapefile polygon or a raster mask in the DEM's grid.
+    File(std::path::PathBuf),
+}
+
+/// Parses `X,Y` as a point, anything else as a file path.
+pub fn parse_release(text: &str) -> anyhow::Result<ReleaseSpec> {
+    let parts: Vec<&str> = text.split(',').collect();
+    if parts.len() == 2
+        && let (Ok(x), Ok(y)) = (
+            parts[0].trim().parse::<f64>(),
+            parts[1].trim().parse::<f64>(),
+        )
+    {
+        if !(x.is_finite() && y.is_finite()) {
+            bail!("--release {text:?}: the coordinates must be finite");
+        }
+        return Ok(ReleaseSpec::Point(x, y));
+    }
+    let path = std::path::PathBuf::from(text);
+    if !path.exists() {
+        bail!("--release {text:?} is neither X,Y map coordinates nor an existing file");
+    }
+    Ok(ReleaseSpec::File(path))
+}
+
+fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
+    let mut p = AvalancheParams::default();
+    if let Some(a) = args.friction_angle {
+        p.rest_angle_deg = a;
+    }
+    if let Some(k) = args.viscosity {
+        p.k_viscous = k;
+    }
+    if let Some(a) = args.dry_fraction {
+        p.alpha = a;
+    }
+    p.validate()
+        .map_err(|e| anyhow!(e).context("--friction-angle / --viscosity / --dry-fraction"))?;
+    Ok(p)
+}
+
+fn run_options(args: &AvalancheArgs) -> anyhow::Result<RunOptions> {
+    let o = RunOptions {
+        duration_s: args.duration,
+        ..RunOptions::default()
+    };
+    o.validate().context("--duration")?;
+    if !(args.frame_interval.is_finite() && args.frame_interval > 0.0) {
+        bail!(
+            "--frame-interval must be a positive number of seconds, got {}",
+            args.frame_interval
+        );
+    }
+    if let Some(t) = args.thickness
+        && !(t.is_finite() && t > 0.0)
+    {
+        bail!("--thickness must be a positive number of metres, got {t}");
+    }
+    Ok(o)
+}
+
+/// The released snow as a flowing state on the bare DEM, and the release cells.
+///
+/// A file gives the cells (and, from a shapefile's `thickness` field, their thickness;
+/// `--thickness` overrides it, 1 m by default). A point covers the DEM with `--thickness` of
+/// unstable snow and breaks it there (Cordonnier 2018 §6.1 rupture: the unstable snow within a
+/// reach proportional to its thickness, and everything down the fall lines below).
+fn released_state(
+    dem: &Grid,
+    spec: &ReleaseSpec,
+    thickness: Option<f64>,
+    dem_options: &ReadOptions,
+) -> anyhow::Result<(AvalancheState, ReleaseMask)> {
+    let g = dem.geometry();
+    match spec {
+        ReleaseSpec::Point(x, y) => {
+            let mut terrain = LayeredTerrain::from_bedrock(dem.clone());
+            let t = thickness.unwrap_or(1.0) as f32;
+            let mask = terrain.mask().clone();
+            for (i, v) in terrain
+                .layer_mut(SnowLayer::Unstable)
+                .iter_mut()
+                .enumerate()
+            {
+                if mask.is_valid(i) {
+                    *v = t;
+                }
+            }
+            let rupture = release_at_point(&terrain, *x, *y, &RuptureParams::default())?;
+            let mut state = AvalancheState::from_terrain(&terrain)?;
+            rupture.mask.release(&mut terrain, &mut state)?;
+            Ok((state, rupture.mask))
+        }
+        ReleaseSpec::File(path) => {
+            let is_shp = path
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("shp"));
+            let mut area = if is_shp {
+                release_from_shapefile(path, g, dem.mask())?
+            } else {
+                release_from_raster(path, g, dem.mask(), dem_options, RasterRelease::Mask)?
+            };
+            for w in &area.warnings {
+                tracing::warn!("{}: {w}", path.display());
+            }
+            if thickness.is_some() {
+                area.thickness = None;
+            }
+            let h = area.thickness_field(thickness.unwrap_or(1.0))?;
+            let bed: Vec<f64> = dem.data().iter().map(|&z| z as f64).collect();
+            let mut state = AvalancheState::new(g, dem.mask(), &bed)?;
+            state.set_thickness(&h)?;
+            Ok((state, area))
+        }
+    }
+}
+
+fn write_map(out: &mut Written, name: &str, dem: &Grid, values: Vec<f32>) -> anyhow::Result<()> {
+    let grid = Grid::new(dem.geometry().clone(), values, dem.mask().clone())?;
+    write_geotiff(&out.path(name), &grid)?;
+    Ok(())
+}
+
+/// Renders the flowing snow (orange-red, as unstable snow) over the shaded terrain.
+fn render_frame(
+    dem: &Grid,
+    run: &AvalancheRun,
+    view: &PreviewOptions,
+) -> anyhow::Result<image::RgbaImage> {
+    let mut t = LayeredTerrain::from_bedrock(dem.clone());
+    let h = run.state.thickness();
+    for (v, &hv) in t.layer_mut(SnowLayer::Unstable).iter_mut().zip(&h) {
+        *v = hv as f32;
+    }
+    Ok(render_preview(&t, view)?)
+}
+
+pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
+    let params = flow_params(args).bad_input()?;
+    let options = run_options(args).bad_input()?;
+    let spec = parse_release(&args.release).bad_input()?;
+    let view = preview_options(&args.view, ColourMode::Layers).bad_input()?;
+    let dem = args.dem_input.read(&args.dem).bad_input()?;
+    let source = args.dem.display().to_string();
+    let dem_options = args.dem_input.read_options().bad_input()?;
+    let (state, area) = released_state(&dem, &spec, args.thickness, &dem_options)
+        .with_context(|| format!("--release {}", args.release))
+        .bad_input()?;
+    if state.flowing_volume() <= 0.0 {
+        return Err(anyhow!(
+            "the release {} holds no snow (released volume 0 m³)",
+            args.release
+        ))
+        .bad_input();
+    }
+    prepare_dir(&args.out).bad_input()?;
+    std::fs::create_dir_all(args.out.join("frames"))
+        .with_context(|| format!("cannot create {}/frames", args.out.display()))
+        .job_failed()?;
+    let t0 = Instant::now();
+    let mut av = AvalancheRun::new(state);
+    let bar = ProgressBar::new((options.duration_s * 10.0).ceil() as u64);
+    if global.quiet {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    if let Ok(style) =
+        ProgressStyle::with_template("{elapsed_precise:.dim} avalanche [{bar:30.cyan/blue}] {msg}")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    let mut out = Written::new(&args.out);
+    let mut frames = Vec::new();
+    let mut next_frame = 0.0;
+    let mut render_s = 0.0;
+    let mut frame_error: Option<anyhow::Error> = None;
+    let summary = av
+        .run::<AvalancheError>(&params, &options, |r| {
+            bar.set_position((r.time() * 10.0).round() as u64);
+            bar.set_message(format!(
+                "t = {:.1} s, {:.0} m³ moving energy {:.3e}",
+                r.time(),
+                r.state.flowing_volume(),
+                r.kinetic_energy()
+            ));
+            if r.time() + 1e-9 >= next_frame || r.stop_reason().is_some() {
+                let tf = Instant::now();
+                let name = format!("frames/frame_{:04}.png", frames.len());
+                match render_frame(&dem, r, &view)
+                    .and_then(|img| write_png(&args.out.join(&name), &img).map(|_| img))
+                {
+                    Ok(img) => {
+                        out.files.push(name);
+                        frames.push(img);
+                    }
+                    Err(e) if frame_error.is_none() => frame_error = Some(e),
+                    Err(_) => {}
+                }
+                render_s += tf.elapsed().as_secs_f64();
+                next_frame += args.frame_interval;
+            }
+            Ok(())
+        })
+        .job_failed()?;
+    bar.finish_and_clear();
+    if let Some(e) = frame_error {
+        return Err(e).job_failed();
+    }
+    let wall = t0.elapsed().as_secs_f64();
+
+    let to_f32 = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+    (|| -> anyhow::Result<()> {
+        write_map(
+            &mut out,
+            "peak_thickness.tif",
+            &dem,
+            to_f32(av.peak_thickness()),
+        )?;
+        write_map(&mut out, "peak_velocity.tif", &dem, to_f32(av.peak_speed()))?;
+        write_map(
+            &mut out,
+            "thickness.tif",
+            &dem,
+            to_f32(&av.state.thickness()),
+        )?;
+        let fp = av.footprint(options.footprint_threshold_m);
+        write_map(
+            &mut out,
+            "footprint.tif",
+            &dem,
+            fp.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect(),
+        )?;
+        let gif = encode_gif(&frames, 100)?;
+        write_bytes_atomic(&out.path("avalanche.gif"), &gif)?;
+        Ok(())
+    })()
+    .job_failed()?;
+    out.files.push("report.json".into());
+    let report = json!({
+        "snowscape_version": env!("CARGO_PKG_VERSION"),
+        "command": "avalanche",
+        "input": InputSummary::of(&source, &dem),
+        "release": match &spec {
+            ReleaseSpec::Point(x, y) => json!({ "point": [x, y] }),
+            ReleaseSpec::File(p) => json!({ "file": p.display().to_string() }),
+        },
+        "release_cells": area.count(),
+        "release_area_m2": area.area_m2(),
+        "release_warnings": area.warnings,
+        "parameters": { "flow": params, "run": options, "thickness_m": args.thickness },
+        "seed": args.seed,
+        "threads": rayon::current_num_threads(),
+        "released_volume_m3": summary.released_volume_m3,
+        "deposited_volume_m3": summary.final_volume_m3,
+        "border_outflow_m3": summary.border_outflow_m3,
+        "volume_closure_rel": summary.volume_closure_rel,
+        "runout_length_m": summary.runout_length_m,
+        "alpha_angle_deg": summary.alpha_angle_deg,
+        "travel_angle_deg": summary.travel_angle_deg,
+        "summary": summary,
+        "simulated_s": summary.simulated_s,
+        "wall_s": wall,
+        "timings": { "flow_s": wall - render_s, "frames_s": render_s },
+        "outputs": out.files,
+    });
+    let text = serde_json::to_string_pretty(&report)
+        .map_err(|e| anyhow!("cannot encode report.json: {e}"))
+        .job_failed()?;
+    write_bytes_atomic(&args.out.join("report.json"), text.as_bytes()).job_failed()?;
+    if !global.quiet {
+        println!(
+            "avalanche: released {:.0} m³, ran {:.1} s ({:?}), runout {:.0} m, travel angle {:.1}°, footprint {:.0} m², {:.2} s wall -> {}",
+            summary.released_volume_m3,
+            summary.simulated_s,
+            summary.stop,
+            summary.runout_length_m,
+            summary.travel_angle_deg,
+            summary.footprint_area_m2,
+            wall,
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn release_points_and_files_are_told_apart() {
+        assert_eq!(
+            parse_release("631500.5, 212300").unwrap(),
+            ReleaseSpec::Point(631500.5, 212300.0)
+        );
+        assert!(parse_release("nan,3").is_err());
+        let e = parse_release("no/such/file.shp").unwrap_err().to_string();
+        assert!(e.contains("no/such/file.shp"), "{e}");
+    }
+}

@@ -1,0 +1,436 @@
+//! Avalanches in the season: when and where they start, and what they leave behind
+//! (Cordonnier et al. 2018, §3.2 and §6.1).
+//!
+//! **When.** Avalanche-Start is a Poisson event (§3.2: "once a week on average for avalanches
+//! on a one square kilometre terrain"). Its rate is the sum of a per-cell hazard
+//!
+//! ```text
+//! λ_i = f_av · (dx·dy / 1 km²) · min(U_i / U_ref, 1) · s(θ_i) · (1 + k_ski · K_i)     [1/day]
+//! ```
+//!
+//! with `U_i` the unstable thickness (only unstable snow ruptures, §6.1), `θ_i` the slope of the
+//! avalanche bed, `s` a slope window (0 below `slope_min_deg`, rising linearly to 1 at
+//! `slope_full_deg`, falling back to 0 at `slope_max_deg`, where snow no longer accumulates:
+//! slab avalanches start on 30–45° slopes), and `K_i` the recent-skier map of the ski-track
+//! phenomenon (§6.2: skiers on unstable snow raise the probability). A square kilometre of
+//! 35–45° slopes loaded with `U_ref` of unstable snow thus averages the paper's one avalanche a
+//! week. The hazard is recomputed after every state change of the snow (melt/stability steps,
+//! snowfall steps, avalanches).
+//!
+//! **Where.** The start cell is drawn with probability `λ_i / Σλ` from the keyed random stream
+//! of the event; the rupture (§6.1, [`snowscape_avalanche::release_area`]) sets the unstable
+//! snow within reach and down-slope of it in motion.
+//!
+//! **Temporal zoom.** The avalanche then runs to rest inside its start event (§3.1, Fig. 4: "an
+//! entire avalanche may take place between two lower frequency events"): the season clock
+//! advances by the avalanche's simulated time in 0.1 s steps, during which no other event
+//! happens.
+//!
+//! **Deposit.** Debris is dense, sintered snow: it becomes *stable* snow (part of the bed of
+//! later avalanches; the stability phenomenon compacts it further), volume for volume, so the
+//! season's snow budget only loses what flowed off the grid.
+
+use serde::{Deserialize, Serialize};
+use snowscape_avalanche::release_area::{ReleaseAreaError, RuptureParams};
+use snowscape_avalanche::{
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, RunOptions, deposit, release,
+};
+use snowscape_terrain::{LayeredTerrain, SnowLayer, surface};
+use thiserror::Error;
+
+/// An invalid `[parameters.avalanche]` value.
+#[derive(Debug, Error)]
+pub enum AvalancheParametersError {
+    /// A trigger parameter is out of range.
+    #[error("{name} = {value} must be {expected}")]
+    Invalid {
+        name: &'static str,
+        value: f64,
+        expected: &'static str,
+    },
+    /// A flow or run parameter is out of range.
+    #[error("flow: {0}")]
+    Flow(#[from] AvalancheError),
+    /// A rupture parameter is out of range.
+    #[error("rupture: {0}")]
+    Rupture(#[from] ReleaseAreaError),
+}
+
+/// When and how season avalanches happen.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AvalancheParameters {
+    /// Whether avalanches start by themselves. Default true.
+    pub natural: bool,
+    /// Avalanches per day on 1 km² of fully loaded, 35–45° slopes, 1/day. Default 1/7
+    /// (Cordonnier 2018 §3.2: "once a week on average ... on a one square kilometer terrain").
+    pub rate_per_km2_per_day: f64,
+    /// Unstable thickness at which a cell's hazard saturates, m. Default 0.5 (chosen here:
+    /// a typical slab is 0.3–1 m thick).
+    pub reference_unstable_m: f64,
+    /// Unstable thickness below which a cell cannot rupture, m. Default 0.05 (chosen here).
+    pub min_unstable_m: f64,
+    /// Slope below which nothing starts, degrees. Default 28 (chosen here: slab avalanches
+    /// start on slopes steeper than ~30°).
+    pub slope_min_deg: f64,
+    /// Slope at which the hazard is full, degrees. Default 35.
+    pub slope_full_deg: f64,
+    /// Slope above which the hazard falls off, degrees. Default 45 (chosen here: steeper
+    /// slopes hold less snow).
+    pub slope_fall_deg: f64,
+    /// Slope above which nothing starts (snow sloughs off continuously), degrees. Default 60.
+    pub slope_max_deg: f64,
+    /// Hazard gain per unit of the recent-skier map. Default 20 (chosen here: a skier on a
+    /// loaded slope makes a release there far more likely than a natural one, §6.2).
+    pub skier_gain: f64,
+    /// Set the flow's dry/wet mix α from the snow temperature of the release (§6.1: "α is
+    /// proportional to snow temperature"); false keeps `flow.alpha`. Default true.
+    pub alpha_from_temperature: bool,
+    /// Release temperature at and below which the snow is dry (α = 1), °C. Default −10
+    /// (Table 2's powdery-snow temperature T0powdery).
+    pub dry_temperature_c: f64,
+    /// Release temperature at and above which the snow is wet (α = `wet_alpha`), °C.
+    /// Default 0 (melting).
+    pub wet_temperature_c: f64,
+    /// α of wet snow. Default 0.6 (chosen here: with Table 2's kv the viscous term alone
+    /// cannot stop a flow, so wet snow keeps 60 % of the Coulomb yield, an effective rest
+    /// angle of atan(0.6·tan 30°) ≈ 19°: wet avalanches run out farther, on gentler slopes).
+    pub wet_alpha: f64,
+    /// The rupture at the start cell (reach per metre of unstable snow, ...).
+    pub rupture: RuptureParams,
+    /// The flow (rest angle, viscosity, dry/wet mix, ...).
+    pub flow: AvalancheParams,
+    /// Run length and stop criterion of each avalanche.
+    pub run: RunOptions,
+}
+
+impl Default for AvalancheParameters {
+    fn default() -> Self {
+        Self {
+            natural: true,
+            rate_per_km2_per_day: 1.0 / 7.0,
+            reference_unstable_m: 0.5,
+            min_unstable_m: 0.05,
+            slope_min_deg: 28.0,
+            slope_full_deg: 35.0,
+            slope_fall_deg: 45.0,
+            slope_max_deg: 60.0,
+            skier_gain: 20.0,
+            alpha_from_temperature: true,
+            dry_temperature_c: -10.0,
+            wet_temperature_c: 0.0,
+            wet_alpha: 0.6,
+            rupture: RuptureParams::default(),
+            flow: AvalancheParams::default(),
+            run: RunOptions {
+                duration_s: 300.0,
+                ..RunOptions::default()
+            },
+        }
+    }
+}
+
+impl AvalancheParameters {
+    /// Checks every field, naming the offending one.
+    pub fn validate(&self) -> Result<(), AvalancheParametersError> {
+        let check = |name: &'static str, v: f64, ok: bool, expected: &'static str| {
+            if v.is_finite() && ok {
+                Ok(())
+            } else {
+                Err(AvalancheParametersError::Invalid {
+                    name,
+                    value: v,
+                    expected,
+                })
+            }
+        };
+        let p = self;
+        check(
+            "rate_per_km2_per_day",
+            p.rate_per_km2_per_day,
+            p.rate_per_km2_per_day >= 0.0,
+            ">= 0",
+        )?;
+        check(
+            "reference_unstable_m",
+            p.reference_unstable_m,
+            p.reference_unstable_m > 0.0,
+            "> 0",
+        )?;
+        check(
+            "min_unstable_m",
+            p.min_unstable_m,
+            p.min_unstable_m >= 0.0,
+            ">= 0",
+        )?;
+        check(
+            "slope_min_deg",
+            p.slope_min_deg,
+            (0.0..90.0).contains(&p.slope_min_deg),
+            "in [0, 90)",
+        )?;
+        check(
+            "slope_full_deg",
+            p.slope_full_deg,
+            p.slope_full_deg > p.slope_min_deg && p.slope_full_deg <= p.slope_fall_deg,
+            "between slope_min_deg and slope_fall_deg",
+        )?;
+        check(
+            "slope_fall_deg",
+            p.slope_fall_deg,
+            p.slope_fall_deg < p.slope_max_deg,
+            "below slope_max_deg",
+        )?;
+        check(
+            "slope_max_deg",
+            p.slope_max_deg,
+            p.slope_max_deg <= 90.0,
+            "<= 90",
+        )?;
+        check("skier_gain", p.skier_gain, p.skier_gain >= 0.0, ">= 0")?;
+        check(
+            "wet_temperature_c",
+            p.wet_temperature_c,
+            p.dry_temperature_c.is_finite() && p.wet_temperature_c > p.dry_temperature_c,
+            "above dry_temperature_c",
+        )?;
+        check(
+            "wet_alpha",
+            p.wet_alpha,
+            (0.0..=1.0).contains(&p.wet_alpha),
+            "in [0, 1]",
+        )?;
+        p.rupture.validate()?;
+        p.flow.validate()?;
+        p.run.validate()?;
+        Ok(())
+    }
+
+    /// The slope window `s(θ)` of the hazard, for a slope in degrees: 0 below
+    /// `slope_min_deg`, linear up to 1 at `slope_full_deg`, 1 up to `slope_fall_deg`, linear
+    /// down to 0 at `slope_max_deg`.
+    pub fn slope_window(&self, slope_deg: f64) -> f64 {
+        if slope_deg <= self.slope_min_deg || slope_deg >= self.slope_max_deg {
+            0.0
+        } else if slope_deg < self.slope_full_deg {
+            (slope_deg - self.slope_min_deg) / (self.slope_full_deg - self.slope_min_deg)
+        } else if slope_deg <= self.slope_fall_deg {
+            1.0
+        } else {
+            (self.slope_max_deg - slope_deg) / (self.slope_max_deg - self.slope_fall_deg)
+        }
+    }
+
+    /// The dry/wet mix α for a release at mean snow temperature `t_c` (°C): 1 at and below
+    /// `dry_temperature_c`, `wet_alpha` at and above `wet_temperature_c`, linear between.
+    pub fn alpha_at(&self, t_c: f64) -> f64 {
+        let x = ((t_c - self.dry_temperature_c)
+            / (self.wet_temperature_c - self.dry_temperature_c))
+            .clamp(0.0, 1.0);
+        1.0 - x * (1.0 - self.wet_alpha)
+    }
+}
+
+/// Per-cell avalanche hazard `λ_i` (1/day, row-major) into `out`, and its sum. `slope_deg` is
+/// the bedrock slope per cell (cached by the season: snow changes the slope of release areas
+/// little); `skiers` the recent-skier map, when skiers run.
+pub fn hazard(
+    params: &AvalancheParameters,
+    terrain: &LayeredTerrain,
+    slope_deg: &[f32],
+    skiers: Option<&[f32]>,
+    out: &mut Vec<f64>,
+) -> f64 {
+    let g = terrain.geometry();
+    let n = g.len();
+    out.clear();
+    out.resize(n, 0.0);
+    let natural = if params.natural { 1.0 } else { 0.0 };
+    let unstable = terrain.layer(SnowLayer::Unstable);
+    let per_cell = params.rate_per_km2_per_day * g.cell_area() / 1e6;
+    let mut total = 0.0;
+    for i in 0..n {
+        let u = unstable[i] as f64;
+        if u < params.min_unstable_m || !terrain.mask().is_valid(i) {
+            continue;
+        }
+        let s = params.slope_window(slope_deg[i] as f64);
+        if s == 0.0 {
+            continue;
+        }
+        let k = skiers.map_or(0.0, |m| m[i] as f64);
+        let lambda = per_cell
+            * (u / params.reference_unstable_m).min(1.0)
+            * s
+            * (natural + params.skier_gain * k);
+        out[i] = lambda;
+        total += lambda;
+    }
+    total
+}
+
+/// Bedrock slope of every cell, degrees.
+pub fn bedrock_slopes_deg(terrain: &LayeredTerrain) -> Vec<f32> {
+    surface::slopes(&terrain.bedrock, terrain.geometry(), terrain.mask())
+        .into_iter()
+        .map(f32::to_degrees)
+        .collect()
+}
+
+/// The cell whose cumulative hazard first exceeds `u · Σλ` (`u` uniform in [0, 1)).
+pub fn pick_cell(hazard: &[f64], total: f64, u: f64) -> Option<usize> {
+    if total <= 0.0 {
+        return None;
+    }
+    let target = u * total;
+    let mut acc = 0.0;
+    let mut last = None;
+    for (i, &h) in hazard.iter().enumerate() {
+        if h > 0.0 {
+            acc += h;
+            last = Some(i);
+            if acc > target {
+                return Some(i);
+            }
+        }
+    }
+    last
+}
+
+/// How an avalanche of the season was triggered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Trigger {
+    /// Drawn from the hazard map.
+    Natural,
+    /// Started by the user (scenario or library call).
+    User,
+    /// Started by a skier crossing unstable snow.
+    Skier,
+}
+
+/// One avalanche of the season, as `report.json` lists it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AvalancheRecord {
+    /// Season day of the release.
+    pub day: f64,
+    /// How it started.
+    pub trigger: Trigger,
+    /// Rupture cell (column, row) and its map coordinates.
+    pub cell: [usize; 2],
+    pub map_xy: [f64; 2],
+    /// Released volume, m³.
+    pub released_m3: f64,
+    /// Deposited on the grid, m³.
+    pub deposited_m3: f64,
+    /// Flowed off the grid, m³.
+    pub outflow_m3: f64,
+    /// Horizontal distance from the release top to the farthest footprint cell, m.
+    pub runout_length_m: f64,
+    /// Mass-centre travel angle, degrees.
+    pub travel_angle_deg: f64,
+    /// Footprint area, m².
+    pub footprint_area_m2: f64,
+    /// Largest speed, m/s.
+    pub max_speed_m_s: f64,
+    /// Simulated duration, s.
+    pub simulated_s: f64,
+    /// Flow steps (0.1 s records) taken.
+    pub steps: u64,
+    /// Mean snow temperature of the released cells, °C (when α follows it).
+    pub release_temperature_c: Option<f64>,
+    /// The dry/wet mix α of the flow.
+    pub alpha: f64,
+}
+
+/// What one avalanche did to the terrain.
+#[derive(Debug, Clone)]
+pub struct AvalancheOutcome {
+    pub record: AvalancheRecord,
+    /// Peak flow thickness per cell (m), for footprints and previews.
+    pub peak_thickness: Vec<f64>,
+}
+
+/// Snow thickness the avalanches of a season took away (scour) and laid down (deposit), per
+/// cell, m.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct AvalancheMaps {
+    pub scour: Vec<f32>,
+    pub deposit: Vec<f32>,
+}
+
+/// Releases `cells`, runs the avalanche to rest and deposits it as stable snow. With
+/// `alpha_from_temperature`, α comes from the mean `temperature` (°C per cell) of the
+/// released cells.
+#[allow(clippy::too_many_arguments)]
+pub fn run_avalanche(
+    params: &AvalancheParameters,
+    terrain: &mut LayeredTerrain,
+    temperature: &[f32],
+    cells: &[bool],
+    day: f64,
+    trigger: Trigger,
+    cell: usize,
+    maps: &mut AvalancheMaps,
+) -> Result<AvalancheOutcome, AvalancheError> {
+    let n = terrain.geometry().len();
+    for m in [&mut maps.scour, &mut maps.deposit] {
+        if m.len() != n {
+            *m = vec![0.0; n];
+        }
+    }
+    let mut state = AvalancheState::from_terrain(terrain)?;
+    release(terrain, &mut state, cells, None)?;
+    for (i, (s, h)) in maps.scour.iter_mut().zip(state.thickness()).enumerate() {
+        if cells[i] {
+            *s += h as f32;
+        }
+    }
+    let mut flow = params.flow.clone();
+    let mut release_t = None;
+    if params.alpha_from_temperature {
+        let (sum, n) = cells
+            .iter()
+            .zip(temperature)
+            .filter(|(on, _)| **on)
+            .fold((0.0, 0usize), |(s, n), (_, &t)| (s + t as f64, n + 1));
+        if n > 0 {
+            let t = sum / n as f64;
+            flow.alpha = params.alpha_at(t);
+            release_t = Some(t);
+        }
+    }
+    let mut run = AvalancheRun::new(state);
+    let mut steps = 0u64;
+    let summary = run.run::<AvalancheError>(&flow, &params.run, |_| {
+        steps += 1;
+        Ok(())
+    })?;
+    for (d, h) in maps.deposit.iter_mut().zip(run.state.thickness()) {
+        *d += h as f32;
+    }
+    let deposited = deposit(terrain, &mut run.state, SnowLayer::Stable, false)?;
+    let g = terrain.geometry();
+    let (c, r) = g.col_row(cell);
+    let (x, y) = g.cell_centre(c, r);
+    Ok(AvalancheOutcome {
+        record: AvalancheRecord {
+            day,
+            trigger,
+            cell: [c, r],
+            map_xy: [x, y],
+            released_m3: summary.released_volume_m3,
+            deposited_m3: deposited,
+            outflow_m3: summary.border_outflow_m3,
+            runout_length_m: summary.runout_length_m,
+            travel_angle_deg: summary.travel_angle_deg,
+            footprint_area_m2: summary.footprint_area_m2,
+            max_speed_m_s: summary.max_speed_m_s,
+            simulated_s: summary.simulated_s,
+            steps,
+            release_temperature_c: release_t,
+            alpha: flow.alpha,
+        },
+        peak_thickness: run.peak_thickness().to_vec(),
+    })
+}

@@ -1,0 +1,201 @@
+//! Avalanches inside the season: the hazard map, user and natural triggers, deposits, the
+//! budget, and (on the real avaMal terrain) steep slopes cleared with debris at their foot.
+
+use snowscape_season::avalanches::{AvalancheParameters, Trigger, hazard, pick_cell};
+use snowscape_season::scenario::{Scenario, UserAvalanche};
+use snowscape_season::winter::Winter;
+use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, SnowLayer};
+
+/// 60 x 120 cells of 5 m: a 40° slope (rows 0..60) onto flat ground (rows 60..120).
+fn slope_onto_flat() -> LayeredTerrain {
+    let g = GridGeometry::square(60, 120, 5.0).unwrap();
+    let tan = 40f32.to_radians().tan();
+    LayeredTerrain::from_bedrock(Grid::from_fn(g, |_, r| {
+        1000.0 + tan * 5.0 * (60.0 - r as f32).max(0.0)
+    }))
+}
+
+fn quiet_scenario(days: f64) -> Scenario {
+    let mut s = Scenario {
+        days,
+        ..Scenario::default()
+    };
+    s.parameters.environment.sky.directions = 8;
+    s.parameters.environment.sun.day_step = 30;
+    s
+}
+
+#[test]
+fn slope_window_and_hazard_follow_the_design() {
+    let p = AvalancheParameters::default();
+    assert_eq!(p.slope_window(20.0), 0.0);
+    assert!((p.slope_window(31.5) - 0.5).abs() < 1e-12);
+    assert_eq!(p.slope_window(40.0), 1.0);
+    assert!((p.slope_window(52.5) - 0.5).abs() < 1e-12);
+    assert_eq!(p.slope_window(70.0), 0.0);
+    assert_eq!(p.alpha_at(-15.0), 1.0);
+    assert!((p.alpha_at(-5.0) - 0.8).abs() < 1e-12);
+    assert_eq!(p.alpha_at(3.0), p.wet_alpha);
+
+    let mut t = slope_onto_flat();
+    let slopes = snowscape_season::avalanches::bedrock_slopes_deg(&t);
+    let mut h = Vec::new();
+    assert_eq!(
+        hazard(&p, &t, &slopes, None, &mut h),
+        0.0,
+        "no snow, no hazard"
+    );
+    t.layer_mut(SnowLayer::Unstable).fill(0.5);
+    let total = hazard(&p, &t, &slopes, None, &mut h);
+    // Interior slope cells (40°, U = U_ref): f·dx·dy/1 km² each; flat cells: 0.
+    let per_cell = p.rate_per_km2_per_day * 25.0 / 1e6;
+    assert!(
+        (h[30 * 60 + 30] - per_cell).abs() < 1e-15,
+        "{}",
+        h[30 * 60 + 30]
+    );
+    assert_eq!(h[100 * 60 + 30], 0.0);
+    assert!(total > 50.0 * 55.0 * per_cell && total < 60.0 * 62.0 * per_cell);
+    // Skiers raise it.
+    let skiers = vec![1.0f32; 60 * 120];
+    let with = hazard(&p, &t, &slopes, Some(&skiers), &mut h);
+    assert!((with / total - (1.0 + p.skier_gain)).abs() < 1e-9);
+    // Sampling follows the hazard: never a zero-hazard cell.
+    hazard(&p, &t, &slopes, None, &mut h);
+    for k in 0..50 {
+        let i = pick_cell(&h, total, k as f64 / 50.0).unwrap();
+        assert!(h[i] > 0.0);
+    }
+    assert_eq!(pick_cell(&h, 0.0, 0.5), None);
+}
+
+#[test]
+fn a_user_avalanche_clears_the_slope_and_piles_at_its_foot() {
+    let mut t = slope_onto_flat();
+    t.layer_mut(SnowLayer::Unstable).fill(0.8);
+    let before_slope: f32 = (5..55).map(|r| t.depth_at(r * 60 + 30)).sum();
+    let mut s = quiet_scenario(1.0);
+    s.parameters.avalanche.natural = false;
+    let g = t.geometry().clone();
+    let (x, y) = g.cell_centre(30, 8);
+    s.avalanches.push(UserAvalanche { day: 0.0, x, y });
+    let mut w = Winter::new(s, t).unwrap();
+    let initial = w.terrain.snow_volume();
+    w.run_until(0.01).unwrap();
+    let recs = w.avalanches();
+    assert_eq!(recs.len(), 1, "{recs:?}");
+    let r = &recs[0];
+    eprintln!("{r:#?}");
+    assert_eq!(r.trigger, Trigger::User);
+    // The rupture zone (reach 50 m per m of unstable snow: 40 m) swept down the whole slope:
+    // a band at least 16 cells wide and 45 rows long.
+    assert!(
+        r.released_m3 > 0.8 * 25.0 * 16.0 * 45.0,
+        "{}",
+        r.released_m3
+    );
+    assert!(
+        ((r.deposited_m3 + r.outflow_m3) - r.released_m3).abs() < 1e-4 * r.released_m3,
+        "released {} deposited {} outflow {}",
+        r.released_m3,
+        r.deposited_m3,
+        r.outflow_m3
+    );
+    assert!(r.runout_length_m > 250.0, "runout {}", r.runout_length_m);
+    // The slope below the rupture lost snow; the flat at its foot gained stable debris.
+    let after_slope: f32 = (5..55).map(|r| w.terrain.depth_at(r * 60 + 30)).sum();
+    assert!(
+        after_slope < 0.5 * before_slope,
+        "{after_slope} vs {before_slope}"
+    );
+    let foot_stable: f32 = (60..90)
+        .map(|r| w.terrain.layer(SnowLayer::Stable)[r * 60 + 30])
+        .sum();
+    assert!(foot_stable > 5.0, "debris at the foot {foot_stable}");
+    // Budget: the store changed only by what left the grid (and the day's melt/snowfall).
+    let b = w.budget();
+    let store = w.terrain.snow_volume();
+    assert!(
+        (store - b.expected_store()).abs() < 1e-5 * initial,
+        "store {store} expected {} ({b:?})",
+        b.expected_store()
+    );
+    w.terrain.check_invariants().unwrap();
+}
+
+#[test]
+fn user_avalanche_outside_the_grid_is_named() {
+    let w = Winter::new(quiet_scenario(1.0), slope_onto_flat());
+    let mut w = w.unwrap();
+    let e = w.trigger_avalanche(-1e6, 5.0).unwrap_err().to_string();
+    assert!(e.contains("-1000000"), "{e}");
+}
+
+#[test]
+fn bad_avalanche_parameters_are_named() {
+    let mut s = quiet_scenario(10.0);
+    s.parameters.avalanche.slope_full_deg = 10.0;
+    let e = s.validate("test.toml").unwrap_err().to_string();
+    assert!(e.contains("slope_full_deg"), "{e}");
+    let mut s = quiet_scenario(10.0);
+    s.avalanches.push(UserAvalanche {
+        day: f64::NAN,
+        x: 0.0,
+        y: 0.0,
+    });
+    let e = s.validate("test.toml").unwrap_err().to_string();
+    assert!(e.contains("avalanche[0]"), "{e}");
+}
+
+/// Real terrain (AvaFrame's avaMal, 787x567 cells of 5 m, median slope 34°): a 60-day winter
+/// with natural avalanches. Avalanches must happen, take their snow from steep slopes and lay
+/// it down lower, on gentler ground (the volume-weighted slope and altitude of the deposit
+/// below those of the scour), and the season's budget must close with their outflow.
+#[test]
+fn avamal_avalanches_clear_steep_slopes_and_pile_at_their_foot() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/dem/avaframe_avaMal/avaMal.asc"
+    );
+    assert!(
+        std::path::Path::new(path).exists(),
+        "real-DEM test input {path} is missing: this test needs /work/shared/data (AvaFrame avaMal)"
+    );
+    let dem = snowscape_io::read_dem(std::path::Path::new(path), &Default::default()).unwrap();
+    let mut w = Winter::new(quiet_scenario(60.0), LayeredTerrain::from_bedrock(dem)).unwrap();
+    w.run_until(60.0).unwrap();
+    let recs = w.avalanches();
+    assert!(recs.len() >= 3, "only {} avalanches", recs.len());
+    let b = w.budget();
+    let store = w.terrain.snow_volume();
+    assert!(
+        (store - b.expected_store()).abs() < 1e-5 * b.snowfall,
+        "closure: store {store}, expected {}",
+        b.expected_store()
+    );
+    w.terrain.check_invariants().unwrap();
+    let slopes = snowscape_season::avalanches::bedrock_slopes_deg(&w.terrain);
+    let maps = w.avalanche_maps();
+    let weighted = |m: &[f32], f: &dyn Fn(usize) -> f64| {
+        let (num, den) = m.iter().enumerate().fold((0.0, 0.0), |(n, d), (i, &v)| {
+            (n + v as f64 * f(i), d + v as f64)
+        });
+        (num / den, den * 25.0)
+    };
+    let (scour_slope, scoured) = weighted(&maps.scour, &|i| slopes[i] as f64);
+    let (deposit_slope, deposited) = weighted(&maps.deposit, &|i| slopes[i] as f64);
+    let (scour_z, _) = weighted(&maps.scour, &|i| w.terrain.bedrock[i] as f64);
+    let (deposit_z, _) = weighted(&maps.deposit, &|i| w.terrain.bedrock[i] as f64);
+    let released: f64 = recs.iter().map(|r| r.released_m3).sum();
+    eprintln!(
+        "{} avalanches, {released:.0} m³ released; scour {scoured:.0} m³ at {scour_slope:.1}°, {scour_z:.0} m; deposit {deposited:.0} m³ at {deposit_slope:.1}°, {deposit_z:.0} m",
+        recs.len()
+    );
+    assert!((scoured - released).abs() < 1e-3 * released);
+    assert!(scour_slope > 33.0, "scour slope {scour_slope}");
+    assert!(
+        deposit_slope < scour_slope - 5.0,
+        "deposit slope {deposit_slope} vs scour {scour_slope}"
+    );
+    assert!(deposit_z < scour_z - 50.0, "deposit {deposit_z} m vs scour {scour_z} m");
+}
