@@ -1405,7 +1405,7 @@ mod tests {
             vec![(1.0, 1.0), (9.0, 1.0), (9.0, 9.0), (1.0, 9.0)],
             vec![(4.0, 4.0), (4.0, 6.0), (6.0, 6.0), (6.0, 4.0)],
         ];
-        let mut cells = vec![false; 100];
+        let mut cells = [false; 100];
         let n = rasterise(&rings, &g, |i| cells[i] = true);
         assert_eq!(n, 64 - 4);
         assert_eq!(cells.iter().filter(|&&c| c).count(), 60);

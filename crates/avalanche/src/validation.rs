@@ -203,7 +203,8 @@ pub struct PlaneRunout {
 }
 
 /// A 20 m x 20 m x 2 m block released 20 m below the top of a `slope_deg` plane 300 m long
-/// (horizontally), running out onto 400 m of flat ground; cells of `cell_m`, open borders.
+/// (horizontally), running out onto 400 m of flat ground, 240 m wide; cells of `cell_m`, open
+/// borders.
 pub fn plane_runout(
     slope_deg: f64,
     params: &AvalancheParams,
@@ -226,7 +227,7 @@ pub fn plane_runout(
     }
     let tan = slope_deg.to_radians().tan();
     let (len_slope, len_flat, block, depth) = (300.0, 400.0, 20.0, 2.0);
-    let w = (2.0 * block / cell_m) as usize + 40;
+    let w = (240.0 / cell_m) as usize;
     let h = ((len_slope + len_flat) / cell_m) as usize;
     let mut s = flat_state(w, h, cell_m)?;
     let bed: Vec<f64> = (0..w * h)

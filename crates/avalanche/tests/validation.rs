@@ -1,6 +1,7 @@
 //! The issue's analytic validations of the avalanche flow core.
 
 use snowscape_avalanche::flow::G;
+use snowscape_avalanche::validation::{dam_break, flank_angle, poured_pile};
 use snowscape_avalanche::{AvalancheParams, AvalancheScratch, AvalancheState, Border, step};
 use snowscape_terrain::{GridGeometry, NodataMask};
 
@@ -18,77 +19,16 @@ fn flat_state(w: usize, h: usize, dx: f64) -> AvalancheState {
     AvalancheState::new(&g, &NodataMask::all_valid(), &vec![0.0; w * h]).unwrap()
 }
 
-struct DamBreak {
-    l1_rel: f64,
-    l1_rarefaction_rel: f64,
-    front: f64,
-    front_exact_1cm: f64,
-    front_exact: f64,
-}
-
-/// Dam break on a flat frictionless bed: 400 x 101 cells of 1 m, h0 = 1 m left of x0 = 200 m,
-/// middle row compared with Ritter's solution at t = 15 s.
-fn dam_break(params: &AvalancheParams) -> DamBreak {
-    let (w, hgt) = (400usize, 101usize);
-    let mut s = flat_state(w, hgt, 1.0);
-    let h0 = 1.0;
-    let x0 = 200.0;
-    let hinit: Vec<f64> = (0..w * hgt)
-        .map(|i| if ((i % w) as f64) < x0 { h0 } else { 0.0 })
-        .collect();
-    s.set_thickness(&hinit).unwrap();
-    let mut scratch = AvalancheScratch::default();
-    let t = 15.0;
-    for _ in 0..15 {
-        step(params, &mut s, &mut scratch, 1.0).unwrap();
-    }
-    let c0 = (G * h0).sqrt();
-    let ritter = |x: f64| {
-        let xi = (x - x0) / t;
-        if xi < -c0 {
-            h0
-        } else if xi > 2.0 * c0 {
-            0.0
-        } else {
-            (2.0 * c0 - xi).powi(2) / (9.0 * G)
-        }
-    };
-    let row = hgt / 2;
-    let (mut err, mut norm, mut err_r, mut norm_r) = (0.0, 0.0, 0.0, 0.0);
-    let mut front = x0;
-    for c in 0..w {
-        let x = c as f64 + 0.5;
-        let hn = s.thickness_at(c, row);
-        let he = ritter(x);
-        err += (hn - he).abs();
-        norm += he;
-        if x <= x0 {
-            err_r += (hn - he).abs();
-            norm_r += he;
-        }
-        if hn > 0.01 {
-            front = x;
-        }
-    }
-    DamBreak {
-        l1_rel: err / norm,
-        l1_rarefaction_rel: err_r / norm_r,
-        front: front - x0,
-        front_exact_1cm: (2.0 * c0 - 3.0 * (0.01 * G).sqrt()) * t,
-        front_exact: 2.0 * c0 * t,
-    }
-}
-
 /// Issue 4, item 6: dry dam break vs Ritter. Tolerances: L1 profile error (relative to the
 /// exact volume, whole strip) < 2 %, rarefaction part (x ≤ x0) < 1 %, front (last cell with
 /// h > 1 cm) within 15 % of Ritter's h = 1 cm position (first-order schemes smear the front).
 /// Measured: 0.72 %, 0.28 %, 71.5 m vs 79.9 m (−10.5 %).
 #[test]
 fn dam_break_matches_ritter() {
-    let r = dam_break(&frictionless());
+    let r = dam_break(&frictionless()).unwrap();
     eprintln!(
         "Ritter: L1 profile {:.4}, rarefaction {:.4}, front {:.2} m vs {:.2} m (h>1cm) / {:.2} m (tip)",
-        r.l1_rel, r.l1_rarefaction_rel, r.front, r.front_exact_1cm, r.front_exact
+        r.l1_rel, r.l1_rarefaction_rel, r.front_m, r.front_exact_1cm_m, r.front_exact_m
     );
     assert!(r.l1_rel < 0.02, "L1 profile error {}", r.l1_rel);
     assert!(
@@ -96,7 +36,7 @@ fn dam_break_matches_ritter() {
         "rarefaction error {}",
         r.l1_rarefaction_rel
     );
-    let front_err = (r.front - r.front_exact_1cm).abs() / r.front_exact_1cm;
+    let front_err = (r.front_m - r.front_exact_1cm_m).abs() / r.front_exact_1cm_m;
     assert!(front_err < 0.15, "front error {front_err}");
 }
 
@@ -109,8 +49,8 @@ fn dam_break_without_advection_lags() {
         momentum_advection: false,
         ..frictionless()
     };
-    let r = dam_break(&p);
-    assert!(r.front < 0.6 * r.front_exact_1cm, "front {}", r.front);
+    let r = dam_break(&p).unwrap();
+    assert!(r.front_m < 0.6 * r.front_exact_1cm_m, "front {}", r.front_m);
 }
 
 /// Issue 4, item 6: a granular pile with Coulomb friction (θc = 30°) has flanks at θc ± 2°
@@ -119,56 +59,29 @@ fn dam_break_without_advection_lags() {
 /// quasi-statically. Measured: 28.8°, height 3.94 m (the 30° cone of 150 m³ is 3.63 m).
 #[test]
 fn poured_pile_flanks_at_rest_angle() {
-    let n = 60usize;
-    let mut s = flat_state(n, n, 1.0);
-    let params = AvalancheParams {
-        border: Border::Closed,
-        ..AvalancheParams::default()
-    };
-    let mut scratch = AvalancheScratch::default();
-    for _ in 0..3000 {
-        s.add_thickness(30, 30, 0.05).unwrap();
-        step(&params, &mut s, &mut scratch, 0.05).unwrap();
-    }
-    for _ in 0..100 {
-        let rep = step(&params, &mut s, &mut scratch, 1.0).unwrap();
-        if rep.max_speed == 0.0 {
-            break;
-        }
-    }
+    let p = poured_pile(&AvalancheParams::default()).unwrap();
     assert!(
-        s.max_speed() < 1e-2,
+        p.final_speed < 1e-2,
         "poured pile still moving: {}",
-        s.max_speed()
+        p.final_speed
     );
-    let (mean, count, hmax) = flank_angle(&s.thickness(), n);
-    eprintln!("pour: max {hmax:.2} m, mean flank {mean:.2} deg over {count} cells");
-    assert!(count > 50);
-    assert!((mean - 30.0).abs() <= 2.0, "mean flank angle {mean}");
-    // A cone at the rest angle holding the poured volume V has height (V/π)^(1/3).
-    let v = 3000.0 * 0.05;
-    let cone = (v / std::f64::consts::PI).cbrt();
+    eprintln!(
+        "pour: max {:.2} m, mean flank {:.2} deg over {} cells",
+        p.height_m, p.mean_flank_deg, p.flank_cells
+    );
+    assert!(p.flank_cells > 50);
     assert!(
-        (hmax - cone).abs() < 0.1 * cone,
-        "height {hmax} vs cone {cone}"
+        (p.mean_flank_deg - 30.0).abs() <= 2.0,
+        "mean flank angle {}",
+        p.mean_flank_deg
     );
-}
-
-fn flank_angle(hv: &[f64], n: usize) -> (f64, usize, f64) {
-    let hmax = hv.iter().cloned().fold(0.0, f64::max);
-    let (mut sum, mut count) = (0.0, 0usize);
-    for r in 1..n - 1 {
-        for c in 1..n - 1 {
-            let v = hv[r * n + c];
-            if v > 0.1 * hmax && v < 0.9 * hmax {
-                let gx = (hv[r * n + c + 1] - hv[r * n + c - 1]) / 2.0;
-                let gy = (hv[(r + 1) * n + c] - hv[(r - 1) * n + c]) / 2.0;
-                sum += gx.hypot(gy).atan().to_degrees();
-                count += 1;
-            }
-        }
-    }
-    (sum / count as f64, count, hmax)
+    // A cone at the rest angle holding the poured volume V has height (V/π)^(1/3).
+    assert!(
+        (p.height_m - p.cone_height_m).abs() < 0.1 * p.cone_height_m,
+        "height {} vs cone {}",
+        p.height_m,
+        p.cone_height_m
+    );
 }
 
 /// A cylinder of snow released at once on flat ground comes to rest with flanks *below* the
