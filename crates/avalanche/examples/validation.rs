@@ -8,7 +8,9 @@
 //! run out from a plane) need nothing; the real paths (avaWog, avaKot against AvaFrame's
 //! reference) read the shared data folder (`../shared/data` beside the project root, or the
 //! folder named by `SNOWSCAPE_DATA`) and are reported as missing, with a non-zero exit, when it
-//! is absent. The tests in `tests/` assert the tolerances; this prints the numbers.
+//! is absent. The tests in `tests/` assert the tolerances; this prints the numbers. An argument
+//! runs only the groups whose name contains it: `ritter`, `pile`, `plane`, `avawog`, `avakot`
+//! (`-- avawog` times the avaWog release alone).
 
 use snowscape_avalanche::validation::{
     ThicknessConvention, dam_break, distance_to_polyline, footprint_overlap, plane_runout,
@@ -43,6 +45,10 @@ fn data_dir() -> PathBuf {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t_all = Instant::now();
     let mut t = Table { rows: Vec::new() };
+    // Optional filter: run only the groups whose name contains it (ritter, pile, plane,
+    // avawog, avakot).
+    let only = std::env::args().nth(1).map(|a| a.to_ascii_lowercase());
+    let want = |group: &str| only.as_deref().is_none_or(|o| group.contains(o));
     println!(
         "{:<28} {:<34} {:>18}   reference / expected",
         "case", "quantity", "measured"
@@ -56,57 +62,61 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         border: Border::Closed,
         ..AvalancheParams::default()
     };
-    let d = dam_break(&frictionless)?;
-    let case = "Ritter dam break (t=15 s)";
-    t.row(
-        case,
-        "L1 profile error (relative)",
-        format!("{:.2} %", 100.0 * d.l1_rel),
-        "test: < 2 %".into(),
-    );
-    t.row(
-        case,
-        "L1 error, rarefaction x <= x0",
-        format!("{:.2} %", 100.0 * d.l1_rarefaction_rel),
-        "test: < 1 %".into(),
-    );
-    t.row(
-        case,
-        "front (h > 1 cm) past the dam",
-        format!("{:.1} m", d.front_m),
-        format!(
-            "exact {:.1} m ({:+.1} %; test: 15 %), tip {:.1} m",
-            d.front_exact_1cm_m,
-            100.0 * (d.front_m - d.front_exact_1cm_m) / d.front_exact_1cm_m,
-            d.front_exact_m
-        ),
-    );
-    let no_adv = dam_break(&AvalancheParams {
-        momentum_advection: false,
-        ..frictionless.clone()
-    })?;
-    t.row(
-        case,
-        "front without momentum advection",
-        format!("{:.1} m", no_adv.front_m),
-        format!("lags: exact {:.1} m", no_adv.front_exact_1cm_m),
-    );
+    if want("ritter") {
+        let d = dam_break(&frictionless)?;
+        let case = "Ritter dam break (t=15 s)";
+        t.row(
+            case,
+            "L1 profile error (relative)",
+            format!("{:.2} %", 100.0 * d.l1_rel),
+            "test: < 2 %".into(),
+        );
+        t.row(
+            case,
+            "L1 error, rarefaction x <= x0",
+            format!("{:.2} %", 100.0 * d.l1_rarefaction_rel),
+            "test: < 1 %".into(),
+        );
+        t.row(
+            case,
+            "front (h > 1 cm) past the dam",
+            format!("{:.1} m", d.front_m),
+            format!(
+                "exact {:.1} m ({:+.1} %; test: 15 %), tip {:.1} m",
+                d.front_exact_1cm_m,
+                100.0 * (d.front_m - d.front_exact_1cm_m) / d.front_exact_1cm_m,
+                d.front_exact_m
+            ),
+        );
+        let no_adv = dam_break(&AvalancheParams {
+            momentum_advection: false,
+            ..frictionless.clone()
+        })?;
+        t.row(
+            case,
+            "front without momentum advection",
+            format!("{:.1} m", no_adv.front_m),
+            format!("lags: exact {:.1} m", no_adv.front_exact_1cm_m),
+        );
+    }
 
     // Poured pile.
-    let p = poured_pile(&AvalancheParams::default())?;
-    let case = "Poured pile (150 m³, θc=30°)";
-    t.row(
-        case,
-        "mean flank slope",
-        format!("{:.2}°", p.mean_flank_deg),
-        "θc = 30° (test: ±2°)".into(),
-    );
-    t.row(
-        case,
-        "height",
-        format!("{:.2} m", p.height_m),
-        format!("30° cone {:.2} m (test: ±10 %)", p.cone_height_m),
-    );
+    if want("pile") {
+        let p = poured_pile(&AvalancheParams::default())?;
+        let case = "Poured pile (150 m³, θc=30°)";
+        t.row(
+            case,
+            "mean flank slope",
+            format!("{:.2}°", p.mean_flank_deg),
+            "θc = 30° (test: ±2°)".into(),
+        );
+        t.row(
+            case,
+            "height",
+            format!("{:.2} m", p.height_m),
+            format!("30° cone {:.2} m (test: ±10 %)", p.cone_height_m),
+        );
+    }
 
     // Plane runout.
     for (theta, cell, stop) in [(30.0, 2.0, 0.0), (30.0, 1.0, 0.0), (25.0, 2.0, 0.01)] {
@@ -119,6 +129,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             duration_s: 300.0,
             ..RunOptions::default()
         };
+        if !want("plane") {
+            continue;
+        }
         let r = plane_runout(35.0, &params, cell, &options)?;
         let s = &r.summary;
         let case = format!("35° plane→flat θc={theta}° {cell} m");
@@ -149,7 +162,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         need("dem/avaframe_avaWog/REL/relWog.shp", &mut missing),
         need("dem/avaframe_avaWog/LINES/path_aimec.shp", &mut missing),
     ];
-    if wog.iter().all(|p| p.is_file()) {
+    if want("avawog") && wog.iter().all(|p| p.is_file()) {
         let r = run_release(
             &wog[0],
             &wog[1],
@@ -228,7 +241,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &mut missing,
         ),
     ];
-    if kot.iter().all(|p| p.is_file()) {
+    if want("avakot") && kot.iter().all(|p| p.is_file()) {
         let r = run_release(
             &kot[0],
             &kot[1],

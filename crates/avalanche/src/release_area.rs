@@ -595,7 +595,6 @@ fn code_of_name(n: &str) -> Option<u32> {
         ("gcsetrs1989", 4258),
         ("ch1903lv03", 21781),
         ("ch1903lv95", 2056),
-        ("ch1903lv95", 2056),
         ("etrs89laea", 3035),
         ("etrs89extendedlaeaeurope", 3035),
         ("etrs1989laea", 3035),
