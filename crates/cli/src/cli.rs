@@ -11,6 +11,7 @@ Examples:
   snowscape run --dem ../shared/data/dem/avaframe_avaMal/avaMal.asc --out out/mal
   snowscape run --dem dem.tif --scenario winter.toml --days 60 --seed 3
   snowscape run --dem dem.tif --resume out/run     # continue an interrupted run
+  snowscape run --dem dem.tif --days 30 --skiers 500  # ski tracks (PNG + GeoJSON) and compaction
   snowscape info ../shared/data/dem/avaframe_avaMal/avaMal.asc
   snowscape render dem.tif --out relief.png --sun-azimuth 300
   snowscape convert dem.asc dem.tif               # any readable format to GeoTIFF/EXR/PNG16/ASC/NPY
@@ -113,9 +114,26 @@ pub struct RunArgs {
     #[arg(long, value_name = "DAY")]
     pub stop_at: Option<f64>,
     #[command(flatten)]
+    pub skiers: SkierArgs,
+    #[command(flatten)]
     pub dem_input: DemInputArgs,
     #[command(flatten)]
     pub view: ViewArgs,
+}
+
+/// Skiers on the slopes of a season (Cordonnier 2018 §6.2): tracks, compaction, triggers.
+#[derive(Debug, Args, Clone, Default)]
+pub struct SkierArgs {
+    /// Number of skier runs over the season (spread evenly: sets the rate to N / days).
+    #[arg(long, value_name = "N")]
+    pub skiers: Option<u64>,
+    /// Skier runs per day (the paper's "once an hour" is 24); overrides --skiers.
+    #[arg(long, value_name = "PER_DAY")]
+    pub skier_frequency: Option<f64>,
+    /// A start point X,Y in map coordinates (repeat for several; used in turn). Without it
+    /// skiers start where runs are longest (weighted by distance to the valley).
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub skier_start: Vec<String>,
 }
 
 #[derive(Debug, Args)]

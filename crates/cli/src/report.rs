@@ -95,6 +95,9 @@ pub struct Report {
     /// Every avalanche of the season, in order (season runs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub avalanches: Option<Vec<snowscape_season::avalanches::AvalancheRecord>>,
+    /// What the season's skiers did (season runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skiers: Option<snowscape_season::skiing::SkiStats>,
     pub mass_budget: MassBudget,
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,

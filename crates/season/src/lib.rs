@@ -12,6 +12,7 @@ pub mod phenomenon;
 pub mod powder_diffusion;
 pub mod scenario;
 pub mod scheduler;
+pub mod skiing;
 pub mod snowfall;
 pub mod stability;
 pub mod wind_transport;

@@ -136,6 +136,8 @@ pub struct Scenario {
     /// Forced snowfall periods.
     #[serde(rename = "snowfall_period")]
     pub snowfall_periods: Vec<SnowfallPeriod>,
+    /// Skiers: how often they come and where they start (`[skiers]`).
+    pub skiers: crate::skiing::SkierParameters,
     /// Avalanches the user triggers at given days and map positions.
     #[serde(rename = "avalanche")]
     pub avalanches: Vec<UserAvalanche>,
@@ -158,6 +160,7 @@ impl Default for Scenario {
             weather: Vec::new(),
             snowfall_periods: Vec::new(),
             avalanches: Vec::new(),
+            skiers: crate::skiing::SkierParameters::default(),
             events: EventFrequencies::default(),
             parameters: Parameters::default(),
         }
@@ -313,6 +316,9 @@ impl Scenario {
                     "needs day >= 0 and finite map coordinates x, y",
                 ));
             }
+        }
+        if let Err(e) = self.skiers.validate() {
+            return Err(bad("skiers", e, "is out of range"));
         }
         if let Err(e) = self.parameters.avalanche.validate() {
             return Err(bad(

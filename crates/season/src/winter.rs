@@ -14,12 +14,14 @@ use crate::phenomenon::PhenomenonError;
 use crate::powder_diffusion::{self, DiffusionScratch};
 use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
 use crate::scheduler::{Event, EventKind, SECONDS_PER_DAY, Scheduler};
+use crate::skiing::SkiStats;
 use crate::snowfall::{self, SnowfallScratch};
 use crate::stability::{self, StabilityScratch};
 use crate::wind_transport::{self, WindMaps, WindScratch};
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::release_area::release_at_point;
 use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams, precompute};
+use snowscape_skiers::{SkiArea, SkiScratch};
 use snowscape_terrain::{LayeredTerrain, TerrainError};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -50,6 +52,8 @@ pub enum SeasonError {
         #[source]
         source: snowscape_avalanche::AvalancheError,
     },
+    #[error("skier at day {day:.3}: {reason}")]
+    Skier { day: f64, reason: String },
     #[error("avalanche at map position ({x}, {y}): {reason}")]
     AvalanchePosition { x: f64, y: f64, reason: String },
     #[error("checkpoint: {0}")]
@@ -106,6 +110,8 @@ struct RunState {
     avalanches: Vec<AvalancheRecord>,
     /// Next scenario avalanche to trigger.
     user_avalanche_index: usize,
+    /// What the skiers did.
+    ski: SkiStats,
 }
 
 /// A season in progress. Cloning it forks the run (the clone continues identically).
@@ -130,6 +136,11 @@ pub struct Winter {
     hazard: Vec<f64>,
     /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
     avalanche_maps: AvalancheMaps,
+    /// The ski area, made at the first skier (not checkpointed: see [`crate::skiing`]).
+    ski_area: Option<SkiArea>,
+    ski_scratch: SkiScratch,
+    /// Whether snowfall or melt changed the snow since the distance map was computed.
+    terminus_stale: bool,
 }
 
 fn scenario_digest(s: &Scenario, weather: &[WeatherPeriod]) -> u64 {
@@ -179,6 +190,7 @@ impl Winter {
             scenario_digest: scenario_digest(&scenario, &weather),
             avalanches: Vec::new(),
             user_avalanche_index: 0,
+            ski: SkiStats::default(),
         };
         let t = Instant::now();
         let params = weather_params(&env, &weather[0]);
@@ -203,6 +215,9 @@ impl Winter {
             slope_deg: Vec::new(),
             hazard: Vec::new(),
             avalanche_maps: AvalancheMaps::default(),
+            ski_area: None,
+            ski_scratch: SkiScratch::default(),
+            terminus_stale: false,
         };
         w.wall_seconds
             .insert("environment", t.elapsed().as_secs_f64());
@@ -214,6 +229,10 @@ impl Winter {
             deposit: vec![0.0; n],
         };
         w.update_avalanche_rate();
+        let per_day = w.scenario.skiers.per_day;
+        w.state
+            .scheduler
+            .set_rate(EventKind::SkierStart, per_day, per_day > 0.0);
         Ok(w)
     }
 
@@ -252,6 +271,14 @@ impl Winter {
     /// Snow thickness the season's avalanches scoured and deposited so far, per cell, m.
     pub fn avalanche_maps(&self) -> &AvalancheMaps {
         &self.avalanche_maps
+    }
+    /// The ski area (tracks, texture), once a skier has come.
+    pub fn ski_area(&self) -> Option<&SkiArea> {
+        self.ski_area.as_ref()
+    }
+    /// What the season's skiers did.
+    pub fn ski_stats(&self) -> &SkiStats {
+        &self.state.ski
     }
     /// The current avalanche hazard per cell, 1/day (Σ is the Avalanche-Start rate).
     pub fn avalanche_hazard(&self) -> &[f64] {
@@ -319,11 +346,15 @@ impl Winter {
 
     /// Recomputes the avalanche hazard and the Avalanche-Start rate.
     fn update_avalanche_rate(&mut self) {
+        let skiers = self
+            .ski_area
+            .as_ref()
+            .map(|a| a.recent_skiers(&self.scenario.skiers.ski));
         let total = avalanches::hazard(
             &self.scenario.parameters.avalanche,
             &self.terrain,
             &self.slope_deg,
-            None,
+            skiers.as_deref(),
             &mut self.hazard,
         );
         self.state
@@ -349,6 +380,111 @@ impl Winter {
         let rec = self.start_avalanche(cell, Trigger::User);
         *self.wall_seconds.entry("avalanche").or_default() += t.elapsed().as_secs_f64();
         rec
+    }
+
+    /// One skier run, from its start to its terminus (temporal zoom); avalanches it triggers
+    /// start at once. See [`crate::skiing`].
+    fn run_skier(&mut self, event_day: f64) -> Result<(), SeasonError> {
+        let day = event_day;
+        let ski_err = |e: snowscape_skiers::SkiError| SeasonError::Skier {
+            day,
+            reason: e.to_string(),
+        };
+        let p = self.scenario.skiers.clone();
+        // Without skiable snow there is no terminus: no run today.
+        let no_snow = |e: &snowscape_skiers::SkiError| {
+            matches!(e, snowscape_skiers::SkiError::NoTerminus(_))
+        };
+        if self.ski_area.is_none() {
+            match SkiArea::new(&p.ski, &self.terrain, p.terminus.clone(), self.scenario.seed) {
+                Ok(a) => self.ski_area = Some(a),
+                Err(e) if no_snow(&e) => return Ok(()),
+                Err(e) => return Err(ski_err(e)),
+            }
+            self.terminus_stale = false;
+        }
+        let Some(area) = self.ski_area.as_mut() else {
+            return Ok(());
+        };
+        if self.terminus_stale {
+            match area.refresh_terminus(&p.ski, &self.terrain) {
+                Ok(()) => self.terminus_stale = false,
+                Err(e) if no_snow(&e) => return Ok(()),
+                Err(e) => return Err(ski_err(e)),
+            }
+        }
+        area.time_s = day * SECONDS_PER_DAY;
+        let k = self.state.ski.runs as usize;
+        let spawned = match p.starts.get(k % p.starts.len().max(1)) {
+            Some([x, y]) => area.spawn_at(&p.ski, &self.terrain, *x, *y).map(|_| 1),
+            None => area
+                .spawn_weighted(&p.ski, &self.terrain, 1)
+                .map(|v| v.len()),
+        };
+        // A start point on bare ground or a map without snow: no run today.
+        if !matches!(spawned, Ok(n) if n > 0) {
+            return Ok(());
+        }
+        self.state.ski.runs += 1;
+        let mut elapsed = 0.0;
+        let mut triggers = Vec::new();
+        while elapsed < p.max_run_s {
+            let Some(area) = self.ski_area.as_mut() else {
+                break;
+            };
+            let r = snowscape_skiers::step(
+                &p.ski,
+                area,
+                &mut self.terrain,
+                &mut self.ski_scratch,
+                p.step_s,
+            )
+            .map_err(ski_err)?;
+            elapsed += p.step_s;
+            self.state.ski.steps += 1;
+            self.state.ski.distance_m += r.distance_m;
+            self.state.budget.densification += r.compaction.densification_m3;
+            self.state.ski.finished += r
+                .finished
+                .iter()
+                .filter(|f| f.stop == snowscape_skiers::StopReason::Terminus)
+                .count() as u64;
+            triggers.extend(r.triggers.iter().map(|t| t.cell));
+            for cell in triggers.drain(..) {
+                match self.start_avalanche(cell, Trigger::Skier) {
+                    Ok(_) => self.state.ski.avalanches_triggered += 1,
+                    Err(SeasonError::AvalanchePosition { .. }) => {}
+                    Err(e) => return Err(e),
+                }
+            }
+            if r.active == 0 {
+                break;
+            }
+        }
+        self.state
+            .scheduler
+            .advance_clock(elapsed / SECONDS_PER_DAY);
+        self.update_avalanche_rate();
+        Ok(())
+    }
+
+    /// Fades the ski tracks under snow that `before` (total depth per cell) did not hold.
+    fn fade_tracks(&mut self, before: Option<Vec<f32>>) -> Result<(), SeasonError> {
+        let (Some(before), Some(area)) = (before, self.ski_area.as_mut()) else {
+            return Ok(());
+        };
+        let added: Vec<f32> = self
+            .terrain
+            .total_depth()
+            .iter()
+            .zip(&before)
+            .map(|(a, b)| a - b)
+            .collect();
+        area.fade_tracks(&self.scenario.skiers.ski, &added)
+            .map_err(|e| SeasonError::Skier {
+                day: self.state.scheduler.time_days(),
+                reason: e.to_string(),
+            })
     }
 
     /// Ruptures at `cell`, runs the avalanche to rest (temporal zoom) and records it.
@@ -433,6 +569,7 @@ impl Winter {
         // An avalanche runs inside its start event: its time is the avalanche's.
         let name = match event.kind {
             EventKind::AvalancheStart => phenomenon_name(EventKind::AvalancheStep),
+            EventKind::SkierStart => phenomenon_name(EventKind::SkierStep),
             kind => phenomenon_name(kind),
         };
         let err = |source| SeasonError::Phenomenon {
@@ -440,6 +577,12 @@ impl Winter {
             day,
             source,
         };
+        let depth_before = (self.ski_area.is_some()
+            && matches!(
+                event.kind,
+                EventKind::SnowfallStep | EventKind::WindTransportStep
+            ))
+        .then(|| self.terrain.total_depth());
         let p = &self.scenario.parameters;
         let temperature = &self.environment.temperature;
         let b = &mut self.state.budget;
@@ -515,9 +658,17 @@ impl Winter {
                     }
                 }
             }
-            // Period starts are handled by the scheduler; skiers are driven by their own module
-            // when enabled.
+            EventKind::SkierStart => self.run_skier(day)?,
+            // Period starts are handled by the scheduler; skier and avalanche steps run inside
+            // their start events.
             _ => {}
+        }
+        self.fade_tracks(depth_before)?;
+        if matches!(
+            event.kind,
+            EventKind::MeltAndStateStep | EventKind::SnowfallStep
+        ) {
+            self.terminus_stale = true;
         }
         if matches!(
             event.kind,

@@ -197,5 +197,8 @@ fn avamal_avalanches_clear_steep_slopes_and_pile_at_their_foot() {
         deposit_slope < scour_slope - 5.0,
         "deposit slope {deposit_slope} vs scour {scour_slope}"
     );
-    assert!(deposit_z < scour_z - 50.0, "deposit {deposit_z} m vs scour {scour_z} m");
+    assert!(
+        deposit_z < scour_z - 50.0,
+        "deposit {deposit_z} m vs scour {scour_z} m"
+    );
 }

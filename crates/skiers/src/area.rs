@@ -48,7 +48,7 @@ pub struct SkiArea {
 }
 
 /// Buffers reused by [`step`] (one event list per skier).
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct SkiScratch {
     events: Vec<Vec<Event>>,
     moved: Vec<f64>,

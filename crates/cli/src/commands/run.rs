@@ -1,10 +1,10 @@
 //! `snowscape run --dem FILE`: a season on a real terrain.
 
-use crate::cli::{GlobalArgs, RunArgs};
+use crate::cli::{GlobalArgs, RunArgs, SkierArgs};
 use crate::commands::render::preview_options;
 use crate::commands::season::{SeasonJob, run_season};
 use crate::failure::{ExitCodeExt, Failure};
-use anyhow::{Context, anyhow};
+use anyhow::{Context, anyhow, bail};
 use serde_json::json;
 use snowscape_io::write_bytes_atomic;
 use snowscape_render::ColourMode;
@@ -18,6 +18,38 @@ fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read scenario {}", path.display()))?;
     Ok(Scenario::from_toml(&text, &path.display().to_string())?)
+}
+
+/// Sets the scenario's skiers from `--skiers`, `--skier-frequency` and `--skier-start`.
+fn apply_skier_args(scenario: &mut Scenario, args: &SkierArgs) -> anyhow::Result<()> {
+    if let Some(n) = args.skiers {
+        scenario.skiers.per_day = n as f64 / scenario.days;
+    }
+    if let Some(f) = args.skier_frequency {
+        if !(f.is_finite() && f >= 0.0) {
+            bail!("--skier-frequency must be a number of runs per day >= 0, got {f}");
+        }
+        scenario.skiers.per_day = f;
+    }
+    for text in &args.skier_start {
+        let parts: Vec<&str> = text.split(',').collect();
+        let parsed = match parts.as_slice() {
+            [x, y] => x
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .zip(y.trim().parse::<f64>().ok()),
+            _ => None,
+        };
+        match parsed {
+            Some((x, y)) if x.is_finite() && y.is_finite() => scenario.skiers.starts.push([x, y]),
+            _ => bail!("--skier-start {text:?} must be X,Y map coordinates"),
+        }
+    }
+    if !args.skier_start.is_empty() && scenario.skiers.per_day == 0.0 {
+        scenario.skiers.per_day = 24.0;
+    }
+    Ok(())
 }
 
 pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
@@ -41,9 +73,10 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
     if let Some(s) = args.seed {
         scenario.seed = s;
     }
+    apply_skier_args(&mut scenario, &args.skiers).bad_input()?;
     scenario
         .validate("the command line")
-        .context("--days/--seed")
+        .context("--days/--seed/--skiers")
         .bad_input()?;
     let bedrock = args.dem_input.read(&args.dem).bad_input()?;
     if args.resume.is_none() {

@@ -211,6 +211,9 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
             write_avalanche_maps(&mut out, &winter)
         })
         .job_failed()?;
+    stages
+        .run("write_ski_tracks", || write_ski_tracks(&mut out, &winter))
+        .job_failed()?;
     write_checkpoint(&job.out, &winter).job_failed()?;
     out.files.push(CHECKPOINT.into());
 
@@ -286,6 +289,24 @@ fn write_avalanche_maps(out: &mut Written, winter: &Winter) -> anyhow::Result<()
     Ok(())
 }
 
+/// Writes `ski_tracks.png` (16-bit track texture, finer than the grid, with a JSON sidecar
+/// and a world file) and `ski_tracks.geojson` (polylines in the DEM's CRS) when skiers came.
+fn write_ski_tracks(out: &mut Written, winter: &Winter) -> anyhow::Result<()> {
+    let Some(area) = winter.ski_area() else {
+        return Ok(());
+    };
+    snowscape_skiers::write_track_png(
+        &out.path("ski_tracks.png"),
+        area.texture(),
+        winter.terrain.geometry(),
+        snowscape_skiers::PngDepth::Sixteen,
+    )?;
+    out.files.push("ski_tracks.png.json".into());
+    out.files.push("ski_tracks.pgw".into());
+    snowscape_skiers::write_tracks_geojson(&out.path("ski_tracks.geojson"), area)?;
+    Ok(())
+}
+
 fn season_report(
     command: &'static str,
     extra_parameters: &serde_json::Value,
@@ -336,6 +357,7 @@ fn season_report(
         timings: timings_json,
         event_counts: Some(counts),
         avalanches: Some(winter.avalanches().to_vec()),
+        skiers: Some(winter.ski_stats().clone()),
         mass_budget: budget.close(),
         outputs,
     }
