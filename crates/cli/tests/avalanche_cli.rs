@@ -1,0 +1,142 @@
+//! End-to-end tests of `snowscape avalanche` on the real avaWog path and of skiers in
+//! `snowscape run`: outputs georeferenced like the DEM, a report with the runout figures, and
+//! bad input refused with exit code 2.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn wog() -> (PathBuf, PathBuf) {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/dem/avaframe_avaWog");
+    let (dem, rel) = (d.join("avaWog.asc"), d.join("REL/relWog.shp"));
+    assert!(
+        dem.is_file() && rel.is_file(),
+        "the avaWog DEM and release shapefile are missing: expected {} and {} (shared data folder beside the checkout)",
+        dem.display(),
+        rel.display()
+    );
+    (dem, rel)
+}
+
+fn snowscape(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_snowscape"))
+        .args(args)
+        .output()
+        .expect("the snowscape binary runs")
+}
+
+/// Width and height of a GeoTIFF written by snowscape.
+fn tiff_size(path: &Path) -> (u32, u32) {
+    let f = std::fs::File::open(path).unwrap();
+    let mut d = tiff::decoder::Decoder::new(std::io::BufReader::new(f)).unwrap();
+    d.dimensions().unwrap()
+}
+
+#[test]
+fn avalanche_on_avawog_writes_maps_frames_and_report() {
+    let (dem, rel) = wog();
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("wog");
+    let o = snowscape(&[
+        "avalanche",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--release",
+        rel.to_str().unwrap(),
+        "--duration",
+        "15",
+        "--frame-interval",
+        "5",
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "peak_thickness.tif",
+        "peak_velocity.tif",
+        "thickness.tif",
+        "footprint.tif",
+        "avalanche.gif",
+        "report.json",
+        "frames/frame_0000.png",
+    ] {
+        assert!(dir.join(f).is_file(), "missing {f}");
+    }
+    assert_eq!(tiff_size(&dir.join("peak_thickness.tif")), (490, 555));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let released = r["released_volume_m3"].as_f64().unwrap();
+    let deposited = r["deposited_volume_m3"].as_f64().unwrap();
+    let outflow = r["border_outflow_m3"].as_f64().unwrap();
+    assert!(released > 1e5, "released {released}");
+    assert!((released - deposited - outflow).abs() < 1e-6 * released);
+    assert!(r["runout_length_m"].as_f64().unwrap() > 200.0);
+    let angle = r["travel_angle_deg"].as_f64().unwrap();
+    assert!(angle > 20.0 && angle < 60.0, "travel angle {angle}");
+    assert_eq!(r["simulated_s"].as_f64().unwrap().round(), 15.0);
+    assert_eq!(r["summary"]["stop"], "duration");
+    assert!(r["wall_s"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn avalanche_bad_input_exits_2_and_names_it() {
+    let (dem, rel) = wog();
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("bad");
+    let d = dem.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--release", "12.5,7"], "12.5"),
+        (vec!["--release", "no/such.shp"], "no/such.shp"),
+        (
+            vec!["--release", rel.to_str().unwrap(), "--friction-angle", "-5"],
+            "-5",
+        ),
+        (
+            vec!["--release", rel.to_str().unwrap(), "--thickness", "0"],
+            "--thickness",
+        ),
+    ] {
+        let mut a = vec!["avalanche", "--dem", d, "--out", dir.to_str().unwrap()];
+        a.extend(args.iter().copied());
+        let o = snowscape(&a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{a:?}: {err}");
+        assert!(err.contains(needle), "{a:?}: {err}");
+        assert!(!dir.join("report.json").exists());
+    }
+}
+
+#[test]
+fn run_with_skiers_writes_tracks() {
+    let dem = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/dem/avaframe_avaMal/avaMal.asc");
+    assert!(dem.is_file(), "missing {}", dem.display());
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("ski");
+    let o = snowscape(&[
+        "run",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--days",
+        "25",
+        "--skier-frequency",
+        "6",
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    assert!(
+        r["skiers"]["runs"].as_u64().unwrap() > 10,
+        "{}",
+        r["skiers"]
+    );
+    let gj: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("ski_tracks.geojson")).unwrap()).unwrap();
+    assert_eq!(gj["type"], "FeatureCollection");
+    assert!(!gj["features"].as_array().unwrap().is_empty());
+    assert!(dir.join("ski_tracks.png").is_file());
+    assert!(r["avalanches"].is_array());
+}
