@@ -132,7 +132,7 @@ pub fn deposit(
         }
     }
     if !at_rest_only {
-        state.pipes.iter_mut().for_each(|p| *p = [0.0; 4]);
+        state.pipes.iter_mut().for_each(|p| p.fill(0.0));
     }
     state.refresh_active();
     Ok(volume)

@@ -48,25 +48,39 @@
 //! the ghost ring walls; [`Border::Open`] gives the ghost ring the bed of the nearest grid cell
 //! and no snow: snow that flows into it leaves the grid and is counted as `border_outflow`.
 //!
-//! **Cost.** Only a box around the flowing snow is visited: every cell with snow and every
-//! moving pipe lies inside the box shrunk by one cell, and snow moves at most one cell per
-//! sub-step, so the box grows by at most one cell per sub-step and shrinks with the snow. The
-//! cost of a sub-step is proportional to the box area (the footprint), not to the grid.
+//! **Cost.** Only an *active set* is visited. The padded grid is cut into tiles of 16x16
+//! cells; each tile keeps the box of its *content* cells (flowing snow or a moving owned pipe),
+//! refreshed by the last pass of every sub-step. Snow moves at most one cell per sub-step, so a
+//! sub-step only changes cells within 1 of the content and only reads cells within 3: its passes
+//! visit, row by row, the union of the tile boxes grown by 3 cells (velocities and pipes) or 2
+//! cells (thickness). A branching avalanche thus costs its footprint, not its bounding box, and
+//! the cost of a sub-step does not depend on the grid size. Pipes with two dry ends and pipes
+//! held by static friction are skipped early. A sub-step makes three passes: (1) in blocks of
+//! 16 rows, the cell velocities, discharges and surface gradients (kept in the block's own rows,
+//! never written to a grid-sized array) then the new pipes and raw volumes; (2) the outflow
+//! factors; (3) the thickness, the scaled pipes, the content per tile and the CFL maxima of the
+//! next sub-step. Away from the ghost ring and nodata cells the kernels run on four consecutive
+//! cells at a time (AVX, when the CPU has it), with the IEEE operations of the one-cell code
+//! and in the same order, so the lanes change no result.
 //!
 //! **Determinism.** Every pass is a gather over rows (rayon), each row writes only its own
-//! cells, and per-row sums are added in row order, so results are bit-identical for any thread
-//! count.
+//! cells, and per-row sums are added in row order (within a row, cell by cell), so results are
+//! bit-identical for any thread count and with or without the four-lane kernels.
 
+mod lanes;
+mod tiles;
+
+use lanes::{Lanes, ld};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, NodataMask};
+use std::cell::RefCell;
+use std::sync::atomic::AtomicBool;
 use thiserror::Error;
+use tiles::{Segments, TILE, TileSet};
 
 /// Gravitational acceleration, m/s² (the paper's `g = 9.81`).
 pub const G: f64 = 9.81;
-
-/// Per-cell flow quantities of a sub-step: `[vx, vy, h·vx, h·vy, ∂A/∂x, ∂A/∂y]`.
-type CellFlow = [f64; 6];
 
 /// A depth below which a cell is treated as dry for the upwind face cross-section, m.
 const DRY: f64 = 1e-12;
@@ -230,7 +244,8 @@ pub struct AvalancheReport {
     pub border_outflow: f64,
     /// Largest pipe speed at the end of any sub-step, m/s.
     pub max_speed: f64,
-    /// Cells visited in the last sub-step (the active box, ghost ring included).
+    /// Cells visited in the last sub-step (the active set: tile boxes grown by 3 cells, ghost
+    /// ring included).
     pub active_cells: usize,
     /// Grid cells holding flowing snow after the step.
     pub flowing_cells: usize,
@@ -260,10 +275,18 @@ impl ActiveBox {
             c1: (self.c1 + 1).min(pw - 1),
         }
     }
-    fn area(self) -> usize {
-        (self.r1 - self.r0 + 1) * (self.c1 - self.c0 + 1)
-    }
 }
+
+/// Rows per block of the pipe pass.
+const BLOCK: usize = 16;
+
+thread_local! {
+    /// Per worker thread: the velocity rows of the block of the pipe pass it works on.
+    static VEL_ROWS: RefCell<[Vec<f64>; 6]> = RefCell::new(Default::default());
+}
+
+/// Forces the one-lane kernels (a test compares them with the four-lane ones).
+pub(crate) static FORCE_SCALAR: AtomicBool = AtomicBool::new(false);
 
 /// Flowing snow over a grid: thickness per cell, velocity per pipe, the fixed bed.
 #[derive(Debug, Clone, PartialEq)]
@@ -277,10 +300,19 @@ pub struct AvalancheState {
     pub(crate) bed: Vec<f64>,
     /// Padded flowing thickness, m.
     pub(crate) h: Vec<f64>,
-    /// Padded pipe velocities (east, south, south-east, south-west), m/s.
-    pub(crate) pipes: Vec<[f64; 4]>,
+    /// Padded pipe velocities, one array per owned direction (east, south, south-east,
+    /// south-west), m/s.
+    pub(crate) pipes: [Vec<f64>; 4],
     /// Box holding all snow and moving pipes, grown by one cell; `None` when nothing flows.
     pub(crate) active: Option<ActiveBox>,
+    /// The active set: per tile, the box of its cells with snow or a moving owned pipe.
+    tiles: TileSet,
+    /// Largest pipe speed (m/s) and largest thickness (m) of the state, for the CFL step.
+    maxima: (f64, f64),
+    /// Padded flags: the cell or one of its 8 neighbours is a nodata cell.
+    near_wall: Vec<bool>,
+    /// Pipe lengths, widths and directions of the grid.
+    pg: PipeGeometry,
 }
 
 impl AvalancheState {
@@ -322,6 +354,18 @@ impl AvalancheState {
                 pbed[r * pw + c] = if b.is_finite() { b } else { 0.0 };
             }
         }
+        let mut near_wall = vec![false; pw * ph];
+        for r in 0..ph {
+            for c in 0..pw {
+                if nodata[r * pw + c] {
+                    for rr in r.saturating_sub(1)..=(r + 1).min(ph - 1) {
+                        for cc in c.saturating_sub(1)..=(c + 1).min(pw - 1) {
+                            near_wall[rr * pw + cc] = true;
+                        }
+                    }
+                }
+            }
+        }
         Ok(Self {
             geometry: geometry.clone(),
             pw,
@@ -329,8 +373,12 @@ impl AvalancheState {
             nodata,
             bed: pbed,
             h: vec![0.0; pw * ph],
-            pipes: vec![[0.0; 4]; pw * ph],
+            pipes: std::array::from_fn(|_| vec![0.0; pw * ph]),
             active: None,
+            tiles: TileSet::new(pw, ph),
+            maxima: (0.0, 0.0),
+            near_wall,
+            pg: PipeGeometry::new(geometry, ph),
         })
     }
 
@@ -399,8 +447,8 @@ impl AvalancheState {
                 });
             }
         }
-        self.pipes.iter_mut().for_each(|p| *p = [0.0; 4]);
-        self.h.iter_mut().for_each(|v| *v = 0.0);
+        self.pipes.iter_mut().for_each(|p| p.fill(0.0));
+        self.h.fill(0.0);
         for r in 0..hgt {
             for c in 0..w {
                 let k = self.pad(c, r);
@@ -427,7 +475,9 @@ impl AvalancheState {
             return Ok(());
         }
         self.h[k] += dh;
+        self.maxima.1 = self.maxima.1.max(self.h[k]);
         let (r, c) = (k / self.pw, k % self.pw);
+        self.tiles.add(r, c, c);
         let cell = ActiveBox {
             r0: r,
             r1: r,
@@ -450,15 +500,22 @@ impl AvalancheState {
     /// Flowing volume on the grid, m³ (rows summed in order).
     pub fn flowing_volume(&self) -> f64 {
         let area = self.geometry.cell_area();
-        self.thickness().iter().sum::<f64>() * area
+        let Some(bx) = self.active else {
+            return 0.0;
+        };
+        // Only the box can hold snow; the cells outside would add zeros to the row-major sum.
+        let (w, hgt) = (self.geometry.width(), self.geometry.height());
+        let (r0, r1) = (bx.r0.max(1), bx.r1.min(hgt));
+        let (c0, c1) = (bx.c0.max(1), bx.c1.min(w));
+        (r0..=r1)
+            .flat_map(|r| self.h[r * self.pw + c0..=r * self.pw + c1].iter())
+            .sum::<f64>()
+            * area
     }
 
     /// Largest pipe speed, m/s.
     pub fn max_speed(&self) -> f64 {
-        self.pipes
-            .iter()
-            .flat_map(|p| p.iter())
-            .fold(0.0f64, |m, u| m.max(u.abs()))
+        self.maxima.0
     }
 
     /// The "snow moving" layer: a grid cell is active if it or one of its 8 neighbours holds
@@ -483,13 +540,13 @@ impl AvalancheState {
     /// Velocity of the snow in a grid cell (m/s; x east, y south), reconstructed from its 8
     /// pipes as in the advection step.
     pub fn velocity_at(&self, col: usize, row: usize) -> [f64; 2] {
-        let pg = PipeGeometry::new(&self.geometry, self.ph);
+        let pg = &self.pg;
         let k = self.pad(col, row);
         let mut p = [0.0; 4];
         for (d, pd) in p.iter_mut().enumerate() {
             let (dc, dr) = DIRS[d];
             let kb = (k as isize - dr * self.pw as isize - dc) as usize;
-            *pd = 0.5 * (self.pipes[k][d] + self.pipes[kb][d]);
+            *pd = 0.5 * (self.pipes[d][k] + self.pipes[d][kb]);
         }
         let vx_d = (p[2] - p[3]) / (2.0 * pg.e[2][0]);
         let vy_d = (p[2] + p[3]) / (2.0 * pg.e[2][1]);
@@ -499,53 +556,74 @@ impl AvalancheState {
     /// Whether a grid cell and all 8 pipes touching it are at rest.
     pub fn at_rest(&self, col: usize, row: usize) -> bool {
         let k = self.pad(col, row);
-        self.pipes[k].iter().all(|&u| u == 0.0)
-            && DIRS.iter().enumerate().all(|(d, &(dc, dr))| {
-                let kb = (k as isize - dr * self.pw as isize - dc) as usize;
-                self.pipes[kb][d] == 0.0
-            })
+        DIRS.iter().enumerate().all(|(d, &(dc, dr))| {
+            let kb = (k as isize - dr * self.pw as isize - dc) as usize;
+            self.pipes[d][k] == 0.0 && self.pipes[d][kb] == 0.0
+        })
     }
 
-    /// Recomputes the active box by scanning the whole grid (after external edits).
+    /// Recomputes the active set, the active box and the CFL maxima by scanning the whole grid
+    /// (after external edits).
     pub(crate) fn refresh_active(&mut self) {
-        let mut b: Option<ActiveBox> = None;
+        self.tiles.clear();
+        let (mut umax, mut hmax) = (0.0f64, 0.0f64);
         for r in 0..self.ph {
+            let mut run: Option<(usize, usize)> = None;
             for c in 0..self.pw {
                 let k = r * self.pw + c;
-                if self.h[k] > 0.0 || self.pipes[k].iter().any(|&u| u != 0.0) {
-                    b = Some(match b {
-                        None => ActiveBox {
-                            r0: r,
-                            r1: r,
-                            c0: c,
-                            c1: c,
-                        },
-                        Some(b) => ActiveBox {
-                            r0: b.r0.min(r),
-                            r1: b.r1.max(r),
-                            c0: b.c0.min(c),
-                            c1: b.c1.max(c),
-                        },
-                    });
+                hmax = hmax.max(self.h[k]);
+                let mut moving = false;
+                for p in &self.pipes {
+                    umax = umax.max(p[k].abs());
+                    moving |= p[k] != 0.0;
+                }
+                if self.h[k] > 0.0 || moving {
+                    run = match run {
+                        Some((a, _)) if a / TILE == c / TILE => Some((a, c)),
+                        Some((a, b)) => {
+                            self.tiles.add(r, a, b);
+                            Some((c, c))
+                        }
+                        None => Some((c, c)),
+                    };
                 }
             }
+            if let Some((a, b)) = run {
+                self.tiles.add(r, a, b);
+            }
         }
-        self.active = b.map(|b| b.grown(self.pw, self.ph));
+        self.maxima = (umax, hmax);
+        self.active = self.tiles.bbox().map(|b| b.grown(self.pw, self.ph));
     }
 }
+
+/// The per-cell quantities of a sub-step the pipes read, one array each: velocity (vx, vy)
+/// reconstructed from the 8 pipes, discharge (h·vx, h·vy) and surface gradient (∂A/∂x, ∂A/∂y;
+/// NaN on the ghost ring and nodata cells).
+const VX: usize = 0;
+const VY: usize = 1;
+const QX: usize = 2;
+const QY: usize = 3;
+const GX: usize = 4;
+const GY: usize = 5;
 
 /// Reusable work buffers for [`step`] (allocated on first use).
 #[derive(Debug, Clone, Default)]
 pub struct AvalancheScratch {
-    /// Per padded cell: velocity (vx, vy), discharge (h·vx, h·vy) and surface gradient
-    /// (∂A/∂x, ∂A/∂y; NaN on the ghost ring and nodata cells).
-    vel: Vec<CellFlow>,
-    new_pipes: Vec<[f64; 4]>,
-    flux: Vec<[f64; 4]>,
+    /// New pipe velocities and raw (unscaled) volumes, per owned direction.
+    new_pipes: [Vec<f64>; 4],
+    flux: [Vec<f64>; 4],
+    /// Outflow scaling factor of every wet cell.
     factor: Vec<f64>,
+    /// Per padded row, the content column range of each tile the row touches.
+    row_tiles: Vec<[u32; 2]>,
+    /// The active tiles grown by 3 cells (velocities, pipes) and by 2 cells (thickness).
+    seg3: Segments,
+    seg2: Segments,
 }
 
 /// Pipe geometry: length, width and unit vector (x east, y south) per owned direction.
+#[derive(Debug, Clone, PartialEq)]
 struct PipeGeometry {
     len: [f64; 4],
     width: [f64; 4],
@@ -583,14 +661,6 @@ impl PipeGeometry {
     }
 }
 
-/// Per-row results of the final pass of a sub-step.
-#[derive(Clone, Copy, Default)]
-struct RowStats {
-    outflow: f64,
-    flowing: usize,
-    cols: Option<(usize, usize)>,
-}
-
 /// Advances the flowing snow by `dt` seconds in CFL-limited sub-steps.
 ///
 /// Pure apart from `state` and `scratch`; deterministic for any rayon thread count.
@@ -605,18 +675,25 @@ pub fn step(
         return Err(AvalancheError::InvalidTimeStep(dt));
     }
     let n = state.pw * state.ph;
-    if scratch.vel.len() != n {
-        scratch.vel = vec![[0.0; 6]; n];
-        scratch.new_pipes = vec![[0.0; 4]; n];
-        scratch.flux = vec![[0.0; 4]; n];
+    if scratch.factor.len() != n {
+        let zeros = || vec![0.0; n];
+        scratch.new_pipes = std::array::from_fn(|_| zeros());
+        scratch.flux = std::array::from_fn(|_| zeros());
+        // Factors stay finite and in [0, 1] (the thickness pass relies on it).
         scratch.factor = vec![1.0; n];
     }
-    let pg = PipeGeometry::new(&state.geometry, state.ph);
+    let nt = state.ph * state.tiles.ntx();
+    if scratch.row_tiles.len() != nt {
+        scratch.row_tiles = vec![[0; 2]; nt];
+    }
+    let pg = state.pg.clone();
     let dmin = pg.dx.min(pg.dy);
     let mut report = AvalancheReport::default();
     let mut elapsed = 0.0;
     while elapsed < dt {
-        let Some(bx) = state.active else { break };
+        if state.active.is_none() {
+            break;
+        }
         if report.substeps >= params.max_substeps {
             return Err(AvalancheError::TooManySubsteps {
                 done: report.substeps,
@@ -624,7 +701,7 @@ pub fn step(
                 dt,
             });
         }
-        let (umax, hmax) = cfl_maxima(state, bx);
+        let (umax, hmax) = state.maxima;
         let speed = umax + (G * hmax).sqrt();
         if speed == 0.0 {
             break;
@@ -636,11 +713,11 @@ pub fn step(
         if dt - elapsed - sub < 1e-9 * dt {
             sub = dt - elapsed;
         }
-        let s = substep(params, &pg, state, scratch, bx, sub);
+        let s = substep(params, &pg, state, scratch, sub);
         report.moved_volume += s.moved;
         report.border_outflow += s.outflow;
         report.max_speed = report.max_speed.max(s.max_speed);
-        report.active_cells = bx.grown(state.pw, state.ph).area();
+        report.active_cells = s.visited;
         report.flowing_cells = s.flowing;
         report.dt_min = if report.substeps == 0 {
             sub
@@ -659,8 +736,10 @@ pub fn step(
 
 /// The sub-step [`step`] would take next from this state (0 when nothing flows), s.
 pub fn cfl_dt(params: &AvalancheParams, state: &AvalancheState) -> f64 {
-    let Some(bx) = state.active else { return 0.0 };
-    let (umax, hmax) = cfl_maxima(state, bx);
+    if state.active.is_none() {
+        return 0.0;
+    }
+    let (umax, hmax) = state.maxima;
     let speed = umax + (G * hmax).sqrt();
     if speed == 0.0 {
         return 0.0;
@@ -672,248 +751,283 @@ pub fn cfl_dt(params: &AvalancheParams, state: &AvalancheState) -> f64 {
     (params.courant * dmin / speed).min(params.courant * (dmin / G).sqrt())
 }
 
-fn cfl_maxima(state: &AvalancheState, bx: ActiveBox) -> (f64, f64) {
-    let pw = state.pw;
-    let rows: Vec<(f64, f64)> = (bx.r0..=bx.r1)
-        .into_par_iter()
-        .map(|r| {
-            let mut um = 0.0f64;
-            let mut hm = 0.0f64;
-            for c in bx.c0..=bx.c1 {
-                let k = r * pw + c;
-                hm = hm.max(state.h[k]);
-                for u in state.pipes[k] {
-                    um = um.max(u.abs());
-                }
-            }
-            (um, hm)
-        })
-        .collect();
-    rows.iter().fold((0.0, 0.0), |(a, b), &(u, h)| {
-        (f64::max(a, u), f64::max(b, h))
-    })
-}
-
 struct SubReport {
     moved: f64,
     outflow: f64,
     max_speed: f64,
     flowing: usize,
+    visited: usize,
 }
 
-#[allow(clippy::needless_range_loop)]
+/// Constants of one sub-step.
+struct Consts {
+    dt: f64,
+    /// `dt·g`.
+    dtg: f64,
+    /// Coulomb yield speed change `α·g·tanθc·dt`.
+    yield_dt: f64,
+    coulomb: bool,
+    /// Viscous coefficient `dt·(1 − α)·kv/2` (0: no viscous term).
+    visc: f64,
+    adv: bool,
+    closed: bool,
+    alpha: f64,
+    pw: usize,
+    ph: usize,
+    len: [f64; 4],
+    width: [f64; 4],
+    e: [[f64; 2]; 4],
+    dx: f64,
+    dy: f64,
+    square: bool,
+    area: f64,
+    /// `2·e_SE,x`, `2·e_SE,y`, `2·dx`, `2·dy`: divisors of the velocity and gradient.
+    den_x: f64,
+    den_y: f64,
+    two_dx: f64,
+    two_dy: f64,
+    /// Padded index offset of the neighbour of each owned pipe.
+    off: [usize; 4],
+}
+
+impl Consts {
+    fn new(params: &AvalancheParams, pg: &PipeGeometry, pw: usize, ph: usize, dt: f64) -> Self {
+        let mu_g = params.rest_angle_deg.to_radians().tan() * G;
+        Self {
+            dt,
+            dtg: dt * G,
+            yield_dt: params.alpha * mu_g * dt,
+            coulomb: params.alpha > 0.0,
+            visc: dt * (1.0 - params.alpha) * params.k_viscous * 0.5,
+            adv: params.momentum_advection,
+            closed: params.border == Border::Closed,
+            alpha: params.alpha,
+            pw,
+            ph,
+            len: pg.len,
+            width: pg.width,
+            e: pg.e,
+            dx: pg.dx,
+            dy: pg.dy,
+            square: pg.dx == pg.dy,
+            area: pg.area,
+            den_x: 2.0 * pg.e[2][0],
+            den_y: 2.0 * pg.e[2][1],
+            two_dx: 2.0 * pg.dx,
+            two_dy: 2.0 * pg.dy,
+            off: [1, pw, pw + 1, pw - 1],
+        }
+    }
+
+    fn is_wall(&self, nodata: &[bool], k: usize, c: usize, r: usize) -> bool {
+        nodata[k] || (self.closed && (r == 0 || c == 0 || r == self.ph - 1 || c == self.pw - 1))
+    }
+
+    /// Padded index of the neighbour of `(c, r)` along owned direction `d`.
+    fn neighbour(&self, c: usize, r: usize, d: usize) -> Option<usize> {
+        let (dc, dr) = DIRS[d];
+        let cc = c as isize + dc;
+        let rr = r as isize + dr;
+        if cc < 0 || rr < 0 || cc >= self.pw as isize || rr >= self.ph as isize {
+            None
+        } else {
+            Some(rr as usize * self.pw + cc as usize)
+        }
+    }
+
+    /// Padded index of the owner of the pipe reaching `(c, r)` along direction `d`.
+    fn back(&self, c: usize, r: usize, d: usize) -> Option<usize> {
+        let (dc, dr) = DIRS[d];
+        let cc = c as isize - dc;
+        let rr = r as isize - dr;
+        if cc < 0 || rr < 0 || cc >= self.pw as isize || rr >= self.ph as isize {
+            None
+        } else {
+            Some(rr as usize * self.pw + cc as usize)
+        }
+    }
+}
+
+/// Read-only arrays of a pass (the ones a pass does not read are empty).
+#[derive(Clone, Copy)]
+struct Inputs<'a> {
+    h: &'a [f64],
+    bed: &'a [f64],
+    nodata: &'a [bool],
+    near_wall: &'a [bool],
+    pipes: [&'a [f64]; 4],
+    /// Velocities, discharges and gradients of the padded cells from index `vbase` on.
+    vel: [&'a [f64]; 6],
+    vbase: usize,
+    new_pipes: [&'a [f64]; 4],
+    flux: [&'a [f64]; 4],
+    factor: &'a [f64],
+}
+
+/// Per-row results of the final pass of a sub-step.
+#[derive(Clone, Copy, Default)]
+struct RowStats {
+    moved: f64,
+    umax: f64,
+    outflow: f64,
+    hmax: f64,
+    flowing: usize,
+    /// Entries of the row in `row_tiles`.
+    tiles: usize,
+}
+
+/// Row slices `range` of `N` padded arrays, one entry per row.
+fn rows_of<const N: usize>(arrays: [&mut [f64]; N], pw: usize) -> Vec<[&mut [f64]; N]> {
+    let rows = arrays[0].len() / pw;
+    let mut its = arrays.map(|a| a.chunks_mut(pw));
+    (0..rows)
+        .map(|_| std::array::from_fn(|i| its[i].next().expect("row")))
+        .collect()
+}
+
+/// One sub-step over the active set.
+///
+/// Regions (`C` = the cells with snow or a moving owned pipe, `C+m` grown by `m` cells): new
+/// snow and moving pipes lie in `C+1`, and a pipe with a wet end has its owner in `C+1`, so
+/// pipes are updated on `C+2` (read: velocities on `C+3`), thickness on `C+1`. The active set
+/// visits `seg3 ⊇ C+3` for velocities and pipes (pipes with two dry ends come out 0 without
+/// reading velocities) and `seg2 ⊇ C+2` for thickness (reading fluxes on `seg3`).
 fn substep(
     params: &AvalancheParams,
     pg: &PipeGeometry,
     state: &mut AvalancheState,
     scratch: &mut AvalancheScratch,
-    bx: ActiveBox,
     dt: f64,
 ) -> SubReport {
     let (pw, ph) = (state.pw, state.ph);
-    let closed = params.border == Border::Closed;
-    let p1 = bx.grown(pw, ph);
-    let p2 = p1.grown(pw, ph);
-    let mu_g = params.rest_angle_deg.to_radians().tan() * G;
-    let is_wall = |nodata: &[bool], k: usize, c: usize, r: usize| {
-        nodata[k] || (closed && (r == 0 || c == 0 || r == ph - 1 || c == pw - 1))
-    };
-    let neighbour = |c: usize, r: usize, d: usize| -> Option<usize> {
-        let (dc, dr) = DIRS[d];
-        let cc = c as isize + dc;
-        let rr = r as isize + dr;
-        if cc < 0 || rr < 0 || cc >= pw as isize || rr >= ph as isize {
-            None
-        } else {
-            Some(rr as usize * pw + cc as usize)
-        }
-    };
-    let back = |c: usize, r: usize, d: usize| -> Option<usize> {
-        let (dc, dr) = DIRS[d];
-        let cc = c as isize - dc;
-        let rr = r as isize - dr;
-        if cc < 0 || rr < 0 || cc >= pw as isize || rr >= ph as isize {
-            None
-        } else {
-            Some(rr as usize * pw + cc as usize)
-        }
+    let k = Consts::new(params, pg, pw, ph, dt);
+    let simd = lanes::simd_available();
+    scratch.seg3.build(&state.tiles, 3, pw, ph);
+    scratch.seg2.build(&state.tiles, 2, pw, ph);
+    let AvalancheScratch {
+        new_pipes,
+        flux,
+        factor,
+        row_tiles,
+        seg3,
+        seg2,
+    } = scratch;
+    let (seg3, seg2) = (&*seg3, &*seg2);
+    let (r0, nr) = (seg3.r0, seg3.rows());
+    let rows = r0 * pw..(r0 + nr) * pw;
+    let empty: &[f64] = &[];
+    let none = Inputs {
+        h: &state.h,
+        bed: &state.bed,
+        nodata: &state.nodata,
+        near_wall: &state.near_wall,
+        pipes: [empty; 4],
+        vel: [empty; 6],
+        vbase: 0,
+        new_pipes: [empty; 4],
+        flux: [empty; 4],
+        factor: empty,
     };
 
-    // Pass 1: cell velocities from the 8 pipes touching each cell (box grown by 2).
+    // Pass 1: new pipe velocities and raw volumes, by blocks of rows. A block first computes
+    // the cell velocities, discharges and surface gradients its pipes read (its rows, one row
+    // above and two below) into rows of its own, then its pipes.
     {
-        let pipes = &state.pipes;
-        let (hh, bed, nodata) = (&state.h, &state.bed, &state.nodata);
-        let e = &pg.e;
-        scratch.vel[p2.r0 * pw..(p2.r1 + 1) * pw]
+        let pipes = state.pipes.each_ref().map(|p| p.as_slice());
+        let inp1 = Inputs { pipes, ..none };
+        let mut np = rows_of(new_pipes.each_mut().map(|v| &mut v[rows.clone()]), pw);
+        let mut fl = rows_of(flux.each_mut().map(|v| &mut v[rows.clone()]), pw);
+        np.par_chunks_mut(BLOCK)
+            .zip(fl.par_chunks_mut(BLOCK))
+            .enumerate()
+            .for_each(|(bi, (np, fl))| {
+                let b0 = r0 + bi * BLOCK;
+                let b1 = b0 + np.len();
+                let (v0, v1) = (b0.saturating_sub(1), (b1 + 1).min(ph - 1));
+                let len = (v1 - v0 + 1) * pw;
+                VEL_ROWS.with_borrow_mut(|buf| {
+                    for a in buf.iter_mut() {
+                        if a.len() < len {
+                            a.resize(len, 0.0);
+                        }
+                    }
+                    let vel_of = |x: usize, buf: &mut [Vec<f64>; 6]| {
+                        let lr = (x - v0) * pw;
+                        let mut row = buf.each_mut().map(|a| &mut a[lr..lr + pw]);
+                        vel_row(simd, &k, pg, &inp1, seg3.row(x), x, &mut row);
+                    };
+                    for x in v0..=(b0 + 1).min(v1) {
+                        vel_of(x, buf);
+                    }
+                    for (i, (np, fl)) in np.iter_mut().zip(fl.iter_mut()).enumerate() {
+                        let r = b0 + i;
+                        if r + 2 <= v1 {
+                            vel_of(r + 2, buf);
+                        }
+                        let inp = Inputs {
+                            pipes,
+                            vel: buf.each_ref().map(|a| &a[..len]),
+                            vbase: v0 * pw,
+                            ..none
+                        };
+                        pipes_row(simd, params, &k, pg, &inp, seg3.row(r), r, np, fl);
+                    }
+                });
+            });
+    }
+
+    // Pass 2: outflow scaling factor of every wet cell (the factor of a cell at most `DRY`
+    // deep is never used: such a cell has no outflow).
+    {
+        let inp = Inputs {
+            flux: flux.each_ref().map(|v| v.as_slice()),
+            ..none
+        };
+        factor[rows.clone()]
             .par_chunks_mut(pw)
             .enumerate()
             .for_each(|(ri, row)| {
-                let r = p2.r0 + ri;
-                for (c, v) in row.iter_mut().enumerate().take(p2.c1 + 1).skip(p2.c0) {
-                    let k = r * pw + c;
-                    let mut p = [0.0; 4];
-                    for (d, pd) in p.iter_mut().enumerate() {
-                        let own = pipes[k][d];
-                        *pd = match back(c, r, d) {
-                            Some(kb) => 0.5 * (own + pipes[kb][d]),
-                            None => own,
-                        };
-                    }
-                    let vx_d = (p[2] - p[3]) / (2.0 * e[2][0]);
-                    let vy_d = (p[2] + p[3]) / (2.0 * e[2][1]);
-                    let (vx, vy) = (0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d));
-                    let [gx, gy] = surface_gradient(pg, hh, bed, nodata, pw, k)
-                        .unwrap_or([f64::NAN, f64::NAN]);
-                    *v = [vx, vy, hh[k] * vx, hh[k] * vy, gx, gy];
-                }
+                let r = r0 + ri;
+                factor_row(simd, &k, &inp, seg3.row(r), r, row);
             });
     }
 
-    // Pass 2: new pipe velocities and raw volumes (owners in the box grown by 1).
-    {
-        let (h, bed, pipes, nodata, vel) = (
-            &state.h,
-            &state.bed,
-            &state.pipes,
-            &state.nodata,
-            &scratch.vel,
-        );
-        let range = p1.r0 * pw..(p1.r1 + 1) * pw;
-        scratch.new_pipes[range.clone()]
+    // Pass 3: thickness update (seg2), pipes scaled by the upwind cell's factor (seg3), the
+    // content of each row per tile.
+    let ntx = state.tiles.ntx();
+    let stats: Vec<RowStats> = {
+        let inp = Inputs {
+            h: empty,
+            bed: empty,
+            nodata: &[],
+            near_wall: &[],
+            pipes: [empty; 4],
+            vel: [empty; 6],
+            vbase: 0,
+            new_pipes: new_pipes.each_ref().map(|v| v.as_slice()),
+            flux: flux.each_ref().map(|v| v.as_slice()),
+            factor,
+        };
+        let (h, pipes) = (&mut state.h, &mut state.pipes);
+        let prows = rows_of(pipes.each_mut().map(|v| &mut v[rows.clone()]), pw);
+        h[rows.clone()]
             .par_chunks_mut(pw)
-            .zip(scratch.flux[range].par_chunks_mut(pw))
+            .zip(prows)
+            .zip(row_tiles[r0 * ntx..(r0 + nr) * ntx].par_chunks_mut(ntx))
             .enumerate()
-            .for_each(|(ri, (urow, frow))| {
-                let r = p1.r0 + ri;
-                for c in p1.c0..=p1.c1 {
-                    let k = r * pw + c;
-                    let wall_k = is_wall(nodata, k, c, r);
-                    for d in 0..4 {
-                        let (dc, dr) = DIRS[d];
-                        let (u, f) = match neighbour(c, r, d) {
-                            Some(j)
-                                if !wall_k
-                                    && !is_wall(
-                                        nodata,
-                                        j,
-                                        (c as isize + dc) as usize,
-                                        r + dr as usize,
-                                    ) =>
-                            {
-                                pipe_update(
-                                    params, pg, mu_g, dt, pw, k, j, d, c, r, h, bed, pipes, vel,
-                                )
-                            }
-                            _ => (0.0, 0.0),
-                        };
-                        urow[c][d] = u;
-                        frow[c][d] = f;
-                    }
-                }
-            });
-    }
-
-    // Pass 3: outflow scaling factor of every cell that can hold snow (the box).
-    {
-        let (h, flux) = (&state.h, &scratch.flux);
-        let area = pg.area;
-        scratch.factor[bx.r0 * pw..(bx.r1 + 1) * pw]
-            .par_chunks_mut(pw)
-            .enumerate()
-            .for_each(|(ri, row)| {
-                let r = bx.r0 + ri;
-                for (c, fac) in row.iter_mut().enumerate().take(bx.c1 + 1).skip(bx.c0) {
-                    let k = r * pw + c;
-                    let mut vout = 0.0;
-                    for d in 0..4 {
-                        vout += flux[k][d].max(0.0);
-                        if let Some(kb) = back(c, r, d) {
-                            vout += (-flux[kb][d]).max(0.0);
-                        }
-                    }
-                    let avail = h[k] * area;
-                    *fac = if vout > avail { avail / vout } else { 1.0 };
-                }
-            });
-    }
-
-    // Pass 4: scale volumes and velocities by the upwind cell's factor; store the velocities.
-    let rows4: Vec<(f64, f64)> = {
-        let (factor, new_pipes) = (&scratch.factor, &scratch.new_pipes);
-        let range = p1.r0 * pw..(p1.r1 + 1) * pw;
-        state.pipes[range.clone()]
-            .par_chunks_mut(pw)
-            .zip(scratch.flux[range].par_chunks_mut(pw))
-            .enumerate()
-            .map(|(ri, (urow, frow))| {
-                let r = p1.r0 + ri;
-                let mut moved = 0.0;
-                let mut umax = 0.0f64;
-                for c in p1.c0..=p1.c1 {
-                    let k = r * pw + c;
-                    for d in 0..4 {
-                        let mut u = new_pipes[k][d];
-                        let mut f = frow[c][d];
-                        if f != 0.0 {
-                            let src = if f > 0.0 {
-                                k
-                            } else {
-                                neighbour(c, r, d).unwrap_or(k)
-                            };
-                            let s = factor[src];
-                            f *= s;
-                            u *= s;
-                        }
-                        frow[c][d] = f;
-                        urow[c][d] = u;
-                        moved += f.abs();
-                        umax = umax.max(u.abs());
-                    }
-                }
-                (moved, umax)
-            })
-            .collect()
-    };
-
-    // Pass 5: thickness update (cells of the box), border outflow, next box.
-    let rows5: Vec<RowStats> = {
-        let (flux, pipes) = (&scratch.flux, &state.pipes);
-        let area = pg.area;
-        state.h[bx.r0 * pw..(bx.r1 + 1) * pw]
-            .par_chunks_mut(pw)
-            .enumerate()
-            .map(|(ri, row)| {
-                let r = bx.r0 + ri;
-                let mut st = RowStats::default();
-                let ghost_row = r == 0 || r == ph - 1;
-                for (c, hv) in row.iter_mut().enumerate().take(bx.c1 + 1).skip(bx.c0) {
-                    let k = r * pw + c;
-                    let mut dv = 0.0;
-                    for d in 0..4 {
-                        dv -= flux[k][d];
-                        if let Some(kb) = back(c, r, d) {
-                            dv += flux[kb][d];
-                        }
-                    }
-                    let mut hn = *hv + dv / area;
-                    if hn < 0.0 {
-                        hn = 0.0;
-                    }
-                    if ghost_row || c == 0 || c == pw - 1 {
-                        st.outflow += hn * area;
-                        hn = 0.0;
-                    } else if hn > 0.0 {
-                        st.flowing += 1;
-                    }
-                    *hv = hn;
-                    if hn > 0.0 || pipes[k].iter().any(|&u| u != 0.0) {
-                        st.cols = Some(match st.cols {
-                            None => (c, c),
-                            Some((a, b)) => (a.min(c), b.max(c)),
-                        });
-                    }
-                }
-                st
+            .map(|(ri, ((hrow, mut prow), trow))| {
+                let r = r0 + ri;
+                update_row(
+                    simd,
+                    &k,
+                    &inp,
+                    seg2.row(r),
+                    seg3.row(r),
+                    r,
+                    hrow,
+                    &mut prow,
+                    trow,
+                )
             })
             .collect()
     };
@@ -923,66 +1037,829 @@ fn substep(
         outflow: 0.0,
         max_speed: 0.0,
         flowing: 0,
+        visited: seg3.cells,
     };
-    for (m, u) in rows4 {
-        out.moved += m;
-        out.max_speed = out.max_speed.max(u);
-    }
-    let mut next: Option<ActiveBox> = None;
-    for (ri, st) in rows5.iter().enumerate() {
+    let mut hmax = 0.0f64;
+    state.tiles.clear();
+    for (ri, st) in stats.iter().enumerate() {
+        let r = r0 + ri;
+        out.moved += st.moved;
+        out.max_speed = out.max_speed.max(st.umax);
         out.outflow += st.outflow;
         out.flowing += st.flowing;
-        if let Some((a, b)) = st.cols {
-            let r = bx.r0 + ri;
-            next = Some(match next {
-                None => ActiveBox {
-                    r0: r,
-                    r1: r,
-                    c0: a,
-                    c1: b,
-                },
-                Some(nb) => ActiveBox {
-                    r0: nb.r0.min(r),
-                    r1: nb.r1.max(r),
-                    c0: nb.c0.min(a),
-                    c1: nb.c1.max(b),
-                },
-            });
+        hmax = hmax.max(st.hmax);
+        for &[a, b] in &row_tiles[r * ntx..r * ntx + st.tiles] {
+            state.tiles.add(r, a as usize, b as usize);
         }
     }
-    state.active = next.map(|b| b.grown(pw, ph));
+    state.maxima = (out.max_speed, hmax);
+    state.active = state.tiles.bbox().map(|b| b.grown(pw, ph));
     out
+}
+
+/// How a pass visits a cell.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Visit {
+    /// `V::N` cells from this one, all away from the ghost ring and walls: the lane kernel.
+    Chunk,
+    /// One such cell: the lane kernel on one lane.
+    One,
+    /// A cell near the ghost ring or a wall: the general code.
+    Border,
+}
+
+/// The cells of `segs` and how to visit them: columns `lo..=hi` not flagged in `wall` run
+/// the lane kernels (in chunks of `lanes`), the others the general code. (An iterator, not a
+/// callback, so that the kernels are compiled inside the caller, with its target features.)
+struct Walk<'a> {
+    segs: &'a [[u32; 2]],
+    /// Next segment, next column, last column of the current segment.
+    si: usize,
+    c: usize,
+    b: usize,
+    lo: usize,
+    hi: usize,
+    wall: Option<&'a [bool]>,
+    lanes: usize,
+}
+
+#[inline(always)]
+fn walk<'a>(
+    segs: &'a [[u32; 2]],
+    lo: usize,
+    hi: usize,
+    wall: Option<&'a [bool]>,
+    lanes: usize,
+) -> Walk<'a> {
+    Walk {
+        segs,
+        si: 0,
+        c: 1,
+        b: 0,
+        lo,
+        hi,
+        wall,
+        lanes,
+    }
+}
+
+impl Walk<'_> {
+    #[inline(always)]
+    fn clear(&self, c: usize) -> bool {
+        self.wall.is_none_or(|w| !w[c])
+    }
+}
+
+impl Iterator for Walk<'_> {
+    type Item = (usize, Visit);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(usize, Visit)> {
+        if self.c > self.b {
+            let &[a, b] = self.segs.get(self.si)?;
+            self.si += 1;
+            self.c = a as usize;
+            self.b = b as usize;
+        }
+        let c = self.c;
+        if c >= self.lo && c <= self.hi && self.clear(c) {
+            let n = self.lanes;
+            if n > 1 && c + n - 1 <= self.b.min(self.hi) && (c + 1..c + n).all(|i| self.clear(i)) {
+                self.c += n;
+                return Some((c, Visit::Chunk));
+            }
+            self.c += 1;
+            return Some((c, Visit::One));
+        }
+        self.c += 1;
+        Some((c, Visit::Border))
+    }
+}
+
+/// Defines `$name(simd, args..)`, running `$generic::<F4>` compiled for AVX when `simd` is
+/// set (the caller checked the CPU), else `$generic::<f64>`.
+macro_rules! lanes_dispatch {
+    ($name:ident, $avx:ident, $generic:ident, ($($arg:ident : $ty:ty),*) -> $ret:ty) => {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx")]
+        #[allow(clippy::too_many_arguments)]
+        fn $avx($($arg: $ty),*) -> $ret {
+            $generic::<lanes::F4>($($arg),*)
+        }
+
+        #[allow(clippy::too_many_arguments)]
+        fn $name(simd: bool, $($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            if simd {
+                // SAFETY: `simd` is only set when the CPU has AVX (`lanes::simd_available`).
+                return unsafe { $avx($($arg),*) };
+            }
+            let _ = simd;
+            $generic::<f64>($($arg),*)
+        }
+    };
+}
+
+lanes_dispatch!(vel_row, vel_row_avx, vel_row_lanes, (k: &Consts, pg: &PipeGeometry, inp: &Inputs, segs: &[[u32; 2]], r: usize, out: &mut [&mut [f64]; 6]) -> ());
+lanes_dispatch!(pipes_row, pipes_row_avx, pipes_row_lanes, (params: &AvalancheParams, k: &Consts, pg: &PipeGeometry, inp: &Inputs, segs: &[[u32; 2]], r: usize, np: &mut [&mut [f64]; 4], fl: &mut [&mut [f64]; 4]) -> ());
+lanes_dispatch!(factor_row, factor_row_avx, factor_row_lanes, (k: &Consts, inp: &Inputs, segs: &[[u32; 2]], r: usize, out: &mut [f64]) -> ());
+lanes_dispatch!(update_row, update_row_avx, update_row_lanes, (k: &Consts, inp: &Inputs, seg2: &[[u32; 2]], seg3: &[[u32; 2]], r: usize, hrow: &mut [f64], prow: &mut [&mut [f64]; 4], trow: &mut [[u32; 2]]) -> RowStats);
+
+/// Pass 1 on one row.
+#[inline(always)]
+fn vel_row_lanes<V: Lanes>(
+    k: &Consts,
+    pg: &PipeGeometry,
+    inp: &Inputs,
+    segs: &[[u32; 2]],
+    r: usize,
+    out: &mut [&mut [f64]; 6],
+) {
+    let pw = k.pw;
+    let (lo, hi) = if r >= 1 && r + 2 <= k.ph {
+        (1, pw - 2)
+    } else {
+        (1, 0)
+    };
+    let wall = &inp.near_wall[r * pw..(r + 1) * pw];
+    for (c, visit) in walk(segs, lo, hi, Some(wall), V::N) {
+        let kk = r * pw + c;
+        match visit {
+            Visit::Chunk => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { cell_flow_lanes::<V>(k, inp, kk, out, c) }
+            }
+            Visit::One => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { cell_flow_lanes::<f64>(k, inp, kk, out, c) }
+            }
+            Visit::Border => {
+                let v = cell_flow_border(k, pg, inp, c, r);
+                for (o, x) in out.iter_mut().zip(v) {
+                    o[c] = x;
+                }
+            }
+        }
+    }
+}
+
+/// Pass 1 on `V::N` cells away from the ghost ring and from nodata cells (their 3x3
+/// neighbourhoods hold none).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn cell_flow_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    out: &mut [&mut [f64]; 6],
+    c: usize,
+) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let pw = k.pw;
+        let p = &inp.pipes;
+        let half = V::splat(0.5);
+        let p0 = half * (ld::<V>(p[0], kk) + ld::<V>(p[0], kk - 1));
+        let p1 = half * (ld::<V>(p[1], kk) + ld::<V>(p[1], kk - pw));
+        let p2 = half * (ld::<V>(p[2], kk) + ld::<V>(p[2], kk - pw - 1));
+        let p3 = half * (ld::<V>(p[3], kk) + ld::<V>(p[3], kk - pw + 1));
+        let vx_d = (p2 - p3) / V::splat(k.den_x);
+        let vy_d = (p2 + p3) / V::splat(k.den_y);
+        let vx = half * (p0 + vx_d);
+        let vy = half * (p1 + vy_d);
+        let a = |i: usize| ld::<V>(inp.bed, i) + ld::<V>(inp.h, i);
+        let gx = (a(kk + 1) - a(kk - 1)) / V::splat(k.two_dx);
+        let gy = (a(kk + pw) - a(kk - pw)) / V::splat(k.two_dy);
+        let hk = ld::<V>(inp.h, kk);
+        vx.store(out[VX], c);
+        vy.store(out[VY], c);
+        (hk * vx).store(out[QX], c);
+        (hk * vy).store(out[QY], c);
+        gx.store(out[GX], c);
+        gy.store(out[GY], c);
+    }
+}
+
+/// Pass 1 at any cell (ghost ring and nodata included).
+fn cell_flow_border(k: &Consts, pg: &PipeGeometry, inp: &Inputs, c: usize, r: usize) -> [f64; 6] {
+    let kk = r * k.pw + c;
+    let mut p = [0.0; 4];
+    for (d, pd) in p.iter_mut().enumerate() {
+        let own = inp.pipes[d][kk];
+        *pd = match k.back(c, r, d) {
+            Some(kb) => 0.5 * (own + inp.pipes[d][kb]),
+            None => own,
+        };
+    }
+    let vx_d = (p[2] - p[3]) / k.den_x;
+    let vy_d = (p[2] + p[3]) / k.den_y;
+    let (vx, vy) = (0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d));
+    let [gx, gy] =
+        surface_gradient(pg, inp.h, inp.bed, inp.nodata, k.pw, kk).unwrap_or([f64::NAN, f64::NAN]);
+    let hk = inp.h[kk];
+    [vx, vy, hk * vx, hk * vy, gx, gy]
+}
+
+/// Pass 2 on one row.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn pipes_row_lanes<V: Lanes>(
+    params: &AvalancheParams,
+    k: &Consts,
+    pg: &PipeGeometry,
+    inp: &Inputs,
+    segs: &[[u32; 2]],
+    r: usize,
+    np: &mut [&mut [f64]; 4],
+    fl: &mut [&mut [f64]; 4],
+) {
+    let pw = k.pw;
+    let (lo, hi) = if r >= 1 && r + 3 <= k.ph && pw >= 5 {
+        (2, pw - 3)
+    } else {
+        (1, 0)
+    };
+    let wall = &inp.near_wall[r * pw..(r + 1) * pw];
+    for (c, visit) in walk(segs, lo, hi, Some(wall), V::N) {
+        let kk = r * pw + c;
+        match visit {
+            Visit::Chunk => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { owner_lanes::<V>(k, inp, kk, np, fl, c) }
+            }
+            Visit::One => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { owner_lanes::<f64>(k, inp, kk, np, fl, c) }
+            }
+            Visit::Border => {
+                let wall_k = k.is_wall(inp.nodata, kk, c, r);
+                for d in 0..4 {
+                    let (dc, dr) = DIRS[d];
+                    let (u, f) = match k.neighbour(c, r, d) {
+                        Some(j)
+                            if !wall_k
+                                && !k.is_wall(
+                                    inp.nodata,
+                                    j,
+                                    (c as isize + dc) as usize,
+                                    r + dr as usize,
+                                ) =>
+                        {
+                            pipe_update(params, k, pg, inp, kk, j, d, c, r)
+                        }
+                        _ => (0.0, 0.0),
+                    };
+                    np[d][c] = u;
+                    fl[d][c] = f;
+                }
+            }
+        }
+    }
+}
+
+/// Pass 2 on `V::N` owners whose pipes and advection stencils stay inside the grid (away from
+/// the ghost ring) and whose 3x3 neighbourhoods hold no nodata cell: no pipe is a wall and
+/// surface gradients are defined at both ends of every pipe.
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn owner_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    np: &mut [&mut [f64]; 4],
+    fl: &mut [&mut [f64]; 4],
+    c: usize,
+) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let dry = V::splat(DRY);
+        let zero = V::splat(0.0);
+        let hk = ld::<V>(inp.h, kk);
+        let dry_k = hk.le(dry);
+        if V::all(dry_k)
+            && k.off
+                .iter()
+                .all(|&o| V::all(ld::<V>(inp.h, kk + o).le(dry)))
+        {
+            for d in 0..4 {
+                zero.store(np[d], c);
+                zero.store(fl[d], c);
+            }
+            return;
+        }
+        for d in 0..4 {
+            let (u, f) = pipe_lanes::<V>(k, inp, d, kk, hk, dry_k);
+            u.store(np[d], c);
+            f.store(fl[d], c);
+        }
+    }
+}
+
+/// New velocity and raw volume of the pipes `d` of `V::N` owners (the operations of
+/// [`pipe_update`] lane by lane; lanes with two dry ends or held by static friction give 0,
+/// and when every lane does, the rest is skipped).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn pipe_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    d: usize,
+    kk: usize,
+    hk: V,
+    dry_k: V::M,
+) -> (V, V) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let zero = V::splat(0.0);
+        let j = kk + k.off[d];
+        let hj = ld::<V>(inp.h, j);
+        let dead = V::and(dry_k, hj.le(V::splat(DRY)));
+        if V::all(dead) {
+            return (zero, zero);
+        }
+        let half = V::splat(0.5);
+        let lv = |a: usize, i: usize| ld::<V>(inp.vel[a], i - inp.vbase);
+        let dtg = V::splat(k.dtg);
+        let t0 = half * (lv(VX, kk) + lv(VX, j)) - dtg * (half * (lv(GX, kk) + lv(GX, j)));
+        let t1 = half * (lv(VY, kk) + lv(VY, j)) - dtg * (half * (lv(GY, kk) + lv(GY, j)));
+        let tnorm = (t0 * t0 + t1 * t1).sqrt();
+        let yield_dt = V::splat(k.yield_dt);
+        let dead = if k.coulomb {
+            V::or(dead, tnorm.le(yield_dt))
+        } else {
+            dead
+        };
+        if V::all(dead) {
+            return (zero, zero);
+        }
+        let u0 = ld::<V>(inp.pipes[d], kk);
+        let ak = ld::<V>(inp.bed, kk) + hk;
+        let aj = ld::<V>(inp.bed, j) + hj;
+        let a = V::splat(-G) * (aj - ak) / V::splat(k.len[d]);
+        let mut u = u0 + V::splat(k.dt) * a;
+        if k.adv {
+            u = u + advection_lanes::<V>(k, inp, d, kk, j, hk, hj, u0);
+        }
+        // `e·trial` (the exact zero components of the axis pipes only change the sign of a zero,
+        // which `abs` drops).
+        let num = match d {
+            0 => t0,
+            1 => t1,
+            _ => V::splat(k.e[d][0]) * t0 + V::splat(k.e[d][1]) * t1,
+        };
+        let proj = V::select(tnorm.gt(zero), (num / tnorm).abs(), V::splat(1.0));
+        let fric = yield_dt * proj;
+        u = V::select(u.abs().le(fric), zero, u - fric * u.signum());
+        if k.visc != 0.0 {
+            // (With no viscosity the division is by exactly 1.)
+            u = u / (V::splat(1.0) + V::splat(k.visc) * (hk + hj));
+        }
+        let hup = V::select(u.gt(zero), hk, hj);
+        let dead = V::or(dead, hup.le(V::splat(DRY)));
+        let f = V::splat(k.width[d]) * hup * u * V::splat(k.dt);
+        (V::select(dead, zero, u), V::select(dead, zero, f))
+    }
+}
+
+/// [`advection`] for the owners of [`owner_lanes`] (every lattice neighbour exists).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+unsafe fn advection_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    d: usize,
+    kk: usize,
+    j: usize,
+    hk: V,
+    hj: V,
+    u0: V,
+) -> V {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let zero = V::splat(0.0);
+        let half = V::splat(0.5);
+        let hbar = half * (hk + hj);
+        let dead = hbar.le(V::splat(DRY));
+        if V::all(dead) {
+            return zero;
+        }
+        let (qx, qy) = (inp.vel[QX], inp.vel[QY]);
+        let pw = k.pw;
+        let jk = j - kk;
+        // (Velocity arrays start at padded index `vbase`.)
+        let (kv, jv) = (kk - inp.vbase, j - inp.vbase);
+        let qp0 = half * (ld::<V>(qx, kv) + ld::<V>(qx, jv));
+        let qp1 = half * (ld::<V>(qy, kv) + ld::<V>(qy, jv));
+        let dt = V::splat(k.dt);
+        let rx = dt / (V::splat(k.dx) * hbar);
+        let ry = if k.square {
+            rx
+        } else {
+            dt / (V::splat(k.dy) * hbar)
+        };
+        let pd = inp.pipes[d];
+        // Lattice neighbours (west, east, north, south): owner, discharge component, rate and
+        // the sign making the face's inflow positive.
+        let nbs = [
+            (kk - 1, kv - 1, qx, qp0, rx, 1.0),
+            (kk + 1, kv + 1, qx, qp0, rx, -1.0),
+            (kk - pw, kv - pw, qy, qp1, ry, 1.0),
+            (kk + pw, kv + pw, qy, qp1, ry, -1.0),
+        ];
+        let mut lam = [zero; 4];
+        let mut un = [zero; 4];
+        let mut total = zero;
+        for (m, &(kn, knv, q, qp, rate, sign)) in nbs.iter().enumerate() {
+            let qn = half * (ld::<V>(q, knv) + ld::<V>(q, knv + jk));
+            let inflow = V::splat(sign) * (half * (qp + qn));
+            let inn = inflow.gt(zero);
+            lam[m] = V::select(inn, rate * inflow, zero);
+            un[m] = V::select(inn, ld::<V>(pd, kn), zero);
+            // (Adding the zero of a face without inflow leaves the sum unchanged.)
+            total = total + lam[m];
+        }
+        let one = V::splat(1.0);
+        let big = total.gt(one);
+        let scale = if V::any(big) {
+            V::select(big, one / total, one)
+        } else {
+            one
+        };
+        let mut du = zero;
+        for m in 0..4 {
+            du = du + scale * lam[m] * (un[m] - u0);
+        }
+        V::select(dead, zero, du)
+    }
+}
+
+/// Pass 3 on one row.
+#[inline(always)]
+fn factor_row_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    segs: &[[u32; 2]],
+    r: usize,
+    out: &mut [f64],
+) {
+    let pw = k.pw;
+    let (lo, hi) = if r >= 1 { (1, pw - 2) } else { (1, 0) };
+    for (c, visit) in walk(segs, lo, hi, None, V::N) {
+        let kk = r * pw + c;
+        match visit {
+            Visit::Chunk => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { factor_lanes::<V>(k, inp, kk, out, c) }
+            }
+            Visit::One => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { factor_lanes::<f64>(k, inp, kk, out, c) }
+            }
+            Visit::Border => {
+                if inp.h[kk] <= DRY {
+                    continue;
+                }
+                let mut vout = 0.0;
+                for d in 0..4 {
+                    vout += inp.flux[d][kk].max(0.0);
+                    if let Some(kb) = k.back(c, r, d) {
+                        vout += (-inp.flux[d][kb]).max(0.0);
+                    }
+                }
+                let avail = inp.h[kk] * k.area;
+                out[c] = if vout > avail { avail / vout } else { 1.0 };
+            }
+        }
+    }
+}
+
+/// Pass 3 on `V::N` cells whose back neighbours exist. Lanes at most `DRY` deep may get a
+/// factor too (finite, in [0, 1], never used).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn factor_lanes<V: Lanes>(k: &Consts, inp: &Inputs, kk: usize, out: &mut [f64], c: usize) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let hk = ld::<V>(inp.h, kk);
+        if V::all(hk.le(V::splat(DRY))) {
+            return;
+        }
+        let zero = V::splat(0.0);
+        let mut vout = zero;
+        for d in 0..4 {
+            // (Zeros of either sign add nothing to `vout`, which starts at +0.)
+            vout = vout + ld::<V>(inp.flux[d], kk).max(zero);
+            vout = vout + (-ld::<V>(inp.flux[d], kk - k.off[d])).max(zero);
+        }
+        let avail = hk * V::splat(k.area);
+        V::select(vout.gt(avail), avail / vout, V::splat(1.0)).store(out, c);
+    }
+}
+
+/// Lane accumulators of pass 4 (maxima and counts: any order gives the same result).
+struct Acc<V> {
+    umax: V,
+    hmax: V,
+    flowing: usize,
+}
+
+/// Pass 4 on one row.
+#[allow(clippy::needless_range_loop)]
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn update_row_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    seg2: &[[u32; 2]],
+    seg3: &[[u32; 2]],
+    r: usize,
+    hrow: &mut [f64],
+    prow: &mut [&mut [f64]; 4],
+    trow: &mut [[u32; 2]],
+) -> RowStats {
+    let (pw, ph) = (k.pw, k.ph);
+    let mut st = RowStats::default();
+    let zero = V::splat(0.0);
+    let mut acc = Acc {
+        umax: zero,
+        hmax: zero,
+        flowing: 0,
+    };
+    let mut acc1 = Acc {
+        umax: 0.0,
+        hmax: 0.0,
+        flowing: 0,
+    };
+    // The row's moved volume, summed cell by cell, pipe by pipe.
+    let mut moved = 0.0;
+    let (lo, hi) = if r >= 1 && r + 2 <= ph {
+        (1, pw - 2)
+    } else {
+        (1, 0)
+    };
+    let ghost_row = r == 0 || r == ph - 1;
+    // Thickness.
+    for (c, visit) in walk(seg2, lo, hi, None, V::N) {
+        let kk = r * pw + c;
+        match visit {
+            Visit::Chunk => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { thickness_lanes::<V>(k, inp, kk, hrow, c, &mut acc) }
+            }
+            Visit::One => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { thickness_lanes::<f64>(k, inp, kk, hrow, c, &mut acc1) }
+            }
+            Visit::Border => {
+                let mut dv = 0.0;
+                for d in 0..4 {
+                    dv -= scaled_flux(k, inp, kk, c, r, d);
+                    if let Some(kb) = k.back(c, r, d) {
+                        let (dc, dr) = DIRS[d];
+                        dv +=
+                            scaled_flux(k, inp, kb, (c as isize - dc) as usize, r - dr as usize, d);
+                    }
+                }
+                let mut hn = hrow[c] + dv / k.area;
+                if hn < 0.0 {
+                    hn = 0.0;
+                }
+                if ghost_row || c == 0 || c == pw - 1 {
+                    st.outflow += hn * k.area;
+                    hn = 0.0;
+                } else if hn > 0.0 {
+                    acc1.flowing += 1;
+                }
+                acc1.hmax = acc1.hmax.max(hn);
+                hrow[c] = hn;
+            }
+        }
+    }
+    // Pipes, volume moved, content.
+    let mut run: Option<(usize, usize)> = None;
+    let mut content = |c: usize, st: &mut RowStats| {
+        run = match run {
+            Some((a, _)) if a / TILE == c / TILE => Some((a, c)),
+            Some((a, b)) => {
+                trow[st.tiles] = [a as u32, b as u32];
+                st.tiles += 1;
+                Some((c, c))
+            }
+            None => Some((c, c)),
+        };
+    };
+    for (c, visit) in walk(seg3, lo, hi, None, V::N) {
+        let kk = r * pw + c;
+        let bits = match visit {
+            Visit::Chunk => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { scale_lanes::<V>(k, inp, kk, hrow, prow, c, &mut acc, &mut moved) }
+            }
+            Visit::One => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { scale_lanes::<f64>(k, inp, kk, hrow, prow, c, &mut acc1, &mut moved) }
+            }
+            Visit::Border => {
+                let mut moving = false;
+                for d in 0..4 {
+                    let mut u = inp.new_pipes[d][kk];
+                    let mut f = inp.flux[d][kk];
+                    if f != 0.0 {
+                        let src = if f > 0.0 {
+                            kk
+                        } else {
+                            k.neighbour(c, r, d).unwrap_or(kk)
+                        };
+                        let s = inp.factor[src];
+                        f *= s;
+                        u *= s;
+                    }
+                    prow[d][c] = u;
+                    moved += f.abs();
+                    acc1.umax = acc1.umax.max(u.abs());
+                    moving |= u != 0.0;
+                }
+                (moving || hrow[c] > 0.0) as u32
+            }
+        };
+        let mut b = bits;
+        while b != 0 {
+            content(c + b.trailing_zeros() as usize, &mut st);
+            b &= b - 1;
+        }
+    }
+    if let Some((a, b)) = run {
+        trow[st.tiles] = [a as u32, b as u32];
+        st.tiles += 1;
+    }
+    st.moved = moved;
+    st.flowing = acc.flowing + acc1.flowing;
+    st.umax = acc1.umax;
+    st.hmax = acc1.hmax;
+    for i in 0..V::N {
+        st.umax = st.umax.max(acc.umax.lane(i));
+        st.hmax = st.hmax.max(acc.hmax.lane(i));
+    }
+    st
+}
+
+/// A pipe's volume scaled by its upwind cell's factor (general code).
+fn scaled_flux(k: &Consts, inp: &Inputs, kk: usize, c: usize, r: usize, d: usize) -> f64 {
+    let f = inp.flux[d][kk];
+    if f != 0.0 {
+        let src = if f > 0.0 {
+            kk
+        } else {
+            k.neighbour(c, r, d).unwrap_or(kk)
+        };
+        f * inp.factor[src]
+    } else {
+        f
+    }
+}
+
+/// Thickness update of `V::N` cells away from the ghost ring. A volume is scaled by the
+/// factor of its upwind cell: `f·s` is `f` itself for a zero `f` (`s` is finite and ≥ 0), so
+/// the product needs no branch.
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn thickness_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    hrow: &mut [f64],
+    c: usize,
+    acc: &mut Acc<V>,
+) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let zero = V::splat(0.0);
+        let fac = |i: usize| ld::<V>(inp.factor, i);
+        let mut dv = zero;
+        for d in 0..4 {
+            let off = k.off[d];
+            let f = ld::<V>(inp.flux[d], kk);
+            dv = dv - f * V::select(f.gt(zero), fac(kk), fac(kk + off));
+            let kb = kk - off;
+            let f = ld::<V>(inp.flux[d], kb);
+            dv = dv + f * V::select(f.gt(zero), fac(kb), fac(kk));
+        }
+        let hn = ld::<V>(hrow, c) + dv / V::splat(k.area);
+        let hn = V::select(hn.lt(zero), zero, hn);
+        hn.store(hrow, c);
+        acc.flowing += V::bits(hn.gt(zero)).count_ones() as usize;
+        acc.hmax = acc.hmax.max(hn);
+    }
+}
+
+/// Pipes of `V::N` cells away from the ghost ring scaled by their upwind cell's factor;
+/// returns the lanes with content (snow or a moving pipe).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+unsafe fn scale_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    hrow: &[f64],
+    prow: &mut [&mut [f64]; 4],
+    c: usize,
+    acc: &mut Acc<V>,
+    moved: &mut f64,
+) -> u32 {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let zero = V::splat(0.0);
+        let fac = |i: usize| ld::<V>(inp.factor, i);
+        let mut moving = zero.ne(zero);
+        let mut absf = [zero; 4];
+        for d in 0..4 {
+            let u = ld::<V>(inp.new_pipes[d], kk);
+            let f = ld::<V>(inp.flux[d], kk);
+            let s = V::select(f.gt(zero), fac(kk), fac(kk + k.off[d]));
+            let u = V::select(f.ne(zero), u * s, u);
+            absf[d] = (f * s).abs();
+            u.store(prow[d], c);
+            acc.umax = acc.umax.max(u.abs());
+            moving = V::or(moving, u.ne(zero));
+        }
+        // The row's volume in the order of the general code: cell by cell, pipe by pipe.
+        for i in 0..V::N {
+            for a in &absf {
+                *moved += a.lane(i);
+            }
+        }
+        V::bits(V::or(moving, ld::<V>(hrow, c).gt(zero)))
+    }
 }
 
 /// One pipe's new velocity and raw (unscaled) volume for a sub-step.
 #[allow(clippy::too_many_arguments)]
-#[inline]
 fn pipe_update(
     params: &AvalancheParams,
+    k: &Consts,
     pg: &PipeGeometry,
-    mu_g: f64,
-    dt: f64,
-    pw: usize,
-    k: usize,
+    inp: &Inputs,
+    kk: usize,
     j: usize,
     d: usize,
     c: usize,
     r: usize,
-    h: &[f64],
-    bed: &[f64],
-    pipes: &[[f64; 4]],
-    vel: &[CellFlow],
 ) -> (f64, f64) {
-    let (hi, hj) = (h[k], h[j]);
+    let (h, bed, vel, vb) = (inp.h, inp.bed, &inp.vel, inp.vbase);
+    let dt = k.dt;
+    let (hi, hj) = (h[kk], h[j]);
     if hi <= DRY && hj <= DRY {
         return (0.0, 0.0);
     }
-    let u0 = pipes[k][d];
-    let a = -G * ((bed[j] + hj) - (bed[k] + hi)) / pg.len[d];
-    let vp = [0.5 * (vel[k][0] + vel[j][0]), 0.5 * (vel[k][1] + vel[j][1])];
+    let u0 = inp.pipes[d][kk];
+    let a = -G * ((bed[j] + hj) - (bed[kk] + hi)) / pg.len[d];
+    let vp = [
+        0.5 * (vel[VX][kk - vb] + vel[VX][j - vb]),
+        0.5 * (vel[VY][kk - vb] + vel[VY][j - vb]),
+    ];
     let mut u = u0 + dt * a;
     if params.momentum_advection {
-        u += advection(pg, pipes, vel, h, pw, k, j, d, c, r, dt);
+        u += advection(pg, inp, k.pw, kk, j, d, c, r, dt);
     }
     // Coulomb friction as one vector: the trial velocity at the pipe, `v + δt·(−g∇A)` (cell
     // velocities and surface gradients averaged over the pipe's two cells), is slowed by
@@ -990,28 +1867,32 @@ fn pipe_update(
     // trial speed is below `g·tanθc·δt` the snow is held (static friction: the yield
     // criterion `|∇A| ≤ tanθc` at rest, the same in every direction), and a pipe the force
     // would reverse is set to zero.
-    let grad = match (vel[k][4].is_nan(), vel[j][4].is_nan()) {
-        (false, false) => [0.5 * (vel[k][4] + vel[j][4]), 0.5 * (vel[k][5] + vel[j][5])],
-        (false, true) => [vel[k][4], vel[k][5]],
-        (true, false) => [vel[j][4], vel[j][5]],
+    let g = |i: usize| [vel[GX][i - vb], vel[GY][i - vb]];
+    let grad = match (vel[GX][kk - vb].is_nan(), vel[GX][j - vb].is_nan()) {
+        (false, false) => [
+            0.5 * (vel[GX][kk - vb] + vel[GX][j - vb]),
+            0.5 * (vel[GY][kk - vb] + vel[GY][j - vb]),
+        ],
+        (false, true) => g(kk),
+        (true, false) => g(j),
         (true, true) => [0.0, 0.0],
     };
-    let trial = [vp[0] - dt * G * grad[0], vp[1] - dt * G * grad[1]];
+    let trial = [vp[0] - k.dtg * grad[0], vp[1] - k.dtg * grad[1]];
     let tnorm = (trial[0] * trial[0] + trial[1] * trial[1]).sqrt();
-    let yield_dt = params.alpha * mu_g * dt;
+    let yield_dt = k.yield_dt;
     let proj = if tnorm > 0.0 {
         ((pg.e[d][0] * trial[0] + pg.e[d][1] * trial[1]) / tnorm).abs()
     } else {
         1.0
     };
     let fric = yield_dt * proj;
-    if (params.alpha > 0.0 && tnorm <= yield_dt) || u.abs() <= fric {
+    if (k.alpha > 0.0 && tnorm <= yield_dt) || u.abs() <= fric {
         u = 0.0;
     } else {
         u -= fric * u.signum();
     }
     // Viscous term, implicit.
-    u /= 1.0 + dt * (1.0 - params.alpha) * params.k_viscous * 0.5 * (hi + hj);
+    u /= 1.0 + dt * (1.0 - k.alpha) * params.k_viscous * 0.5 * (hi + hj);
     let hup = if u > 0.0 { hi } else { hj };
     if hup <= DRY {
         return (0.0, 0.0);
@@ -1048,12 +1929,9 @@ fn surface_gradient(
 /// discharges `h·v` of the two pipes' end cells), `h̄` the mean depth of the pipe's cells. The
 /// `λ` are scaled so that `Σ λ ≤ 1` (a convex combination: no overshoot).
 #[allow(clippy::too_many_arguments)]
-#[inline]
 fn advection(
     pg: &PipeGeometry,
-    pipes: &[[f64; 4]],
-    vel: &[CellFlow],
-    h: &[f64],
+    inp: &Inputs,
     pw: usize,
     k: usize,
     j: usize,
@@ -1062,14 +1940,18 @@ fn advection(
     r: usize,
     dt: f64,
 ) -> f64 {
+    let (h, vel, vb) = (inp.h, &inp.vel, inp.vbase);
     let hbar = 0.5 * (h[k] + h[j]);
     if hbar <= DRY {
         return 0.0;
     }
     let ph = pg.ph;
-    let u0 = pipes[k][d];
+    let u0 = inp.pipes[d][k];
     let (dc, dr) = DIRS[d];
-    let qp = [0.5 * (vel[k][2] + vel[j][2]), 0.5 * (vel[k][3] + vel[j][3])];
+    let qp = [
+        0.5 * (vel[QX][k - vb] + vel[QX][j - vb]),
+        0.5 * (vel[QY][k - vb] + vel[QY][j - vb]),
+    ];
     // Lattice neighbours: (owner offset, axis, side) with side +1 for the + face.
     let nbs: [(isize, isize, usize, f64); 4] = [
         (-1, 0, 0, -1.0),
@@ -1081,31 +1963,24 @@ fn advection(
     let mut un = [0.0f64; 4];
     let mut total = 0.0;
     let rate = [dt / (pg.dx * hbar), dt / (pg.dy * hbar)];
-    let interior = c >= 2 && c + 2 < pw && r >= 1 && r + 2 < ph;
-    let jk = j as isize - k as isize;
     for (m, &(oc, or, axis, side)) in nbs.iter().enumerate() {
-        let (kn, jn) = if interior {
-            let kn = (k as isize + oc + or * pw as isize) as usize;
-            (kn, (kn as isize + jk) as usize)
-        } else {
-            let (cc, rr) = (c as isize + oc, r as isize + or);
-            let (jc, jr) = (cc + dc, rr + dr);
-            if cc < 0 || rr < 0 || jc < 0 || jr < 0 {
-                continue;
-            }
-            let (cc, rr, jc, jr) = (cc as usize, rr as usize, jc as usize, jr as usize);
-            if cc >= pw || jc >= pw || rr >= ph || jr >= ph {
-                continue;
-            }
-            (rr * pw + cc, jr * pw + jc)
-        };
-        let qn = 0.5 * (vel[kn][2 + axis] + vel[jn][2 + axis]);
+        let (cc, rr) = (c as isize + oc, r as isize + or);
+        let (jc, jr) = (cc + dc, rr + dr);
+        if cc < 0 || rr < 0 || jc < 0 || jr < 0 {
+            continue;
+        }
+        let (cc, rr, jc, jr) = (cc as usize, rr as usize, jc as usize, jr as usize);
+        if cc >= pw || jc >= pw || rr >= ph || jr >= ph {
+            continue;
+        }
+        let (kn, jn) = (rr * pw + cc, jr * pw + jc);
+        let qn = 0.5 * (vel[QX + axis][kn - vb] + vel[QX + axis][jn - vb]);
         let q_face = 0.5 * (qp[axis] + qn);
         // Inflow through the + face is q < 0, through the − face q > 0.
         let inflow = -side * q_face;
         if inflow > 0.0 {
             lam[m] = rate[axis] * inflow;
-            un[m] = pipes[kn][d];
+            un[m] = inp.pipes[d][kn];
             total += lam[m];
         }
     }
@@ -1115,4 +1990,69 @@ fn advection(
         du += scale * lam[m] * (un[m] - u0);
     }
     du
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::Ordering;
+
+    /// The four-lane kernels give the bits of the one-lane (scalar) ones: random bed and
+    /// depths, nodata cells, both borders, dry, wet and mixed snow, square and oblong cells.
+    #[test]
+    fn lanes_match_scalar() {
+        let hash = |i: usize, seed: u64| {
+            let mut x = (i as u64 ^ seed.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+                .wrapping_add(0x632B_E59B_D9B4_E019);
+            x ^= x >> 30;
+            x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            x ^= x >> 27;
+            x = x.wrapping_mul(0x94D0_49BB_1331_11EB);
+            x ^= x >> 31;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let cases = [
+            (70, 50, 2.0, 2.0, Border::Open, 1.0),
+            (61, 43, 3.0, 2.0, Border::Closed, 0.4),
+            (40, 64, 5.0, 5.0, Border::Open, 0.0),
+        ];
+        for (case, &(w, h, dx, dy, border, alpha)) in cases.iter().enumerate() {
+            let seed = case as u64 + 11;
+            let g = GridGeometry::new(w, h, dx, dy).unwrap();
+            let bed: Vec<f64> = (0..w * h)
+                .map(|i| 4.0 * hash(i, seed) + 0.9 * (i / w) as f64 + 0.2 * (i % w) as f64)
+                .collect();
+            let mask =
+                NodataMask::from_invalid((0..w * h).map(|i| hash(i, seed ^ 7) < 0.02).collect());
+            let mut s = AvalancheState::new(&g, &mask, &bed).unwrap();
+            let depth: Vec<f64> = (0..w * h)
+                .map(|i| {
+                    let v = hash(i, seed ^ 3);
+                    if v < 0.4 { 0.0 } else { 2.0 * v }
+                })
+                .collect();
+            s.set_thickness(&depth).unwrap();
+            let params = AvalancheParams {
+                border,
+                alpha,
+                k_viscous: 0.02,
+                ..AvalancheParams::default()
+            };
+            let run = |scalar: bool| {
+                FORCE_SCALAR.store(scalar, Ordering::Relaxed);
+                let mut st = s.clone();
+                let mut scratch = AvalancheScratch::default();
+                let reports: Vec<AvalancheReport> = (0..12)
+                    .map(|_| step(&params, &mut st, &mut scratch, 0.3).unwrap())
+                    .collect();
+                FORCE_SCALAR.store(false, Ordering::Relaxed);
+                (st, reports)
+            };
+            let (a, ra) = run(true);
+            let (b, rb) = run(false);
+            assert!(ra.iter().map(|r| r.substeps).sum::<usize>() > 20);
+            assert_eq!(a, b, "case {case}");
+            assert_eq!(ra, rb, "case {case}");
+        }
+    }
 }
