@@ -41,7 +41,9 @@
 //! and `h ≥ 0` (round-off negatives, `~1e-17 m`, are clamped to 0).
 //!
 //! **Time step (CFL).** A call to [`step`] of length `dt` is split into sub-steps
-//! `δt ≤ C · min(dx, dy) / (max|u| + sqrt(g · max h))` and `δt ≤ C · sqrt(min(dx, dy)/g)` (the
+//! `δt ≤ C · min(dx, dy) / max_i (|u|_i + sqrt(g · h_i))` (`|u|_i` the largest speed of the 8
+//! pipes touching cell `i`: the fastest wave of each cell, not the largest speed plus the
+//! deepest cell's celerity, which may lie far apart) and `δt ≤ C · sqrt(min(dx, dy)/g)` (the
 //! latter bounds the first sub-step from rest on steep beds), `C` = [`AvalancheParams::courant`].
 //!
 //! **Borders.** Nodata cells are walls (pipes to them carry nothing). [`Border::Closed`] makes
@@ -56,12 +58,13 @@
 //! cells (thickness). A branching avalanche thus costs its footprint, not its bounding box, and
 //! the cost of a sub-step does not depend on the grid size. Pipes with two dry ends and pipes
 //! held by static friction are skipped early. A sub-step makes three passes: (1) in blocks of
-//! 16 rows, the cell velocities, discharges and surface gradients (kept in the block's own rows,
-//! never written to a grid-sized array) then the new pipes and raw volumes; (2) the outflow
-//! factors; (3) the thickness, the scaled pipes, the content per tile and the CFL maxima of the
-//! next sub-step. Away from the ghost ring and nodata cells the kernels run on four consecutive
-//! cells at a time (AVX, when the CPU has it), with the IEEE operations of the one-cell code
-//! and in the same order, so the lanes change no result.
+//! 16 rows, row by row, the cell velocities, discharges and surface gradients (kept in the
+//! block's own rows, never written to a grid-sized array), the new pipes and raw volumes, and
+//! the outflow factors; (2) the outflow factors of the first row of every block (they need the
+//! block above); (3) the thickness, the scaled pipes, the content per tile and the CFL maxima
+//! of the next sub-step. Away from the ghost ring and nodata cells the kernels run on four
+//! consecutive cells at a time (AVX, when the CPU has it), with the IEEE operations of the
+//! one-cell code and in the same order, so the lanes change no result.
 //!
 //! **Determinism.** Every pass is a gather over rows (rayon), each row writes only its own
 //! cells, and per-row sums are added in row order (within a row, cell by cell), so results are
@@ -307,7 +310,8 @@ pub struct AvalancheState {
     pub(crate) active: Option<ActiveBox>,
     /// The active set: per tile, the box of its cells with snow or a moving owned pipe.
     tiles: TileSet,
-    /// Largest pipe speed (m/s) and largest thickness (m) of the state, for the CFL step.
+    /// Largest pipe speed and largest wave speed `sqrt(g·h) + |u|` over the cells (`|u|` the
+    /// largest speed of the 8 pipes touching the cell), m/s: the CFL step.
     maxima: (f64, f64),
     /// Padded flags: the cell or one of its 8 neighbours is a nodata cell.
     near_wall: Vec<bool>,
@@ -475,7 +479,7 @@ impl AvalancheState {
             return Ok(());
         }
         self.h[k] += dh;
-        self.maxima.1 = self.maxima.1.max(self.h[k]);
+        self.maxima.1 = self.maxima.1.max(self.wave_speed(k));
         let (r, c) = (k / self.pw, k % self.pw);
         self.tiles.add(r, c, c);
         let cell = ActiveBox {
@@ -539,39 +543,69 @@ impl AvalancheState {
 
     /// Velocity of the snow in a grid cell (m/s; x east, y south), reconstructed from its 8
     /// pipes as in the advection step.
+    #[inline]
     pub fn velocity_at(&self, col: usize, row: usize) -> [f64; 2] {
-        let pg = &self.pg;
-        let k = self.pad(col, row);
-        let mut p = [0.0; 4];
-        for (d, pd) in p.iter_mut().enumerate() {
-            let (dc, dr) = DIRS[d];
-            let kb = (k as isize - dr * self.pw as isize - dc) as usize;
-            *pd = 0.5 * (self.pipes[d][k] + self.pipes[d][kb]);
-        }
-        let vx_d = (p[2] - p[3]) / (2.0 * pg.e[2][0]);
-        let vy_d = (p[2] + p[3]) / (2.0 * pg.e[2][1]);
-        [0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d)]
+        let (k, pw) = (self.pad(col, row), self.pw);
+        let p = &self.pipes;
+        // (The owners of the pipes reaching the cell: west, north, north-west, north-east.)
+        let p0 = 0.5 * (p[0][k] + p[0][k - 1]);
+        let p1 = 0.5 * (p[1][k] + p[1][k - pw]);
+        let p2 = 0.5 * (p[2][k] + p[2][k - pw - 1]);
+        let p3 = 0.5 * (p[3][k] + p[3][k - pw + 1]);
+        let vx_d = (p2 - p3) / (2.0 * self.pg.e[2][0]);
+        let vy_d = (p2 + p3) / (2.0 * self.pg.e[2][1]);
+        [0.5 * (p0 + vx_d), 0.5 * (p1 + vy_d)]
     }
 
     /// Whether a grid cell and all 8 pipes touching it are at rest.
+    #[inline]
     pub fn at_rest(&self, col: usize, row: usize) -> bool {
-        let k = self.pad(col, row);
-        DIRS.iter().enumerate().all(|(d, &(dc, dr))| {
-            let kb = (k as isize - dr * self.pw as isize - dc) as usize;
-            self.pipes[d][k] == 0.0 && self.pipes[d][kb] == 0.0
-        })
+        let (k, pw) = (self.pad(col, row), self.pw);
+        let p = &self.pipes;
+        // (Row above, from the north-west to the north-east neighbour; the cell's row, from the
+        // west neighbour to the cell.)
+        let (up, here) = (k - pw - 1..k - pw + 2, k - 1..k + 1);
+        let (n0, n1, n2, n3) = (
+            &p[0][here.clone()],
+            &p[1][up.clone()],
+            &p[2][up.clone()],
+            &p[3][up],
+        );
+        let (h1, h2, h3) = (&p[1][here.clone()], &p[2][here.clone()], &p[3][here]);
+        n0[0] == 0.0
+            && n0[1] == 0.0
+            && h1[1] == 0.0
+            && n1[1] == 0.0
+            && h2[1] == 0.0
+            && n2[0] == 0.0
+            && h3[1] == 0.0
+            && n3[2] == 0.0
+    }
+
+    /// `sqrt(g·h) + |u|` at padded cell `k`, `|u|` the largest speed of the 8 pipes touching it.
+    fn wave_speed(&self, k: usize) -> f64 {
+        let (c, r) = (k % self.pw, k / self.pw);
+        let mut umax = 0.0f64;
+        for (d, &(dc, dr)) in DIRS.iter().enumerate() {
+            umax = umax.max(self.pipes[d][k].abs());
+            let (cc, rr) = (c as isize - dc, r as isize - dr);
+            if cc >= 0 && rr >= 0 && (cc as usize) < self.pw {
+                umax = umax.max(self.pipes[d][rr as usize * self.pw + cc as usize].abs());
+            }
+        }
+        (G * self.h[k]).sqrt() + umax
     }
 
     /// Recomputes the active set, the active box and the CFL maxima by scanning the whole grid
     /// (after external edits).
     pub(crate) fn refresh_active(&mut self) {
         self.tiles.clear();
-        let (mut umax, mut hmax) = (0.0f64, 0.0f64);
+        let (mut umax, mut wave) = (0.0f64, 0.0f64);
         for r in 0..self.ph {
             let mut run: Option<(usize, usize)> = None;
             for c in 0..self.pw {
                 let k = r * self.pw + c;
-                hmax = hmax.max(self.h[k]);
+                wave = wave.max(self.wave_speed(k));
                 let mut moving = false;
                 for p in &self.pipes {
                     umax = umax.max(p[k].abs());
@@ -592,7 +626,7 @@ impl AvalancheState {
                 self.tiles.add(r, a, b);
             }
         }
-        self.maxima = (umax, hmax);
+        self.maxima = (umax, wave);
         self.active = self.tiles.bbox().map(|b| b.grown(self.pw, self.ph));
     }
 }
@@ -701,8 +735,7 @@ pub fn step(
                 dt,
             });
         }
-        let (umax, hmax) = state.maxima;
-        let speed = umax + (G * hmax).sqrt();
+        let speed = state.maxima.1;
         if speed == 0.0 {
             break;
         }
@@ -739,8 +772,7 @@ pub fn cfl_dt(params: &AvalancheParams, state: &AvalancheState) -> f64 {
     if state.active.is_none() {
         return 0.0;
     }
-    let (umax, hmax) = state.maxima;
-    let speed = umax + (G * hmax).sqrt();
+    let speed = state.maxima.1;
     if speed == 0.0 {
         return 0.0;
     }
@@ -860,7 +892,9 @@ struct Inputs<'a> {
     vel: [&'a [f64]; 6],
     vbase: usize,
     new_pipes: [&'a [f64]; 4],
+    /// Raw volumes of the padded cells from index `fbase` on (0 outside the pipe pass).
     flux: [&'a [f64]; 4],
+    fbase: usize,
     factor: &'a [f64],
 }
 
@@ -870,16 +904,16 @@ struct RowStats {
     moved: f64,
     umax: f64,
     outflow: f64,
-    hmax: f64,
+    wave: f64,
     flowing: usize,
     /// Entries of the row in `row_tiles`.
     tiles: usize,
 }
 
-/// Row slices `range` of `N` padded arrays, one entry per row.
-fn rows_of<const N: usize>(arrays: [&mut [f64]; N], pw: usize) -> Vec<[&mut [f64]; N]> {
-    let rows = arrays[0].len() / pw;
-    let mut its = arrays.map(|a| a.chunks_mut(pw));
+/// The chunks of `len` values (the last one may be shorter) of `N` arrays, one entry per chunk.
+fn rows_of<const N: usize>(arrays: [&mut [f64]; N], len: usize) -> Vec<[&mut [f64]; N]> {
+    let rows = arrays[0].len().div_ceil(len);
+    let mut its = arrays.map(|a| a.chunks_mut(len));
     (0..rows)
         .map(|_| std::array::from_fn(|i| its[i].next().expect("row")))
         .collect()
@@ -926,23 +960,30 @@ fn substep(
         vbase: 0,
         new_pipes: [empty; 4],
         flux: [empty; 4],
+        fbase: 0,
         factor: empty,
     };
 
-    // Pass 1: new pipe velocities and raw volumes, by blocks of rows. A block first computes
-    // the cell velocities, discharges and surface gradients its pipes read (its rows, one row
-    // above and two below) into rows of its own, then its pipes.
+    // Pass 1: new pipe velocities, raw volumes and outflow factors, by blocks of rows. Row by
+    // row, a block computes the cell velocities, discharges and surface gradients its pipes
+    // read (its rows, one row above and two below) into rows of its own, its pipes, and the
+    // outflow factors of the row (but for its first row, which needs the block above).
     {
         let pipes = state.pipes.each_ref().map(|p| p.as_slice());
         let inp1 = Inputs { pipes, ..none };
-        let mut np = rows_of(new_pipes.each_mut().map(|v| &mut v[rows.clone()]), pw);
-        let mut fl = rows_of(flux.each_mut().map(|v| &mut v[rows.clone()]), pw);
-        np.par_chunks_mut(BLOCK)
-            .zip(fl.par_chunks_mut(BLOCK))
+        let mut np = rows_of(
+            new_pipes.each_mut().map(|v| &mut v[rows.clone()]),
+            BLOCK * pw,
+        );
+        let mut fl = rows_of(flux.each_mut().map(|v| &mut v[rows.clone()]), BLOCK * pw);
+        let mut fac = rows_of([&mut factor[rows.clone()]], BLOCK * pw);
+        np.par_iter_mut()
+            .zip(fl.par_iter_mut())
+            .zip(fac.par_iter_mut())
             .enumerate()
-            .for_each(|(bi, (np, fl))| {
+            .for_each(|(bi, ((np, fl), [fac]))| {
                 let b0 = r0 + bi * BLOCK;
-                let b1 = b0 + np.len();
+                let b1 = b0 + fac.len() / pw;
                 let (v0, v1) = (b0.saturating_sub(1), (b1 + 1).min(ph - 1));
                 let len = (v1 - v0 + 1) * pw;
                 VEL_ROWS.with_borrow_mut(|buf| {
@@ -959,8 +1000,8 @@ fn substep(
                     for x in v0..=(b0 + 1).min(v1) {
                         vel_of(x, buf);
                     }
-                    for (i, (np, fl)) in np.iter_mut().zip(fl.iter_mut()).enumerate() {
-                        let r = b0 + i;
+                    for r in b0..b1 {
+                        let lr = (r - b0) * pw..(r - b0 + 1) * pw;
                         if r + 2 <= v1 {
                             vel_of(r + 2, buf);
                         }
@@ -970,25 +1011,47 @@ fn substep(
                             vbase: v0 * pw,
                             ..none
                         };
-                        pipes_row(simd, params, &k, pg, &inp, seg3.row(r), r, np, fl);
+                        let mut np_r = np.each_mut().map(|a| &mut a[lr.clone()]);
+                        let mut fl_r = fl.each_mut().map(|a| &mut a[lr.clone()]);
+                        pipes_row(
+                            simd,
+                            params,
+                            &k,
+                            pg,
+                            &inp,
+                            seg3.row(r),
+                            r,
+                            &mut np_r,
+                            &mut fl_r,
+                        );
+                        // The outflow factors of the row (those of the block's first row need
+                        // the row above: pass 2).
+                        if r > b0 {
+                            let inp = Inputs {
+                                flux: fl.each_ref().map(|a| &**a),
+                                fbase: b0 * pw,
+                                ..none
+                            };
+                            factor_row(simd, &k, &inp, seg3.row(r), r, &mut fac[lr]);
+                        }
                     }
                 });
             });
     }
 
-    // Pass 2: outflow scaling factor of every wet cell (the factor of a cell at most `DRY`
-    // deep is never used: such a cell has no outflow).
+    // Pass 2: outflow factors of the first row of every block (the factor of a cell at most
+    // `DRY` deep is never used: such a cell has no outflow).
     {
         let inp = Inputs {
             flux: flux.each_ref().map(|v| v.as_slice()),
             ..none
         };
         factor[rows.clone()]
-            .par_chunks_mut(pw)
+            .par_chunks_mut(BLOCK * pw)
             .enumerate()
-            .for_each(|(ri, row)| {
-                let r = r0 + ri;
-                factor_row(simd, &k, &inp, seg3.row(r), r, row);
+            .for_each(|(bi, block)| {
+                let r = r0 + bi * BLOCK;
+                factor_row(simd, &k, &inp, seg3.row(r), r, &mut block[..pw]);
             });
     }
 
@@ -1006,6 +1069,7 @@ fn substep(
             vbase: 0,
             new_pipes: new_pipes.each_ref().map(|v| v.as_slice()),
             flux: flux.each_ref().map(|v| v.as_slice()),
+            fbase: 0,
             factor,
         };
         let (h, pipes) = (&mut state.h, &mut state.pipes);
@@ -1039,7 +1103,7 @@ fn substep(
         flowing: 0,
         visited: seg3.cells,
     };
-    let mut hmax = 0.0f64;
+    let mut wave = 0.0f64;
     state.tiles.clear();
     for (ri, st) in stats.iter().enumerate() {
         let r = r0 + ri;
@@ -1047,12 +1111,12 @@ fn substep(
         out.max_speed = out.max_speed.max(st.umax);
         out.outflow += st.outflow;
         out.flowing += st.flowing;
-        hmax = hmax.max(st.hmax);
+        wave = wave.max(st.wave);
         for &[a, b] in &row_tiles[r * ntx..r * ntx + st.tiles] {
             state.tiles.add(r, a as usize, b as usize);
         }
     }
-    state.maxima = (out.max_speed, hmax);
+    state.maxima = (out.max_speed, wave);
     state.active = state.tiles.bbox().map(|b| b.grown(pw, ph));
     out
 }
@@ -1544,9 +1608,9 @@ fn factor_row_lanes<V: Lanes>(
                 }
                 let mut vout = 0.0;
                 for d in 0..4 {
-                    vout += inp.flux[d][kk].max(0.0);
+                    vout += inp.flux[d][kk - inp.fbase].max(0.0);
                     if let Some(kb) = k.back(c, r, d) {
-                        vout += (-inp.flux[d][kb]).max(0.0);
+                        vout += (-inp.flux[d][kb - inp.fbase]).max(0.0);
                     }
                 }
                 let avail = inp.h[kk] * k.area;
@@ -1575,8 +1639,9 @@ unsafe fn factor_lanes<V: Lanes>(k: &Consts, inp: &Inputs, kk: usize, out: &mut 
         let mut vout = zero;
         for d in 0..4 {
             // (Zeros of either sign add nothing to `vout`, which starts at +0.)
-            vout = vout + ld::<V>(inp.flux[d], kk).max(zero);
-            vout = vout + (-ld::<V>(inp.flux[d], kk - k.off[d])).max(zero);
+            let kf = kk - inp.fbase;
+            vout = vout + ld::<V>(inp.flux[d], kf).max(zero);
+            vout = vout + (-ld::<V>(inp.flux[d], kf - k.off[d])).max(zero);
         }
         let avail = hk * V::splat(k.area);
         V::select(vout.gt(avail), avail / vout, V::splat(1.0)).store(out, c);
@@ -1586,7 +1651,7 @@ unsafe fn factor_lanes<V: Lanes>(k: &Consts, inp: &Inputs, kk: usize, out: &mut 
 /// Lane accumulators of pass 4 (maxima and counts: any order gives the same result).
 struct Acc<V> {
     umax: V,
-    hmax: V,
+    wave: V,
     flowing: usize,
 }
 
@@ -1609,12 +1674,12 @@ fn update_row_lanes<V: Lanes>(
     let zero = V::splat(0.0);
     let mut acc = Acc {
         umax: zero,
-        hmax: zero,
+        wave: zero,
         flowing: 0,
     };
     let mut acc1 = Acc {
         umax: 0.0,
-        hmax: 0.0,
+        wave: 0.0,
         flowing: 0,
     };
     // The row's moved volume, summed cell by cell, pipe by pipe.
@@ -1625,46 +1690,6 @@ fn update_row_lanes<V: Lanes>(
         (1, 0)
     };
     let ghost_row = r == 0 || r == ph - 1;
-    // Thickness.
-    for (c, visit) in walk(seg2, lo, hi, None, V::N) {
-        let kk = r * pw + c;
-        match visit {
-            Visit::Chunk => {
-                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
-                // the stencil lies in the padded arrays (all of length `pw·ph`).
-                unsafe { thickness_lanes::<V>(k, inp, kk, hrow, c, &mut acc) }
-            }
-            Visit::One => {
-                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
-                // the stencil lies in the padded arrays (all of length `pw·ph`).
-                unsafe { thickness_lanes::<f64>(k, inp, kk, hrow, c, &mut acc1) }
-            }
-            Visit::Border => {
-                let mut dv = 0.0;
-                for d in 0..4 {
-                    dv -= scaled_flux(k, inp, kk, c, r, d);
-                    if let Some(kb) = k.back(c, r, d) {
-                        let (dc, dr) = DIRS[d];
-                        dv +=
-                            scaled_flux(k, inp, kb, (c as isize - dc) as usize, r - dr as usize, d);
-                    }
-                }
-                let mut hn = hrow[c] + dv / k.area;
-                if hn < 0.0 {
-                    hn = 0.0;
-                }
-                if ghost_row || c == 0 || c == pw - 1 {
-                    st.outflow += hn * k.area;
-                    hn = 0.0;
-                } else if hn > 0.0 {
-                    acc1.flowing += 1;
-                }
-                acc1.hmax = acc1.hmax.max(hn);
-                hrow[c] = hn;
-            }
-        }
-    }
-    // Pipes, volume moved, content.
     let mut run: Option<(usize, usize)> = None;
     let mut content = |c: usize, st: &mut RowStats| {
         run = match run {
@@ -1677,20 +1702,107 @@ fn update_row_lanes<V: Lanes>(
             None => Some((c, c)),
         };
     };
+    // Cells of seg3 in column order; those of seg2 also get their thickness. `next2` is the
+    // first segment of seg2 not left of the current cell.
+    let mut next2 = 0;
+    let mut in2 = |c: usize| {
+        while next2 < seg2.len() && (seg2[next2][1] as usize) < c {
+            next2 += 1;
+        }
+        match seg2.get(next2) {
+            Some(&[a, b]) if a as usize <= c => (true, b as usize),
+            Some(&[a, _]) => (false, a as usize),
+            None => (false, usize::MAX),
+        }
+    };
     for (c, visit) in walk(seg3, lo, hi, None, V::N) {
         let kk = r * pw + c;
         let bits = match visit {
-            Visit::Chunk => {
-                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
-                // the stencil lies in the padded arrays (all of length `pw·ph`).
-                unsafe { scale_lanes::<V>(k, inp, kk, hrow, prow, c, &mut acc, &mut moved) }
-            }
-            Visit::One => {
-                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
-                // the stencil lies in the padded arrays (all of length `pw·ph`).
-                unsafe { scale_lanes::<f64>(k, inp, kk, hrow, prow, c, &mut acc1, &mut moved) }
+            Visit::Chunk | Visit::One => {
+                let (inside, edge) = in2(c);
+                let n = if visit == Visit::Chunk { V::N } else { 1 };
+                // SAFETY (the three calls): `walk` only gives lane visits in the inner region
+                // of this pass, where the stencil lies in the padded arrays (all of length
+                // `pw·ph`).
+                if n == 1 {
+                    unsafe {
+                        update_lanes::<f64>(
+                            k, inp, kk, hrow, prow, c, &mut acc1, &mut moved, inside,
+                        )
+                    }
+                } else if (inside && c + n - 1 <= edge) || (!inside && c + n - 1 < edge) {
+                    // All lanes in seg2, or none.
+                    unsafe {
+                        update_lanes::<V>(k, inp, kk, hrow, prow, c, &mut acc, &mut moved, inside)
+                    }
+                } else {
+                    let mut bits = 0;
+                    for i in 0..n {
+                        let inside = in2(c + i).0;
+                        let b = unsafe {
+                            update_lanes::<f64>(
+                                k,
+                                inp,
+                                kk + i,
+                                hrow,
+                                prow,
+                                c + i,
+                                &mut acc1,
+                                &mut moved,
+                                inside,
+                            )
+                        };
+                        bits |= b << i;
+                    }
+                    bits
+                }
             }
             Visit::Border => {
+                if in2(c).0 {
+                    let mut dv = 0.0;
+                    for d in 0..4 {
+                        dv -= scaled_flux(k, inp, kk, c, r, d);
+                        if let Some(kb) = k.back(c, r, d) {
+                            let (dc, dr) = DIRS[d];
+                            dv += scaled_flux(
+                                k,
+                                inp,
+                                kb,
+                                (c as isize - dc) as usize,
+                                r - dr as usize,
+                                d,
+                            );
+                        }
+                    }
+                    let mut hn = hrow[c] + dv / k.area;
+                    if hn < 0.0 {
+                        hn = 0.0;
+                    }
+                    if ghost_row || c == 0 || c == pw - 1 {
+                        st.outflow += hn * k.area;
+                        hn = 0.0;
+                    } else if hn > 0.0 {
+                        acc1.flowing += 1;
+                    }
+                    let mut umax = 0.0f64;
+                    for d in 0..4 {
+                        umax = umax.max(scaled_pipe(k, inp, kk, c, r, d).abs());
+                        if let Some(kb) = k.back(c, r, d) {
+                            let (dc, dr) = DIRS[d];
+                            let u = scaled_pipe(
+                                k,
+                                inp,
+                                kb,
+                                (c as isize - dc) as usize,
+                                r - dr as usize,
+                                d,
+                            );
+                            umax = umax.max(u.abs());
+                        }
+                    }
+                    acc1.wave = acc1.wave.max((G * hn).sqrt() + umax);
+                    hrow[c] = hn;
+                }
                 let mut moving = false;
                 for d in 0..4 {
                     let mut u = inp.new_pipes[d][kk];
@@ -1726,12 +1838,28 @@ fn update_row_lanes<V: Lanes>(
     st.moved = moved;
     st.flowing = acc.flowing + acc1.flowing;
     st.umax = acc1.umax;
-    st.hmax = acc1.hmax;
+    st.wave = acc1.wave;
     for i in 0..V::N {
         st.umax = st.umax.max(acc.umax.lane(i));
-        st.hmax = st.hmax.max(acc.hmax.lane(i));
+        st.wave = st.wave.max(acc.wave.lane(i));
     }
     st
+}
+
+/// A pipe's new velocity scaled by its upwind cell's factor (general code).
+fn scaled_pipe(k: &Consts, inp: &Inputs, kk: usize, c: usize, r: usize, d: usize) -> f64 {
+    let u = inp.new_pipes[d][kk];
+    let f = inp.flux[d][kk];
+    if f != 0.0 {
+        let src = if f > 0.0 {
+            kk
+        } else {
+            k.neighbour(c, r, d).unwrap_or(kk)
+        };
+        u * inp.factor[src]
+    } else {
+        u
+    }
 }
 
 /// A pipe's volume scaled by its upwind cell's factor (general code).
@@ -1749,46 +1877,11 @@ fn scaled_flux(k: &Consts, inp: &Inputs, kk: usize, c: usize, r: usize, d: usize
     }
 }
 
-/// Thickness update of `V::N` cells away from the ghost ring. A volume is scaled by the
-/// factor of its upwind cell: `f·s` is `f` itself for a zero `f` (`s` is finite and ≥ 0), so
-/// the product needs no branch.
-///
-/// # Safety
-/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
-/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
-/// cell of the stencil is in the arrays.
-#[inline(always)]
-unsafe fn thickness_lanes<V: Lanes>(
-    k: &Consts,
-    inp: &Inputs,
-    kk: usize,
-    hrow: &mut [f64],
-    c: usize,
-    acc: &mut Acc<V>,
-) {
-    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
-    unsafe {
-        let zero = V::splat(0.0);
-        let fac = |i: usize| ld::<V>(inp.factor, i);
-        let mut dv = zero;
-        for d in 0..4 {
-            let off = k.off[d];
-            let f = ld::<V>(inp.flux[d], kk);
-            dv = dv - f * V::select(f.gt(zero), fac(kk), fac(kk + off));
-            let kb = kk - off;
-            let f = ld::<V>(inp.flux[d], kb);
-            dv = dv + f * V::select(f.gt(zero), fac(kb), fac(kk));
-        }
-        let hn = ld::<V>(hrow, c) + dv / V::splat(k.area);
-        let hn = V::select(hn.lt(zero), zero, hn);
-        hn.store(hrow, c);
-        acc.flowing += V::bits(hn.gt(zero)).count_ones() as usize;
-        acc.hmax = acc.hmax.max(hn);
-    }
-}
-
-/// Pipes of `V::N` cells away from the ghost ring scaled by their upwind cell's factor;
-/// returns the lanes with content (snow or a moving pipe).
+/// Pass 3 on `V::N` cells away from the ghost ring: the pipes they own scaled by their upwind
+/// cell's factor (volume moved, largest speed) and, with `thick`, their new thickness (and
+/// wave speed). A volume `f` scaled by the factor `s` is `f·s` even for a zero `f` (`s` is
+/// finite and ≥ 0), so the product needs no branch. Returns the lanes with content (snow or a
+/// moving pipe).
 ///
 /// # Safety
 /// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
@@ -1796,37 +1889,60 @@ unsafe fn thickness_lanes<V: Lanes>(
 /// cell of the stencil is in the arrays.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-unsafe fn scale_lanes<V: Lanes>(
+unsafe fn update_lanes<V: Lanes>(
     k: &Consts,
     inp: &Inputs,
     kk: usize,
-    hrow: &[f64],
+    hrow: &mut [f64],
     prow: &mut [&mut [f64]; 4],
     c: usize,
     acc: &mut Acc<V>,
     moved: &mut f64,
+    thick: bool,
 ) -> u32 {
     // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
     unsafe {
         let zero = V::splat(0.0);
         let fac = |i: usize| ld::<V>(inp.factor, i);
+        let mut dv = zero;
+        // Largest speed of the 8 pipes touching the cells.
+        let mut ucell = zero;
         let mut moving = zero.ne(zero);
         let mut absf = [zero; 4];
         for d in 0..4 {
-            let u = ld::<V>(inp.new_pipes[d], kk);
+            let off = k.off[d];
             let f = ld::<V>(inp.flux[d], kk);
-            let s = V::select(f.gt(zero), fac(kk), fac(kk + k.off[d]));
+            let s = V::select(f.gt(zero), fac(kk), fac(kk + off));
+            let u = ld::<V>(inp.new_pipes[d], kk);
             let u = V::select(f.ne(zero), u * s, u);
-            absf[d] = (f * s).abs();
+            let fs = f * s;
+            absf[d] = fs.abs();
             u.store(prow[d], c);
             acc.umax = acc.umax.max(u.abs());
             moving = V::or(moving, u.ne(zero));
+            if thick {
+                dv = dv - fs;
+                ucell = ucell.max(u.abs());
+                let kb = kk - off;
+                let f = ld::<V>(inp.flux[d], kb);
+                let s = V::select(f.gt(zero), fac(kb), fac(kk));
+                dv = dv + f * s;
+                let u = ld::<V>(inp.new_pipes[d], kb);
+                ucell = ucell.max(V::select(f.ne(zero), u * s, u).abs());
+            }
         }
         // The row's volume in the order of the general code: cell by cell, pipe by pipe.
         for i in 0..V::N {
             for a in &absf {
                 *moved += a.lane(i);
             }
+        }
+        if thick {
+            let hn = ld::<V>(hrow, c) + dv / V::splat(k.area);
+            let hn = V::select(hn.lt(zero), zero, hn);
+            hn.store(hrow, c);
+            acc.flowing += V::bits(hn.gt(zero)).count_ones() as usize;
+            acc.wave = acc.wave.max((V::splat(G) * hn).sqrt() + ucell);
         }
         V::bits(V::or(moving, ld::<V>(hrow, c).gt(zero)))
     }
