@@ -57,14 +57,15 @@
 //! visit, row by row, the union of the tile boxes grown by 3 cells (velocities and pipes) or 2
 //! cells (thickness). A branching avalanche thus costs its footprint, not its bounding box, and
 //! the cost of a sub-step does not depend on the grid size. Pipes with two dry ends and pipes
-//! held by static friction are skipped early. A sub-step makes three passes: (1) in blocks of
+//! held by static friction are skipped early. A sub-step makes two passes: (1) in blocks of
 //! 16 rows, row by row, the cell velocities, discharges and surface gradients (kept in the
 //! block's own rows, never written to a grid-sized array), the new pipes and raw volumes, and
-//! the outflow factors; (2) the outflow factors of the first row of every block (they need the
-//! block above); (3) the thickness, the scaled pipes, the content per tile and the CFL maxima
-//! of the next sub-step. Away from the ghost ring and nodata cells the kernels run on four
-//! consecutive cells at a time (AVX, when the CPU has it), with the IEEE operations of the
-//! one-cell code and in the same order, so the lanes change no result.
+//! the outflow factors (a block also computes the pipes of the next block's first row, for the
+//! factors of its last row); (2) in one sweep of each row, the thickness, the pipes scaled by
+//! the outflow factors, the content per tile and the CFL maxima of the next sub-step. Away
+//! from the ghost ring and nodata cells the kernels run on four consecutive cells at a time
+//! (AVX, when the CPU has it), with the IEEE operations of the one-cell code and in the same
+//! order, so the lanes change no result.
 //!
 //! **Determinism.** Every pass is a gather over rows (rayon), each row writes only its own
 //! cells, and per-row sums are added in row order (within a row, cell by cell), so results are
@@ -283,9 +284,18 @@ impl ActiveBox {
 /// Rows per block of the pipe pass.
 const BLOCK: usize = 16;
 
+/// Per worker thread, the rows of the block of the pipe pass it works on: velocities,
+/// discharges and gradients ([`VX`]..[`GY`]), and the pipes and volumes of the next block's
+/// first row (the volumes after a copy of the block's last row).
+#[derive(Default)]
+struct BlockRows {
+    vel: [Vec<f64>; 6],
+    np: [Vec<f64>; 4],
+    fl: [Vec<f64>; 4],
+}
+
 thread_local! {
-    /// Per worker thread: the velocity rows of the block of the pipe pass it works on.
-    static VEL_ROWS: RefCell<[Vec<f64>; 6]> = RefCell::new(Default::default());
+    static BLOCK_ROWS: RefCell<BlockRows> = RefCell::new(Default::default());
 }
 
 /// Forces the one-lane kernels (a test compares them with the four-lane ones).
@@ -967,96 +977,112 @@ fn substep(
     // Pass 1: new pipe velocities, raw volumes and outflow factors, by blocks of rows. Row by
     // row, a block computes the cell velocities, discharges and surface gradients its pipes
     // read (its rows, one row above and two below) into rows of its own, its pipes, and the
-    // outflow factors of the row (but for its first row, which needs the block above).
+    // outflow factors of the row above (those of its first row need the block above). Then
+    // it computes the pipes of the next block's first row (into rows of its own) for the
+    // factors of its last row. (The factors of the first row of the active set are never
+    // used: no snow lies within 3 rows of it.)
     {
         let pipes = state.pipes.each_ref().map(|p| p.as_slice());
         let inp1 = Inputs { pipes, ..none };
+        let end = r0 + nr;
+        let nb = nr.div_ceil(BLOCK);
         let mut np = rows_of(
             new_pipes.each_mut().map(|v| &mut v[rows.clone()]),
             BLOCK * pw,
         );
         let mut fl = rows_of(flux.each_mut().map(|v| &mut v[rows.clone()]), BLOCK * pw);
-        let mut fac = rows_of([&mut factor[rows.clone()]], BLOCK * pw);
+        // Block `b` holds the factors of its rows shifted down by one.
+        let frows = (r0 + 1).min(ph) * pw..(end + 1).min(ph) * pw;
+        let mut fac = rows_of([&mut factor[frows]], BLOCK * pw);
+        fac.resize_with(nb, || [&mut []]);
         np.par_iter_mut()
             .zip(fl.par_iter_mut())
             .zip(fac.par_iter_mut())
             .enumerate()
             .for_each(|(bi, ((np, fl), [fac]))| {
                 let b0 = r0 + bi * BLOCK;
-                let b1 = b0 + fac.len() / pw;
-                let (v0, v1) = (b0.saturating_sub(1), (b1 + 1).min(ph - 1));
+                let b1 = b0 + np[0].len() / pw;
+                // Pipes of row `b1` too, but in the last block.
+                let halo = b1 < end;
+                let v0 = b0.saturating_sub(1);
+                let v1 = (b1 + 1 + halo as usize).min(ph - 1);
                 let len = (v1 - v0 + 1) * pw;
-                VEL_ROWS.with_borrow_mut(|buf| {
-                    for a in buf.iter_mut() {
+                BLOCK_ROWS.with_borrow_mut(|bb| {
+                    let BlockRows {
+                        vel,
+                        np: np_h,
+                        fl: fl_h,
+                    } = bb;
+                    for a in vel.iter_mut() {
                         if a.len() < len {
                             a.resize(len, 0.0);
                         }
                     }
-                    let vel_of = |x: usize, buf: &mut [Vec<f64>; 6]| {
+                    for a in np_h.iter_mut().chain(fl_h.iter_mut()) {
+                        if a.len() < 2 * pw {
+                            a.resize(2 * pw, 0.0);
+                        }
+                    }
+                    let vel_of = |x: usize, vel: &mut [Vec<f64>; 6]| {
                         let lr = (x - v0) * pw;
-                        let mut row = buf.each_mut().map(|a| &mut a[lr..lr + pw]);
+                        let mut row = vel.each_mut().map(|a| &mut a[lr..lr + pw]);
                         vel_row(simd, &k, pg, &inp1, seg3.row(x), x, &mut row);
                     };
                     for x in v0..=(b0 + 1).min(v1) {
-                        vel_of(x, buf);
+                        vel_of(x, vel);
                     }
-                    for r in b0..b1 {
-                        let lr = (r - b0) * pw..(r - b0 + 1) * pw;
+                    for r in b0..b1 + halo as usize {
                         if r + 2 <= v1 {
-                            vel_of(r + 2, buf);
+                            vel_of(r + 2, vel);
                         }
                         let inp = Inputs {
                             pipes,
-                            vel: buf.each_ref().map(|a| &a[..len]),
+                            vel: vel.each_ref().map(|a| &a[..len]),
                             vbase: v0 * pw,
                             ..none
                         };
-                        let mut np_r = np.each_mut().map(|a| &mut a[lr.clone()]);
-                        let mut fl_r = fl.each_mut().map(|a| &mut a[lr.clone()]);
-                        pipes_row(
-                            simd,
-                            params,
-                            &k,
-                            pg,
-                            &inp,
-                            seg3.row(r),
-                            r,
-                            &mut np_r,
-                            &mut fl_r,
-                        );
-                        // The outflow factors of the row (those of the block's first row need
-                        // the row above: pass 2).
+                        let segs = seg3.row(r);
+                        if r < b1 {
+                            let lr = (r - b0) * pw..(r - b0 + 1) * pw;
+                            let mut np_r = np.each_mut().map(|a| &mut a[lr.clone()]);
+                            let mut fl_r = fl.each_mut().map(|a| &mut a[lr.clone()]);
+                            pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
+                        } else {
+                            // The next block's first row, after a copy of this block's last
+                            // row of volumes (the factors read both).
+                            let last = (b1 - 1 - b0) * pw..(b1 - b0) * pw;
+                            for (h, f) in fl_h.iter_mut().zip(fl.iter()) {
+                                h[..pw].copy_from_slice(&f[last.clone()]);
+                            }
+                            let mut np_r = np_h.each_mut().map(|a| &mut a[..pw]);
+                            let mut fl_r = fl_h.each_mut().map(|a| &mut a[pw..2 * pw]);
+                            pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
+                        }
+                        // The factors of the row (the block's first row: the block above).
                         if r > b0 {
-                            let inp = Inputs {
-                                flux: fl.each_ref().map(|a| &**a),
-                                fbase: b0 * pw,
-                                ..none
+                            let inp = if r < b1 {
+                                Inputs {
+                                    flux: fl.each_ref().map(|a| &**a),
+                                    fbase: b0 * pw,
+                                    ..none
+                                }
+                            } else {
+                                Inputs {
+                                    flux: fl_h.each_ref().map(|a| &a[..2 * pw]),
+                                    fbase: (r - 1) * pw,
+                                    ..none
+                                }
                             };
-                            factor_row(simd, &k, &inp, seg3.row(r), r, &mut fac[lr]);
+                            let lr = (r - b0 - 1) * pw..(r - b0) * pw;
+                            factor_row(simd, &k, &inp, segs, r, &mut fac[lr]);
                         }
                     }
                 });
             });
     }
 
-    // Pass 2: outflow factors of the first row of every block (the factor of a cell at most
-    // `DRY` deep is never used: such a cell has no outflow).
-    {
-        let inp = Inputs {
-            flux: flux.each_ref().map(|v| v.as_slice()),
-            ..none
-        };
-        factor[rows.clone()]
-            .par_chunks_mut(BLOCK * pw)
-            .enumerate()
-            .for_each(|(bi, block)| {
-                let r = r0 + bi * BLOCK;
-                factor_row(simd, &k, &inp, seg3.row(r), r, &mut block[..pw]);
-            });
-    }
-
-    // Pass 3: thickness update (seg2), pipes scaled by the upwind cell's factor (seg3), the
-    // content of each row per tile.
+    // Pass 2: thickness update (seg2), pipes scaled by the upwind cell's factor (seg3), the
+    // content of each row per tile, the CFL maxima.
     let ntx = state.tiles.ntx();
     let stats: Vec<RowStats> = {
         let inp = Inputs {
@@ -1203,7 +1229,7 @@ impl Iterator for Walk<'_> {
 /// Defines `$name(simd, args..)`, running `$generic::<F4>` compiled for AVX when `simd` is
 /// set (the caller checked the CPU), else `$generic::<f64>`.
 macro_rules! lanes_dispatch {
-    ($name:ident, $avx:ident, $generic:ident, ($($arg:ident : $ty:ty),*) -> $ret:ty) => {
+    ($name:ident, $avx:ident, $generic:ident, ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $(,)?) => {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx")]
         #[allow(clippy::too_many_arguments)]
@@ -1224,12 +1250,63 @@ macro_rules! lanes_dispatch {
     };
 }
 
-lanes_dispatch!(vel_row, vel_row_avx, vel_row_lanes, (k: &Consts, pg: &PipeGeometry, inp: &Inputs, segs: &[[u32; 2]], r: usize, out: &mut [&mut [f64]; 6]) -> ());
-lanes_dispatch!(pipes_row, pipes_row_avx, pipes_row_lanes, (params: &AvalancheParams, k: &Consts, pg: &PipeGeometry, inp: &Inputs, segs: &[[u32; 2]], r: usize, np: &mut [&mut [f64]; 4], fl: &mut [&mut [f64]; 4]) -> ());
-lanes_dispatch!(factor_row, factor_row_avx, factor_row_lanes, (k: &Consts, inp: &Inputs, segs: &[[u32; 2]], r: usize, out: &mut [f64]) -> ());
-lanes_dispatch!(update_row, update_row_avx, update_row_lanes, (k: &Consts, inp: &Inputs, seg2: &[[u32; 2]], seg3: &[[u32; 2]], r: usize, hrow: &mut [f64], prow: &mut [&mut [f64]; 4], trow: &mut [[u32; 2]]) -> RowStats);
+lanes_dispatch!(
+    vel_row,
+    vel_row_avx,
+    vel_row_lanes,
+    (
+        k: &Consts,
+        pg: &PipeGeometry,
+        inp: &Inputs,
+        segs: &[[u32; 2]],
+        r: usize,
+        out: &mut [&mut [f64]; 6],
+    ) -> ()
+);
+lanes_dispatch!(
+    pipes_row,
+    pipes_row_avx,
+    pipes_row_lanes,
+    (
+        params: &AvalancheParams,
+        k: &Consts,
+        pg: &PipeGeometry,
+        inp: &Inputs,
+        segs: &[[u32; 2]],
+        r: usize,
+        np: &mut [&mut [f64]; 4],
+        fl: &mut [&mut [f64]; 4],
+    ) -> ()
+);
+lanes_dispatch!(
+    factor_row,
+    factor_row_avx,
+    factor_row_lanes,
+    (
+        k: &Consts,
+        inp: &Inputs,
+        segs: &[[u32; 2]],
+        r: usize,
+        out: &mut [f64],
+    ) -> ()
+);
+lanes_dispatch!(
+    update_row,
+    update_row_avx,
+    update_row_lanes,
+    (
+        k: &Consts,
+        inp: &Inputs,
+        seg2: &[[u32; 2]],
+        seg3: &[[u32; 2]],
+        r: usize,
+        hrow: &mut [f64],
+        prow: &mut [&mut [f64]; 4],
+        trow: &mut [[u32; 2]],
+    ) -> RowStats
+);
 
-/// Pass 1 on one row.
+/// Velocities of pass 1 on one row.
 #[inline(always)]
 fn vel_row_lanes<V: Lanes>(
     k: &Consts,
@@ -1269,7 +1346,7 @@ fn vel_row_lanes<V: Lanes>(
     }
 }
 
-/// Pass 1 on `V::N` cells away from the ghost ring and from nodata cells (their 3x3
+/// Velocities of pass 1 on `V::N` cells away from the ghost ring and from nodata cells (their 3x3
 /// neighbourhoods hold none).
 ///
 /// # Safety
@@ -1310,7 +1387,7 @@ unsafe fn cell_flow_lanes<V: Lanes>(
     }
 }
 
-/// Pass 1 at any cell (ghost ring and nodata included).
+/// Velocities of pass 1 at any cell (ghost ring and nodata included).
 fn cell_flow_border(k: &Consts, pg: &PipeGeometry, inp: &Inputs, c: usize, r: usize) -> [f64; 6] {
     let kk = r * k.pw + c;
     let mut p = [0.0; 4];
@@ -1330,7 +1407,7 @@ fn cell_flow_border(k: &Consts, pg: &PipeGeometry, inp: &Inputs, c: usize, r: us
     [vx, vy, hk * vx, hk * vy, gx, gy]
 }
 
-/// Pass 2 on one row.
+/// Pipes of pass 1 on one row.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn pipes_row_lanes<V: Lanes>(
@@ -1389,8 +1466,8 @@ fn pipes_row_lanes<V: Lanes>(
     }
 }
 
-/// Pass 2 on `V::N` owners whose pipes and advection stencils stay inside the grid (away from
-/// the ghost ring) and whose 3x3 neighbourhoods hold no nodata cell: no pipe is a wall and
+/// Pipes of pass 1 on `V::N` owners whose pipes and advection stencils stay inside the grid (away
+/// from the ghost ring) and whose 3x3 neighbourhoods hold no nodata cell: no pipe is a wall and
 /// surface gradients are defined at both ends of every pipe.
 ///
 /// # Safety
@@ -1578,7 +1655,7 @@ unsafe fn advection_lanes<V: Lanes>(
     }
 }
 
-/// Pass 3 on one row.
+/// Outflow factors of pass 1 on one row.
 #[inline(always)]
 fn factor_row_lanes<V: Lanes>(
     k: &Consts,
@@ -1620,8 +1697,8 @@ fn factor_row_lanes<V: Lanes>(
     }
 }
 
-/// Pass 3 on `V::N` cells whose back neighbours exist. Lanes at most `DRY` deep may get a
-/// factor too (finite, in [0, 1], never used).
+/// Outflow factors of pass 1 on `V::N` cells whose back neighbours exist. Lanes at most `DRY` deep
+/// may get a factor too (finite, in [0, 1], never used).
 ///
 /// # Safety
 /// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
@@ -1648,14 +1725,14 @@ unsafe fn factor_lanes<V: Lanes>(k: &Consts, inp: &Inputs, kk: usize, out: &mut 
     }
 }
 
-/// Lane accumulators of pass 4 (maxima and counts: any order gives the same result).
+/// Lane accumulators of pass 2 (maxima and counts: any order gives the same result).
 struct Acc<V> {
     umax: V,
     wave: V,
     flowing: usize,
 }
 
-/// Pass 4 on one row.
+/// Pass 2 on one row.
 #[allow(clippy::needless_range_loop)]
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -1877,7 +1954,7 @@ fn scaled_flux(k: &Consts, inp: &Inputs, kk: usize, c: usize, r: usize, d: usize
     }
 }
 
-/// Pass 3 on `V::N` cells away from the ghost ring: the pipes they own scaled by their upwind
+/// Pass 2 on `V::N` cells away from the ghost ring: the pipes they own scaled by their upwind
 /// cell's factor (volume moved, largest speed) and, with `thick`, their new thickness (and
 /// wave speed). A volume `f` scaled by the factor `s` is `f·s` even for a zero `f` (`s` is
 /// finite and ≥ 0), so the product needs no branch. Returns the lanes with content (snow or a
