@@ -1622,22 +1622,24 @@ unsafe fn advection_lanes<V: Lanes>(
         let pd = inp.pipes[d];
         // Lattice neighbours (west, east, north, south): owner, discharge component, rate and
         // the sign making the face's inflow positive.
+        // (`1·q` is `q` and `−1·q` is `−q`, bit for bit.)
         let nbs = [
-            (kk - 1, kv - 1, qx, qp0, rx, 1.0),
-            (kk + 1, kv + 1, qx, qp0, rx, -1.0),
-            (kk - pw, kv - pw, qy, qp1, ry, 1.0),
-            (kk + pw, kv + pw, qy, qp1, ry, -1.0),
+            (kk - 1, kv - 1, qx, qp0, rx, false),
+            (kk + 1, kv + 1, qx, qp0, rx, true),
+            (kk - pw, kv - pw, qy, qp1, ry, false),
+            (kk + pw, kv + pw, qy, qp1, ry, true),
         ];
         let mut lam = [zero; 4];
         let mut un = [zero; 4];
         let mut total = zero;
-        for (m, &(kn, knv, q, qp, rate, sign)) in nbs.iter().enumerate() {
+        for (m, &(kn, knv, q, qp, rate, minus)) in nbs.iter().enumerate() {
             let qn = half * (ld::<V>(q, knv) + ld::<V>(q, knv + jk));
-            let inflow = V::splat(sign) * (half * (qp + qn));
-            let inn = inflow.gt(zero);
-            lam[m] = V::select(inn, rate * inflow, zero);
-            un[m] = V::select(inn, ld::<V>(pd, kn), zero);
-            // (Adding the zero of a face without inflow leaves the sum unchanged.)
+            let face = half * (qp + qn);
+            let inflow = if minus { -face } else { face };
+            lam[m] = V::select(inflow.gt(zero), rate * inflow, zero);
+            // (A face without inflow has `λ = 0`: its term below is a zero whatever `u_f`, and
+            // zeros leave the sums unchanged.)
+            un[m] = ld::<V>(pd, kn);
             total = total + lam[m];
         }
         let one = V::splat(1.0);
