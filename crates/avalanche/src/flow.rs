@@ -553,7 +553,7 @@ impl AvalancheState {
 
     /// Velocity of the snow in a grid cell (m/s; x east, y south), reconstructed from its 8
     /// pipes as in the advection step.
-    #[inline]
+    #[inline(always)]
     pub fn velocity_at(&self, col: usize, row: usize) -> [f64; 2] {
         let (k, pw) = (self.pad(col, row), self.pw);
         let p = &self.pipes;
@@ -568,7 +568,7 @@ impl AvalancheState {
     }
 
     /// Whether a grid cell and all 8 pipes touching it are at rest.
-    #[inline]
+    #[inline(always)]
     pub fn at_rest(&self, col: usize, row: usize) -> bool {
         let (k, pw) = (self.pad(col, row), self.pw);
         let p = &self.pipes;
