@@ -101,7 +101,7 @@ pub fn release(
     Ok(volume)
 }
 
-/// Turns flowing snow into `layer`. With `at_rest_only`, only cells whose 8 pipes are all at
+/// Turns flowing snow (and settled films) into `layer`. With `at_rest_only`, only cells whose 8 pipes are all at
 /// rest deposit; otherwise every cell does and all motion stops. Returns the deposited
 /// volume, m³.
 pub fn deposit(
@@ -118,8 +118,12 @@ pub fn deposit(
     for row in 0..hgt {
         for col in 0..w {
             let k = state.pad(col, row);
-            let hv = state.h[k];
-            if hv <= 0.0 || (at_rest_only && !state.at_rest(col, row)) {
+            // Settled films are at rest by definition.
+            let mut hv = std::mem::take(&mut state.settled[k]);
+            if !at_rest_only || state.at_rest(col, row) {
+                hv += std::mem::take(&mut state.h[k]);
+            }
+            if hv <= 0.0 {
                 continue;
             }
             let i = row * w + col;
@@ -127,7 +131,6 @@ pub fn deposit(
             if raises_bed {
                 state.bed[k] += hv;
             }
-            state.h[k] = 0.0;
             volume += hv * g.cell_area();
         }
     }

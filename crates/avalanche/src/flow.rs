@@ -72,6 +72,7 @@
 //! bit-identical for any thread count and with or without the four-lane kernels.
 
 mod lanes;
+mod settle;
 mod tiles;
 
 use lanes::{Lanes, ld};
@@ -313,6 +314,8 @@ pub struct AvalancheState {
     pub(crate) bed: Vec<f64>,
     /// Padded flowing thickness, m.
     pub(crate) h: Vec<f64>,
+    /// Padded thickness of the films that came to rest during the run (see `settle_films`), m.
+    pub(crate) settled: Vec<f64>,
     /// Padded pipe velocities, one array per owned direction (east, south, south-east,
     /// south-west), m/s.
     pub(crate) pipes: [Vec<f64>; 4],
@@ -387,6 +390,7 @@ impl AvalancheState {
             nodata,
             bed: pbed,
             h: vec![0.0; pw * ph],
+            settled: vec![0.0; pw * ph],
             pipes: std::array::from_fn(|_| vec![0.0; pw * ph]),
             active: None,
             tiles: TileSet::new(pw, ph),
@@ -463,6 +467,7 @@ impl AvalancheState {
         }
         self.pipes.iter_mut().for_each(|p| p.fill(0.0));
         self.h.fill(0.0);
+        self.settled.fill(0.0);
         for r in 0..hgt {
             for c in 0..w {
                 let k = self.pad(c, r);
@@ -608,6 +613,10 @@ impl AvalancheState {
 
     /// Recomputes the active set, the active box and the CFL maxima by scanning the whole grid
     /// (after external edits).
+    ///
+    /// The largest wave speed over all cells is the larger of the wet cells' and the largest
+    /// pipe speed (a dry cell's `|u|` is the speed of a pipe, and the cell at either end of the
+    /// fastest pipe reaches it), so dry cells cost one look at their pipes.
     pub(crate) fn refresh_active(&mut self) {
         self.tiles.clear();
         let (mut umax, mut wave) = (0.0f64, 0.0f64);
@@ -615,13 +624,16 @@ impl AvalancheState {
             let mut run: Option<(usize, usize)> = None;
             for c in 0..self.pw {
                 let k = r * self.pw + c;
-                wave = wave.max(self.wave_speed(k));
                 let mut moving = false;
                 for p in &self.pipes {
                     umax = umax.max(p[k].abs());
                     moving |= p[k] != 0.0;
                 }
-                if self.h[k] > 0.0 || moving {
+                let wet = self.h[k] > 0.0;
+                if wet {
+                    wave = wave.max(self.wave_speed(k));
+                }
+                if wet || moving {
                     run = match run {
                         Some((a, _)) if a / TILE == c / TILE => Some((a, c)),
                         Some((a, b)) => {
@@ -636,7 +648,7 @@ impl AvalancheState {
                 self.tiles.add(r, a, b);
             }
         }
-        self.maxima = (umax, wave);
+        self.maxima = (umax, wave.max(umax));
         self.active = self.tiles.bbox().map(|b| b.grown(self.pw, self.ph));
     }
 }

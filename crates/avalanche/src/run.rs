@@ -40,6 +40,10 @@ pub struct RunOptions {
     /// Peak thickness above which a cell belongs to the footprint, m. Default 0.01 (AvaFrame's
     /// peak-flow-thickness convention).
     pub footprint_threshold_m: f64,
+    /// Films thinner than this (the cell and its 8 neighbours) come to rest after each record
+    /// interval, m (see `AvalancheState::settle_films`). Default 0.005 (chosen here: half the
+    /// footprint threshold); 0 keeps every film flowing.
+    pub settle_thickness_m: f64,
 }
 
 impl Default for RunOptions {
@@ -49,6 +53,7 @@ impl Default for RunOptions {
             record_interval_s: 0.1,
             stop_energy_fraction: 0.01,
             footprint_threshold_m: 0.01,
+            settle_thickness_m: 0.005,
         }
     }
 }
@@ -78,12 +83,17 @@ impl RunOptions {
                 expected: "in [0, 1)",
             });
         }
-        if !(self.footprint_threshold_m.is_finite() && self.footprint_threshold_m >= 0.0) {
-            return Err(AvalancheError::InvalidParameter {
-                name: "footprint_threshold_m",
-                value: self.footprint_threshold_m,
-                expected: "finite and >= 0",
-            });
+        for (name, value) in [
+            ("footprint_threshold_m", self.footprint_threshold_m),
+            ("settle_thickness_m", self.settle_thickness_m),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(AvalancheError::InvalidParameter {
+                    name,
+                    value,
+                    expected: "finite and >= 0",
+                });
+            }
         }
         Ok(())
     }
@@ -167,6 +177,12 @@ pub struct AvalancheRun {
 impl AvalancheRun {
     /// Starts a run from released snow (the state's flowing thickness).
     pub fn new(state: AvalancheState) -> Self {
+        Self::with_scratch(state, AvalancheScratch::default())
+    }
+
+    /// [`AvalancheRun::new`] reusing the work buffers of an earlier run (a season runs many
+    /// avalanches on one grid; [`AvalancheRun::take_scratch`] hands them back).
+    pub fn with_scratch(state: AvalancheState, scratch: AvalancheScratch) -> Self {
         let n = state.geometry.width() * state.geometry.height();
         let released_volume = state.flowing_volume();
         let start_centre = mass_centre(&state);
@@ -183,7 +199,7 @@ impl AvalancheRun {
             }
         }
         let mut run = Self {
-            scratch: AvalancheScratch::default(),
+            scratch,
             peak_thickness: vec![0.0; n],
             peak_speed: vec![0.0; n],
             released_volume,
@@ -203,6 +219,12 @@ impl AvalancheRun {
             run.stop = Some(StopReason::Empty);
         }
         run
+    }
+
+    /// The work buffers, for the next run (this one can no longer advance cheaply: it
+    /// reallocates them).
+    pub fn take_scratch(&mut self) -> AvalancheScratch {
+        std::mem::take(&mut self.scratch)
     }
 
     /// Simulated time since the release, s.
@@ -253,6 +275,7 @@ impl AvalancheRun {
         self.time += dt;
         self.substeps += report.substeps;
         self.border_outflow += report.border_outflow;
+        self.state.settle_films(options.settle_thickness_m);
         self.record();
         self.stop = if self.state.active.is_none() {
             Some(StopReason::Empty)
@@ -286,38 +309,32 @@ impl AvalancheRun {
         Ok(self.summary(options))
     }
 
-    /// Updates peaks, energy and the moving flag over the active box.
+    /// Updates peaks, energy and the moving flag over the active tiles.
     fn record(&mut self) {
-        let Some(bx) = self.state.active else {
-            self.energy = 0.0;
-            self.moving = false;
-            return;
-        };
         let s = &self.state;
-        let (w, h) = (s.geometry.width(), s.geometry.height());
+        let w = s.geometry.width();
         let area = s.geometry.cell_area();
         let mut energy = 0.0;
         let mut moving = false;
-        let rows = bx.r0.max(1) - 1..bx.r1.min(h);
-        let cols = bx.c0.max(1) - 1..bx.c1.min(w);
-        for r in rows {
-            for c in cols.clone() {
-                let k = s.pad(c, r);
-                let hk = s.h[k];
-                let i = r * w + c;
-                if hk > self.peak_thickness[i] {
-                    self.peak_thickness[i] = hk;
-                }
-                if !s.at_rest(c, r) {
-                    moving = true;
-                }
-                if hk > 0.0 {
-                    let v = s.velocity_at(c, r);
-                    let sp2 = v[0] * v[0] + v[1] * v[1];
-                    energy += 0.5 * hk * sp2 * area;
-                    let sp = sp2.sqrt();
-                    if sp > self.peak_speed[i] {
-                        self.peak_speed[i] = sp;
+        for (r0, r1, c0, c1) in s.content_cells() {
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    let hk = s.thickness_at(c, r);
+                    if !moving && !s.at_rest(c, r) {
+                        moving = true;
+                    }
+                    if hk > 0.0 {
+                        let i = r * w + c;
+                        if hk > self.peak_thickness[i] {
+                            self.peak_thickness[i] = hk;
+                        }
+                        let v = s.velocity_at(c, r);
+                        let sp2 = v[0] * v[0] + v[1] * v[1];
+                        energy += 0.5 * hk * sp2 * area;
+                        let sp = sp2.sqrt();
+                        if sp > self.peak_speed[i] {
+                            self.peak_speed[i] = sp;
+                        }
                     }
                 }
             }
@@ -331,7 +348,7 @@ impl AvalancheRun {
     pub fn summary(&self, options: &RunOptions) -> RunSummary {
         let g = &self.state.geometry;
         let w = g.width();
-        let final_volume = self.state.flowing_volume();
+        let final_volume = self.state.total_volume();
         let closure = if self.released_volume > 0.0 {
             (self.released_volume - final_volume - self.border_outflow).abs() / self.released_volume
         } else {
@@ -406,14 +423,15 @@ impl AvalancheRun {
     }
 }
 
-/// Volume-weighted centre of the flowing snow: local metres east and south of the grid's
+/// Volume-weighted centre of the avalanche's snow (flowing and settled): local metres east and south of the grid's
 /// north-west corner and the bed altitude under it, m.
 fn mass_centre(state: &AvalancheState) -> [f64; 3] {
     let g = &state.geometry;
     let (mut sx, mut sy, mut sz, mut sv) = (0.0, 0.0, 0.0, 0.0);
+    let snow = state.snow_thickness();
     for r in 0..g.height() {
         for c in 0..g.width() {
-            let h = state.thickness_at(c, r);
+            let h = snow[r * g.width() + c];
             if h > 0.0 {
                 let (x, y) = g.local_metres(c, r);
                 sx += h * x;

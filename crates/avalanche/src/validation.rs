@@ -344,7 +344,7 @@ pub fn run_release(
     let wall_s = t0.elapsed().as_secs_f64();
     Ok(RealRun {
         peak_thickness: run.peak_thickness().to_vec(),
-        final_thickness: run.state.thickness(),
+        final_thickness: run.state.snow_thickness(),
         dem: grid,
         release: mask,
         summary,

@@ -136,3 +136,60 @@ fn bad_options_are_named() {
         assert!(err.to_string().contains(name), "{err}");
     }
 }
+
+/// Film settling: only films thinner than the threshold (with thin neighbours) settle, the
+/// settled snow counts in the final volume, and a run without settling keeps more cells wet.
+#[test]
+fn thin_films_settle_and_mass_is_conserved() {
+    let params = AvalancheParams::default();
+    let threshold = 0.005;
+    let mut run = slope_runout();
+    let summary = run
+        .run::<AvalancheError>(&params, &RunOptions::default(), |r| {
+            for (i, &s) in r.state.settled_thickness().iter().enumerate() {
+                assert!(s >= 0.0 && s.is_finite(), "cell {i}: settled {s}");
+            }
+            Ok(())
+        })
+        .unwrap();
+    assert!(
+        summary.volume_closure_rel < 1e-9,
+        "{}",
+        summary.volume_closure_rel
+    );
+    let settled = run.state.settled_thickness();
+    let flowing = run.state.thickness();
+    let settled_cells = settled.iter().filter(|&&s| s > 0.0).count();
+    assert!(settled_cells > 0, "no film settled");
+    // A cell settles at most a few films of less than the threshold each.
+    let max_settled = settled.iter().fold(0.0f64, |m, &s| m.max(s));
+    assert!(max_settled < 20.0 * threshold, "settled {max_settled} m");
+    let total: f64 = run.state.snow_thickness().iter().sum::<f64>() * 4.0;
+    let parts: f64 = (settled.iter().sum::<f64>() + flowing.iter().sum::<f64>()) * 4.0;
+    assert!((total - parts).abs() < 1e-9 * total);
+    let kept = summary.released_volume_m3 - summary.border_outflow_m3;
+    assert!((total - kept).abs() < 1e-9 * total, "{total} vs {kept}");
+
+    let mut unsettled = slope_runout();
+    let options = RunOptions {
+        settle_thickness_m: 0.0,
+        ..RunOptions::default()
+    };
+    unsettled
+        .run::<AvalancheError>(&params, &options, |_| Ok(()))
+        .unwrap();
+    assert!(
+        unsettled
+            .state
+            .settled_thickness()
+            .iter()
+            .all(|&s| s == 0.0)
+    );
+    let wet = |v: &[f64]| v.iter().filter(|&&h| h > 0.0).count();
+    assert!(
+        wet(&flowing) < wet(&unsettled.state.thickness()),
+        "settling leaves fewer flowing cells: {} vs {}",
+        wet(&flowing),
+        wet(&unsettled.state.thickness())
+    );
+}

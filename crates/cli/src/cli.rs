@@ -228,6 +228,14 @@ pub struct AvalancheArgs {
     /// Longest simulated time, seconds (the run stops earlier once the snow is at rest).
     #[arg(long, default_value_t = 600.0)]
     pub duration: f64,
+    /// Films thinner than this, metres (a cell and its 8 neighbours), come to rest as deposit
+    /// instead of creeping on; 0 keeps every film flowing (pure Coulomb friction).
+    #[arg(long, default_value_t = 0.005)]
+    pub settle_thickness: f64,
+    /// Stop once the kinetic energy falls below this fraction of its peak (AvaFrame's
+    /// stopCrit); 0 runs until the snow is at rest or --duration.
+    #[arg(long, default_value_t = 0.01)]
+    pub stop_energy: f64,
     /// Simulated seconds between playback frames.
     #[arg(long, default_value_t = 1.0)]
     pub frame_interval: f64,

@@ -33,7 +33,8 @@
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::release_area::{ReleaseAreaError, RuptureParams};
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, RunOptions, deposit, release,
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheScratch, AvalancheState, RunOptions,
+    deposit, release,
 };
 use snowscape_terrain::{LayeredTerrain, SnowLayer, surface};
 use thiserror::Error;
@@ -372,6 +373,7 @@ pub fn run_avalanche(
     trigger: Trigger,
     cell: usize,
     maps: &mut AvalancheMaps,
+    scratch: &mut AvalancheScratch,
 ) -> Result<AvalancheOutcome, AvalancheError> {
     let n = terrain.geometry().len();
     for m in [&mut maps.scour, &mut maps.deposit] {
@@ -400,13 +402,15 @@ pub fn run_avalanche(
             release_t = Some(t);
         }
     }
-    let mut run = AvalancheRun::new(state);
+    let mut run = AvalancheRun::with_scratch(state, std::mem::take(scratch));
     let mut steps = 0u64;
     let summary = run.run::<AvalancheError>(&flow, &params.run, |_| {
         steps += 1;
         Ok(())
-    })?;
-    for (d, h) in maps.deposit.iter_mut().zip(run.state.thickness()) {
+    });
+    *scratch = run.take_scratch();
+    let summary = summary?;
+    for (d, h) in maps.deposit.iter_mut().zip(run.state.snow_thickness()) {
         *d += h as f32;
     }
     let deposited = deposit(terrain, &mut run.state, SnowLayer::Stable, false)?;

@@ -19,6 +19,7 @@ use crate::snowfall::{self, SnowfallScratch};
 use crate::stability::{self, StabilityScratch};
 use crate::wind_transport::{self, WindMaps, WindScratch};
 use serde::{Deserialize, Serialize};
+use snowscape_avalanche::AvalancheScratch;
 use snowscape_avalanche::release_area::release_at_point;
 use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams, precompute};
 use snowscape_skiers::{SkiArea, SkiScratch};
@@ -136,6 +137,7 @@ pub struct Winter {
     hazard: Vec<f64>,
     /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
     avalanche_maps: AvalancheMaps,
+    avalanche_scratch: AvalancheScratch,
     /// The ski area, made at the first skier (not checkpointed: see [`crate::skiing`]).
     ski_area: Option<SkiArea>,
     ski_scratch: SkiScratch,
@@ -215,6 +217,7 @@ impl Winter {
             slope_deg: Vec::new(),
             hazard: Vec::new(),
             avalanche_maps: AvalancheMaps::default(),
+            avalanche_scratch: AvalancheScratch::default(),
             ski_area: None,
             ski_scratch: SkiScratch::default(),
             terminus_stale: false,
@@ -392,11 +395,15 @@ impl Winter {
         };
         let p = self.scenario.skiers.clone();
         // Without skiable snow there is no terminus: no run today.
-        let no_snow = |e: &snowscape_skiers::SkiError| {
-            matches!(e, snowscape_skiers::SkiError::NoTerminus(_))
-        };
+        let no_snow =
+            |e: &snowscape_skiers::SkiError| matches!(e, snowscape_skiers::SkiError::NoTerminus(_));
         if self.ski_area.is_none() {
-            match SkiArea::new(&p.ski, &self.terrain, p.terminus.clone(), self.scenario.seed) {
+            match SkiArea::new(
+                &p.ski,
+                &self.terrain,
+                p.terminus.clone(),
+                self.scenario.seed,
+            ) {
                 Ok(a) => self.ski_area = Some(a),
                 Err(e) if no_snow(&e) => return Ok(()),
                 Err(e) => return Err(ski_err(e)),
@@ -517,6 +524,7 @@ impl Winter {
             trigger,
             cell,
             &mut self.avalanche_maps,
+            &mut self.avalanche_scratch,
         )
         .map_err(err)?;
         let rec = outcome.record;

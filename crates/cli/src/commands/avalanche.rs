@@ -72,9 +72,12 @@ fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
 fn run_options(args: &AvalancheArgs) -> anyhow::Result<RunOptions> {
     let o = RunOptions {
         duration_s: args.duration,
+        settle_thickness_m: args.settle_thickness,
+        stop_energy_fraction: args.stop_energy,
         ..RunOptions::default()
     };
-    o.validate().context("--duration")?;
+    o.validate()
+        .context("--duration, --settle-thickness or --stop-energy")?;
     if !(args.frame_interval.is_finite() && args.frame_interval > 0.0) {
         bail!(
             "--frame-interval must be a positive number of seconds, got {}",
@@ -159,7 +162,7 @@ fn render_frame(
     view: &PreviewOptions,
 ) -> anyhow::Result<image::RgbaImage> {
     let mut t = LayeredTerrain::from_bedrock(dem.clone());
-    let h = run.state.thickness();
+    let h = run.state.snow_thickness();
     for (v, &hv) in t.layer_mut(SnowLayer::Unstable).iter_mut().zip(&h) {
         *v = hv as f32;
     }
@@ -251,7 +254,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
             &mut out,
             "thickness.tif",
             &dem,
-            to_f32(&av.state.thickness()),
+            to_f32(&av.state.snow_thickness()),
         )?;
         let fp = av.footprint(options.footprint_threshold_m);
         write_map(
