@@ -1,1 +1,23 @@
-//! Physical snow transport after Jubert 2018: scene voxelisation, 3D wind by Stable Fluids, precipitation maps, terrain wind modification, saltation, suspension, sublimation and melt (SnowTran-3D).
+//! # snowscape-transport: physical snow transport after Jubert 2018
+//!
+//! Jubert's thesis (Université de Montréal, 2018, in French) couples a 3D wind, a
+//! precipitation map and the SnowTran-3D transport model of Liston & Sturm (1998) on a 2D
+//! height map. This crate implements, module by module:
+//!
+//! - [`params`]: the user parameters of Table 6.I and a piecewise-constant weather timeline.
+//! - [`physics`]: the per-cell formulas of Section 5.5 and Annex I (snow density, threshold
+//!   and actual friction velocity by Newton-Raphson, saltation capacity and fetch rule,
+//!   suspension profile, sublimation loss rate with solar radiation, degree-day melt).
+//! - [`terrain_wind`]: the terrain modification of the wind at `z_r` (Section 5.4).
+//! - [`tables`]: the per-weather lookup tables that make the per-cell work cheap (the
+//!   saltating `u*` depends on the wind alone, the suspension integrals on `u*` alone).
+
+pub mod error;
+pub mod params;
+pub mod physics;
+
+pub mod tables;
+pub mod terrain_wind;
+
+pub use error::TransportError;
+pub use params::{Phenomena, Timeline, TransportParams, Weather};
