@@ -8,6 +8,7 @@
 //! - [`physics`]: the per-cell formulas of Section 5.5 and Annex I (snow density, threshold
 //!   and actual friction velocity by Newton-Raphson, saltation capacity and fetch rule,
 //!   suspension profile, sublimation loss rate with solar radiation, degree-day melt).
+//! - [`step`]: one explicit step of the mass balance, Eq. 5.16, with a closed budget.
 //! - [`terrain_wind`]: the terrain modification of the wind at `z_r` (Section 5.4).
 //! - [`tables`]: the per-weather lookup tables that make the per-cell work cheap (the
 //!   saltating `u*` depends on the wind alone, the suspension integrals on `u*` alone).
@@ -15,7 +16,7 @@
 pub mod error;
 pub mod params;
 pub mod physics;
-
+pub mod step;
 pub mod tables;
 pub mod terrain_wind;
 

@@ -32,14 +32,14 @@ const MAX_U_STAR_T: f64 = 3.0;
 
 /// A uniformly sampled function with linear interpolation, clamped at both ends.
 #[derive(Debug, Clone, PartialEq)]
-struct Table1 {
+pub(crate) struct Table1 {
     lo: f32,
     inv_step: f32,
     values: Vec<f32>,
 }
 
 impl Table1 {
-    fn new(lo: f64, hi: f64, n: usize, f: impl Fn(f64) -> f64) -> Self {
+    pub(crate) fn new(lo: f64, hi: f64, n: usize, f: impl Fn(f64) -> f64) -> Self {
         let step = (hi - lo) / (n - 1) as f64;
         Self {
             lo: lo as f32,
@@ -49,7 +49,7 @@ impl Table1 {
     }
 
     #[inline]
-    fn at(&self, x: f32) -> f32 {
+    pub(crate) fn at(&self, x: f32) -> f32 {
         let last = self.values.len() - 1;
         let t = ((x - self.lo) * self.inv_step).clamp(0.0, last as f32);
         let i = (t as usize).min(last - 1);

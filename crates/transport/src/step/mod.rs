@@ -1,0 +1,326 @@
+//! One explicit step of the snow mass balance (Jubert 2018, Section 5.5, Eqs. 5.16-5.17):
+//!
+//! `d(ρs ζ)/dt = ρw P − ∇·(Qsalt + Qsusp) + Qsubl − ρs M`
+//!
+//! integrated by forward Euler over `Δt` (5.17), per cell, in mass per area (kg m⁻²).
+//! The order follows Section 5.5: threshold `u*t` from the density (5.18-5.25), surface
+//! shear `u*` (5.26-5.36), saltation capacity and the fetch-limited flux along the wind
+//! (5.37-5.39, [`sweep`]), suspension and sublimation from the saltation layer
+//! (5.40-5.47, Annex I), degree-day melt (5.48).
+//!
+//! **Divergence.** The thesis takes central differences of the fluxes (6.2). Here the flux
+//! each cell sends downwind is exactly what its downwind neighbour receives (an upwind,
+//! flux-form scheme, as SnowTran-3D does), so transport conserves mass to rounding. Flux
+//! blown across the grid border leaves the domain and is reported; saturated inflow
+//! (`saturated_inflow`) enters at upwind borders and is reported too.
+//!
+//! **Positivity.** A cell cannot send more snow than it holds: its wind-driven losses
+//! (transport out and sublimation) are scaled by `min(1, erodible / wanted)`, where the
+//! erodible mass is the snow above the vegetation's holding depth `C_v` (5.27), and melt by
+//! what is left. Receivers read the scaled amounts, so the scheme stays conservative and no
+//! cell goes negative, whatever `Δt`.
+//!
+//! **Density.** Kept snow keeps its density; snowfall arrives at the new-snow density
+//! (5.18-5.20) and drifted snow at the wind-packed density of 5.19-5.20 for a wind of at
+//! least 5 m s⁻¹ (chosen here: drifted grains are broken and pack densely). Without
+//! snowfall the snow densifies by 5.21-5.22, capped at 550 kg m⁻³ (SnowModel's cap).
+//!
+//! **Parallelism.** Every pass computes each cell from the previous state or from its
+//! upwind chain, and budgets are summed per row then in row order: results are
+//! bit-identical for any number of threads.
+
+mod sweep;
+
+use crate::error::TransportError;
+use crate::params::{TransportParams, Weather};
+use crate::physics::WATER_DENSITY;
+use crate::physics::melt::melt_rate;
+use crate::physics::shear::ShearSite;
+use crate::tables::Tables;
+use crate::terrain_wind::check_len;
+use rayon::prelude::*;
+use snowscape_terrain::GridGeometry;
+use sweep::SweepInputs;
+
+/// Highest density reached by densification, kg m⁻³ (SnowModel's `ro_snowmax`).
+pub const MAX_DENSITY: f32 = 550.0;
+/// Lowest density drifted snow lands at: new snow packed by a 5 m s⁻¹ wind (Eq. 5.19).
+const DRIFT_PACKING_WIND: f64 = 5.0;
+
+/// The snow cover: water equivalent and density per cell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SnowState {
+    /// Snow water equivalent `ρs ζ`, kg m⁻².
+    pub swe: Vec<f32>,
+    /// Snow density `ρs`, kg m⁻³ (kept where there is no snow, for the next snowfall).
+    pub density: Vec<f32>,
+}
+
+impl SnowState {
+    /// No snow, with a nominal density of 100 kg m⁻³.
+    pub fn bare(geometry: &GridGeometry) -> Self {
+        Self {
+            swe: vec![0.0; geometry.len()],
+            density: vec![100.0; geometry.len()],
+        }
+    }
+
+    /// A uniform snow cover of `depth` m at `density` kg m⁻³.
+    pub fn uniform(geometry: &GridGeometry, depth: f32, density: f32) -> Self {
+        Self {
+            swe: vec![depth * density; geometry.len()],
+            density: vec![density; geometry.len()],
+        }
+    }
+
+    /// Snow depth `ζ`, m, per cell.
+    pub fn depth(&self) -> Vec<f32> {
+        self.swe
+            .iter()
+            .zip(&self.density)
+            .map(|(m, r)| if *r > 0.0 { m / r } else { 0.0 })
+            .collect()
+    }
+
+    /// Total snow mass over the grid, kg.
+    pub fn total_mass(&self, geometry: &GridGeometry) -> f64 {
+        let rows: Vec<f64> = self
+            .swe
+            .par_chunks(geometry.width())
+            .map(|r| r.iter().map(|&m| f64::from(m)).sum())
+            .collect();
+        rows.iter().sum::<f64>() * geometry.cell_area()
+    }
+}
+
+/// The maps a step reads: the wind at `z_r` (after Section 5.4) and the precipitation ratio
+/// map of Chapter 4 (1 everywhere when absent).
+#[derive(Debug, Clone, Copy)]
+pub struct SceneMaps<'a> {
+    /// Grid of every map.
+    pub geometry: &'a GridGeometry,
+    /// Wind towards the east at `z_r`, m s⁻¹.
+    pub wind_u: &'a [f32],
+    /// Wind towards the north at `z_r`, m s⁻¹.
+    pub wind_v: &'a [f32],
+    /// Share of the mean snowfall each cell receives (Section 6.4), or `None` for uniform.
+    pub precipitation_ratio: Option<&'a [f32]>,
+}
+
+/// The mass budget of one step or a run, kg (Eq. 5.16 integrated over the grid).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct MassBudget {
+    /// Snowfall `ρw P` received.
+    pub precipitation_in: f64,
+    /// Saltation entering through upwind borders (`saturated_inflow`).
+    pub border_in: f64,
+    /// Saltation and suspension blown out of the grid.
+    pub border_out: f64,
+    /// Snow lost to sublimation of blowing snow (`−Qsubl`).
+    pub sublimation_out: f64,
+    /// Snow lost to melt.
+    pub melt_out: f64,
+    /// Snow moved between cells by saltation and suspension (sent downwind).
+    pub transported: f64,
+    /// Stored snow at the start.
+    pub initial_mass: f64,
+    /// Stored snow at the end.
+    pub final_mass: f64,
+    /// `final − initial − (in − out)`: rounding only.
+    pub closure_error: f64,
+}
+
+impl MassBudget {
+    /// Appends a later budget (a following step).
+    pub fn accumulate(&mut self, later: &MassBudget) {
+        if self.initial_mass == 0.0 && self.final_mass == 0.0 && self.precipitation_in == 0.0 {
+            self.initial_mass = later.initial_mass;
+        }
+        self.precipitation_in += later.precipitation_in;
+        self.border_in += later.border_in;
+        self.border_out += later.border_out;
+        self.sublimation_out += later.sublimation_out;
+        self.melt_out += later.melt_out;
+        self.transported += later.transported;
+        self.final_mass = later.final_mass;
+        self.closure_error = self.final_mass
+            - self.initial_mass
+            - (self.precipitation_in + self.border_in
+                - self.border_out
+                - self.sublimation_out
+                - self.melt_out);
+    }
+}
+
+/// Per-cell results of the last step, plus reusable buffers.
+#[derive(Debug, Clone, Default)]
+pub struct StepScratch {
+    tables: Tables,
+    fields: Fields,
+    q_x: Vec<f32>,
+    q_y: Vec<f32>,
+    send_x: Vec<f32>,
+    send_y: Vec<f32>,
+    loss_subl: Vec<f32>,
+    loss_melt: Vec<f32>,
+    /// Saltation flux magnitude of the last step, kg m⁻¹ s⁻¹.
+    pub q_salt: Vec<f32>,
+    /// Suspension flux magnitude of the last step, kg m⁻¹ s⁻¹.
+    pub q_susp: Vec<f32>,
+    /// Sublimation rate of the last step, kg m⁻² s⁻¹ (≤ 0, Eq. 5.47).
+    pub q_subl: Vec<f32>,
+}
+
+/// Per-cell shear state of the current step.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Fields {
+    /// Wind speed `W` at `z_r`, m s⁻¹.
+    pub speed: Vec<f32>,
+    pub u_star: Vec<f32>,
+    pub u_star_t: Vec<f32>,
+    /// Saltation capacity magnitude `Qs_max`, kg m⁻¹ s⁻¹ (0 where no saltation).
+    pub q_max: Vec<f32>,
+}
+
+/// Sizes a buffer; every pass overwrites all its cells, so no clearing is needed.
+fn resize(v: &mut Vec<f32>, n: usize) {
+    if v.len() != n {
+        v.clear();
+        v.resize(n, 0.0);
+    }
+}
+
+mod cells;
+
+/// Advances the snow cover by `dt_s` seconds under `weather` (Eqs. 5.16-5.17).
+pub fn step(
+    params: &TransportParams,
+    weather: &Weather,
+    scene: &SceneMaps,
+    state: &mut SnowState,
+    scratch: &mut StepScratch,
+    dt_s: f64,
+) -> Result<MassBudget, TransportError> {
+    params.validate()?;
+    weather.validate()?;
+    if !(dt_s.is_finite() && dt_s >= 0.0) {
+        return Err(TransportError::InvalidTimeStep { dt_s });
+    }
+    let g = scene.geometry;
+    check_len("wind_u", scene.wind_u, g)?;
+    check_len("wind_v", scene.wind_v, g)?;
+    check_len("swe", &state.swe, g)?;
+    check_len("density", &state.density, g)?;
+    if let Some(p) = scene.precipitation_ratio {
+        check_len("precipitation_ratio", p, g)?;
+    }
+    let n = g.len();
+    let initial_mass = state.total_mass(g);
+    let (shear_table, blowing_table) = scratch.tables.update(params, weather);
+    let (shear_table, blowing_table) = (shear_table.clone(), blowing_table.clone());
+    for v in [
+        &mut scratch.fields.speed,
+        &mut scratch.fields.u_star,
+        &mut scratch.fields.u_star_t,
+        &mut scratch.fields.q_max,
+        &mut scratch.q_x,
+        &mut scratch.q_y,
+        &mut scratch.send_x,
+        &mut scratch.send_y,
+        &mut scratch.loss_subl,
+        &mut scratch.loss_melt,
+        &mut scratch.q_salt,
+        &mut scratch.q_susp,
+        &mut scratch.q_subl,
+    ] {
+        resize(v, n);
+    }
+    let t_k = weather.air_temperature_k();
+    let ctx = cells::Context {
+        rates: cells::CellRates::new(t_k),
+        width: g.width(),
+        height: g.height(),
+        params,
+        scene,
+        site: ShearSite {
+            z_r: params.reference_height_m,
+            z0_snow: params.snow_roughness_m,
+            z0_veg: params.vegetation_roughness_m,
+            holding_depth: params.vegetation_snow_depth_m,
+        },
+        shear_table: &shear_table,
+        blowing_table: &blowing_table,
+        dt: dt_s as f32,
+        inv_dx: (1.0 / g.cell_size_x()) as f32,
+        inv_dy: (1.0 / g.cell_size_y()) as f32,
+        melt_rate: if params.phenomena.melt {
+            melt_rate(
+                params.melt_factor_mm_per_degc_day,
+                weather.air_temperature_c,
+                params.melt_base_temperature_c,
+            ) as f32
+        } else {
+            0.0
+        },
+        snowfall: if params.phenomena.precipitation {
+            (WATER_DENSITY * weather.precipitation_m_per_s() * dt_s) as f32
+        } else {
+            0.0
+        },
+        densify: params.phenomena.densification && weather.precipitation_mm_per_h == 0.0,
+        max_wind: shear_table.max_wind() as f32,
+    };
+    // Pass 1: threshold, shear and capacity per cell.
+    cells::shear_pass(&ctx, state, &mut scratch.fields);
+    // Pass 2: fetch-limited saltation along x and y.
+    let relax = |d: f64| ((params.fetch_scale * d / params.fetch_m) as f32).min(1.0);
+    let sweep_inputs = SweepInputs {
+        width: g.width(),
+        height: g.height(),
+        fields: &scratch.fields,
+        wind_u: scene.wind_u,
+        wind_v: scene.wind_v,
+        relax_x: relax(g.cell_size_x()),
+        relax_y: relax(g.cell_size_y()),
+        saturated_inflow: params.saturated_inflow,
+    };
+    sweep::sweep_x(&sweep_inputs, &mut scratch.q_x);
+    sweep::sweep_y(&sweep_inputs, &mut scratch.q_y);
+    // Pass 3: suspension, sublimation, melt and the limited outflows.
+    cells::outflow_pass(&ctx, state, scratch);
+    // Pass 4: gather the inflows, update mass and density.
+    let rows = cells::update_pass(&ctx, state, scratch);
+    let area = g.cell_area();
+    let mut budget = MassBudget {
+        initial_mass,
+        ..Default::default()
+    };
+    for r in &rows {
+        if let Some((col, row, value)) = r.non_finite {
+            return Err(TransportError::NonFinite {
+                phenomenon: "transport",
+                what: "snow water equivalent",
+                col,
+                row,
+                value: f64::from(value),
+            });
+        }
+        budget.precipitation_in += r.precipitation * area;
+        budget.border_in += r.border_in * area;
+        budget.border_out += r.border_out * area;
+        budget.sublimation_out += r.sublimation * area;
+        budget.melt_out += r.melt * area;
+        budget.transported += r.transported * area;
+    }
+    budget.final_mass = state.total_mass(g);
+    budget.closure_error = budget.final_mass
+        - budget.initial_mass
+        - (budget.precipitation_in + budget.border_in
+            - budget.border_out
+            - budget.sublimation_out
+            - budget.melt_out);
+    Ok(budget)
+}
+
+#[cfg(test)]
+mod tests;
