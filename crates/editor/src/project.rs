@@ -1,0 +1,299 @@
+//! The project folder: the only place the server reads and writes.
+//!
+//! A project saved under `NAME` is the folder `projects/NAME/` holding `bedrock.tif` (the
+//! terrain), `scenario.toml`, `checkpoint.bin` (the season's state: snow layers, clock,
+//! scheduler, budget, as `snowscape run --resume` uses them), `avalanche_probability.tif` and
+//! `ski_area.tif` (the painted maps) and `history.json` (what the user did, and the
+//! timeline's snapshot days). Exports go to `exports/NAME/`.
+//!
+//! Every path is checked by [`ProjectDir::resolve`]: relative, no `..`, no root or prefix,
+//! and once resolved (symbolic links followed) still inside the canonical project folder.
+
+use crate::brush::PaintMaps;
+use crate::session::Session;
+use snowscape_io::{ReadOptions, read_dem, write_bytes_atomic, write_geotiff};
+use snowscape_season::scenario::Scenario;
+use snowscape_season::winter::Winter;
+use snowscape_terrain::LayeredTerrain;
+use std::path::{Component, Path, PathBuf};
+use thiserror::Error;
+
+/// A project-folder error; each names the offending path or value.
+#[derive(Debug, Error)]
+pub enum ProjectError {
+    #[error("path {0:?} is not allowed: it must be relative and stay inside the project folder")]
+    BadPath(String),
+    #[error("path {0:?} leaves the project folder (through a symbolic link)")]
+    Escapes(String),
+    #[error("project {0:?} does not exist in the project folder")]
+    NotFound(String),
+    #[error("cannot use the project folder {path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{what} {path}: {reason}")]
+    Content {
+        what: &'static str,
+        path: String,
+        reason: String,
+    },
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ProjectError + '_ {
+    move |source| ProjectError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+/// The project folder.
+#[derive(Debug, Clone)]
+pub struct ProjectDir {
+    root: PathBuf,
+}
+
+impl ProjectDir {
+    /// Opens (creating if missing) the project folder `dir`.
+    pub fn open(dir: &Path) -> Result<Self, ProjectError> {
+        std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+        let root = dir.canonicalize().map_err(io_err(dir))?;
+        Ok(Self { root })
+    }
+
+    /// The canonical folder.
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// The path of `rel` inside the project folder. Refuses absolute paths, `..`, and paths
+    /// whose existing part resolves (through symbolic links) outside the folder.
+    pub fn resolve(&self, rel: &str) -> Result<PathBuf, ProjectError> {
+        let p = Path::new(rel);
+        if rel.is_empty()
+            || rel.len() > 512
+            || rel.contains('\0')
+            || rel.contains('\\')
+            || !p.components().all(|c| matches!(c, Component::Normal(_)))
+        {
+            return Err(ProjectError::BadPath(rel.chars().take(200).collect()));
+        }
+        let full = self.root.join(p);
+        // The deepest existing ancestor must resolve inside the root.
+        let mut existing = full.as_path();
+        while !existing.exists() {
+            match existing.parent() {
+                Some(parent) => existing = parent,
+                None => break,
+            }
+        }
+        let canon = existing.canonicalize().map_err(io_err(existing))?;
+        if !canon.starts_with(&self.root) {
+            return Err(ProjectError::Escapes(rel.chars().take(200).collect()));
+        }
+        Ok(full)
+    }
+
+    /// Creates the folder `rel` inside the project folder.
+    pub fn create_dir(&self, rel: &str) -> Result<PathBuf, ProjectError> {
+        let p = self.resolve(rel)?;
+        std::fs::create_dir_all(&p).map_err(io_err(&p))?;
+        // Created folders may not replace a link planted meanwhile.
+        let canon = p.canonicalize().map_err(io_err(&p))?;
+        if !canon.starts_with(&self.root) {
+            return Err(ProjectError::Escapes(rel.into()));
+        }
+        Ok(p)
+    }
+
+    /// Reads the file `rel` (for downloads), at most `max` bytes.
+    pub fn read(&self, rel: &str, max: u64) -> Result<Vec<u8>, ProjectError> {
+        let p = self.resolve(rel)?;
+        let canon = p
+            .canonicalize()
+            .map_err(|_| ProjectError::NotFound(rel.into()))?;
+        if !canon.starts_with(&self.root) {
+            return Err(ProjectError::Escapes(rel.into()));
+        }
+        let meta = std::fs::metadata(&canon).map_err(io_err(&canon))?;
+        if !meta.is_file() {
+            return Err(ProjectError::NotFound(rel.into()));
+        }
+        if meta.len() > max {
+            return Err(ProjectError::Content {
+                what: "file",
+                path: rel.into(),
+                reason: format!("{} bytes is more than the {max} bytes served", meta.len()),
+            });
+        }
+        std::fs::read(&canon).map_err(io_err(&canon))
+    }
+
+    /// Saves the session as project `name`; returns the written files (relative).
+    pub fn save(&self, name: &str, s: &Session) -> Result<Vec<String>, ProjectError> {
+        crate::protocol::check_name(name).map_err(|e| ProjectError::BadPath(e.to_string()))?;
+        let dir_rel = format!("projects/{name}");
+        let dir = self.create_dir(&dir_rel)?;
+        let w = s.winter();
+        let t = &w.terrain;
+        let content = |what: &'static str, path: &Path| {
+            let path = path.display().to_string();
+            move |e: String| ProjectError::Content {
+                what,
+                path,
+                reason: e,
+            }
+        };
+        let mut files = Vec::new();
+        let mut put = |file: &str| {
+            files.push(format!("{dir_rel}/{file}"));
+            dir.join(file)
+        };
+        let p = put("bedrock.tif");
+        let grid = t
+            .to_grid(t.bedrock.clone())
+            .map_err(|e| content("terrain", &p)(e.to_string()))?;
+        write_geotiff(&p, &grid).map_err(|e| content("terrain", &p)(e.to_string()))?;
+        for (file, values) in [
+            (
+                "avalanche_probability.tif",
+                &s.paint().avalanche_probability,
+            ),
+            ("ski_area.tif", &s.paint().ski_area),
+        ] {
+            let p = put(file);
+            let grid = t
+                .to_grid(values.clone())
+                .map_err(|e| content("map", &p)(e.to_string()))?;
+            write_geotiff(&p, &grid).map_err(|e| content("map", &p)(e.to_string()))?;
+        }
+        let p = put("scenario.toml");
+        let text =
+            toml::to_string(w.scenario()).map_err(|e| content("scenario", &p)(e.to_string()))?;
+        write_bytes_atomic(&p, text.as_bytes())
+            .map_err(|e| content("scenario", &p)(e.to_string()))?;
+        let p = put("checkpoint.bin");
+        let mut bytes = Vec::new();
+        w.write_checkpoint(&mut bytes)
+            .map_err(|e| content("checkpoint", &p)(e.to_string()))?;
+        write_bytes_atomic(&p, &bytes).map_err(|e| content("checkpoint", &p)(e.to_string()))?;
+        let p = put("history.json");
+        let history = serde_json::json!({
+            "source": s.summary().source,
+            "day": w.day(),
+            "snapshot_days": s.timeline.days(),
+            "actions": s.history,
+        });
+        let text = serde_json::to_vec_pretty(&history)
+            .map_err(|e| content("history", &p)(e.to_string()))?;
+        write_bytes_atomic(&p, &text).map_err(|e| content("history", &p)(e.to_string()))?;
+        Ok(files)
+    }
+
+    /// Loads project `name` (its season at the saved day; the timeline starts there).
+    pub fn load(&self, name: &str) -> Result<Session, ProjectError> {
+        crate::protocol::check_name(name).map_err(|e| ProjectError::BadPath(e.to_string()))?;
+        let dir = self.resolve(&format!("projects/{name}"))?;
+        if !dir.join("checkpoint.bin").is_file() {
+            return Err(ProjectError::NotFound(name.into()));
+        }
+        let file = |f: &str| self.resolve(&format!("projects/{name}/{f}"));
+        let bad = |what: &'static str, p: &Path, e: String| ProjectError::Content {
+            what,
+            path: p.display().to_string(),
+            reason: e,
+        };
+        let p = file("bedrock.tif")?;
+        let bedrock =
+            read_dem(&p, &ReadOptions::default()).map_err(|e| bad("terrain", &p, e.to_string()))?;
+        let p = file("scenario.toml")?;
+        let text = std::fs::read_to_string(&p).map_err(io_err(&p))?;
+        let scenario = Scenario::from_toml(&text, &p.display().to_string())
+            .map_err(|e| bad("scenario", &p, e.to_string()))?;
+        let p = file("checkpoint.bin")?;
+        let bytes = std::fs::read(&p).map_err(io_err(&p))?;
+        let terrain = LayeredTerrain::from_bedrock(bedrock);
+        let n = terrain.geometry().len();
+        let winter = Winter::resume(scenario, terrain, &mut bytes.as_slice())
+            .map_err(|e| bad("checkpoint", &p, e.to_string()))?;
+        let mut paint = PaintMaps::new(n);
+        for (f, dst) in [
+            (
+                "avalanche_probability.tif",
+                &mut paint.avalanche_probability,
+            ),
+            ("ski_area.tif", &mut paint.ski_area),
+        ] {
+            let p = file(f)?;
+            let g =
+                read_dem(&p, &ReadOptions::default()).map_err(|e| bad("map", &p, e.to_string()))?;
+            if g.data().len() != n {
+                return Err(bad(
+                    "map",
+                    &p,
+                    format!("{} cells, the terrain has {n}", g.data().len()),
+                ));
+            }
+            for (d, v) in dst.iter_mut().zip(g.data()) {
+                *d = if v.is_finite() {
+                    v.clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+            }
+        }
+        let p = file("history.json")?;
+        let history: serde_json::Value = std::fs::read(&p)
+            .ok()
+            .and_then(|b| serde_json::from_slice(&b).ok())
+            .unwrap_or_default();
+        let source = history["source"].as_str().unwrap_or(name).to_string();
+        let mut s = Session::with_paint(winter, paint, source);
+        if let Some(a) = history["actions"].as_array() {
+            s.history = a.clone();
+        }
+        s.history
+            .push(serde_json::json!({"action": "load", "name": name}));
+        Ok(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolve_refuses_traversal_absolute_and_links_out() {
+        let tmp = tempfile::tempdir().unwrap();
+        let pd = ProjectDir::open(&tmp.path().join("proj")).unwrap();
+        assert!(
+            pd.resolve("projects/a/b.tif")
+                .unwrap()
+                .starts_with(pd.root())
+        );
+        for bad in [
+            "../x",
+            "a/../../x",
+            "/etc/passwd",
+            "",
+            "a\\..\\b",
+            "./a",
+            "a//../b",
+        ] {
+            assert!(pd.resolve(bad).is_err(), "{bad:?} was accepted");
+        }
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(tmp.path(), pd.root().join("out")).unwrap();
+            assert!(matches!(
+                pd.resolve("out/secret"),
+                Err(ProjectError::Escapes(_))
+            ));
+            assert!(pd.read("out/secret", 1000).is_err());
+        }
+        assert!(matches!(
+            pd.read("nothing.txt", 1000),
+            Err(ProjectError::NotFound(_))
+        ));
+    }
+}

@@ -1,0 +1,379 @@
+//! The local web server: the page, its WebSocket, a few JSON endpoints, and the actor thread
+//! that owns the [`Session`] (Cordonnier et al. 2018, Section 3: one shared scene that the user
+//! directs interactively).
+//!
+//! - `GET /` and `GET /<file>`: the page ([`crate::assets`]).
+//! - `GET /ws`: the WebSocket. On connect the tab gets the state and every channel in full;
+//!   then every change, as JSON text ([`crate::protocol`]) and binary tile frames
+//!   ([`crate::wire`]). Every tab sees the same state: changes are broadcast to all.
+//! - `GET /api/state`: the state summary; `GET /api/cell?col=C&row=R`: values at a cell.
+//! - `GET /files/<path>`: a file of the project folder (exports), read-only.
+//!
+//! One actor thread owns the session: messages are handled in order, and a live avalanche or
+//! skier advances one frame per loop turn between messages. A tab that falls behind the
+//! broadcast (its queue overflows) is sent the whole state again.
+
+use crate::assets::{Assets, BUILD_HINT};
+use crate::project::{ProjectDir, ProjectError};
+use crate::protocol::{
+    ClientMessage, ErrorCode, MAX_MESSAGE_BYTES, RATE_BURST, RATE_PER_S, RateLimiter,
+    ServerMessage, decode,
+};
+use crate::session::{CellValues, Exporter, Out, Outgoing, Refusal, Session, StateSummary};
+use axum::Router;
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::{Query, State};
+use axum::http::{StatusCode, Uri, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+use std::net::{IpAddr, SocketAddr};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use thiserror::Error;
+use tokio::sync::{broadcast, mpsc, oneshot};
+
+/// Largest WebSocket message the socket layer reads (larger ones close the connection; the
+/// decoder's own cap, [`MAX_MESSAGE_BYTES`], answers smaller oversized ones with an error).
+pub const SOCKET_MAX_BYTES: usize = 1 << 20;
+/// Shortest wall time between two frames of a live event when pacing (25 frames/s: an
+/// avalanche at its real speed with [`crate::live::RECORD_INTERVAL_S`] records).
+pub const FRAME_INTERVAL: Duration = Duration::from_millis(40);
+/// Largest project file served for download.
+const MAX_DOWNLOAD: u64 = 1 << 30;
+
+/// A server error.
+#[derive(Debug, Error)]
+pub enum ServeError {
+    #[error("cannot listen on {addr}: {source}")]
+    Bind {
+        addr: SocketAddr,
+        source: std::io::Error,
+    },
+    #[error("cannot start the server runtime: {0}")]
+    Runtime(std::io::Error),
+    #[error("the server stopped: {0}")]
+    Stopped(std::io::Error),
+    #[error(transparent)]
+    Project(#[from] ProjectError),
+}
+
+/// What to serve.
+pub struct ServeConfig {
+    pub session: Session,
+    pub project: ProjectDir,
+    pub bind: IpAddr,
+    /// 0 picks a free port.
+    pub port: u16,
+    pub assets: Assets,
+    pub exporter: Option<Arc<Exporter>>,
+    /// Pace live events at [`FRAME_INTERVAL`] (off: as fast as they compute).
+    pub pace: bool,
+}
+
+enum Command {
+    Msg {
+        msg: ClientMessage,
+        reply: mpsc::UnboundedSender<Arc<Outgoing>>,
+    },
+    Join(oneshot::Sender<Vec<Outgoing>>),
+    State(oneshot::Sender<StateSummary>),
+    Probe(usize, usize, oneshot::Sender<Result<CellValues, Refusal>>),
+}
+
+#[derive(Clone)]
+struct AppState {
+    commands: mpsc::UnboundedSender<Command>,
+    updates: broadcast::Sender<Arc<Outgoing>>,
+    project: ProjectDir,
+    assets: Arc<Assets>,
+}
+
+/// The actor: owns the session, handles commands in order, advances live events.
+fn actor(
+    mut session: Session,
+    mut commands: mpsc::UnboundedReceiver<Command>,
+    updates: broadcast::Sender<Arc<Outgoing>>,
+    project: ProjectDir,
+    exporter: Option<Arc<Exporter>>,
+    pace: bool,
+) {
+    let mut last_frame = Instant::now();
+    loop {
+        let cmd = if session.busy() {
+            match commands.try_recv() {
+                Ok(c) => Some(c),
+                Err(mpsc::error::TryRecvError::Empty) => None,
+                Err(mpsc::error::TryRecvError::Disconnected) => return,
+            }
+        } else {
+            match commands.blocking_recv() {
+                Some(c) => Some(c),
+                None => return,
+            }
+        };
+        let mut outs: Vec<Out> = Vec::new();
+        let mut reply_to = None;
+        match cmd {
+            Some(Command::Msg { msg, reply }) => {
+                match session.handle(msg, Some(&project), exporter.as_deref()) {
+                    Ok(o) => outs = o,
+                    Err((code, message)) => {
+                        outs.push(Out::Sender(Outgoing::Text(
+                            ServerMessage::error(code, message).to_json(),
+                        )));
+                    }
+                }
+                reply_to = Some(reply);
+            }
+            Some(Command::Join(tx)) => {
+                let _ = tx.send(session.full_state());
+            }
+            Some(Command::State(tx)) => {
+                let _ = tx.send(session.summary());
+            }
+            Some(Command::Probe(c, r, tx)) => {
+                let _ = tx.send(session.probe(c, r));
+            }
+            None => {
+                if pace {
+                    let since = last_frame.elapsed();
+                    if since < FRAME_INTERVAL {
+                        std::thread::sleep(FRAME_INTERVAL - since);
+                    }
+                }
+                last_frame = Instant::now();
+                outs = session.tick().unwrap_or_else(|(code, message)| {
+                    vec![Out::All(Outgoing::Text(
+                        ServerMessage::error(code, message).to_json(),
+                    ))]
+                });
+            }
+        }
+        for o in outs {
+            match o {
+                Out::All(m) => {
+                    let _ = updates.send(Arc::new(m));
+                }
+                Out::Sender(m) => {
+                    if let Some(r) = &reply_to {
+                        let _ = r.send(Arc::new(m));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Starts the server and blocks until Ctrl-C. `on_ready` gets the address listened on.
+pub fn serve_blocking(
+    config: ServeConfig,
+    on_ready: impl FnOnce(SocketAddr),
+) -> Result<(), ServeError> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .map_err(ServeError::Runtime)?;
+    rt.block_on(async move {
+        let addr = SocketAddr::new(config.bind, config.port);
+        let listener = tokio::net::TcpListener::bind(addr)
+            .await
+            .map_err(|source| ServeError::Bind { addr, source })?;
+        let local = listener
+            .local_addr()
+            .map_err(|source| ServeError::Bind { addr, source })?;
+        let app = router(config);
+        on_ready(local);
+        axum::serve(listener, app)
+            .with_graceful_shutdown(async {
+                let _ = tokio::signal::ctrl_c().await;
+            })
+            .await
+            .map_err(ServeError::Stopped)
+    })
+}
+
+/// The router, with the actor thread started.
+fn router(config: ServeConfig) -> Router {
+    let (tx, rx) = mpsc::unbounded_channel();
+    let (updates, _) = broadcast::channel(4096);
+    let state = AppState {
+        commands: tx,
+        updates: updates.clone(),
+        project: config.project.clone(),
+        assets: Arc::new(config.assets),
+    };
+    let (session, project, exporter, pace) =
+        (config.session, config.project, config.exporter, config.pace);
+    std::thread::Builder::new()
+        .name("snowscape-editor".into())
+        .spawn(move || actor(session, rx, updates, project, exporter, pace))
+        .ok();
+    Router::new()
+        .route("/ws", get(ws_handler))
+        .route("/api/state", get(state_handler))
+        .route("/api/cell", get(cell_handler))
+        .route("/files/{*path}", get(file_handler))
+        .fallback(get(asset_handler))
+        .with_state(state)
+}
+
+async fn asset_handler(State(s): State<AppState>, uri: Uri) -> Response {
+    let path = uri.path().trim_start_matches('/');
+    match s.assets.get(path) {
+        Some((bytes, mime)) => ([(header::CONTENT_TYPE, mime)], bytes.into_owned()).into_response(),
+        None if matches!(*s.assets, Assets::Missing) => (
+            StatusCode::SERVICE_UNAVAILABLE,
+            [(header::CONTENT_TYPE, "text/plain; charset=utf-8")],
+            format!("snowscape serve: {BUILD_HINT}\n"),
+        )
+            .into_response(),
+        None => (StatusCode::NOT_FOUND, format!("no file {path:?}\n")).into_response(),
+    }
+}
+
+async fn ask<T>(s: &AppState, make: impl FnOnce(oneshot::Sender<T>) -> Command) -> Option<T> {
+    let (tx, rx) = oneshot::channel();
+    s.commands.send(make(tx)).ok()?;
+    rx.await.ok()
+}
+
+async fn state_handler(State(s): State<AppState>) -> Response {
+    match ask(&s, Command::State).await {
+        Some(st) => axum::Json(st).into_response(),
+        None => StatusCode::SERVICE_UNAVAILABLE.into_response(),
+    }
+}
+
+#[derive(serde::Deserialize)]
+struct CellQuery {
+    col: usize,
+    row: usize,
+}
+
+async fn cell_handler(State(s): State<AppState>, Query(q): Query<CellQuery>) -> Response {
+    match ask(&s, |tx| Command::Probe(q.col, q.row, tx)).await {
+        Some(Ok(v)) => axum::Json(v).into_response(),
+        Some(Err((_, m))) => (StatusCode::BAD_REQUEST, m).into_response(),
+        None => StatusCode::SERVICE_UNAVAILABLE.into_response(),
+    }
+}
+
+async fn file_handler(
+    State(s): State<AppState>,
+    axum::extract::Path(path): axum::extract::Path<String>,
+) -> Response {
+    match s.project.read(&path, MAX_DOWNLOAD) {
+        Ok(bytes) => {
+            let name = path.rsplit('/').next().unwrap_or("file").to_string();
+            (
+                [
+                    (header::CONTENT_TYPE, crate::assets::mime(&path).to_string()),
+                    (
+                        header::CONTENT_DISPOSITION,
+                        format!("attachment; filename=\"{name}\""),
+                    ),
+                ],
+                bytes,
+            )
+                .into_response()
+        }
+        Err(ProjectError::NotFound(_)) => (StatusCode::NOT_FOUND, "not found").into_response(),
+        Err(e @ (ProjectError::BadPath(_) | ProjectError::Escapes(_))) => {
+            (StatusCode::FORBIDDEN, e.to_string()).into_response()
+        }
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response(),
+    }
+}
+
+async fn ws_handler(State(s): State<AppState>, ws: WebSocketUpgrade) -> Response {
+    ws.max_message_size(SOCKET_MAX_BYTES)
+        .max_frame_size(SOCKET_MAX_BYTES)
+        .on_upgrade(move |socket| connection(socket, s))
+}
+
+fn to_message(o: &Outgoing) -> Message {
+    match o {
+        Outgoing::Text(t) => Message::text(t.clone()),
+        Outgoing::Binary(b) => Message::binary(b.clone()),
+    }
+}
+
+fn error_message(code: ErrorCode, message: impl Into<String>) -> Message {
+    Message::text(ServerMessage::error(code, message).to_json())
+}
+
+/// One tab: its messages go to the actor; the broadcast and its own replies come back.
+async fn connection(mut socket: WebSocket, s: AppState) {
+    let mut updates = s.updates.subscribe();
+    let (reply_tx, mut replies) = mpsc::unbounded_channel::<Arc<Outgoing>>();
+    let Some(initial) = ask(&s, Command::Join).await else {
+        return;
+    };
+    for o in &initial {
+        if socket.send(to_message(o)).await.is_err() {
+            return;
+        }
+    }
+    let mut limiter = RateLimiter::new(RATE_PER_S, RATE_BURST);
+    loop {
+        tokio::select! {
+            incoming = socket.recv() => {
+                let reply = match incoming {
+                    None | Some(Err(_)) | Some(Ok(Message::Close(_))) => break,
+                    Some(Ok(Message::Ping(_) | Message::Pong(_))) => continue,
+                    Some(Ok(Message::Binary(b))) => Some(error_message(
+                        ErrorCode::BinaryNotAccepted,
+                        format!("binary messages ({} bytes) are not accepted; send JSON text", b.len()),
+                    )),
+                    Some(Ok(Message::Text(t))) => {
+                        if !limiter.allow(Instant::now()) {
+                            Some(error_message(
+                                ErrorCode::RateLimited,
+                                format!("more than {RATE_PER_S} messages per second; message dropped"),
+                            ))
+                        } else {
+                            match decode(t.as_bytes(), MAX_MESSAGE_BYTES) {
+                                Ok(msg) => {
+                                    if s.commands.send(Command::Msg { msg, reply: reply_tx.clone() }).is_err() {
+                                        break;
+                                    }
+                                    None
+                                }
+                                Err(e) => Some(error_message(e.code(), e.to_string())),
+                            }
+                        }
+                    }
+                };
+                if let Some(r) = reply
+                    && socket.send(r).await.is_err()
+                {
+                    break;
+                }
+            }
+            update = updates.recv() => {
+                let sent = match update {
+                    Ok(o) => socket.send(to_message(&o)).await,
+                    Err(broadcast::error::RecvError::Lagged(_)) => {
+                        let Some(all) = ask(&s, Command::Join).await else { break };
+                        let mut r = Ok(());
+                        for o in &all {
+                            r = socket.send(to_message(o)).await;
+                            if r.is_err() { break; }
+                        }
+                        r
+                    }
+                    Err(broadcast::error::RecvError::Closed) => break,
+                };
+                if sent.is_err() {
+                    break;
+                }
+            }
+            Some(reply) = replies.recv() => {
+                if socket.send(to_message(&reply)).await.is_err() {
+                    break;
+                }
+            }
+        }
+    }
+}

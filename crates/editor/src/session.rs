@@ -1,0 +1,686 @@
+//! The editor's one shared state: a season in progress ([`Winter`]), its timeline of snapshots,
+//! the brushes' undo and redo stacks, the painted maps, and the live avalanche or skier.
+//!
+//! Cordonnier et al. 2018, Section 3: "any point on the simulation time-line" can be edited
+//! with brushes, the scenario and the parameters, or by triggering avalanches and skiers. The
+//! session is free of I/O: [`Session::handle`] turns a [`ClientMessage`] into [`Out`]puts for
+//! every tab or for the sender alone, and [`Session::tick`] advances a live event by one frame;
+//! the server ([`crate::server`]) moves them over the network.
+
+use crate::brush::{self, CellRect, Dab, Edit, PaintMaps};
+use crate::live::{LiveAvalanche, LiveSkiers, skier_progress, tiles_near};
+use crate::protocol::{BrushTarget, ClientMessage, ErrorCode, ServerMessage};
+use crate::timeline::Timeline;
+use crate::wire::{self, Channel, Field, Quant, TILE};
+use serde::{Deserialize, Serialize};
+use snowscape_season::scenario::{Scenario, WeatherPeriod};
+use snowscape_season::winter::Winter;
+use snowscape_skiers::{SkiArea, SkiScratch};
+use snowscape_terrain::{LayeredTerrain, SnowLayer};
+use std::path::Path;
+
+/// A message on its way out.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outgoing {
+    Text(String),
+    Binary(Vec<u8>),
+}
+
+/// An output and who gets it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Out {
+    /// Every connected tab (the state changed).
+    All(Outgoing),
+    /// The tab that sent the message.
+    Sender(Outgoing),
+}
+
+/// A refused request: the reply's code and message.
+pub type Refusal = (ErrorCode, String);
+
+/// Writes the outputs of `snowscape run` for a season state into a folder; returns the
+/// written file names (the command-line front end supplies it).
+pub type Exporter = dyn Fn(&Winter, &Path) -> Result<Vec<String>, String> + Send + Sync;
+
+/// The state summary every tab shows.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StateSummary {
+    pub width: usize,
+    pub height: usize,
+    pub cell_size_m: f64,
+    /// Where the terrain came from.
+    pub source: String,
+    pub day: f64,
+    pub season_days: f64,
+    /// Days of the timeline's snapshots, and the one shown.
+    pub snapshots: Vec<f64>,
+    pub current: usize,
+    pub undo: usize,
+    pub redo: usize,
+    /// A live avalanche or skier is running (season steps wait).
+    pub busy: bool,
+    /// Avalanches of the season so far (not counting live ones).
+    pub season_avalanches: usize,
+    /// The scenario (weather timeline, Table 2 parameters), as JSON.
+    pub scenario: serde_json::Value,
+    /// The resolved weather timeline.
+    pub weather: Vec<WeatherPeriod>,
+    /// Snow volume, m³.
+    pub snow_volume_m3: f64,
+}
+
+/// Values at one cell (reply to `probe`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CellValues {
+    pub col: usize,
+    pub row: usize,
+    pub bedrock: f32,
+    /// Compacted, stable, unstable, powder, m.
+    pub layers: [f32; 4],
+    pub depth: f32,
+    pub avalanche_probability: f32,
+    pub ski_area: f32,
+}
+
+/// The session.
+pub struct Session {
+    pub(crate) winter: Winter,
+    pub(crate) paint: PaintMaps,
+    pub(crate) timeline: Timeline,
+    undo: Vec<Edit>,
+    redo: Vec<Edit>,
+    seq: u32,
+    bedrock_quant: Quant,
+    source: String,
+    avalanche: Option<LiveAvalanche>,
+    pub(crate) skiers: Option<LiveSkiers>,
+    /// Skier descents in progress.
+    skiing: bool,
+    /// What the user did, in order (saved with the project).
+    pub(crate) history: Vec<serde_json::Value>,
+}
+
+fn refuse<T>(code: ErrorCode, message: impl Into<String>) -> Result<T, Refusal> {
+    Err((code, message.into()))
+}
+
+fn text(m: &ServerMessage) -> Outgoing {
+    Outgoing::Text(m.to_json())
+}
+
+impl Session {
+    /// A session on a season (day 0 is the first snapshot).
+    pub fn new(winter: Winter, source: impl Into<String>) -> Self {
+        let n = winter.terrain.geometry().len();
+        Self::with_paint(winter, PaintMaps::new(n), source)
+    }
+
+    pub(crate) fn with_paint(winter: Winter, paint: PaintMaps, source: impl Into<String>) -> Self {
+        let bedrock_quant = Quant::spanning(&winter.terrain.bedrock);
+        let timeline = Timeline::new(&winter, &paint);
+        Self {
+            winter,
+            paint,
+            timeline,
+            undo: Vec::new(),
+            redo: Vec::new(),
+            seq: 0,
+            bedrock_quant,
+            source: source.into(),
+            avalanche: None,
+            skiers: None,
+            skiing: false,
+            history: Vec::new(),
+        }
+    }
+
+    /// The season being edited.
+    pub fn winter(&self) -> &Winter {
+        &self.winter
+    }
+
+    /// The painted maps.
+    pub fn paint(&self) -> &PaintMaps {
+        &self.paint
+    }
+
+    /// Whether a live event is running ([`Session::tick`] advances it).
+    pub fn busy(&self) -> bool {
+        self.avalanche.is_some() || self.skiing
+    }
+
+    /// The state summary.
+    pub fn summary(&self) -> StateSummary {
+        let g = self.winter.terrain.geometry();
+        StateSummary {
+            width: g.width(),
+            height: g.height(),
+            cell_size_m: g.cell_size_x(),
+            source: self.source.clone(),
+            day: self.winter.day(),
+            season_days: self.winter.scenario().days,
+            snapshots: self.timeline.days(),
+            current: self.timeline.current(),
+            undo: self.undo.len(),
+            redo: self.redo.len(),
+            busy: self.busy(),
+            season_avalanches: self.winter.avalanches().len(),
+            scenario: serde_json::to_value(self.winter.scenario()).unwrap_or_default(),
+            weather: self.winter.weather().to_vec(),
+            snow_volume_m3: self.winter.terrain.snow_volume(),
+        }
+    }
+
+    /// Values at a cell.
+    pub fn probe(&self, col: usize, row: usize) -> Result<CellValues, Refusal> {
+        let t = &self.winter.terrain;
+        let g = t.geometry();
+        if col >= g.width() || row >= g.height() {
+            return refuse(
+                ErrorCode::InvalidValue,
+                format!(
+                    "cell ({col}, {row}) is outside the {}x{} grid",
+                    g.width(),
+                    g.height()
+                ),
+            );
+        }
+        let i = g.index(col, row);
+        Ok(CellValues {
+            col,
+            row,
+            bedrock: t.bedrock[i],
+            layers: SnowLayer::ALL.map(|l| t.layer(l)[i]),
+            depth: t.depth_at(i),
+            avalanche_probability: self.paint.avalanche_probability[i],
+            ski_area: self.paint.ski_area[i],
+        })
+    }
+
+    fn next_seq(&mut self) -> u32 {
+        self.seq = self.seq.wrapping_add(1);
+        self.seq
+    }
+
+    /// A frame of `tiles` of one channel (`None` for all tiles).
+    fn frame(&mut self, channel: Channel, tiles: Option<&[(usize, usize)]>) -> Option<Outgoing> {
+        let seq = self.next_seq();
+        let t = &self.winter.terrain;
+        let g = t.geometry();
+        let (w, h) = (g.width(), g.height());
+        let env = self.winter.environment();
+        let wind: Vec<f32>;
+        let (values, quant): (&[f32], Quant) = match channel {
+            Channel::Bedrock => (&t.bedrock, self.bedrock_quant),
+            Channel::Compacted => (t.layer(SnowLayer::Compacted), Quant::THICKNESS),
+            Channel::Stable => (t.layer(SnowLayer::Stable), Quant::THICKNESS),
+            Channel::Unstable => (t.layer(SnowLayer::Unstable), Quant::THICKNESS),
+            Channel::Powder => (t.layer(SnowLayer::Powder), Quant::THICKNESS),
+            Channel::Temperature => (&env.temperature, Quant::spanning(&env.temperature)),
+            Channel::Sun => (&env.sun, Quant::spanning(&env.sun)),
+            Channel::Wind => {
+                wind = env
+                    .wind_u
+                    .iter()
+                    .zip(&env.wind_v)
+                    .map(|(u, v)| u.hypot(*v))
+                    .collect();
+                (&wind, Quant::spanning(&wind))
+            }
+            Channel::AvalancheProbability => (&self.paint.avalanche_probability, Quant::UNIT),
+            Channel::SkiArea => (&self.paint.ski_area, Quant::UNIT),
+            Channel::Flow => return None,
+        };
+        let all;
+        let tiles = match tiles {
+            Some(t) => t,
+            None => {
+                all = wire::all_tiles(w, h);
+                &all
+            }
+        };
+        let field = Field {
+            channel,
+            values,
+            width: w,
+            height: h,
+            quant,
+        };
+        let (tw, th) = wire::tile_counts(w, h);
+        wire::encode_tiles(&field, tiles, tiles.len() == tw * th, seq)
+            .ok()
+            .map(Outgoing::Binary)
+    }
+
+    fn layer_frames(&mut self, tiles: &[(usize, usize)]) -> Vec<Out> {
+        if tiles.is_empty() {
+            return Vec::new();
+        }
+        Channel::LAYERS
+            .iter()
+            .filter_map(|&c| self.frame(c, Some(tiles)))
+            .map(Out::All)
+            .collect()
+    }
+
+    fn state_out(&self) -> Out {
+        Out::All(text(&ServerMessage::State(self.summary())))
+    }
+
+    /// Everything a tab needs: the state and every channel in full.
+    pub fn full_state(&mut self) -> Vec<Outgoing> {
+        let mut v = vec![text(&ServerMessage::State(self.summary()))];
+        for c in [
+            Channel::Bedrock,
+            Channel::Compacted,
+            Channel::Stable,
+            Channel::Unstable,
+            Channel::Powder,
+            Channel::Temperature,
+            Channel::Sun,
+            Channel::Wind,
+            Channel::AvalancheProbability,
+            Channel::SkiArea,
+        ] {
+            v.extend(self.frame(c, None));
+        }
+        v
+    }
+
+    fn everything(&mut self) -> Vec<Out> {
+        self.full_state().into_iter().map(Out::All).collect()
+    }
+
+    fn tiles_of_rect(r: CellRect) -> Vec<(usize, usize)> {
+        (r.r0 / TILE..=r.r1 / TILE)
+            .flat_map(|ty| (r.c0 / TILE..=r.c1 / TILE).map(move |tx| (tx, ty)))
+            .collect()
+    }
+
+    fn rect_frames(&mut self, target: BrushTarget, rect: CellRect) -> Vec<Out> {
+        let tiles = Self::tiles_of_rect(rect);
+        match target {
+            BrushTarget::AvalancheProbability => self
+                .frame(Channel::AvalancheProbability, Some(&tiles))
+                .map(Out::All)
+                .into_iter()
+                .collect(),
+            BrushTarget::SkiArea => self
+                .frame(Channel::SkiArea, Some(&tiles))
+                .map(Out::All)
+                .into_iter()
+                .collect(),
+            _ => self.layer_frames(&tiles),
+        }
+    }
+
+    fn log(&mut self, entry: serde_json::Value) {
+        self.history.push(entry);
+    }
+
+    /// Handles one message; `export` writes outputs, `project` is the project folder.
+    pub fn handle(
+        &mut self,
+        msg: ClientMessage,
+        project: Option<&crate::project::ProjectDir>,
+        export: Option<&Exporter>,
+    ) -> Result<Vec<Out>, Refusal> {
+        let allowed_when_busy = matches!(
+            msg,
+            ClientMessage::Brush { .. } | ClientMessage::Probe { .. } | ClientMessage::Resync {}
+        );
+        if self.busy() && !allowed_when_busy {
+            return refuse(
+                ErrorCode::Busy,
+                "a live avalanche or skier is running; try again when it ends",
+            );
+        }
+        match msg {
+            ClientMessage::Brush {
+                stroke,
+                op,
+                target,
+                col,
+                row,
+                radius_m,
+                strength,
+                value,
+            } => {
+                let dab = Dab {
+                    op,
+                    target,
+                    col,
+                    row,
+                    radius_m,
+                    strength,
+                    value,
+                };
+                let mut edit = match self.undo.pop() {
+                    Some(e) if e.stroke == stroke => e,
+                    other => {
+                        self.undo.extend(other);
+                        self.log(serde_json::json!({"action": "brush", "stroke": stroke, "op": op, "target": target, "day": self.winter.day()}));
+                        Edit {
+                            stroke,
+                            ..Edit::default()
+                        }
+                    }
+                };
+                let rect = brush::apply(&mut self.winter.terrain, &mut self.paint, &dab, &mut edit);
+                if !edit.is_empty() {
+                    self.undo.push(edit);
+                    self.redo.clear();
+                    self.timeline.mark_edited();
+                }
+                let mut out = rect
+                    .map(|r| self.rect_frames(target, r))
+                    .unwrap_or_default();
+                out.push(self.state_out());
+                Ok(out)
+            }
+            ClientMessage::Undo {} | ClientMessage::Redo {} => {
+                let undo = matches!(msg, ClientMessage::Undo {});
+                let (from, to) = if undo {
+                    (&mut self.undo, &mut self.redo)
+                } else {
+                    (&mut self.redo, &mut self.undo)
+                };
+                let Some(edit) = from.pop() else {
+                    return refuse(
+                        ErrorCode::InvalidValue,
+                        if undo {
+                            "nothing to undo"
+                        } else {
+                            "nothing to redo"
+                        },
+                    );
+                };
+                let (inverse, rect) = edit.revert(&mut self.winter.terrain, &mut self.paint);
+                to.push(inverse);
+                self.timeline.mark_edited();
+                let mut out = Vec::new();
+                if let Some(r) = rect {
+                    let tiles = Self::tiles_of_rect(r);
+                    out.extend(self.layer_frames(&tiles));
+                    for c in [Channel::AvalancheProbability, Channel::SkiArea] {
+                        out.extend(self.frame(c, Some(&tiles)).map(Out::All));
+                    }
+                }
+                out.push(self.state_out());
+                Ok(out)
+            }
+            ClientMessage::Step { days } => {
+                self.timeline.store(&self.winter, &self.paint);
+                let from = self.winter.day();
+                if self.winter.finished() {
+                    return refuse(
+                        ErrorCode::InvalidValue,
+                        format!("the season ends at day {}", self.winter.scenario().days),
+                    );
+                }
+                self.winter
+                    .run_until(from + days)
+                    .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
+                crate::painted::apply_painted(self, from)?;
+                self.timeline.push(&self.winter, &self.paint);
+                self.undo.clear();
+                self.redo.clear();
+                self.log(
+                    serde_json::json!({"action": "step", "from": from, "to": self.winter.day()}),
+                );
+                Ok(self.everything())
+            }
+            ClientMessage::Seek { index } => {
+                self.timeline.store(&self.winter, &self.paint);
+                let (w, p) = self.timeline.seek(index).ok_or_else(|| {
+                    (
+                        ErrorCode::InvalidValue,
+                        format!(
+                            "snapshot {index} does not exist ({} snapshots)",
+                            self.timeline.len()
+                        ),
+                    )
+                })?;
+                self.winter = w;
+                self.paint = p;
+                self.undo.clear();
+                self.redo.clear();
+                Ok(self.everything())
+            }
+            ClientMessage::TriggerAvalanche { col, row } => {
+                let params = self.winter.scenario().parameters.avalanche.clone();
+                let temperature = self.winter.environment().temperature.clone();
+                let live = LiveAvalanche::start(
+                    &mut self.winter.terrain,
+                    Some(&temperature),
+                    &params,
+                    col.round() as usize,
+                    row.round() as usize,
+                )
+                .map_err(|e| {
+                    (
+                        ErrorCode::InvalidValue,
+                        format!("no avalanche at ({col}, {row}): {e}"),
+                    )
+                })?;
+                let tiles = live.release_tiles();
+                let progress = live.progress.clone();
+                self.avalanche = Some(live);
+                self.undo.clear();
+                self.redo.clear();
+                self.timeline.mark_edited();
+                self.log(serde_json::json!({"action": "avalanche", "col": col, "row": row, "day": self.winter.day()}));
+                let mut out = self.layer_frames(&tiles);
+                out.push(Out::All(text(&ServerMessage::Avalanche(progress))));
+                out.push(self.state_out());
+                Ok(out)
+            }
+            ClientMessage::LaunchSkier { col, row } => self.launch_skier(col, row),
+            ClientMessage::SetScenario { scenario } => {
+                let s: Scenario = serde_json::from_value(scenario)
+                    .map_err(|e| (ErrorCode::InvalidValue, format!("invalid scenario: {e}")))?;
+                s.validate("the page")
+                    .map_err(|e| (ErrorCode::InvalidValue, e.to_string()))?;
+                let (first, paint) = self.timeline.first();
+                let winter = Winter::new(s, first.terrain.clone())
+                    .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
+                let history = std::mem::take(&mut self.history);
+                *self = Self::with_paint(winter, paint, self.source.clone());
+                self.history = history;
+                self.log(serde_json::json!({"action": "set_scenario"}));
+                Ok(self.everything())
+            }
+            ClientMessage::Save { name } => {
+                let p = project.ok_or((ErrorCode::Failed, "no project folder".to_string()))?;
+                let files = p
+                    .save(&name, self)
+                    .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
+                Ok(vec![Out::All(text(&ServerMessage::Done {
+                    what: "saved".into(),
+                    name,
+                    files,
+                }))])
+            }
+            ClientMessage::Load { name } => {
+                let p = project.ok_or((ErrorCode::Failed, "no project folder".to_string()))?;
+                let loaded = p.load(&name).map_err(|e| {
+                    let code = match e {
+                        crate::project::ProjectError::NotFound(_) => ErrorCode::NotFound,
+                        _ => ErrorCode::Failed,
+                    };
+                    (code, e.to_string())
+                })?;
+                *self = loaded;
+                let mut out = self.everything();
+                out.push(Out::All(text(&ServerMessage::Done {
+                    what: "loaded".into(),
+                    name,
+                    files: Vec::new(),
+                })));
+                Ok(out)
+            }
+            ClientMessage::Export { name } => {
+                let p = project.ok_or((ErrorCode::Failed, "no project folder".to_string()))?;
+                let export = export.ok_or((
+                    ErrorCode::Failed,
+                    "this server cannot export outputs".to_string(),
+                ))?;
+                let dir = p
+                    .create_dir(&format!("exports/{name}"))
+                    .map_err(|e| (ErrorCode::BadPath, e.to_string()))?;
+                let files = export(&self.winter, &dir).map_err(|e| (ErrorCode::Failed, e))?;
+                let files = files
+                    .into_iter()
+                    .map(|f| format!("exports/{name}/{f}"))
+                    .collect();
+                Ok(vec![Out::Sender(text(&ServerMessage::Done {
+                    what: "exported".into(),
+                    name,
+                    files,
+                }))])
+            }
+            ClientMessage::Probe { col, row } => Ok(vec![Out::Sender(text(&ServerMessage::Cell(
+                self.probe(col, row)?,
+            )))]),
+            ClientMessage::Resync {} => {
+                Ok(self.full_state().into_iter().map(Out::Sender).collect())
+            }
+        }
+    }
+
+    fn launch_skier(&mut self, col: f64, row: f64) -> Result<Vec<Out>, Refusal> {
+        let p = self.winter.scenario().skiers.clone();
+        let t = &self.winter.terrain;
+        let g = t.geometry().clone();
+        if col.round() as usize >= g.width() || row.round() as usize >= g.height() {
+            return refuse(
+                ErrorCode::InvalidValue,
+                format!("cell ({col}, {row}) is outside the grid"),
+            );
+        }
+        if self.skiers.is_none() {
+            let area = SkiArea::new(&p.ski, t, p.terminus.clone(), self.winter.scenario().seed)
+                .map_err(|e| (ErrorCode::InvalidValue, format!("no skiing here: {e}")))?;
+            self.skiers = Some(LiveSkiers {
+                area,
+                scratch: SkiScratch::default(),
+                time_s: 0.0,
+            });
+        }
+        let Some(s) = self.skiers.as_mut() else {
+            return refuse(ErrorCode::Failed, "no ski area");
+        };
+        s.area
+            .refresh_terminus(&p.ski, &self.winter.terrain)
+            .map_err(|e| (ErrorCode::InvalidValue, format!("no skiing here: {e}")))?;
+        let (x, y) = g.cell_centre(col.round() as usize, row.round() as usize);
+        s.area
+            .spawn_at(&p.ski, &self.winter.terrain, x, y)
+            .map_err(|e| {
+                (
+                    ErrorCode::InvalidValue,
+                    format!("no skier at ({col}, {row}): {e}"),
+                )
+            })?;
+        s.time_s = 0.0;
+        self.skiing = true;
+        self.undo.clear();
+        self.redo.clear();
+        self.timeline.mark_edited();
+        let progress = skier_progress(&s.area, &self.winter.terrain, 0.0);
+        self.log(serde_json::json!({"action": "skier", "col": col, "row": row, "day": self.winter.day()}));
+        Ok(vec![
+            Out::All(text(&ServerMessage::Skiers(progress))),
+            self.state_out(),
+        ])
+    }
+
+    /// Advances the live avalanche or skiers by one frame.
+    pub fn tick(&mut self) -> Result<Vec<Out>, Refusal> {
+        if let Some(mut live) = self.avalanche.take() {
+            let (flow, tiles) = live.advance().map_err(|e| (ErrorCode::Failed, e))?;
+            let g = self.winter.terrain.geometry();
+            let field = Field {
+                channel: Channel::Flow,
+                values: &flow,
+                width: g.width(),
+                height: g.height(),
+                quant: Quant::THICKNESS,
+            };
+            let seq = self.next_seq();
+            let mut out = Vec::new();
+            if !tiles.is_empty() {
+                let bytes = wire::encode_tiles(&field, &tiles, false, seq)
+                    .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
+                out.push(Out::All(Outgoing::Binary(bytes)));
+            }
+            if live.finished() {
+                let tiles = live
+                    .finish(&mut self.winter.terrain)
+                    .map_err(|e| (ErrorCode::Failed, e))?;
+                out.extend(self.layer_frames(&tiles));
+                out.push(Out::All(text(&ServerMessage::Avalanche(
+                    live.progress.clone(),
+                ))));
+                out.push(self.state_out());
+            } else {
+                if live.progress.records % 5 == 1 {
+                    out.push(Out::All(text(&ServerMessage::Avalanche(
+                        live.progress.clone(),
+                    ))));
+                }
+                self.avalanche = Some(live);
+            }
+            return Ok(out);
+        }
+        if self.skiing {
+            return self.tick_skiers();
+        }
+        Ok(Vec::new())
+    }
+
+    fn tick_skiers(&mut self) -> Result<Vec<Out>, Refusal> {
+        let p = self.winter.scenario().skiers.clone();
+        let Some(s) = self.skiers.as_mut() else {
+            self.skiing = false;
+            return Ok(Vec::new());
+        };
+        let before = skier_progress(&s.area, &self.winter.terrain, s.time_s).positions;
+        let r = snowscape_skiers::step(
+            &p.ski,
+            &mut s.area,
+            &mut self.winter.terrain,
+            &mut s.scratch,
+            p.step_s,
+        )
+        .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
+        s.time_s += p.step_s;
+        let progress = skier_progress(&s.area, &self.winter.terrain, s.time_s);
+        let done = r.active == 0 || s.time_s >= p.max_run_s;
+        let g = self.winter.terrain.geometry();
+        let mut pts = before;
+        pts.extend(progress.positions.iter().copied());
+        let tiles = tiles_near(&pts, g.width(), g.height(), 2.0);
+        let mut out = self.layer_frames(&tiles);
+        out.push(Out::All(text(&ServerMessage::Skiers(progress))));
+        if done {
+            self.skiing = false;
+            out.push(self.state_out());
+        }
+        Ok(out)
+    }
+
+    /// Runs the live event to its end (tests, and callers without a network).
+    pub fn run_live_to_end(&mut self) -> Result<Vec<Out>, Refusal> {
+        let mut out = Vec::new();
+        while self.busy() {
+            out.extend(self.tick()?);
+        }
+        Ok(out)
+    }
+
+    /// The terrain being edited.
+    pub fn terrain(&self) -> &LayeredTerrain {
+        &self.winter.terrain
+    }
+}

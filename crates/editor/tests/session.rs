@@ -1,0 +1,342 @@
+//! The session without a network: brushes, undo/redo, timeline, live avalanche and skier,
+//! scenario changes, save and load, and refusals.
+
+mod common;
+
+use common::{session, snow_mean_altitude, steepest_cell};
+use snowscape_editor::project::ProjectDir;
+use snowscape_editor::protocol::{BrushOp, BrushTarget, ClientMessage, ErrorCode, decode};
+use snowscape_editor::session::{Out, Outgoing};
+use snowscape_editor::wire::{Channel, decode_frame};
+
+fn brush(
+    stroke: u32,
+    op: BrushOp,
+    target: BrushTarget,
+    c: usize,
+    r: usize,
+    strength: f64,
+) -> ClientMessage {
+    ClientMessage::Brush {
+        stroke,
+        op,
+        target,
+        col: c as f64,
+        row: r as f64,
+        radius_m: 100.0,
+        strength,
+        value: 0.0,
+    }
+}
+
+fn binary_channels(out: &[Out]) -> Vec<u8> {
+    out.iter()
+        .filter_map(|o| match o {
+            Out::All(Outgoing::Binary(b)) | Out::Sender(Outgoing::Binary(b)) => {
+                decode_frame(b).map(|f| f.channel)
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn brush_raises_depth_sends_dirty_tiles_and_undoes() {
+    let mut s = session(128, 10.0);
+    let i = s.terrain().geometry().index(40, 50);
+    let before = s.terrain().depth_at(i);
+    let out = s
+        .handle(
+            brush(1, BrushOp::Add, BrushTarget::All, 40, 50, 0.5),
+            None,
+            None,
+        )
+        .unwrap();
+    s.handle(
+        brush(1, BrushOp::Add, BrushTarget::All, 41, 50, 0.5),
+        None,
+        None,
+    )
+    .unwrap();
+    let after = s.terrain().depth_at(i);
+    assert!(after > before + 0.5, "{before} -> {after}");
+    let chans = binary_channels(&out);
+    assert_eq!(chans, vec![1, 2, 3, 4], "the four layer channels");
+    for o in &out {
+        if let Out::All(Outgoing::Binary(b)) = o {
+            let f = decode_frame(b).unwrap();
+            assert!(
+                !f.full && f.tiles.len() < 4,
+                "only dirty tiles: {}",
+                f.tiles.len()
+            );
+        }
+    }
+    assert_eq!(s.summary().undo, 1, "dabs of one stroke are one undo step");
+    s.handle(ClientMessage::Undo {}, None, None).unwrap();
+    assert_eq!(s.terrain().depth_at(i), before);
+    s.handle(ClientMessage::Redo {}, None, None).unwrap();
+    assert_eq!(s.terrain().depth_at(i), after);
+    let e = s.handle(ClientMessage::Redo {}, None, None).unwrap_err();
+    assert_eq!(e.0, ErrorCode::InvalidValue);
+}
+
+#[test]
+fn paint_brushes_paint_their_maps() {
+    let mut s = session(128, 10.0);
+    let out = s
+        .handle(
+            brush(1, BrushOp::Add, BrushTarget::SkiArea, 60, 60, 1.0),
+            None,
+            None,
+        )
+        .unwrap();
+    assert_eq!(binary_channels(&out), vec![Channel::SkiArea as u8]);
+    let i = s.terrain().geometry().index(60, 60);
+    assert_eq!(s.paint().ski_area[i], 1.0);
+    assert_eq!(s.terrain().depth_at(i), 0.0);
+}
+
+#[test]
+fn timeline_steps_seeks_and_branches() {
+    let mut s = session(128, 20.0);
+    s.handle(ClientMessage::Step { days: 1.0 }, None, None)
+        .unwrap();
+    s.handle(ClientMessage::Step { days: 1.0 }, None, None)
+        .unwrap();
+    let st = s.summary();
+    assert_eq!(st.snapshots.len(), 3);
+    assert!((st.day - 2.0).abs() < 0.5, "day {}", st.day);
+    let vol2 = st.snow_volume_m3;
+    s.handle(ClientMessage::Seek { index: 0 }, None, None)
+        .unwrap();
+    assert_eq!(s.summary().day, 0.0);
+    // An edit at day 0 survives scrubbing away and back.
+    s.handle(
+        brush(5, BrushOp::Add, BrushTarget::Stable, 30, 30, 1.0),
+        None,
+        None,
+    )
+    .unwrap();
+    let v0 = s.summary().snow_volume_m3;
+    s.handle(ClientMessage::Seek { index: 2 }, None, None)
+        .unwrap();
+    assert_eq!(s.summary().snow_volume_m3, vol2);
+    s.handle(ClientMessage::Seek { index: 0 }, None, None)
+        .unwrap();
+    assert_eq!(s.summary().snow_volume_m3, v0);
+    // Stepping from day 0 drops the later snapshots.
+    s.handle(ClientMessage::Step { days: 1.0 }, None, None)
+        .unwrap();
+    assert_eq!(s.summary().snapshots.len(), 2);
+    let e = s
+        .handle(ClientMessage::Seek { index: 9 }, None, None)
+        .unwrap_err();
+    assert!(e.1.contains("snapshot 9"), "{}", e.1);
+}
+
+#[test]
+fn triggered_avalanche_streams_flow_and_moves_snow_downhill() {
+    let mut s = session(128, 10.0);
+    let (c, r) = steepest_cell(&s);
+    s.handle(
+        brush(1, BrushOp::Add, BrushTarget::Unstable, c, r, 2.0),
+        None,
+        None,
+    )
+    .unwrap();
+    s.handle(
+        brush(1, BrushOp::Add, BrushTarget::Stable, c, r, 0.5),
+        None,
+        None,
+    )
+    .unwrap();
+    let before = snow_mean_altitude(&s);
+    let vol = s.summary().snow_volume_m3;
+    let out = s
+        .handle(
+            ClientMessage::TriggerAvalanche {
+                col: c as f64,
+                row: r as f64,
+            },
+            None,
+            None,
+        )
+        .unwrap();
+    assert!(s.busy());
+    assert!(binary_channels(&out).contains(&(Channel::Unstable as u8)));
+    // Season steps wait for the flow to end.
+    let e = s
+        .handle(ClientMessage::Step { days: 1.0 }, None, None)
+        .unwrap_err();
+    assert_eq!(e.0, ErrorCode::Busy);
+    let frames = s.run_live_to_end().unwrap();
+    let flow_frames = binary_channels(&frames)
+        .iter()
+        .filter(|&&c| c == Channel::Flow as u8)
+        .count();
+    assert!(flow_frames > 5, "{flow_frames} flow frames");
+    let after = snow_mean_altitude(&s);
+    assert!(
+        after < before - 1.0,
+        "snow mean altitude {before} -> {after}"
+    );
+    let vol_after = s.summary().snow_volume_m3;
+    assert!(
+        vol_after <= vol * 1.0001 && vol_after > vol * 0.5,
+        "{vol} -> {vol_after}"
+    );
+}
+
+#[test]
+fn avalanche_without_unstable_snow_is_refused() {
+    let mut s = session(128, 10.0);
+    let e = s
+        .handle(
+            ClientMessage::TriggerAvalanche {
+                col: 10.0,
+                row: 10.0,
+            },
+            None,
+            None,
+        )
+        .unwrap_err();
+    assert_eq!(e.0, ErrorCode::InvalidValue);
+    assert!(e.1.contains("(10, 10)"), "{}", e.1);
+    assert!(!s.busy());
+}
+
+#[test]
+fn scenario_change_restarts_from_day_zero_and_bad_ones_are_refused() {
+    let mut s = session(128, 10.0);
+    s.handle(ClientMessage::Step { days: 1.0 }, None, None)
+        .unwrap();
+    let mut sc = s.summary().scenario;
+    sc["days"] = serde_json::json!(42.0);
+    s.handle(
+        ClientMessage::SetScenario {
+            scenario: sc.clone(),
+        },
+        None,
+        None,
+    )
+    .unwrap();
+    let st = s.summary();
+    assert_eq!((st.day, st.season_days, st.snapshots.len()), (0.0, 42.0, 1));
+    sc["days"] = serde_json::json!(-3.0);
+    let e = s
+        .handle(ClientMessage::SetScenario { scenario: sc }, None, None)
+        .unwrap_err();
+    assert_eq!(e.0, ErrorCode::InvalidValue);
+    let e = s
+        .handle(
+            ClientMessage::SetScenario {
+                scenario: serde_json::json!({"nope": 1}),
+            },
+            None,
+            None,
+        )
+        .unwrap_err();
+    assert!(e.1.contains("nope"), "{}", e.1);
+}
+
+#[test]
+fn save_and_load_round_trip_in_the_project_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let pd = ProjectDir::open(tmp.path()).unwrap();
+    let mut s = session(128, 10.0);
+    s.handle(ClientMessage::Step { days: 2.0 }, None, None)
+        .unwrap();
+    s.handle(
+        brush(1, BrushOp::Add, BrushTarget::Powder, 50, 50, 1.0),
+        None,
+        None,
+    )
+    .unwrap();
+    s.handle(
+        brush(
+            2,
+            BrushOp::Add,
+            BrushTarget::AvalancheProbability,
+            20,
+            20,
+            0.3,
+        ),
+        None,
+        None,
+    )
+    .unwrap();
+    let out = s
+        .handle(ClientMessage::Save { name: "p1".into() }, Some(&pd), None)
+        .unwrap();
+    assert_eq!(out.len(), 1);
+    assert!(tmp.path().join("projects/p1/checkpoint.bin").is_file());
+    let saved = s.summary();
+    let layers = s.terrain().snow.clone();
+    let paint = s.paint().clone();
+    s.handle(ClientMessage::Seek { index: 0 }, None, None)
+        .unwrap();
+    s.handle(ClientMessage::Load { name: "p1".into() }, Some(&pd), None)
+        .unwrap();
+    assert_eq!(s.summary().day, saved.day);
+    assert_eq!(s.terrain().snow, layers);
+    assert_eq!(s.paint(), &paint);
+    let e = s
+        .handle(
+            ClientMessage::Load {
+                name: "absent".into(),
+            },
+            Some(&pd),
+            None,
+        )
+        .unwrap_err();
+    assert_eq!(e.0, ErrorCode::NotFound);
+    // The decoder refuses names that could leave the folder before the session sees them.
+    assert!(decode(br#"{"type":"load","name":"../p1"}"#, 1000).is_err());
+}
+
+#[test]
+fn launched_skier_moves_and_packs_snow() {
+    let mut s = session(128, 10.0);
+    // Snow everywhere so the skier has a run.
+    for r in (8..120).step_by(6) {
+        for c in (8..120).step_by(6) {
+            let dab = ClientMessage::Brush {
+                stroke: 1,
+                op: BrushOp::Add,
+                target: BrushTarget::Unstable,
+                col: c as f64,
+                row: r as f64,
+                radius_m: 250.0,
+                strength: 0.4,
+                value: 0.0,
+            };
+            s.handle(dab, None, None).unwrap();
+        }
+    }
+    let (c, r) = steepest_cell(&s);
+    s.handle(
+        ClientMessage::LaunchSkier {
+            col: c as f64,
+            row: r as f64,
+        },
+        None,
+        None,
+    )
+    .unwrap();
+    let out = s.run_live_to_end().unwrap();
+    let positions: Vec<serde_json::Value> = out
+        .iter()
+        .filter_map(|o| match o {
+            Out::All(Outgoing::Text(t)) => serde_json::from_str::<serde_json::Value>(t).ok(),
+            _ => None,
+        })
+        .filter(|v| v["type"] == "skiers")
+        .collect();
+    assert!(positions.len() > 3, "{} skier frames", positions.len());
+    let first = &positions[0]["positions"][0];
+    let later = &positions[positions.len() / 2]["positions"][0];
+    assert_ne!(first, later, "the skier moved");
+    let stable: f32 = s.terrain().snow[1].iter().sum();
+    assert!(stable > 0.0, "skiing packs unstable snow into stable snow");
+}
