@@ -10,6 +10,8 @@
 //!   suspension profile, sublimation loss rate with solar radiation, degree-day melt).
 //! - [`step`]: one explicit step of the mass balance, Eq. 5.16, with a closed budget.
 //! - [`terrain_wind`]: the terrain modification of the wind at `z_r` (Section 5.4).
+//! - [`wind3d`]: scene voxelisation (a DEM or any height map; a project-built castle scene)
+//!   and the 3D wind by Stable Fluids with a conjugate-gradient projection (Chapter 3, 6.3).
 //! - [`tables`]: the per-weather lookup tables that make the per-cell work cheap (the
 //!   saltating `u*` depends on the wind alone, the suspension integrals on `u*` alone).
 
@@ -19,6 +21,7 @@ pub mod physics;
 pub mod step;
 pub mod tables;
 pub mod terrain_wind;
+pub mod wind3d;
 
 pub use error::TransportError;
 pub use params::{Phenomena, Timeline, TransportParams, Weather};

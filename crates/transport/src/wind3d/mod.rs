@@ -1,0 +1,311 @@
+//! 3D wind by Stable Fluids on the voxel grid (Jubert 2018, Chapter 3 and Section 6.3;
+//! Stam 1999).
+//!
+//! Each iteration applies, over a time step `Δt`:
+//!
+//! 1. **Forces**: the inflow boundary holds the wind (Section 6.3: "vent initial"); no
+//!    body force is needed for a steady wind.
+//! 2. **Advection** (3.12-3.14): semi-Lagrangian, each face value is the velocity found at
+//!    the point its particle came from, back-traced with fourth-order Runge-Kutta through
+//!    the current field (Fig. 3.1).
+//! 3. **Viscosity** (3.15-3.16): implicit, `(I − ν Δt ∇²) u_new = u`, by Jacobi sweeps
+//!    (the system is strongly diagonally dominant for the small `ν Δt / Δ²` of a wind).
+//! 4. **Projection** (3.20-3.24): [`project`], conjugate gradients instead of Jacobi.
+//!
+//! The velocity is stored on the voxel faces ([`field`]). Faces touching a solid voxel carry
+//! no flow (no flow into solids, Section 3.5.2), the ground and the lid are closed, faces on
+//! the upwind sides of the domain hold the inflow profile, and the downwind sides are open
+//! (zero-gradient velocity, `φ = 0`). The mean wind is the average of the fields after each
+//! iteration (Section 6.3: "une texture 3D qui conserve la moyenne des itérations").
+//!
+//! The inflow profile is the log law `U(z) = U_r ln(z'/z0) / ln(z_r/z0)` of the height `z'`
+//! above the ground of the boundary column (uniform `U_r` when `inflow_roughness_m` is 0).
+
+pub mod field;
+pub mod project;
+pub mod voxel;
+
+use crate::error::{TransportError, check_positive, check_range};
+use field::{Component, Velocity};
+use project::{Poisson, SolverWork};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use voxel::VoxelGrid;
+
+/// Parameters of the wind simulation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct WindParams {
+    /// Inflow wind speed at `reference_height_m` above the ground, m s⁻¹. Table 7.I: 11.
+    pub speed_m_s: f64,
+    /// Direction the wind blows from, degrees clockwise from north. Table 7.I: 270 (west).
+    pub from_deg: f64,
+    /// Height of the inflow speed above the ground, m (the `z_r` of Table 6.I: 5 m).
+    pub reference_height_m: f64,
+    /// Roughness of the inflow log profile, m; 0 gives a uniform inflow. Chosen here: 0.1 m.
+    pub inflow_roughness_m: f64,
+    /// Kinematic (eddy) viscosity `ν`, m² s⁻¹ (3.15). Chosen here: 0.05, a smooth laminar
+    /// mean flow (Section 3.1: turbulence is not sought).
+    pub viscosity_m2_s: f64,
+    /// Courant number of the time step, `Δt = courant · Δ / U`. Chosen here: 1.
+    pub courant: f64,
+    /// Relative residual of the pressure solve. Chosen here: 1e-6.
+    pub tolerance: f64,
+    /// Most conjugate-gradient iterations per projection. Chosen here: 500.
+    pub max_solver_iterations: usize,
+}
+
+impl Default for WindParams {
+    fn default() -> Self {
+        Self {
+            speed_m_s: 11.0,
+            from_deg: 270.0,
+            reference_height_m: 5.0,
+            inflow_roughness_m: 0.1,
+            viscosity_m2_s: 0.05,
+            courant: 1.0,
+            tolerance: 1e-6,
+            max_solver_iterations: 500,
+        }
+    }
+}
+
+impl WindParams {
+    /// Checks the parameters.
+    pub fn validate(&self) -> Result<(), TransportError> {
+        check_range("speed_m_s", self.speed_m_s, 0.0, 100.0)?;
+        check_range("from_deg", self.from_deg, -360.0, 360.0)?;
+        check_positive("reference_height_m", self.reference_height_m)?;
+        check_range("inflow_roughness_m", self.inflow_roughness_m, 0.0, 10.0)?;
+        check_range("viscosity_m2_s", self.viscosity_m2_s, 0.0, 1e3)?;
+        check_range("courant", self.courant, 1e-3, 10.0)?;
+        check_range("tolerance", self.tolerance, 1e-14, 1.0)?;
+        check_range(
+            "max_solver_iterations",
+            self.max_solver_iterations as f64,
+            1.0,
+            1e6,
+        )?;
+        Ok(())
+    }
+
+    /// The inflow wind (east, north) at the reference height, m s⁻¹ (Eqs. 5.1-5.2).
+    pub fn inflow(&self) -> [f64; 2] {
+        let t = self.from_deg.to_radians();
+        [-self.speed_m_s * t.sin(), -self.speed_m_s * t.cos()]
+    }
+}
+
+/// What a face's velocity obeys.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Face {
+    /// Between two fluid voxels: advected, diffused, projected.
+    Fluid,
+    /// Touching a solid voxel, the ground or the lid: always 0.
+    Closed,
+    /// Upwind domain boundary: holds the inflow profile.
+    Inflow,
+    /// Downwind domain boundary: zero-gradient, `φ = 0` beyond.
+    Outflow,
+}
+
+/// Report of one iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct IterationReport {
+    /// Conjugate-gradient iterations of the projection.
+    pub solver_iterations: usize,
+    /// Largest divergence of a fluid voxel after the projection, s⁻¹.
+    pub max_divergence: f64,
+    /// The same relative to `U / Δ` (the divergence scale of the flow).
+    pub relative_divergence: f64,
+}
+
+/// The wind solver over a voxel grid.
+#[derive(Debug, Clone)]
+pub struct WindSolver {
+    grid: VoxelGrid,
+    params: WindParams,
+    kinds: [Vec<Face>; 3],
+    /// Current velocity.
+    pub velocity: Velocity,
+    previous: Velocity,
+    mean_sum: [Vec<f64>; 3],
+    iterations: usize,
+    poisson: Poisson,
+    phi: Vec<f64>,
+    rhs: Vec<f64>,
+    work: SolverWork,
+    dt: f64,
+}
+
+mod steps;
+
+impl WindSolver {
+    /// Sets up the faces, the inflow and a projected initial field.
+    pub fn new(grid: VoxelGrid, params: WindParams) -> Result<Self, TransportError> {
+        params.validate()?;
+        check_positive("voxel_layers", grid.len() as f64)?;
+        let velocity = Velocity::zeros(grid.nx, grid.ny, grid.nz);
+        let speed = params.speed_m_s.max(1e-3);
+        let dt = params.courant * grid.cell / speed;
+        let mut s = Self {
+            kinds: steps::face_kinds(&grid, &params),
+            previous: velocity.clone(),
+            mean_sum: [
+                vec![0.0; velocity.u.data.len()],
+                vec![0.0; velocity.v.data.len()],
+                vec![0.0; velocity.w.data.len()],
+            ],
+            velocity,
+            iterations: 0,
+            poisson: Poisson::default(),
+            phi: vec![0.0; grid.len()],
+            rhs: vec![0.0; grid.len()],
+            work: SolverWork::default(),
+            dt,
+            grid,
+            params,
+        };
+        s.poisson = steps::poisson(&s.grid, &s.kinds);
+        steps::initialise(&mut s);
+        s.project();
+        Ok(s)
+    }
+
+    /// The voxel grid.
+    pub fn grid(&self) -> &VoxelGrid {
+        &self.grid
+    }
+
+    /// Time step of an iteration, s.
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// One Stable Fluids iteration (advection, viscosity, projection), accumulated into the
+    /// mean wind.
+    pub fn iterate(&mut self) -> IterationReport {
+        steps::advect(self);
+        steps::diffuse(self);
+        let report = self.project();
+        for (sum, c) in self.mean_sum.iter_mut().zip(self.velocity.components()) {
+            sum.par_iter_mut()
+                .zip(c.data.par_iter())
+                .for_each(|(s, v)| *s += f64::from(*v));
+        }
+        self.iterations += 1;
+        report
+    }
+
+    fn project(&mut self) -> IterationReport {
+        steps::divergence(self);
+        let scale = -self.grid.cell * self.grid.cell;
+        self.rhs.par_iter_mut().for_each(|b| *b *= scale);
+        let (its, _) = self.poisson.solve(
+            &self.rhs,
+            &mut self.phi,
+            self.params.tolerance,
+            self.params.max_solver_iterations,
+            &mut self.work,
+        );
+        steps::subtract_gradient(self);
+        steps::divergence(self);
+        let max_div = self
+            .rhs
+            .par_iter()
+            .map(|d| d.abs())
+            .reduce(|| 0.0, f64::max);
+        IterationReport {
+            solver_iterations: its,
+            max_divergence: max_div,
+            relative_divergence: max_div * self.grid.cell / self.params.speed_m_s.max(1e-9),
+        }
+    }
+
+    /// The mean face velocity over the iterations so far (the current one before any).
+    pub fn mean_velocity(&self) -> Velocity {
+        if self.iterations == 0 {
+            return self.velocity.clone();
+        }
+        let n = self.iterations as f64;
+        let mut m = self.velocity.clone();
+        for (c, sum) in [&mut m.u, &mut m.v, &mut m.w]
+            .into_iter()
+            .zip(&self.mean_sum)
+        {
+            for (d, s) in c.data.iter_mut().zip(sum) {
+                *d = (s / n) as f32;
+            }
+        }
+        m
+    }
+
+    /// Largest speed on any face touching a solid voxel (0 when no flow enters solids).
+    pub fn max_flow_into_solids(&self) -> f32 {
+        let mut m = 0.0f32;
+        for (c, kinds) in self.velocity.components().into_iter().zip(&self.kinds) {
+            for (v, k) in c.data.iter().zip(kinds) {
+                if *k == Face::Closed {
+                    m = m.max(v.abs());
+                }
+            }
+        }
+        m
+    }
+
+    /// The mean wind `(east, north)` at `height` m above the ground of each voxel column,
+    /// on an `nx × ny` grid with row 0 at the north (Section 5.4.1: the 2D wind at `z_r`).
+    pub fn wind_at_height(&self, height: f64) -> (Vec<f32>, Vec<f32>) {
+        let m = self.mean_velocity();
+        let g = &self.grid;
+        let mut u = vec![0.0f32; g.nx * g.ny];
+        let mut v = vec![0.0f32; g.nx * g.ny];
+        for j in 0..g.ny {
+            for i in 0..g.nx {
+                let top = f64::from(g.column_top[j * g.nx + i]).max(g.base);
+                let z = (top + height - g.base) / g.cell;
+                let p = [i as f64 + 0.5, j as f64 + 0.5, z];
+                let row = g.ny - 1 - j;
+                u[row * g.nx + i] = m.u.sample(p) as f32;
+                v[row * g.nx + i] = m.v.sample(p) as f32;
+            }
+        }
+        (u, v)
+    }
+
+    /// Writes the mean wind at the voxel centres to `path` as a compact little-endian
+    /// binary file: the 8 bytes `SNOWWIND`, `nx ny nz` (u32), voxel size and base altitude
+    /// (f64), then `u`, `v`, `w` (f32, index `(k ny + j) nx + i`). Written to a temporary
+    /// name and renamed, so an interrupted write leaves no partial file.
+    pub fn write_mean_wind(&self, path: &std::path::Path) -> std::io::Result<()> {
+        let m = self.mean_velocity();
+        let g = &self.grid;
+        let mut bytes = Vec::with_capacity(40 + 12 * g.len());
+        bytes.extend_from_slice(b"SNOWWIND");
+        for d in [g.nx, g.ny, g.nz] {
+            bytes.extend_from_slice(&(d as u32).to_le_bytes());
+        }
+        bytes.extend_from_slice(&g.cell.to_le_bytes());
+        bytes.extend_from_slice(&g.base.to_le_bytes());
+        let centre = |c: &Component, axis: usize, i: usize, j: usize, k: usize| {
+            let a = c.index(i, j, k);
+            let o = [1, c.dims[0], c.dims[0] * c.dims[1]][axis];
+            0.5 * (c.data[a] + c.data[a + o])
+        };
+        for (axis, c) in m.components().into_iter().enumerate() {
+            for k in 0..g.nz {
+                for j in 0..g.ny {
+                    for i in 0..g.nx {
+                        bytes.extend_from_slice(&centre(c, axis, i, j, k).to_le_bytes());
+                    }
+                }
+            }
+        }
+        let tmp = path.with_extension("tmp");
+        std::fs::write(&tmp, &bytes)?;
+        std::fs::rename(&tmp, path)
+    }
+}
+
+#[cfg(test)]
+mod tests;
