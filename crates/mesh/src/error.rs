@@ -1,0 +1,94 @@
+//! Typed errors of mesh input and output. Every variant names the file (where there is one)
+//! and the offending value and where it was found (object, vertex, face, line), so a user can
+//! fix the input.
+
+use snowscape_io::AtomicWriteError;
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// Why a mesh could not be read, checked or written.
+#[derive(Debug, Error)]
+pub enum MeshError {
+    /// The file could not be opened or read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The format could not be told from the file name.
+    #[error(
+        "cannot tell the mesh format of {path} from its extension {extension:?}; \
+         use .obj, .ply, .glb or .gltf"
+    )]
+    UnknownFormat { path: PathBuf, extension: String },
+    /// The file is not a valid file of its format (truncated, malformed...).
+    #[error("{path}: invalid {format} file{}: {message}", line.map(|l| format!(" at line {l}")).unwrap_or_default())]
+    Parse {
+        path: PathBuf,
+        format: &'static str,
+        line: Option<usize>,
+        message: String,
+    },
+    /// A feature of the format that this reader does not handle.
+    #[error("{path}: {what} is not supported")]
+    Unsupported { path: PathBuf, what: String },
+    /// A vertex position (or normal) is NaN or infinite.
+    #[error(
+        "{path}: object {object:?} vertex {vertex} is not finite: {value:?} \
+         (NaN or infinite coordinates)"
+    )]
+    NonFiniteVertex {
+        path: PathBuf,
+        object: String,
+        vertex: usize,
+        value: [f32; 3],
+    },
+    /// A face refers to a vertex that does not exist.
+    #[error(
+        "{path}: object {object:?} face {face} refers to vertex {index}, \
+         but the object has {vertex_count} vertices"
+    )]
+    IndexOutOfRange {
+        path: PathBuf,
+        object: String,
+        face: usize,
+        index: i64,
+        vertex_count: usize,
+    },
+    /// The file holds no usable triangle (no faces, or only degenerate ones).
+    #[error("{path}: no usable triangle ({reason})")]
+    EmptyMesh { path: PathBuf, reason: String },
+    /// An option or parameter outside its valid range.
+    #[error("invalid {name} {value}: expected {expected}")]
+    InvalidOption {
+        name: &'static str,
+        value: String,
+        expected: &'static str,
+    },
+    /// A mesh handed to a writer is inconsistent (lengths, indices, non-finite values).
+    #[error("mesh {mesh:?} cannot be written: {reason}")]
+    InvalidMesh { mesh: String, reason: String },
+    /// The output could not be written (nothing is left at the target path).
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+    /// The output could not be encoded (glTF JSON, PNG...).
+    #[error("cannot encode {path}: {message}")]
+    Encode { path: PathBuf, message: String },
+}
+
+impl MeshError {
+    /// A [`MeshError::Parse`] without a line number.
+    pub(crate) fn parse(
+        path: &std::path::Path,
+        format: &'static str,
+        message: impl ToString,
+    ) -> Self {
+        MeshError::Parse {
+            path: path.to_path_buf(),
+            format,
+            line: None,
+            message: message.to_string(),
+        }
+    }
+}

@@ -1,0 +1,266 @@
+//! glTF 2.0 input (`.gltf` JSON with external or `data:` buffers, and `.glb`) through the
+//! `gltf` crate, without its `import` feature: buffers are resolved here, and every accessor is
+//! checked against its buffer before it is read, so a truncated or inconsistent file is a
+//! [`MeshError::Parse`] naming the accessor rather than a panic.
+//!
+//! The default scene (or, without one, the first) is walked from its root nodes; each node
+//! with a mesh becomes one object named after the node (else the mesh), with the node's world
+//! transform applied to positions and its inverse transpose to normals. The triangle
+//! primitives of a mesh (modes TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN) are merged into the
+//! object; point and line primitives are skipped.
+
+use crate::MeshError;
+use crate::report::RawObject;
+use base64::Engine;
+use glam::{Mat3, Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::{Mode, Semantic};
+use std::path::Path;
+
+/// Deepest node hierarchy walked (a deeper or cyclic graph is an error).
+const MAX_NODE_DEPTH: usize = 256;
+
+/// The objects of a glTF or GLB file, in file coordinates.
+pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
+    let bytes = crate::read::read_bytes(path)?;
+    let bad = |message: String| MeshError::parse(path, "glTF", message);
+    check_glb_header(&bytes).map_err(bad)?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| bad(e.to_string()))?;
+    let buffers = load_buffers(path, &gltf)?;
+    let doc = &gltf.document;
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| bad("no scene".into()))?;
+    let mut objects = Vec::new();
+    let mut stack: Vec<(gltf::Node, Mat4, usize)> =
+        scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > MAX_NODE_DEPTH {
+            return Err(bad(format!(
+                "node hierarchy deeper than {MAX_NODE_DEPTH} (a cycle?) at node {}",
+                node.index()
+            )));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if let Some(mesh) = node.mesh() {
+            let name = node
+                .name()
+                .or(mesh.name())
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("node{}", node.index()));
+            objects.push(read_mesh(path, &mesh, &buffers, world, name)?);
+        }
+        for child in node.children() {
+            stack.push((child, world, depth + 1));
+        }
+    }
+    // Walking with a stack reverses sibling order; keep the file's order.
+    objects.reverse();
+    Ok(objects)
+}
+
+/// Checks a GLB header's declared length before the gltf crate subtracts from it.
+fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    if bytes.len() >= 4 && &bytes[..4] == b"glTF" {
+        let Some(len) = bytes.get(8..12) else {
+            return Err(format!("GLB header truncated ({} bytes)", bytes.len()));
+        };
+        let len = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
+        if len < 20 || len > bytes.len() {
+            return Err(format!(
+                "GLB header declares {len} bytes, the file has {} (truncated?)",
+                bytes.len()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The data of every buffer: the GLB's BIN chunk, a `data:` URI, or a file beside `path`.
+fn load_buffers(path: &Path, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, MeshError> {
+    let bad = |message: String| MeshError::parse(path, "glTF", message);
+    let mut out = Vec::new();
+    for buffer in gltf.document.buffers() {
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
+                bad(format!(
+                    "buffer {} refers to a missing BIN chunk",
+                    buffer.index()
+                ))
+            })?,
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let (_, payload) = uri.split_once(";base64,").ok_or_else(|| {
+                    bad(format!("buffer {}: data URI is not base64", buffer.index()))
+                })?;
+                base64::engine::general_purpose::STANDARD
+                    .decode(payload)
+                    .map_err(|e| bad(format!("buffer {}: {e}", buffer.index())))?
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                let file = path.parent().unwrap_or(Path::new(".")).join(uri);
+                crate::read::read_bytes(&file)?
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(bad(format!(
+                "buffer {} holds {} bytes, the file declares {} (truncated?)",
+                buffer.index(),
+                data.len(),
+                buffer.length()
+            )));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// Checks that `accessor` lies inside its buffer view and buffer, with the expected shape.
+fn check_accessor(
+    accessor: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    shapes: &[(DataType, Dimensions)],
+) -> Result<(), String> {
+    let i = accessor.index();
+    if !shapes.contains(&(accessor.data_type(), accessor.dimensions())) {
+        return Err(format!(
+            "accessor {i} is {:?} {:?}, expected one of {shapes:?}",
+            accessor.data_type(),
+            accessor.dimensions()
+        ));
+    }
+    if accessor.sparse().is_some() {
+        return Err(format!("accessor {i} is sparse (not supported)"));
+    }
+    let view = accessor
+        .view()
+        .ok_or_else(|| format!("accessor {i} has no buffer view"))?;
+    let size = accessor.size();
+    let stride = view.stride().unwrap_or(size);
+    if accessor.count() == 0 || stride < size {
+        return Err(format!(
+            "accessor {i}: count {} and stride {stride} (element size {size})",
+            accessor.count()
+        ));
+    }
+    let end = (accessor.count() - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(size))
+        .and_then(|x| x.checked_add(accessor.offset()));
+    if end.is_none_or(|e| e > view.length()) {
+        return Err(format!(
+            "accessor {i} runs past the end of buffer view {}",
+            view.index()
+        ));
+    }
+    let data = buffers.get(view.buffer().index()).map_or(0, Vec::len);
+    if view
+        .offset()
+        .checked_add(view.length())
+        .is_none_or(|e| e > data)
+    {
+        return Err(format!(
+            "buffer view {} runs past the end of its buffer",
+            view.index()
+        ));
+    }
+    Ok(())
+}
+
+/// One node's mesh as an object in file coordinates (the node's world transform applied).
+fn read_mesh(
+    path: &Path,
+    mesh: &gltf::Mesh,
+    buffers: &[Vec<u8>],
+    world: Mat4,
+    name: String,
+) -> Result<RawObject, MeshError> {
+    let bad = |message: String| MeshError::parse(path, "glTF", message);
+    let normal_matrix = {
+        let m = Mat3::from_mat4(world);
+        (m.determinant().abs() > 1e-20).then(|| m.inverse().transpose())
+    };
+    let mut object = RawObject {
+        name,
+        normals: normal_matrix.map(|_| Vec::new()),
+        ..Default::default()
+    };
+    let float3 = [(DataType::F32, Dimensions::Vec3)];
+    let index_shapes =
+        [DataType::U8, DataType::U16, DataType::U32].map(|d| (d, Dimensions::Scalar));
+    for primitive in mesh.primitives() {
+        let mode = primitive.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            continue;
+        }
+        let positions = primitive.get(&Semantic::Positions).ok_or_else(|| {
+            bad(format!(
+                "mesh {} has a primitive without POSITION",
+                mesh.index()
+            ))
+        })?;
+        check_accessor(&positions, buffers, &float3).map_err(bad)?;
+        let normals = primitive.get(&Semantic::Normals);
+        if let Some(n) = &normals {
+            check_accessor(n, buffers, &float3).map_err(bad)?;
+        }
+        if let Some(ix) = primitive.indices() {
+            check_accessor(&ix, buffers, &index_shapes).map_err(bad)?;
+        }
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        let base = object.positions.len() as i64;
+        let first = object.positions.len();
+        let read = reader
+            .read_positions()
+            .ok_or_else(|| bad(format!("mesh {}: unreadable POSITION", mesh.index())))?;
+        object
+            .positions
+            .extend(read.map(|p| world.transform_point3(Vec3::from(p)).to_array()));
+        let count = object.positions.len() - first;
+        match (normals.is_some(), normal_matrix, object.normals.as_mut()) {
+            (true, Some(m), Some(out)) if out.len() == first => {
+                if let Some(read) = reader.read_normals() {
+                    out.extend(read.map(|n| (m * Vec3::from(n)).normalize_or_zero().to_array()));
+                }
+                if out.len() != object.positions.len() {
+                    object.normals = None;
+                }
+            }
+            _ => object.normals = None,
+        }
+        let indices: Vec<i64> = match reader.read_indices() {
+            Some(ix) => ix.into_u32().map(|i| base + i as i64).collect(),
+            None => (0..count as i64).map(|i| base + i).collect(),
+        };
+        push_faces(&mut object.faces, &indices, mode);
+    }
+    Ok(object)
+}
+
+/// Triangles of an index list in a glTF triangle mode (the checker rejects bad indices).
+fn push_faces(faces: &mut Vec<Vec<i64>>, ix: &[i64], mode: Mode) {
+    match mode {
+        Mode::TriangleStrip => {
+            for k in 0..ix.len().saturating_sub(2) {
+                // Every other triangle of a strip is flipped to keep the winding.
+                faces.push(match k % 2 {
+                    0 => vec![ix[k], ix[k + 1], ix[k + 2]],
+                    _ => vec![ix[k + 1], ix[k], ix[k + 2]],
+                });
+            }
+        }
+        Mode::TriangleFan => {
+            for k in 1..ix.len().saturating_sub(1) {
+                faces.push(vec![ix[0], ix[k], ix[k + 1]]);
+            }
+        }
+        _ => {
+            for c in ix.chunks(3) {
+                faces.push(c.to_vec());
+            }
+        }
+    }
+}

@@ -1,0 +1,125 @@
+//! Wavefront OBJ input through tobj: `v` positions, `vn` normals, `f` polygons, one object per
+//! `o`/`g` (tobj also splits an object where its material changes). Materials are not needed
+//! and a missing `.mtl` is ignored.
+//!
+//! tobj's errors carry no position, so when it rejects a file, [`locate_problem`] scans the
+//! text once more to name the line (and, for an index out of range, the face and the index).
+
+use crate::MeshError;
+use crate::report::RawObject;
+use std::path::Path;
+
+/// The objects of an OBJ file, in file coordinates.
+pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
+    // Read once ourselves: a missing file is an I/O error naming it, and the text is there to
+    // locate problems.
+    let text = crate::read::read_bytes(path)?;
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let mut reader = std::io::Cursor::new(&text);
+    let loaded = tobj::load_obj_buf(&mut reader, &options, |_| {
+        // Materials are not used: an empty library, whatever the file names.
+        Ok(Default::default())
+    });
+    let (models, _materials) = match loaded {
+        Ok(m) => m,
+        Err(e) => return Err(locate_problem(path, &text, e)),
+    };
+    Ok(models
+        .into_iter()
+        .map(|m| {
+            let mesh = m.mesh;
+            let positions = triples(&mesh.positions);
+            let normals = (!mesh.normals.is_empty()).then(|| triples(&mesh.normals));
+            let faces = if mesh.face_arities.is_empty() {
+                mesh.indices
+                    .chunks(3)
+                    .map(|c| c.iter().map(|&i| i as i64).collect())
+                    .collect()
+            } else {
+                let mut start = 0usize;
+                mesh.face_arities
+                    .iter()
+                    .map(|&n| {
+                        let end = (start + n as usize).min(mesh.indices.len());
+                        let f = mesh.indices[start..end].iter().map(|&i| i as i64).collect();
+                        start = end;
+                        f
+                    })
+                    .collect()
+            };
+            RawObject {
+                name: m.name,
+                positions,
+                normals,
+                faces,
+            }
+        })
+        .collect())
+}
+
+fn triples(v: &[f32]) -> Vec<[f32; 3]> {
+    v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+/// Turns a tobj error into a [`MeshError`] naming the line, face and index where possible.
+fn locate_problem(path: &Path, text: &[u8], error: tobj::LoadError) -> MeshError {
+    let text = String::from_utf8_lossy(text);
+    let mut vertices = 0i64;
+    let mut faces = 0usize;
+    let mut object = String::from("unnamed_object");
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let at = |message: String| MeshError::Parse {
+            path: path.to_path_buf(),
+            format: "OBJ",
+            line: Some(n + 1),
+            message,
+        };
+        match words.next() {
+            Some("v") => {
+                let coords: Vec<&str> = words.collect();
+                if coords.len() < 3 || coords.iter().any(|w| w.parse::<f32>().is_err()) {
+                    return at(format!("{error}: vertex {:?}", line.trim()));
+                }
+                vertices += 1;
+            }
+            Some(kind @ ("vn" | "vt")) => {
+                let needed = if kind == "vn" { 3 } else { 1 };
+                let coords: Vec<&str> = words.collect();
+                if coords.len() < needed || coords.iter().any(|w| w.parse::<f32>().is_err()) {
+                    return at(format!("{error}: {:?}", line.trim()));
+                }
+            }
+            Some("o" | "g") => object = words.collect::<Vec<_>>().join(" "),
+            Some("f") => {
+                let refs: Vec<&str> = words.collect();
+                if refs.len() < 3 {
+                    return at(format!("{error}: face {faces} has {} corners", refs.len()));
+                }
+                for r in refs {
+                    let Some(Ok(i)) = r.split('/').next().map(str::parse::<i64>) else {
+                        return at(format!("{error}: face {faces} corner {r:?}"));
+                    };
+                    let resolved = if i < 0 { vertices + i } else { i - 1 };
+                    if i == 0 || resolved < 0 || resolved >= vertices {
+                        return MeshError::IndexOutOfRange {
+                            path: path.to_path_buf(),
+                            object,
+                            face: faces,
+                            index: i,
+                            vertex_count: vertices as usize,
+                        };
+                    }
+                }
+                faces += 1;
+            }
+            _ => {}
+        }
+    }
+    MeshError::parse(path, "OBJ", error)
+}

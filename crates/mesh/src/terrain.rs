@@ -1,0 +1,150 @@
+//! Scenes on a DEM: a [`Grid`] as a triangle-mesh object, and objects standing on it.
+//!
+//! Frame: scene x and y are metres east and north of the grid's south-west corner (cell
+//! `(col, row)` has its centre at `x = (col + 0.5)·dx`, `y = (height - row - 0.5)·dy`), z is
+//! the grid's value (altitude, metres). Nodata cells give no triangle.
+
+use crate::MeshError;
+use crate::scene::SceneObject;
+use snowscape_terrain::Grid;
+
+/// Scene (x, y) of the centre of cell `(col, row)`.
+pub fn cell_centre_xy(grid: &Grid, col: usize, row: usize) -> [f64; 2] {
+    let g = grid.geometry();
+    [
+        (col as f64 + 0.5) * g.cell_size_x(),
+        (g.height() as f64 - row as f64 - 0.5) * g.cell_size_y(),
+    ]
+}
+
+/// The terrain height at scene `(x, y)`, bilinear between cell centres; `None` outside the
+/// grid or over nodata.
+pub fn height_at(grid: &Grid, x: f64, y: f64) -> Option<f32> {
+    let g = grid.geometry();
+    let col = x / g.cell_size_x() - 0.5;
+    let row = g.height() as f64 - y / g.cell_size_y() - 0.5;
+    grid.sample(col, row)
+}
+
+/// The grid as one object: a vertex per cell centre, two triangles per square of four valid
+/// cells (counter-clockwise seen from above, so normals point up).
+pub fn grid_object(grid: &Grid, name: &str) -> SceneObject {
+    let g = grid.geometry();
+    let (w, h) = (g.width(), g.height());
+    let mask = grid.mask();
+    let data = grid.data();
+    let mut positions = Vec::with_capacity(w * h);
+    for row in 0..h {
+        for col in 0..w {
+            let [x, y] = cell_centre_xy(grid, col, row);
+            positions.push([x as f32, y as f32, data[g.index(col, row)]]);
+        }
+    }
+    let mut triangles = Vec::with_capacity(2 * w.saturating_sub(1) * h.saturating_sub(1));
+    for row in 0..h.saturating_sub(1) {
+        for col in 0..w.saturating_sub(1) {
+            let nw = g.index(col, row) as u32;
+            let (ne, sw) = (nw + 1, nw + w as u32);
+            let se = sw + 1;
+            let valid = |i: u32| mask.is_valid(i as usize) && data[i as usize].is_finite();
+            if [nw, ne, sw, se].into_iter().all(valid) {
+                triangles.push([sw, se, ne]);
+                triangles.push([sw, ne, nw]);
+            }
+        }
+    }
+    SceneObject {
+        name: name.to_string(),
+        positions,
+        normals: None,
+        triangles,
+    }
+}
+
+/// Moves `object` so that the centre of its horizontal bounds is at scene `(x, y)` and its
+/// lowest point is at the lowest terrain height under its vertices: the object stands on the
+/// terrain and never floats over a slope (its uphill side sinks in). Returns that ground height.
+pub fn place_on_grid(
+    object: &mut SceneObject,
+    grid: &Grid,
+    x: f64,
+    y: f64,
+) -> Result<f32, MeshError> {
+    let bounds = object.bounds().ok_or_else(|| MeshError::InvalidOption {
+        name: "object to place",
+        value: object.name.clone(),
+        expected: "an object with triangles",
+    })?;
+    let c = bounds.centre();
+    let dx = (x - c[0] as f64) as f32;
+    let dy = (y - c[1] as f64) as f32;
+    let mut ground = f32::INFINITY;
+    for p in &object.positions {
+        let (px, py) = ((p[0] + dx) as f64, (p[1] + dy) as f64);
+        let h = height_at(grid, px, py).ok_or_else(|| MeshError::InvalidOption {
+            name: "placement",
+            value: format!(
+                "{} at ({x}, {y}): vertex at ({px:.2}, {py:.2})",
+                object.name
+            ),
+            expected: "every vertex over a valid cell of the terrain",
+        })?;
+        ground = ground.min(h);
+    }
+    object.translate([dx, dy, ground - bounds.min[2]]);
+    Ok(ground)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use snowscape_terrain::{GridGeometry, NodataMask};
+
+    fn slope() -> Grid {
+        // 5 x 4 cells of 2 m, rising 1 m per column eastwards.
+        Grid::from_fn(GridGeometry::new(5, 4, 2.0, 2.0).unwrap(), |c, _| c as f32)
+    }
+
+    #[test]
+    fn grid_mesh_faces_up_and_skips_nodata() {
+        let g = slope();
+        let o = grid_object(&g, "terrain");
+        assert_eq!(o.triangles.len(), 2 * 4 * 3);
+        for t in 0..o.triangles.len() {
+            assert!(o.triangle_normal(t)[2] > 0.0);
+        }
+        let b = o.bounds().unwrap();
+        assert_eq!((b.min, b.max), ([1.0, 1.0, 0.0], [9.0, 7.0, 4.0]));
+        // Cell (0, 0) is the north-west one: highest y.
+        assert_eq!(o.positions[0], [1.0, 7.0, 0.0]);
+        let mut invalid = vec![false; 20];
+        invalid[6] = true; // (1, 1): four squares touch it
+        let holed = Grid::new(
+            g.geometry().clone(),
+            g.data().to_vec(),
+            NodataMask::from_invalid(invalid),
+        )
+        .unwrap();
+        assert_eq!(grid_object(&holed, "t").triangles.len(), 2 * (12 - 4));
+    }
+
+    #[test]
+    fn placed_objects_stand_on_the_lowest_ground_under_them() {
+        let g = slope();
+        let mut cube = SceneObject {
+            name: "box".into(),
+            positions: vec![[0., 0., 5.], [2., 0., 5.], [2., 2., 5.], [0., 2., 6.]],
+            normals: None,
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let ground = place_on_grid(&mut cube, &g, 5.0, 4.0).unwrap();
+        // Footprint x in [4, 6]: cell-centre coordinate 1.5..2.5, terrain 1.5..2.5.
+        assert!((ground - 1.5).abs() < 1e-5, "{ground}");
+        let b = cube.bounds().unwrap();
+        assert!((b.min[2] - 1.5).abs() < 1e-5 && (b.centre()[0] - 5.0).abs() < 1e-5);
+        // Off the grid: a typed error, the object untouched.
+        let before = cube.clone();
+        assert!(place_on_grid(&mut cube, &g, 100.0, 4.0).is_err());
+        assert_eq!(cube, before);
+    }
+}
