@@ -29,6 +29,11 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
         Ok(m) => m,
         Err(e) => return Err(locate_problem(path, &text, e)),
     };
+    // tobj renumbers vertices in order of use: name a bad vertex by its place in the file.
+    let non_finite = |v: &[f32]| !v.iter().all(|c| c.is_finite());
+    if models.iter().any(|m| non_finite(&m.mesh.positions)) {
+        return Err(locate_non_finite(path, &text));
+    }
     Ok(models
         .into_iter()
         .map(|m| {
@@ -64,6 +69,37 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
 
 fn triples(v: &[f32]) -> Vec<[f32; 3]> {
     v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+/// The first `v` line with a NaN or infinite coordinate, as [`MeshError::NonFiniteVertex`]
+/// (vertex numbered from 0 in file order, object from the last `o`/`g`).
+fn locate_non_finite(path: &Path, text: &[u8]) -> MeshError {
+    let text = String::from_utf8_lossy(text);
+    let mut object = String::from("unnamed_object");
+    let mut vertex = 0usize;
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("o" | "g") => object = words.collect::<Vec<_>>().join(" "),
+            Some("v") => {
+                let mut value = [0.0f32; 3];
+                for (c, w) in value.iter_mut().zip(words) {
+                    *c = w.parse().unwrap_or(f32::NAN);
+                }
+                if !value.iter().all(|c| c.is_finite()) {
+                    return MeshError::NonFiniteVertex {
+                        path: path.to_path_buf(),
+                        object: format!("{object} (line {})", n + 1),
+                        vertex,
+                        value,
+                    };
+                }
+                vertex += 1;
+            }
+            _ => {}
+        }
+    }
+    MeshError::parse(path, "OBJ", "a non-finite vertex that could not be located")
 }
 
 /// Turns a tobj error into a [`MeshError`] naming the line, face and index where possible.

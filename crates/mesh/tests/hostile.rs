@@ -1,0 +1,272 @@
+//! Hostile inputs: every one is a typed error naming the file (or a handled, reported case),
+//! never a panic.
+
+mod common;
+use snowscape_mesh::{MeshError, SourceFrame, read_scene};
+use std::path::{Path, PathBuf};
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+fn read(p: &Path) -> Result<snowscape_mesh::Scene, MeshError> {
+    read_scene(p, &SourceFrame::default()).map(|(s, _)| s)
+}
+
+const TETRA: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+
+#[test]
+fn obj_nan_vertex_names_file_and_vertex() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(
+        d.path(),
+        "nan.obj",
+        TETRA.replace("v 0 1 0", "v 0 nan 0").as_bytes(),
+    );
+    match read(&p) {
+        Err(e @ MeshError::NonFiniteVertex { vertex: 2, .. }) => {
+            assert!(e.to_string().contains("nan.obj"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let p = write(
+        d.path(),
+        "inf.obj",
+        TETRA.replace("v 1 0 0", "v inf 0 0").as_bytes(),
+    );
+    assert!(matches!(
+        read(&p),
+        Err(MeshError::NonFiniteVertex { vertex: 1, .. })
+    ));
+}
+
+#[test]
+fn obj_index_out_of_range_names_face_and_index() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(
+        d.path(),
+        "idx.obj",
+        TETRA.replace("f 2 3 4", "f 2 3 9").as_bytes(),
+    );
+    match read(&p) {
+        Err(
+            e @ MeshError::IndexOutOfRange {
+                face: 2,
+                index: 9,
+                vertex_count: 4,
+                ..
+            },
+        ) => {
+            assert!(e.to_string().contains("idx.obj"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let p = write(
+        d.path(),
+        "zero.obj",
+        TETRA.replace("f 1 2 4", "f 0 2 4").as_bytes(),
+    );
+    assert!(matches!(
+        read(&p),
+        Err(MeshError::IndexOutOfRange {
+            face: 1,
+            index: 0,
+            ..
+        })
+    ));
+}
+
+#[test]
+fn empty_and_flat_meshes_are_empty_mesh_errors() {
+    let d = tempfile::tempdir().unwrap();
+    for (name, text) in [
+        ("empty.obj", ""),
+        ("points.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\n"),
+        ("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n"),
+    ] {
+        let p = write(d.path(), name, text.as_bytes());
+        match read(&p) {
+            Err(MeshError::EmptyMesh { path, .. }) => assert_eq!(path, p),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn zero_area_triangles_are_dropped_and_counted() {
+    let d = tempfile::tempdir().unwrap();
+    let text = format!("{TETRA}v 2 0 0\nf 1 2 5\nf 4 4 4\n");
+    let p = write(d.path(), "zero_area.obj", text.as_bytes());
+    let (scene, report) = read_scene(&p, &SourceFrame::default()).unwrap();
+    assert_eq!(scene.triangle_count(), 4);
+    assert_eq!(report.degenerate_dropped(), 2);
+    assert_eq!(report.open_edges(), 0);
+}
+
+#[test]
+fn truncated_files_never_panic() {
+    let d = tempfile::tempdir().unwrap();
+    for name in ["bunny_npm.obj", "ant.ply", "airplane.ply", "spider.obj"] {
+        let bytes = std::fs::read(common::mesh_path(name)).unwrap();
+        for cut in [
+            1,
+            10,
+            200,
+            bytes.len() / 3,
+            bytes.len() / 2,
+            bytes.len() - 7,
+        ] {
+            let p = write(d.path(), name, &bytes[..cut]);
+            // A text file cut at a line end may still be a valid (smaller) mesh; anything else
+            // must be a typed error naming the file.
+            if let Err(e) = read(&p) {
+                assert!(e.to_string().contains(name), "{name} cut at {cut}: {e}");
+            }
+        }
+    }
+    // Binary PLY cut in its data: the parser must say so.
+    let bytes = std::fs::read(common::mesh_path("ant.ply")).unwrap();
+    let p = write(d.path(), "cut.ply", &bytes[..bytes.len() / 2]);
+    assert!(matches!(
+        read(&p),
+        Err(MeshError::Parse { format: "PLY", .. })
+    ));
+    // OBJ cut in the middle of a vertex line: the line is named.
+    let p = write(d.path(), "cut.obj", b"v 0 0 0\nv 1 0 0\nv 0 1");
+    match read(&p) {
+        Err(MeshError::Parse { line: Some(3), .. }) => {}
+        other => panic!("{other:?}"),
+    }
+}
+
+fn ascii_ply(vertices: &[&str], faces: &[&str]) -> String {
+    format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {}\nproperty list uchar int vertex_indices\nend_header\n{}\n{}\n",
+        vertices.len(),
+        faces.len(),
+        vertices.join("\n"),
+        faces.join("\n")
+    )
+}
+
+#[test]
+fn ply_nan_bad_index_and_quads() {
+    let d = tempfile::tempdir().unwrap();
+    let v = ["0 0 0", "1 0 0", "1 1 0", "0 1 0"];
+    let p = write(
+        d.path(),
+        "quad.ply",
+        ascii_ply(&v, &["4 0 1 2 3"]).as_bytes(),
+    );
+    let (s, r) = read_scene(&p, &SourceFrame::default()).unwrap();
+    assert_eq!((s.triangle_count(), r.objects[0].polygons_split), (2, 1));
+    let p = write(
+        d.path(),
+        "nan.ply",
+        ascii_ply(&["0 0 0", "nan 0 0", "1 1 0"], &["3 0 1 2"]).as_bytes(),
+    );
+    // ply-rs-bw's ASCII grammar has no NaN: a parse error naming the line.
+    let r = read(&p);
+    assert!(
+        matches!(r, Err(MeshError::Parse { line: Some(11), .. })),
+        "{r:?}"
+    );
+    // In a binary file a NaN is a plain float: the checker names the vertex.
+    let mut bin = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n\
+        property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+        end_header\n"
+        .to_vec();
+    for v in [[0.0f32, 0.0, 0.0], [1.0, f32::NAN, 0.0], [1.0, 1.0, 0.0]] {
+        bin.extend(v.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    bin.push(3);
+    bin.extend([0i32, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+    let p = write(d.path(), "nan_bin.ply", &bin);
+    let r = read(&p);
+    assert!(
+        matches!(r, Err(MeshError::NonFiniteVertex { vertex: 1, .. })),
+        "{r:?}"
+    );
+    let p = write(
+        d.path(),
+        "idx.ply",
+        ascii_ply(&v, &["3 0 1 2", "3 0 2 -1"]).as_bytes(),
+    );
+    assert!(matches!(
+        read(&p),
+        Err(MeshError::IndexOutOfRange {
+            face: 1,
+            index: -1,
+            ..
+        })
+    ));
+    let p = write(d.path(), "noface.ply", ascii_ply(&v, &[]).as_bytes());
+    assert!(matches!(read(&p), Err(MeshError::EmptyMesh { .. })));
+}
+
+#[test]
+fn broken_gltf_and_glb_are_parse_errors() {
+    let d = tempfile::tempdir().unwrap();
+    // A GLB header claiming more bytes than the file has, one claiming fewer than a header.
+    let mut glb = b"glTF".to_vec();
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&1000u32.to_le_bytes());
+    glb.extend_from_slice(&[0u8; 20]);
+    let p = write(d.path(), "long.glb", &glb);
+    assert!(matches!(read(&p), Err(MeshError::Parse { .. })));
+    glb[8..12].copy_from_slice(&4u32.to_le_bytes());
+    let p = write(d.path(), "short.glb", &glb);
+    assert!(matches!(read(&p), Err(MeshError::Parse { .. })));
+    let p = write(d.path(), "junk.gltf", b"{ not json");
+    assert!(matches!(read(&p), Err(MeshError::Parse { .. })));
+    // An accessor running past its buffer.
+    let json = r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],
+      "nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+      "accessors":[{"bufferView":0,"componentType":5126,"count":30,"type":"VEC3",
+                    "min":[0,0,0],"max":[1,1,1]}],
+      "bufferViews":[{"buffer":0,"byteLength":36}],
+      "buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]}"#;
+    let p = write(d.path(), "short_accessor.gltf", json.as_bytes());
+    match read(&p) {
+        Err(MeshError::Parse { message, .. }) => {
+            assert!(message.contains("accessor 0"), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // The same with a correct count reads one triangle.
+    let p = write(
+        d.path(),
+        "ok.gltf",
+        json.replace("\"count\":30", "\"count\":3").as_bytes(),
+    );
+    let s = read(&p).unwrap();
+    assert_eq!(s.triangle_count(), 1);
+    // A missing external buffer is an I/O error naming it.
+    let p = write(
+        d.path(),
+        "ext.gltf",
+        json.replace(
+            "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA",
+            "missing.bin",
+        )
+        .as_bytes(),
+    );
+    match read(&p) {
+        Err(MeshError::Io { path, .. }) => assert!(path.ends_with("missing.bin")),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn missing_files_and_unknown_formats() {
+    let d = tempfile::tempdir().unwrap();
+    assert!(matches!(
+        read(&d.path().join("none.obj")),
+        Err(MeshError::Io { .. })
+    ));
+    let p = write(d.path(), "mesh.stl", b"solid x");
+    assert!(matches!(read(&p), Err(MeshError::UnknownFormat { .. })));
+}
