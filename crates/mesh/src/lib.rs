@@ -13,6 +13,7 @@
 //! - [`preview`]: a CPU z-buffer rasteriser for a PNG preview of a scene and its snow.
 
 pub mod error;
+pub mod height_span;
 pub mod preview;
 pub mod raycast;
 pub mod read;
@@ -22,6 +23,7 @@ pub mod terrain;
 pub mod write;
 
 pub use error::MeshError;
+pub use height_span::{HeightSpanMap, HeightSpanOptions, SnowSite};
 pub use raycast::{Ray, RayHit, SceneBvh};
 pub use read::{MeshFormat, read_scene};
 pub use report::{MeshReport, ObjectReport};
