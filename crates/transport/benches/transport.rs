@@ -3,11 +3,17 @@
 //! 1000², ≤ 25 ms per step; the thesis: 242 ms on a GTX 970). The wind is a west wind of
 //! 11 m/s (Table 7.I) modified by the terrain (Section 5.4); the snow is 30 cm deep with
 //! snowfall, so every phenomenon runs in most cells.
+//!
+//! The wind benchmark times one Stable Fluids iteration (Chapter 3) on an `n³` voxel grid,
+//! `n` = `SNOWSCAPE_WIND_BENCH_SIZE` (default 24; the target is 128³ ≤ 300 ms, the
+//! thesis: 1.8 s), over the castle scene, after a few warm-up iterations.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use snowscape_terrain::GridGeometry;
 use snowscape_transport::step::{SceneMaps, SnowState, StepScratch, step};
 use snowscape_transport::terrain_wind::modify_wind;
+use snowscape_transport::wind3d::voxel::{VoxelGrid, castle_heights};
+use snowscape_transport::wind3d::{WindParams, WindSolver};
 use snowscape_transport::{TransportParams, Weather};
 use std::hint::black_box;
 
@@ -56,5 +62,30 @@ fn transport(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, transport);
+fn wind(c: &mut Criterion) {
+    let n: usize = std::env::var("SNOWSCAPE_WIND_BENCH_SIZE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(24);
+    let cell = 850.0 / n as f64;
+    let g = GridGeometry::square(n, n, cell).unwrap();
+    let z = castle_heights(n, cell);
+    let vox = VoxelGrid::from_heights(&g, &z, cell, n, -cell).unwrap();
+    let mut solver = WindSolver::new(vox, WindParams::default()).unwrap();
+    for _ in 0..3 {
+        solver.iterate();
+    }
+    let r = solver.iterate();
+    eprintln!(
+        "wind {n}^3: {} CG iterations, relative divergence {:.2e}",
+        r.solver_iterations, r.relative_divergence
+    );
+    let mut group = c.benchmark_group(format!("wind_{n}"));
+    group.throughput(Throughput::Elements((n * n * n) as u64));
+    group.sample_size(10);
+    group.bench_function("iteration", |b| b.iter(|| black_box(solver.iterate())));
+    group.finish();
+}
+
+criterion_group!(benches, transport, wind);
 criterion_main!(benches);

@@ -7,6 +7,8 @@
 //! the discrete field divergence-free to the solver tolerance, and a face between a fluid
 //! and a solid voxel carries no flow by construction.
 
+use rayon::prelude::*;
+
 /// One velocity component on its face grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Component {
@@ -68,6 +70,73 @@ impl Component {
         let x01 = lerp(v(dz), v(dz + dx), frac[0]);
         let x11 = lerp(v(dz + dy), v(dz + dy + dx), frac[0]);
         lerp(lerp(x00, x10, frac[1]), lerp(x01, x11, frac[1]), frac[2])
+    }
+}
+
+/// The velocity averaged to the voxel centres, interleaved, for fast back-tracing: one
+/// trilinear interpolation of a 3-vector instead of three staggered ones.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Centred {
+    /// Voxels along x, y, z.
+    pub dims: [usize; 3],
+    /// `(u, v, w)` at each voxel centre, index `(k ny + j) nx + i`.
+    pub data: Vec<[f32; 3]>,
+}
+
+impl Centred {
+    /// Averages the face velocities of `vel` to the voxel centres.
+    pub fn update(&mut self, vel: &Velocity) {
+        let [nx, ny, nz] = [vel.w.dims[0], vel.w.dims[1], vel.u.dims[2]];
+        self.dims = [nx, ny, nz];
+        self.data.resize(nx * ny * nz, [0.0; 3]);
+        let s = nx * ny;
+        self.data
+            .par_chunks_mut(s)
+            .enumerate()
+            .for_each(|(k, out)| {
+                for j in 0..ny {
+                    for i in 0..nx {
+                        let a = vel.u.index(i, j, k);
+                        let b = vel.v.index(i, j, k);
+                        let c = vel.w.index(i, j, k);
+                        out[j * nx + i] = [
+                            0.5 * (vel.u.data[a] + vel.u.data[a + 1]),
+                            0.5 * (vel.v.data[b] + vel.v.data[b + nx]),
+                            0.5 * (vel.w.data[c] + vel.w.data[c + s]),
+                        ];
+                    }
+                }
+            });
+    }
+
+    /// Trilinear interpolation at `p` (voxel units), clamped to the voxel centres.
+    #[inline]
+    pub fn sample(&self, p: [f32; 3]) -> [f32; 3] {
+        let mut base = [0usize; 3];
+        let mut t = [0.0f32; 3];
+        let mut step = [0usize; 3];
+        let strides = [1, self.dims[0], self.dims[0] * self.dims[1]];
+        for a in 0..3 {
+            let n = self.dims[a];
+            let g = (p[a] - 0.5).clamp(0.0, (n - 1) as f32);
+            let b = (g as usize).min(n.saturating_sub(2));
+            base[a] = b;
+            t[a] = if n > 1 { g - b as f32 } else { 0.0 };
+            step[a] = if n > 1 { strides[a] } else { 0 };
+        }
+        let i0 = base[0] + strides[1] * base[1] + strides[2] * base[2];
+        let d = &self.data;
+        let mut out = [0.0f32; 3];
+        for (c, o) in out.iter_mut().enumerate() {
+            let v = |off: usize| d[i0 + off][c];
+            let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+            let x00 = lerp(v(0), v(step[0]), t[0]);
+            let x10 = lerp(v(step[1]), v(step[1] + step[0]), t[0]);
+            let x01 = lerp(v(step[2]), v(step[2] + step[0]), t[0]);
+            let x11 = lerp(v(step[2] + step[1]), v(step[2] + step[1] + step[0]), t[0]);
+            *o = lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]);
+        }
+        out
     }
 }
 

@@ -10,7 +10,8 @@
 //!    the current field (Fig. 3.1).
 //! 3. **Viscosity** (3.15-3.16): implicit, `(I − ν Δt ∇²) u_new = u`, by Jacobi sweeps
 //!    (the system is strongly diagonally dominant for the small `ν Δt / Δ²` of a wind).
-//! 4. **Projection** (3.20-3.24): [`project`], conjugate gradients instead of Jacobi.
+//! 4. **Projection** (3.20-3.24): [`project`], multigrid-preconditioned conjugate gradients
+//!    instead of Jacobi.
 //!
 //! The velocity is stored on the voxel faces ([`field`]). Faces touching a solid voxel carry
 //! no flow (no flow into solids, Section 3.5.2), the ground and the lid are closed, faces on
@@ -22,11 +23,12 @@
 //! above the ground of the boundary column (uniform `U_r` when `inflow_roughness_m` is 0).
 
 pub mod field;
+pub mod multigrid;
 pub mod project;
 pub mod voxel;
 
 use crate::error::{TransportError, check_positive, check_range};
-use field::{Component, Velocity};
+use field::{Centred, Component, Velocity};
 use project::{Poisson, SolverWork};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -129,6 +131,7 @@ pub struct WindSolver {
     /// Current velocity.
     pub velocity: Velocity,
     previous: Velocity,
+    centred: Centred,
     mean_sum: [Vec<f64>; 3],
     iterations: usize,
     poisson: Poisson,
@@ -151,6 +154,7 @@ impl WindSolver {
         let mut s = Self {
             kinds: steps::face_kinds(&grid, &params),
             previous: velocity.clone(),
+            centred: Centred::default(),
             mean_sum: [
                 vec![0.0; velocity.u.data.len()],
                 vec![0.0; velocity.v.data.len()],

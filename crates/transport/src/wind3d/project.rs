@@ -4,12 +4,14 @@
 //! couples the two; a face to the open outflow boundary sees `φ = 0` (Dirichlet); faces to
 //! solids, inflow faces, the ground and the lid are closed (Neumann: their velocity is
 //! imposed). The thesis solves this with Jacobi iterations, its bottleneck (Table 7.II);
-//! here it is solved by conjugate gradients preconditioned by the diagonal, warm-started
-//! from the previous iteration's `φ`, to a relative residual `tolerance`.
+//! here it is solved by conjugate gradients preconditioned by a multigrid V-cycle
+//! ([`super::multigrid`]), warm-started from the previous iteration's `φ`, to a relative
+//! residual `tolerance`.
 //!
 //! Inner products are summed per z-slice and then in slice order, so the solution is the
 //! same for any thread count.
 
+use super::multigrid::Multigrid;
 use rayon::prelude::*;
 
 /// The Poisson operator on the voxel grid.
@@ -22,6 +24,8 @@ pub struct Poisson {
     pub diag: Vec<u8>,
     /// Bit `d` set when face `d` (−x, +x, −y, +y, −z, +z) couples to a fluid voxel.
     pub couple: Vec<u8>,
+    /// The V-cycle preconditioner.
+    pub multigrid: Multigrid,
 }
 
 /// Offsets of the six neighbours, in face order (−x, +x, −y, +y, −z, +z).
@@ -78,11 +82,11 @@ impl Poisson {
             .reduce(|| 0.0, f64::max)
     }
 
-    /// Solves `A φ = b` by Jacobi-preconditioned conjugate gradients from the initial `phi`,
+    /// Solves `A φ = b` by multigrid-preconditioned conjugate gradients from the initial `phi`,
     /// until `max |r| ≤ tolerance · max |b|` or `max_iterations`. Returns the iterations
     /// used and the final `max |r|`.
     pub fn solve(
-        &self,
+        &mut self,
         b: &[f64],
         phi: &mut [f64],
         tolerance: f64,
@@ -100,12 +104,8 @@ impl Poisson {
             .zip(b.par_iter().zip(q.par_iter()))
             .for_each(|(r, (b, q))| *r = b - q);
         let target = tolerance * self.max_abs(b);
-        let precondition = |r: &[f64], z: &mut [f64]| {
-            z.par_iter_mut()
-                .zip(r.par_iter().zip(self.diag.par_iter()))
-                .for_each(|(z, (r, d))| *z = if *d > 0 { r / f64::from(*d) } else { 0.0 });
-        };
-        precondition(r, z);
+        let mut mg = std::mem::take(&mut self.multigrid);
+        mg.apply(r, z);
         p.copy_from_slice(z);
         let mut rz = self.dot(r, z);
         let mut residual = self.max_abs(r);
@@ -123,7 +123,7 @@ impl Poisson {
             r.par_iter_mut()
                 .zip(q.par_iter())
                 .for_each(|(r, q)| *r -= alpha * q);
-            precondition(r, z);
+            mg.apply(r, z);
             let rz_new = self.dot(r, z);
             let beta = rz_new / rz;
             rz = rz_new;
@@ -133,6 +133,7 @@ impl Poisson {
             residual = self.max_abs(r);
             it += 1;
         }
+        self.multigrid = mg;
         (it, residual)
     }
 }

@@ -98,6 +98,7 @@ pub(super) fn poisson(g: &VoxelGrid, kinds: &[Vec<Face>; 3]) -> Poisson {
     Poisson {
         nx: g.nx,
         slice: g.nx * g.ny,
+        multigrid: super::multigrid::Multigrid::new([g.nx, g.ny, g.nz], &diag, &couple),
         diag,
         couple,
     }
@@ -144,7 +145,9 @@ pub(super) fn initialise(s: &mut WindSolver) {
     s.velocity = vel;
 }
 
-/// Semi-Lagrangian advection with an RK4 back-trace (3.12-3.14, Fig. 3.1).
+/// Semi-Lagrangian advection with an RK4 back-trace (3.12-3.14, Fig. 3.1). The trace
+/// runs through the velocity averaged to the voxel centres; the advected value is then
+/// interpolated on the face's own staggered grid.
 pub(super) fn advect(s: &mut WindSolver) {
     for (dst, src) in [
         (&mut s.previous.u, &s.velocity.u),
@@ -153,22 +156,21 @@ pub(super) fn advect(s: &mut WindSolver) {
     ] {
         dst.data.copy_from_slice(&src.data);
     }
-    let h = s.dt / s.grid.cell; // voxels per (m/s)
-    let prev = &s.previous;
-    let trace = |p: [f64; 3]| {
+    s.centred.update(&s.previous);
+    let h = (s.dt / s.grid.cell) as f32; // voxels per (m/s)
+    let centred = &s.centred;
+    let trace = |p: [f32; 3]| {
         let at =
-            |q: [f64; 3], k: [f64; 3], f: f64| [q[0] - f * k[0], q[1] - f * k[1], q[2] - f * k[2]];
-        let k1 = prev.sample(p);
-        let k2 = prev.sample(at(p, k1, 0.5 * h));
-        let k3 = prev.sample(at(p, k2, 0.5 * h));
-        let k4 = prev.sample(at(p, k3, h));
-        let mean = [
-            (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]) / 6.0,
-            (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]) / 6.0,
-            (k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2]) / 6.0,
-        ];
+            |q: [f32; 3], k: [f32; 3], f: f32| [q[0] - f * k[0], q[1] - f * k[1], q[2] - f * k[2]];
+        let k1 = centred.sample(p);
+        let k2 = centred.sample(at(p, k1, 0.5 * h));
+        let k3 = centred.sample(at(p, k2, 0.5 * h));
+        let k4 = centred.sample(at(p, k3, h));
+        let mean: [f32; 3] =
+            std::array::from_fn(|a| (k1[a] + 2.0 * k2[a] + 2.0 * k3[a] + k4[a]) / 6.0);
         at(p, mean, h)
     };
+    let prev = &s.previous;
     let comps = [&mut s.velocity.u, &mut s.velocity.v, &mut s.velocity.w];
     for (axis, c) in comps.into_iter().enumerate() {
         let src = prev.components()[axis];
@@ -184,11 +186,13 @@ pub(super) fn advect(s: &mut WindSolver) {
                         let o = j * dims[0] + i;
                         if matches!(kinds[k * slice + o], Face::Fluid | Face::Outflow) {
                             let p = [
-                                i as f64 + offset[0],
-                                j as f64 + offset[1],
-                                k as f64 + offset[2],
+                                (i as f64 + offset[0]) as f32,
+                                (j as f64 + offset[1]) as f32,
+                                (k as f64 + offset[2]) as f32,
                             ];
-                            out[o] = src.sample(trace(p)) as f32;
+                            let b = trace(p);
+                            out[o] = src.sample([f64::from(b[0]), f64::from(b[1]), f64::from(b[2])])
+                                as f32;
                         }
                     }
                 }
