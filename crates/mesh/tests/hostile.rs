@@ -236,14 +236,21 @@ fn broken_gltf_and_glb_are_parse_errors() {
         }
         other => panic!("{other:?}"),
     }
-    // The same with a correct count reads one triangle.
-    let p = write(
-        d.path(),
-        "ok.gltf",
-        json.replace("\"count\":30", "\"count\":3").as_bytes(),
+    // The same with a correct count reads one triangle, moved by its node's transform.
+    let ok = json.replace("\"count\":30", "\"count\":3").replace(
+        "{\"mesh\":0}",
+        "{\"mesh\":0,\"name\":\"roof\",\"translation\":[0,5,0],\"scale\":[2,2,2]}",
     );
+    let p = write(d.path(), "ok.gltf", ok.as_bytes());
     let s = read(&p).unwrap();
     assert_eq!(s.triangle_count(), 1);
+    let o = &s.objects[0];
+    assert_eq!(o.name, "roof");
+    // File y-up: (0, 5, 0) + 2 (x, y, z) is scene (2x, -2z, 5 + 2y).
+    assert_eq!(
+        o.corners(0),
+        [[0.0, 0.0, 5.0], [2.0, 0.0, 5.0], [0.0, 0.0, 7.0]]
+    );
     // A missing external buffer is an I/O error naming it.
     let p = write(
         d.path(),
