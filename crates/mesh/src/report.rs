@@ -47,6 +47,9 @@ pub struct ObjectReport {
     pub open_edges: usize,
     /// Edges used by three or more triangles.
     pub non_manifold_edges: usize,
+    /// Connected pieces (triangles sharing welded vertices): several teapots in one object
+    /// count as several.
+    pub components: usize,
     /// Whether the file's normals were dropped (non-finite, or a count not matching positions).
     pub normals_dropped: bool,
 }
@@ -89,6 +92,9 @@ impl MeshReport {
     pub fn non_manifold_edges(&self) -> usize {
         self.total(|o| o.non_manifold_edges)
     }
+    pub fn components(&self) -> usize {
+        self.total(|o| o.components)
+    }
 }
 
 /// Relative area below which a triangle counts as degenerate: |e1 x e2| < this x (longest edge)^2.
@@ -122,6 +128,7 @@ pub(crate) fn check_object(
         polygons_split: 0,
         open_edges: 0,
         non_manifold_edges: 0,
+        components: 0,
         normals_dropped: false,
     };
     let positions: Vec<[f32; 3]> = raw.positions.iter().map(|p| frame.to_scene(*p)).collect();
@@ -155,9 +162,10 @@ pub(crate) fn check_object(
         }
     }
     report.triangles = triangles.len();
-    let (open, non_manifold) = count_edges(&positions, &triangles);
-    report.open_edges = open;
-    report.non_manifold_edges = non_manifold;
+    let topology = count_edges(&positions, &triangles);
+    report.open_edges = topology.open_edges;
+    report.non_manifold_edges = topology.non_manifold_edges;
+    report.components = topology.components;
     let normals = raw.normals.and_then(|ns| {
         let ok = ns.len() == n && ns.iter().all(|v| v.iter().all(|c| c.is_finite()));
         report.normals_dropped = !ok;
@@ -194,8 +202,16 @@ pub(crate) fn is_degenerate(positions: &[[f32; 3]], t: [u32; 3]) -> bool {
     area2.is_nan() || area2 <= DEGENERATE_RELATIVE_AREA * longest * longest
 }
 
-/// Open and non-manifold edge counts of `triangles`, on positions welded by exact equality.
-pub(crate) fn count_edges(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> (usize, usize) {
+/// Edge and piece counts of a triangle set.
+pub(crate) struct Topology {
+    pub open_edges: usize,
+    pub non_manifold_edges: usize,
+    pub components: usize,
+}
+
+/// Open and non-manifold edges and connected pieces of `triangles`, on positions welded by
+/// exact equality.
+pub(crate) fn count_edges(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Topology {
     let mut weld: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
     let ids: Vec<u32> = positions
         .iter()
@@ -206,6 +222,15 @@ pub(crate) fn count_edges(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> (us
             *weld.entry(key).or_insert(next)
         })
         .collect();
+    let mut parent: Vec<u32> = (0..weld.len() as u32).collect();
+    fn root(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            let up = parent[parent[i as usize] as usize];
+            parent[i as usize] = up;
+            i = up;
+        }
+        i
+    }
     let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 2);
     for t in triangles {
         for k in 0..3 {
@@ -213,11 +238,21 @@ pub(crate) fn count_edges(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> (us
             if a != b {
                 *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
             }
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            parent[ra.max(rb) as usize] = ra.min(rb);
         }
     }
-    let open = edges.values().filter(|&&c| c == 1).count();
-    let non_manifold = edges.values().filter(|&&c| c > 2).count();
-    (open, non_manifold)
+    let mut roots: Vec<u32> = triangles
+        .iter()
+        .map(|t| root(&mut parent, ids[t[0] as usize]))
+        .collect();
+    roots.sort_unstable();
+    roots.dedup();
+    Topology {
+        open_edges: edges.values().filter(|&&c| c == 1).count(),
+        non_manifold_edges: edges.values().filter(|&&c| c > 2).count(),
+        components: roots.len(),
+    }
 }
 
 fn normalise(v: [f32; 3]) -> [f32; 3] {
@@ -281,6 +316,23 @@ mod tests {
         let (o, r) = check_object(Path::new("t"), tetrahedron(), &SourceFrame::default()).unwrap();
         assert_eq!(o.unwrap().triangles.len(), 4);
         assert!(r.is_closed_manifold(), "{r:?}");
+        assert_eq!(r.components, 1);
+        // Two tetrahedra in one object: two pieces.
+        let mut two = tetrahedron();
+        two.positions.extend(
+            tetrahedron()
+                .positions
+                .iter()
+                .map(|p| [p[0] + 5.0, p[1], p[2]]),
+        );
+        two.faces.extend(
+            tetrahedron()
+                .faces
+                .iter()
+                .map(|f| f.iter().map(|i| i + 4).collect()),
+        );
+        let (_, r) = check_object(Path::new("t"), two, &SourceFrame::default()).unwrap();
+        assert_eq!((r.components, r.open_edges), (2, 0));
     }
 
     #[test]

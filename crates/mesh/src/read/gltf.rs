@@ -35,7 +35,17 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
     let mut objects = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    // glTF nodes form trees (a node has at most one parent): more visits than nodes is a
+    // cycle or a shared child, refused before it can blow up.
+    let mut visits = 0usize;
     while let Some((node, parent, depth)) = stack.pop() {
+        visits += 1;
+        if visits > doc.nodes().len() {
+            return Err(bad(format!(
+                "node {} is reached twice: the node graph is not a tree",
+                node.index()
+            )));
+        }
         if depth > MAX_NODE_DEPTH {
             return Err(bad(format!(
                 "node hierarchy deeper than {MAX_NODE_DEPTH} (a cycle?) at node {}",
