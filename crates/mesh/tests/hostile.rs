@@ -251,6 +251,23 @@ fn broken_gltf_and_glb_are_parse_errors() {
         o.corners(0),
         [[0.0, 0.0, 5.0], [2.0, 0.0, 5.0], [0.0, 0.0, 7.0]]
     );
+    // A node graph with a cycle (node 0 its own child) is refused, not walked forever.
+    let cyclic = ok.replace("\"name\":\"roof\"", "\"name\":\"roof\",\"children\":[0]");
+    let p = write(d.path(), "cycle.gltf", cyclic.as_bytes());
+    assert!(matches!(read(&p), Err(MeshError::Parse { .. })));
+    // The buffer as an external file beside the .gltf reads the same.
+    let bin = [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        .as_flattened()
+        .iter()
+        .flat_map(|c| c.to_le_bytes())
+        .collect::<Vec<u8>>();
+    write(d.path(), "tri.bin", &bin);
+    let external = ok.replace(
+        "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA",
+        "tri.bin",
+    );
+    let p = write(d.path(), "external.gltf", external.as_bytes());
+    assert_eq!(read(&p).unwrap().objects[0].corners(0), o.corners(0));
     // A missing external buffer is an I/O error naming it.
     let p = write(
         d.path(),

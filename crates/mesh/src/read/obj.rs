@@ -2,7 +2,7 @@
 //! `o`/`g` (tobj also splits an object where its material changes). Materials are not needed
 //! and a missing `.mtl` is ignored.
 //!
-//! tobj's errors carry no position, so when it rejects a file, [`locate_problem`] scans the
+//! tobj's errors carry no position, so when it rejects a file, `locate_problem` scans the
 //! text once more to name the line (and, for an index out of range, the face and the index).
 
 use crate::MeshError;

@@ -1,6 +1,6 @@
 //! Snow-mesh output: [`SnowMesh`] (scene metres, z up) written as binary glTF ([`glb`]) or as
 //! OBJ + MTL + PNG texture ([`obj`]), converted back into the input's own axes and units with
-//! its [`SourceFrame`], so the snow lies exactly on the user's scene. Every file goes through
+//! its [`SourceFrame`](crate::SourceFrame), so the snow lies exactly on the user's scene. Every file goes through
 //! [`snowscape_io::write_atomic`]: a temporary file renamed when complete.
 
 pub mod glb;
