@@ -12,12 +12,15 @@
 //! - [`terrain_wind`]: the terrain modification of the wind at `z_r` (Section 5.4).
 //! - [`wind3d`]: scene voxelisation (a DEM or any height map; a project-built castle scene)
 //!   and the 3D wind by Stable Fluids with a conjugate-gradient projection (Chapter 3, 6.3).
+//! - [`precipitation`]: the precipitation map of Chapter 4 (flakes through the mean wind,
+//!   landing on upward voxel faces, IQR outlier replacement, 11 × 11 Gaussian).
 //! - [`tables`]: the per-weather lookup tables that make the per-cell work cheap (the
 //!   saltating `u*` depends on the wind alone, the suspension integrals on `u*` alone).
 
 pub mod error;
 pub mod params;
 pub mod physics;
+pub mod precipitation;
 pub mod step;
 pub mod tables;
 pub mod terrain_wind;
