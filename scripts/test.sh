@@ -24,7 +24,8 @@ bin=target/release/snowscape
 "$bin" --quiet bench --size 256 --repeats 2 --out "$scratch/bench.json"
 "$bin" --quiet demo --size 128 --days 5 --frames 3 --out "$scratch/demo"
 test -s "$scratch/demo/report.json"
+bash scripts/browser-tests.sh 2>&1 | tee -a "$log"
 passed=$(grep -Eo '^test result: ok\. [0-9]+ passed' "$log" | awk '{s += $4} END {print s + 0}')
 failed=$(grep -Eo '[0-9]+ failed' "$log" | awk '{s += $1} END {print s + 0}')
-echo "scripts/test.sh: all checks passed (unit, integration, property, real-data, doc tests; benchmarks in test mode; bench and demo at reduced size)"
+echo "scripts/test.sh: all checks passed (unit, integration, property, real-data, doc tests; benchmarks in test mode; bench and demo at reduced size; editor browser tests)"
 echo "$passed passed, $failed failed"

@@ -19,6 +19,7 @@ Examples:
   snowscape avalanche --dem ../shared/data/dem/avaframe_avaWog/avaWog.asc \
       --release ../shared/data/dem/avaframe_avaWog/REL/relWog.shp --out out/wog
   snowscape avalanche --dem dem.tif --release 631250,5220400 --thickness 0.8
+  snowscape serve --size 512 --project proj      # the browser editor on http://127.0.0.1:8080
   snowscape bench --size 1024                     # kernel throughput and memory-bandwidth share
 
 Exit codes: 0 success, 1 the job failed, 2 bad input (usage, file or parameter).";
@@ -63,6 +64,8 @@ pub enum Command {
     Bench(BenchArgs),
     /// Run one avalanche from a release area or point to rest; write peak maps and a report.
     Avalanche(AvalancheArgs),
+    /// Start the interactive browser editor (a local web server; prints its URL).
+    Serve(ServeArgs),
 }
 
 #[derive(Debug, Args)]
@@ -273,4 +276,40 @@ impl Default for ViewArgs {
             max_size: 2048,
         }
     }
+}
+
+#[derive(Debug, Args)]
+pub struct ServeArgs {
+    /// Terrain raster (default: the procedural alpine terrain of --size and --seed).
+    #[arg(long)]
+    pub dem: Option<PathBuf>,
+    /// Cells per side of the procedural terrain (128..=4096), without --dem.
+    #[arg(long, default_value_t = 256)]
+    pub size: usize,
+    /// Random seed of the procedural terrain and the season.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Cell size of the procedural terrain, metres.
+    #[arg(long = "terrain-cell-size", default_value_t = 20.0)]
+    pub terrain_cell_size: f64,
+    /// Scenario file (TOML); default: a 100-day winter fitted to the terrain.
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// Project folder: the only place the server reads and writes (created if missing).
+    #[arg(long, default_value = "snowscape-project")]
+    pub project: PathBuf,
+    /// Port to listen on (0: any free port).
+    #[arg(long, default_value_t = 8080)]
+    pub port: u16,
+    /// Address to listen on (127.0.0.1: this machine only).
+    #[arg(long, default_value = "127.0.0.1")]
+    pub bind: std::net::IpAddr,
+    /// Folder of the built page (default: embedded in the binary, or web/ beside it).
+    #[arg(long)]
+    pub web_dir: Option<PathBuf>,
+    /// Run live avalanches and skiers as fast as they compute instead of at 25 frames/s.
+    #[arg(long)]
+    pub no_pace: bool,
+    #[command(flatten)]
+    pub dem_input: DemInputArgs,
 }

@@ -8,6 +8,7 @@ mod info;
 mod render;
 mod run;
 mod season;
+mod serve;
 
 use crate::cli::{Cli, Command};
 use crate::failure::Failure;
@@ -23,5 +24,6 @@ pub fn dispatch(cli: Cli) -> Result<(), Failure> {
         Command::Convert(a) => convert::run(a),
         Command::Bench(a) => bench::run(a, g),
         Command::Avalanche(a) => avalanche::run(a, g),
+        Command::Serve(a) => serve::run(a, g),
     }
 }

@@ -1,4 +1,5 @@
 //! Shared test set-up: a small procedural terrain and its season.
+#![allow(dead_code)] // each test crate uses some of the helpers
 
 use snowscape_editor::Session;
 use snowscape_season::scenario::Scenario;

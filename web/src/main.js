@@ -1,0 +1,260 @@
+// The snowscape editor page (Cordonnier et al. 2018, Section 3): a three.js view of the terrain
+// and its snow, brushes painted on the server, the season timeline, the weather and parameter
+// editors, live avalanches and skiers. The server owns the state; this page shows it and sends
+// the user's actions (crates/editor/src/protocol.rs lists the messages).
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { applyFrame } from './wire.js';
+import { colourOf } from './shade.js';
+import { setupPanels } from './panels.js';
+
+const $ = (id) => document.getElementById(id);
+const grids = {};
+const app = { state: null, grids, frames: 0, errors: [], messages: [], lastSkiers: null, lastAvalanche: null };
+window.snowscape = app;
+
+// ---------- connection ----------
+let ws;
+function send(msg) {
+  if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
+}
+app.send = send;
+app.sendRaw = (text) => ws.send(text);
+
+function connect() {
+  ws = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`);
+  ws.binaryType = 'arraybuffer';
+  ws.onopen = () => status('connected');
+  ws.onclose = () => { status('disconnected; reconnecting…'); setTimeout(connect, 1000); };
+  ws.onmessage = (ev) => {
+    if (typeof ev.data === 'string') onText(JSON.parse(ev.data));
+    else onFrame(ev.data);
+  };
+}
+
+function status(text) { $('status').textContent = text; }
+
+function onText(m) {
+  app.messages.push(m.type);
+  if (app.messages.length > 200) app.messages.shift();
+  switch (m.type) {
+    case 'state': onState(m); break;
+    case 'error': app.errors.push(m); status(`error (${m.code}): ${m.message}`); break;
+    case 'avalanche':
+      app.lastAvalanche = m;
+      status(`avalanche ${m.phase}: t=${m.time_s.toFixed(1)} s, ${m.flowing_m3.toFixed(0)} m³ moving` +
+        (m.phase === 'ended' ? `, ${m.deposited_m3.toFixed(0)} m³ deposited (${m.stop})` : ''));
+      if (m.phase === 'ended' && grids.flow) { grids.flow.fill(0); dirtyAll(); }
+      break;
+    case 'skiers': app.lastSkiers = m; showSkiers(m); break;
+    case 'cell': app.lastCell = m; break;
+    case 'done': onDone(m); break;
+    default: break;
+  }
+}
+
+// ---------- 3D view ----------
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+$('view').appendChild(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x9fb8d0);
+const camera = new THREE.PerspectiveCamera(45, 1, 1, 1e6);
+const controls = new OrbitControls(camera, renderer.domElement);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x445566, 0.9));
+const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+sun.position.set(-1, 1.2, -0.6);
+scene.add(sun);
+const skierGroup = new THREE.Group();
+scene.add(skierGroup);
+
+let mesh = null;
+let geo = null;
+let step = 1;
+let meshW = 0, meshH = 0;
+const dirty = new Set();
+
+function resize() {
+  const el = $('view');
+  renderer.setSize(el.clientWidth, el.clientHeight);
+  camera.aspect = el.clientWidth / Math.max(1, el.clientHeight);
+  camera.updateProjectionMatrix();
+}
+window.addEventListener('resize', resize);
+
+function buildMesh(s) {
+  if (mesh) { scene.remove(mesh); geo.dispose(); }
+  step = Math.max(1, Math.ceil(Math.max(s.width, s.height) / 384));
+  meshW = Math.ceil(s.width / step);
+  meshH = Math.ceil(s.height / step);
+  geo = new THREE.BufferGeometry();
+  const n = meshW * meshH;
+  geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
+  geo.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
+  const idx = [];
+  for (let j = 0; j < meshH - 1; j++) {
+    for (let i = 0; i < meshW - 1; i++) {
+      const a = j * meshW + i;
+      idx.push(a, a + meshW, a + 1, a + 1, a + meshW, a + meshW + 1);
+    }
+  }
+  geo.setIndex(idx);
+  mesh = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true }));
+  scene.add(mesh);
+  const cs = s.cell_size_m;
+  const ext = Math.max(s.width, s.height) * cs;
+  controls.target.set(s.width * cs / 2, meshMid(), s.height * cs / 2);
+  camera.position.set(s.width * cs / 2, meshMid() + ext * 0.8, s.height * cs * 1.4);
+  camera.far = ext * 20;
+  camera.updateProjectionMatrix();
+  controls.update();
+}
+
+function meshMid() {
+  const b = grids.bedrock;
+  if (!b) return 0;
+  let lo = Infinity, hi = -Infinity;
+  for (let i = 0; i < b.length; i += 97) { if (b[i] < lo) lo = b[i]; if (b[i] > hi) hi = b[i]; }
+  return (lo + hi) / 2;
+}
+
+function dirtyAll() { dirty.add('all'); }
+
+// Updates mesh vertices of the dirty tiles (or all).
+function refreshMesh() {
+  if (!mesh || !app.state || dirty.size === 0) return;
+  const s = app.state;
+  const cs = s.cell_size_m;
+  const pos = geo.attributes.position.array;
+  const col = geo.attributes.color.array;
+  const mode = $('shade').value;
+  const ranges = [];
+  if (dirty.has('all')) ranges.push([0, meshW - 1, 0, meshH - 1]);
+  else {
+    for (const key of dirty) {
+      const [tx, ty, tile] = key.split(',').map(Number);
+      ranges.push([Math.floor(tx * tile / step), Math.min(meshW - 1, Math.ceil(((tx + 1) * tile) / step)),
+        Math.floor(ty * tile / step), Math.min(meshH - 1, Math.ceil(((ty + 1) * tile) / step))]);
+    }
+  }
+  dirty.clear();
+  const b = grids.bedrock;
+  if (!b) return;
+  const rgb = [0, 0, 0];
+  for (const [i0, i1, j0, j1] of ranges) {
+    for (let j = j0; j <= j1; j++) {
+      const r = Math.min(s.height - 1, j * step);
+      for (let i = i0; i <= i1; i++) {
+        const c = Math.min(s.width - 1, i * step);
+        const k = r * s.width + c;
+        const v = j * meshW + i;
+        let depth = 0;
+        for (const l of ['compacted', 'stable', 'unstable', 'powder']) depth += grids[l] ? grids[l][k] : 0;
+        const flow = grids.flow ? grids.flow[k] || 0 : 0;
+        const z = Number.isFinite(b[k]) ? b[k] : 0;
+        pos[3 * v] = c * cs;
+        pos[3 * v + 1] = z + depth + flow;
+        pos[3 * v + 2] = r * cs;
+        colourOf(mode, grids, k, depth, flow, rgb);
+        col[3 * v] = rgb[0]; col[3 * v + 1] = rgb[1]; col[3 * v + 2] = rgb[2];
+      }
+    }
+  }
+  geo.attributes.position.needsUpdate = true;
+  geo.attributes.color.needsUpdate = true;
+  geo.computeVertexNormals();
+  geo.computeBoundingSphere();
+}
+
+function onFrame(buf) {
+  const f = applyFrame(buf, grids);
+  if (!f) { status('malformed frame from the server'); return; }
+  app.frames++;
+  if (f.channel === 'bedrock' && app.state) { buildMesh(app.state); dirtyAll(); return; }
+  for (const [tx, ty] of f.tiles) dirty.add(`${tx},${ty},${f.tile}`);
+}
+
+function onState(m) {
+  const first = !app.state || app.state.width !== m.width || app.state.height !== m.height;
+  app.state = m;
+  if (first && grids.bedrock) { buildMesh(m); dirtyAll(); }
+  panels.onState(m);
+}
+
+function showSkiers(m) {
+  skierGroup.clear();
+  if (!app.state || !grids.bedrock) return;
+  const s = app.state, cs = s.cell_size_m;
+  const h = (p) => {
+    const c = Math.max(0, Math.min(s.width - 1, Math.round(p[0])));
+    const r = Math.max(0, Math.min(s.height - 1, Math.round(p[1])));
+    const k = r * s.width + c;
+    let d = 0;
+    for (const l of ['compacted', 'stable', 'unstable', 'powder']) d += grids[l] ? grids[l][k] : 0;
+    return grids.bedrock[k] + d + 2;
+  };
+  for (const p of m.positions) {
+    const ball = new THREE.Mesh(new THREE.SphereGeometry(cs * 0.8), new THREE.MeshBasicMaterial({ color: 0xff2020 }));
+    ball.position.set(p[0] * cs, h(p), p[1] * cs);
+    skierGroup.add(ball);
+  }
+  if (m.track.length > 1) {
+    const pts = m.track.map((p) => new THREE.Vector3(p[0] * cs, h(p), p[1] * cs));
+    skierGroup.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(pts), new THREE.LineBasicMaterial({ color: 0x202020 })));
+  }
+}
+
+// ---------- picking and tools ----------
+const ray = new THREE.Raycaster();
+function pick(ev) {
+  if (!mesh || !app.state) return null;
+  const rect = renderer.domElement.getBoundingClientRect();
+  const p = new THREE.Vector2(((ev.clientX - rect.left) / rect.width) * 2 - 1, -((ev.clientY - rect.top) / rect.height) * 2 + 1);
+  ray.setFromCamera(p, camera);
+  const hit = ray.intersectObject(mesh)[0];
+  if (!hit) return null;
+  const cs = app.state.cell_size_m;
+  return { col: hit.point.x / cs, row: hit.point.z / cs };
+}
+app.pickAt = (x, y) => pick({ clientX: x, clientY: y });
+
+let stroke = 1;
+let painting = false;
+let pending = null;
+function dab(at) {
+  send({
+    type: 'brush', stroke, op: $('op').value, target: $('target').value, col: at.col, row: at.row,
+    radius_m: Number($('radius').value), strength: Number($('strength').value), value: Number($('value').value),
+  });
+}
+renderer.domElement.addEventListener('pointerdown', (ev) => {
+  const tool = $('tool').value;
+  if (tool === 'orbit') return;
+  const at = pick(ev);
+  if (!at) return;
+  if (tool === 'brush') { painting = true; stroke++; dab(at); }
+  if (tool === 'avalanche') send({ type: 'trigger_avalanche', col: at.col, row: at.row });
+  if (tool === 'skier') send({ type: 'launch_skier', col: at.col, row: at.row });
+});
+renderer.domElement.addEventListener('pointermove', (ev) => { if (painting) pending = ev; });
+window.addEventListener('pointerup', () => { painting = false; pending = null; });
+$('tool').addEventListener('change', () => { controls.enabled = $('tool').value === 'orbit'; });
+$('shade').addEventListener('change', dirtyAll);
+
+const panels = setupPanels(app, send);
+
+function onDone(m) {
+  status(`${m.what} ${m.name}`);
+  if (m.what === 'exported') panels.showFiles(m.files);
+}
+
+function loop() {
+  if (painting && pending) { const at = pick(pending); pending = null; if (at) dab(at); }
+  refreshMesh();
+  controls.update();
+  renderer.render(scene, camera);
+  requestAnimationFrame(loop);
+}
+resize();
+connect();
+loop();

@@ -1,0 +1,170 @@
+// End-to-end tests of the editor page in headless Chromium (Debian's `chromium`), driven by
+// playwright-core. Needs a running `snowscape serve`; SNOWSCAPE_URL says where.
+// Checks: the page draws a non-blank terrain, a brush stroke raises the snow depth where it
+// was applied (read back from the server), a triggered avalanche moves snow downhill, the
+// timeline steps a day, a second tab sees the same state, and malformed messages get error
+// replies without breaking the session. Writes screenshots to SNOWSCAPE_SHOTS (default /tmp).
+import { chromium } from 'playwright-core';
+import assert from 'node:assert/strict';
+
+const url = process.env.SNOWSCAPE_URL;
+if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
+const shots = process.env.SNOWSCAPE_SHOTS || '/tmp';
+const base = url.replace(/\/$/, '');
+const cell = async (c, r) => (await fetch(`${base}/api/cell?col=${c}&row=${r}`)).json();
+const results = [];
+async function check(name, fn) {
+  const t = Date.now();
+  try { await fn(); results.push([name, 'ok', Date.now() - t]); console.log(`ok   ${name} (${Date.now() - t} ms)`); }
+  catch (e) { results.push([name, 'FAILED', e]); console.log(`FAIL ${name}: ${e.stack || e}`); }
+}
+
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+});
+const context = await browser.newContext({ viewport: { width: 1200, height: 800 } });
+const page = await context.newPage();
+page.on('pageerror', (e) => console.log('page error:', e.message));
+
+// Canvas statistics read back from WebGL (preserveDrawingBuffer): distinct colours and spread.
+const canvasStats = () => page.evaluate(() => {
+  const src = document.querySelector('#view canvas');
+  const c = document.createElement('canvas');
+  c.width = 200; c.height = 150;
+  const g = c.getContext('2d');
+  g.drawImage(src, 0, 0, 200, 150);
+  const d = g.getImageData(0, 0, 200, 150).data;
+  const colours = new Set();
+  let white = 0;
+  for (let i = 0; i < d.length; i += 4) {
+    colours.add((d[i] >> 3) << 10 | (d[i + 1] >> 3) << 5 | (d[i + 2] >> 3));
+    if (d[i] > 220 && d[i + 1] > 220 && d[i + 2] > 220) white++;
+  }
+  return { colours: colours.size, white };
+});
+
+await check('page loads and draws a non-blank terrain', async () => {
+  const t0 = Date.now();
+  await page.goto(url);
+  await page.waitForFunction(() => window.snowscape && window.snowscape.state && window.snowscape.frames >= 10, null, { timeout: 60000 });
+  await page.waitForTimeout(1500);
+  console.log(`     page load to first full state: ${Date.now() - t0} ms`);
+  await page.screenshot({ path: `${shots}/editor_start.png` });
+  const s = await canvasStats();
+  assert.ok(s.colours > 50, `only ${s.colours} colours on the canvas`);
+});
+
+let brushCell;
+await check('a brush stroke raises the snow depth where it was applied (server state)', async () => {
+  await page.selectOption('#tool', 'brush');
+  await page.selectOption('#op', 'add');
+  await page.selectOption('#target', 'all');
+  await page.fill('#strength', '1.5');
+  await page.fill('#radius', '200');
+  const box = await page.locator('#view canvas').boundingBox();
+  const x = box.x + box.width / 2, y = box.y + box.height / 2;
+  brushCell = await page.evaluate(([x, y]) => window.snowscape.pickAt(x, y), [x, y]);
+  assert.ok(brushCell, 'the view centre hits the terrain');
+  const c = Math.round(brushCell.col), r = Math.round(brushCell.row);
+  const before = (await cell(c, r)).depth;
+  await page.mouse.move(x, y);
+  await page.mouse.down();
+  await page.mouse.move(x + 3, y + 2, { steps: 3 });
+  await page.mouse.up();
+  let after = before;
+  for (let k = 0; k < 50 && after <= before + 1; k++) { await page.waitForTimeout(100); after = (await cell(c, r)).depth; }
+  assert.ok(after > before + 1, `depth at (${c}, ${r}) went ${before} -> ${after}`);
+  await page.waitForTimeout(500);
+  await page.screenshot({ path: `${shots}/editor_brush.png` });
+});
+
+await check('a second tab sees the same state', async () => {
+  const p2 = await context.newPage();
+  await p2.goto(url);
+  await p2.waitForFunction(() => window.snowscape && window.snowscape.state && window.snowscape.frames >= 10, null, { timeout: 60000 });
+  const [a, b] = await Promise.all([page, p2].map((p) => p.evaluate(() => {
+    const s = window.snowscape.state;
+    const g = window.snowscape.grids;
+    let d = 0;
+    for (const l of ['compacted', 'stable', 'unstable', 'powder']) for (let i = 0; i < g[l].length; i++) d += g[l][i];
+    return { undo: s.undo, day: s.day, depthSum: Math.round(d) };
+  })));
+  assert.deepEqual(a, b);
+  assert.equal(a.undo, 1);
+  await p2.close();
+});
+
+await check('a triggered avalanche moves snow downhill', async () => {
+  // The steepest cell of the bedrock, loaded with unstable snow through brush messages.
+  const site = await page.evaluate(() => {
+    const { state: s, grids: g } = window.snowscape;
+    let best = [0, 0, 0];
+    for (let r = 8; r < s.height - 8; r++) for (let c = 8; c < s.width - 8; c++) {
+      const i = r * s.width + c;
+      const dz = Math.abs(g.bedrock[i + 1] - g.bedrock[i - 1]) + Math.abs(g.bedrock[i + s.width] - g.bedrock[i - s.width]);
+      if (dz > best[0]) best = [dz, c, r];
+    }
+    return { col: best[1], row: best[2] };
+  });
+  await page.evaluate((p) => window.snowscape.send({ type: 'brush', stroke: 9000, op: 'add', target: 'unstable', col: p.col, row: p.row, radius_m: 150, strength: 2, value: 0 }), site);
+  await page.waitForTimeout(500);
+  const meanAlt = () => page.evaluate(() => {
+    const g = window.snowscape.grids;
+    let a = 0, m = 0;
+    for (let i = 0; i < g.bedrock.length; i++) {
+      const d = g.compacted[i] + g.stable[i] + g.unstable[i] + g.powder[i];
+      a += d * g.bedrock[i]; m += d;
+    }
+    return a / m;
+  });
+  const before = await meanAlt();
+  await page.selectOption('#tool', 'avalanche');
+  await page.evaluate((p) => window.snowscape.send({ type: 'trigger_avalanche', col: p.col, row: p.row }), site);
+  await page.waitForFunction(() => window.snowscape.lastAvalanche && window.snowscape.lastAvalanche.phase === 'running', null, { timeout: 20000 });
+  await page.screenshot({ path: `${shots}/editor_avalanche.png` });
+  await page.waitForFunction(() => window.snowscape.lastAvalanche && window.snowscape.lastAvalanche.phase === 'ended', null, { timeout: 120000 });
+  await page.waitForTimeout(500);
+  const after = await meanAlt();
+  const av = await page.evaluate(() => window.snowscape.lastAvalanche);
+  assert.ok(av.records > 5, `${av.records} flow frames`);
+  assert.ok(after < before - 0.5, `snow mean altitude ${before} -> ${after}`);
+  console.log(`     avalanche: ${av.records} frames, ${av.released_m3.toFixed(0)} m³ released, ${av.time_s.toFixed(1)} s simulated`);
+});
+
+await check('the timeline steps a day', async () => {
+  const d0 = await page.evaluate(() => window.snowscape.state.day);
+  await page.click('#step');
+  await page.waitForFunction((d0) => window.snowscape.state.day >= d0 + 0.99, d0, { timeout: 120000 });
+  const s = await page.evaluate(() => window.snowscape.state);
+  assert.equal(s.snapshots.length, 2);
+  const srv = await (await fetch(`${base}/api/state`)).json();
+  assert.equal(srv.day, s.day);
+  await page.screenshot({ path: `${shots}/editor_day1.png` });
+});
+
+await check('malformed messages get error replies and the session goes on', async () => {
+  const n0 = await page.evaluate(() => window.snowscape.errors.length);
+  await page.evaluate(() => {
+    const a = window.snowscape;
+    a.sendRaw('not json');
+    a.sendRaw('{"type":"brush","col":"x"}');
+    a.sendRaw('{"type":"step","days":1e400}');
+    a.sendRaw('{"type":"save","name":"../../etc"}');
+    a.sendRaw(JSON.stringify({ type: 'seek', index: 1, extra: 1 }));
+    a.sendRaw('x'.repeat(70000));
+  });
+  await page.waitForFunction((n0) => window.snowscape.errors.length >= n0 + 6, n0, { timeout: 10000 });
+  const codes = await page.evaluate((n0) => window.snowscape.errors.slice(n0).map((e) => e.code), n0);
+  assert.ok(codes.includes('malformed') && codes.includes('too_large') && codes.includes('invalid_value'), codes.join(','));
+  await page.evaluate((c) => window.snowscape.send({ type: 'probe', col: c.col, row: c.row }), { col: Math.round(brushCell.col), row: Math.round(brushCell.row) });
+  await page.waitForFunction(() => window.snowscape.lastCell, null, { timeout: 10000 });
+  const open = await page.evaluate(() => window.snowscape.messages.includes('cell'));
+  assert.ok(open, 'the session still answers');
+});
+
+await browser.close();
+const failed = results.filter((r) => r[1] !== 'ok');
+console.log(`browser tests: ${results.length - failed.length} passed, ${failed.length} failed`);
+process.exit(failed.length ? 1 : 0);
