@@ -164,6 +164,23 @@ await check('malformed messages get error replies and the session goes on', asyn
   assert.ok(open, 'the session still answers');
 });
 
+await check('save and export from the page; exported files download', async () => {
+  await page.fill('#name', 'e2e');
+  await page.click('#save');
+  await page.waitForFunction(() => window.snowscape.messages.includes('done'), null, { timeout: 60000 });
+  await page.click('#export');
+  await page.waitForSelector('#files a', { timeout: 120000 });
+  const links = await page.$$eval('#files a', (as) => as.map((a) => a.getAttribute('href')));
+  for (const f of ['depth.tif', 'layers.exr', 'splat.png', 'terrain.glb', 'preview.png']) {
+    assert.ok(links.some((l) => l.endsWith(`/${f}`)), `${f} missing from ${links.join(', ')}`);
+  }
+  const glb = await fetch(base + links.find((l) => l.endsWith('terrain.glb')));
+  assert.equal(glb.status, 200);
+  assert.equal(Buffer.from(await glb.arrayBuffer()).subarray(0, 4).toString(), 'glTF');
+  const escape = await fetch(`${base}/files/..%2F..%2Fetc%2Fpasswd`);
+  assert.notEqual(escape.status, 200);
+});
+
 await browser.close();
 const failed = results.filter((r) => r[1] !== 'ok');
 console.log(`browser tests: ${results.length - failed.length} passed, ${failed.length} failed`);
