@@ -7,9 +7,14 @@
 //! The wind benchmark times one Stable Fluids iteration (Chapter 3) on an `n³` voxel grid,
 //! `n` = `SNOWSCAPE_WIND_BENCH_SIZE` (default 24; the target is 128³ ≤ 300 ms, the
 //! thesis: 1.8 s), over the castle scene, after a few warm-up iterations.
+//!
+//! The flake benchmark builds a precipitation map (Chapter 4) from `SNOWSCAPE_FLAKES` flakes
+//! (default 20 000; the target is 1 M flakes ≤ 3 s, the thesis: 90 s) through the
+//! mean wind of the castle scene on a 48 × 48 × 24 grid.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use snowscape_terrain::GridGeometry;
+use snowscape_transport::precipitation::{FlakeParams, precipitation_map};
 use snowscape_transport::step::{SceneMaps, SnowState, StepScratch, step};
 use snowscape_transport::terrain_wind::modify_wind;
 use snowscape_transport::wind3d::voxel::{VoxelGrid, castle_heights};
@@ -87,5 +92,34 @@ fn wind(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, transport, wind);
+fn flakes(c: &mut Criterion) {
+    let count: usize = std::env::var("SNOWSCAPE_FLAKES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20_000);
+    let (n, cell) = (48, 850.0 / 48.0);
+    let g = GridGeometry::square(n, n, cell).unwrap();
+    let z = castle_heights(n, cell);
+    let vox = VoxelGrid::from_heights(&g, &z, cell, 24, -cell).unwrap();
+    let mut solver = WindSolver::new(vox.clone(), WindParams::default()).unwrap();
+    for _ in 0..5 {
+        solver.iterate();
+    }
+    let wind = solver.mean_velocity();
+    let params = FlakeParams {
+        count,
+        ..Default::default()
+    };
+    let map = precipitation_map(&vox, &wind, &params).unwrap();
+    eprintln!("flakes: {} landed, {} lost", map.landed, map.lost);
+    let mut group = c.benchmark_group("flakes");
+    group.throughput(Throughput::Elements(count as u64));
+    group.sample_size(10);
+    group.bench_function(format!("map_{count}"), |b| {
+        b.iter(|| black_box(precipitation_map(&vox, &wind, &params).unwrap()))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, transport, wind, flakes);
 criterion_main!(benches);

@@ -12,9 +12,12 @@
 //! 4.5-4.7 with the drag taken implicitly in `v` (`|v_rel|` lagged), stable for any `Δt`,
 //! with `Δt` one voxel of travel.
 //!
-//! **Launch window** (Fig. 6.5): flakes start at random, uniformly, on the plane at the top
-//! of the voxel grid, within the rectangle from which the slowest and fastest horizontal
-//! mean winds can carry a flake onto the domain during its fall.
+//! **Launch window** (Fig. 6.5): flakes start at random, uniformly, on a plane at height
+//! `h` (the user's parameter: here a clearance above the highest surface), within the
+//! rectangle from which the slowest and fastest horizontal mean winds can carry a flake
+//! onto the domain during its fall. The extreme winds are taken over the voxels above the
+//! highest surface, the free flow the flakes cross (the sheltered calm near the ground
+//! would widen the window without sending any flake in).
 //!
 //! **Collisions** (4.3): entering a solid voxel through its top (the voxel above is free)
 //! lands the flake on that column; entering through a side, the flake slides: the velocity
@@ -58,6 +61,9 @@ pub struct FlakeParams {
     pub drag_coefficient: f64,
     /// Air density `ρa`, kg m⁻³ (4.2-4.3). Section 4.2: 1.225.
     pub air_density: f64,
+    /// Height of the launch plane above the highest surface of the scene, m (Section 6.4:
+    /// "une hauteur h laissée en paramètre"). Chosen here: 50 m; capped at the grid's top.
+    pub launch_clearance_m: f64,
     /// Most steps of one flake before it is abandoned.
     pub max_steps: usize,
 }
@@ -71,6 +77,7 @@ impl Default for FlakeParams {
             flake_density: 22.0,
             drag_coefficient: 0.47,
             air_density: 1.225,
+            launch_clearance_m: 50.0,
             max_steps: 100_000,
         }
     }
@@ -84,6 +91,7 @@ impl FlakeParams {
         check_positive("flake_density", self.flake_density)?;
         check_positive("drag_coefficient", self.drag_coefficient)?;
         check_positive("air_density", self.air_density)?;
+        check_positive("launch_clearance_m", self.launch_clearance_m)?;
         check_range("max_steps", self.max_steps as f64, 1.0, 1e9)?;
         Ok(())
     }
@@ -247,18 +255,29 @@ pub fn precipitation_map(
     centred.update(wind);
     let k = params.drag_constant();
     let vt = params.terminal_speed();
-    // Launch window (Fig. 6.5) from the extreme horizontal winds.
+    // Launch plane and window (Fig. 6.5) from the extreme free-flow horizontal winds.
+    let highest = grid
+        .column_top
+        .iter()
+        .fold(f32::NEG_INFINITY, |m, &t| m.max(t));
+    let highest_layer = ((f64::from(highest) - grid.base) / grid.cell)
+        .ceil()
+        .max(0.0) as usize;
+    let top = ((f64::from(highest) - grid.base + params.launch_clearance_m) / grid.cell)
+        .min(grid.nz as f64 - 0.5);
     let (mut wmin, mut wmax) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for (c, s) in centred.data.iter().zip(&grid.solid) {
-        if !s {
-            for a in 0..2 {
-                wmin[a] = wmin[a].min(f64::from(c[a]));
-                wmax[a] = wmax[a].max(f64::from(c[a]));
-            }
+    let slice = grid.nx * grid.ny;
+    for c in centred
+        .data
+        .iter()
+        .skip(highest_layer.min(grid.nz - 1) * slice)
+    {
+        for a in 0..2 {
+            wmin[a] = wmin[a].min(f64::from(c[a]));
+            wmax[a] = wmax[a].max(f64::from(c[a]));
         }
     }
     let lowest = grid.column_top.iter().fold(f32::INFINITY, |m, &t| m.min(t));
-    let top = grid.nz as f64 - 0.5;
     let fall_time = (top - ((f64::from(lowest) - grid.base) / grid.cell).max(0.0)) * grid.cell / vt;
     let extent = [grid.nx as f64, grid.ny as f64];
     let mut lo = [f64::INFINITY; 2];
