@@ -49,6 +49,9 @@ pub enum TransportError {
         /// The value.
         value: f64,
     },
+    /// A scene grid the terrain model rejects (its message names the value).
+    #[error("invalid scene grid: {0}")]
+    Scene(String),
     /// A weather timeline that is empty or not sorted by start time.
     #[error("invalid weather timeline: {reason} (period {index}, from_hour = {from_hour})")]
     Timeline {

@@ -14,6 +14,7 @@
 //!   and the 3D wind by Stable Fluids with a conjugate-gradient projection (Chapter 3, 6.3).
 //! - [`precipitation`]: the precipitation map of Chapter 4 (flakes through the mean wind,
 //!   landing on upward voxel faces, IQR outlier replacement, 11 × 11 Gaussian).
+//! - [`scenario`]: scenario files (Tables 6.I, 7.I) and the run driver of the pipeline.
 //! - [`tables`]: the per-weather lookup tables that make the per-cell work cheap (the
 //!   saltating `u*` depends on the wind alone, the suspension integrals on `u*` alone).
 
@@ -21,6 +22,7 @@ pub mod error;
 pub mod params;
 pub mod physics;
 pub mod precipitation;
+pub mod scenario;
 pub mod step;
 pub mod tables;
 pub mod terrain_wind;

@@ -1,0 +1,58 @@
+use super::*;
+
+const CASTLE: &str = include_str!("../../scenarios/castle.toml");
+const VALLEY: &str = include_str!("../../scenarios/valley.toml");
+
+#[test]
+fn shipped_scenarios_parse_and_validate() {
+    for text in [CASTLE, VALLEY] {
+        let s = Scenario::from_toml(text).unwrap();
+        s.validate().unwrap();
+        assert_eq!(s.duration_h, 36.0);
+        assert_eq!(s.weather.len(), 2);
+        assert_eq!(s.transport.melt_factor_mm_per_degc_day, 3.2);
+    }
+    let castle = Scenario::from_toml(CASTLE).unwrap();
+    assert!(matches!(castle.scene, SceneSpec::Castle { size_m, .. } if size_m == 850.0));
+}
+
+#[test]
+fn unknown_keys_name_themselves() {
+    let err = Scenario::from_toml("duration_hours = 3.0").unwrap_err();
+    assert!(err.to_string().contains("duration_hours"), "{err}");
+    let err =
+        Scenario::from_toml("[scene]\nkind = \"castle\"\nsize_m = 1.0\ncell = 1.0").unwrap_err();
+    assert!(err.to_string().contains("cell"), "{err}");
+}
+
+/// The castle scenario at a coarse resolution, shortened: every stage runs and the mass
+/// budget closes.
+#[test]
+fn a_small_castle_run_closes_its_budget() {
+    let mut s = Scenario::from_toml(CASTLE).unwrap();
+    s.scene = SceneSpec::Castle {
+        size_m: 850.0,
+        cell_m: 10.0,
+    };
+    s.voxel_size_m = 17.0;
+    s.voxel_layers = 12;
+    s.wind_iterations = 4;
+    s.flakes.count = 40_000;
+    s.duration_h = 14.0; // 12 h of snowfall, 2 warm hours
+    s.transport.time_step_s = 1800.0;
+    let (g, z) = s.build_scene().unwrap().unwrap();
+    let out = run(&s, &g, &z).unwrap();
+    assert_eq!(out.steps, 28);
+    let b = out.budget;
+    assert!(b.precipitation_in > 0.0 && b.melt_out > 0.0);
+    let scale = b.precipitation_in + b.transported;
+    assert!(b.closure_error.abs() < 1e-5 * scale, "{b:?}");
+    assert!(out.state.swe.iter().all(|m| m.is_finite() && *m >= 0.0));
+    assert!(out.wind_report.relative_divergence < 1e-5);
+    assert!(out.flakes_landed > 0);
+    // 7.5 mm/h water equivalent for 12 h is 90 kg/m² on average, less what melted and blew
+    // away in the warm hours.
+    let area = g.cell_area() * g.len() as f64;
+    let mean_swe = b.final_mass / area;
+    assert!(mean_swe > 60.0 && mean_swe < 91.0, "{mean_swe}");
+}
