@@ -15,9 +15,11 @@
 //! **Launch window** (Fig. 6.5): flakes start at random, uniformly, on a plane at height
 //! `h` (the user's parameter: here a clearance above the highest surface), within the
 //! rectangle from which the slowest and fastest horizontal mean winds can carry a flake
-//! onto the domain during its fall. The extreme winds are taken over the voxels above the
-//! highest surface, the free flow the flakes cross (the sheltered calm near the ground
-//! would widen the window without sending any flake in).
+//! onto the domain during its fall, the extreme winds taken over the fluid voxels below the
+//! launch plane, and the fall slowed by the strongest updraft (at most to a quarter). That
+//! window is conservative; a pilot batch of flakes (2 % of them, 5000 to 50 000) launched
+//! over it finds the box their landing flakes start from, and the flakes proper are
+//! launched over that box widened by a quarter of its size and 4 voxels.
 //!
 //! **Collisions** (4.3): entering a solid voxel through its top (the voxel above is free)
 //! lands the flake on that column; entering through a side, the flake slides: the velocity
@@ -255,28 +257,27 @@ pub fn precipitation_map(
     centred.update(wind);
     let k = params.drag_constant();
     let vt = params.terminal_speed();
-    // Launch plane and window (Fig. 6.5) from the extreme free-flow horizontal winds.
+    // Launch plane and window (Fig. 6.5) from the extreme horizontal winds below it.
     let highest = grid
         .column_top
         .iter()
         .fold(f32::NEG_INFINITY, |m, &t| m.max(t));
-    let highest_layer = ((f64::from(highest) - grid.base) / grid.cell)
-        .ceil()
-        .max(0.0) as usize;
     let top = ((f64::from(highest) - grid.base + params.launch_clearance_m) / grid.cell)
         .min(grid.nz as f64 - 0.5);
     let (mut wmin, mut wmax) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    let slice = grid.nx * grid.ny;
-    for c in centred
-        .data
-        .iter()
-        .skip(highest_layer.min(grid.nz - 1) * slice)
-    {
-        for a in 0..2 {
-            wmin[a] = wmin[a].min(f64::from(c[a]));
-            wmax[a] = wmax[a].max(f64::from(c[a]));
+    let mut updraft = 0.0f64;
+    let below = (top.ceil() as usize).min(grid.nz) * grid.nx * grid.ny;
+    for (c, s) in centred.data.iter().zip(&grid.solid).take(below) {
+        if !s {
+            for a in 0..2 {
+                wmin[a] = wmin[a].min(f64::from(c[a]));
+                wmax[a] = wmax[a].max(f64::from(c[a]));
+            }
+            updraft = updraft.max(f64::from(c[2]));
         }
     }
+    // Updrafts slow the fall: size the window for the slowest one.
+    let vt = (vt - updraft).max(0.25 * vt);
     let lowest = grid.column_top.iter().fold(f32::INFINITY, |m, &t| m.min(t));
     let fall_time = (top - ((f64::from(lowest) - grid.base) / grid.cell).max(0.0)) * grid.cell / vt;
     let extent = [grid.nx as f64, grid.ny as f64];
@@ -295,27 +296,35 @@ pub fn precipitation_map(
     let layers: Vec<u32> = (0..columns)
         .map(|c| grid.ground_layers(c % grid.nx, c / grid.nx) as u32)
         .collect();
-    const CHUNK: usize = 4096;
-    let chunks = params.count.div_ceil(CHUNK);
-    let partial: Vec<(Vec<u32>, u64)> = (0..chunks)
-        .into_par_iter()
-        .map(|c| {
-            let mut counts = vec![0u32; columns];
-            let mut lost = 0u64;
-            for n in c * CHUNK..((c + 1) * CHUNK).min(params.count) {
-                let start = [
-                    lo[0] + (hi[0] - lo[0]) * uniform(params.seed, 2 * n as u64, 0),
-                    lo[1] + (hi[1] - lo[1]) * uniform(params.seed, 2 * n as u64 + 1, 0),
-                    top,
-                ];
-                match fly(grid, &centred, &layers, params, start, k) {
-                    Fate::Landed(col) => counts[col] += 1,
-                    Fate::Lost => lost += 1,
+    // Pilot flakes over the conservative window find where landing flakes start; the
+    // flakes proper are launched over that box, widened by a quarter and a margin.
+    let pilot = (params.count / 50).clamp(5000, 50_000);
+    let (plo, phi) = pilot_window(grid, &centred, &layers, params, k, top, lo, hi, pilot);
+    let (lo, hi) = (plo, phi);
+    let fly_range = |first: u64, count: usize, stream: u64| -> Vec<(Vec<u32>, u64)> {
+        const CHUNK: usize = 4096;
+        (0..count.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut counts = vec![0u32; columns];
+                let mut lost = 0u64;
+                for n in c * CHUNK..((c + 1) * CHUNK).min(count) {
+                    let key = first + 2 * n as u64;
+                    let start = [
+                        lo[0] + (hi[0] - lo[0]) * uniform(params.seed, key, stream),
+                        lo[1] + (hi[1] - lo[1]) * uniform(params.seed, key + 1, stream),
+                        top,
+                    ];
+                    match fly(grid, &centred, &layers, params, start, k) {
+                        Fate::Landed(col) => counts[col] += 1,
+                        Fate::Lost => lost += 1,
+                    }
                 }
-            }
-            (counts, lost)
-        })
-        .collect();
+                (counts, lost)
+            })
+            .collect()
+    };
+    let partial = fly_range(0, params.count, 0);
     let mut counts = vec![0u32; columns];
     let mut lost = 0u64;
     for (c, l) in &partial {
@@ -350,6 +359,55 @@ pub fn precipitation_map(
         lost,
         outliers,
     })
+}
+
+/// The launch box of the pilot flakes that landed, widened by a quarter of its size and
+/// [`WINDOW_MARGIN`], within the conservative window `lo..hi`; the whole window if none
+/// landed.
+#[allow(clippy::too_many_arguments)]
+fn pilot_window(
+    grid: &VoxelGrid,
+    centred: &Centred,
+    layers: &[u32],
+    params: &FlakeParams,
+    k: f64,
+    top: f64,
+    lo: [f64; 2],
+    hi: [f64; 2],
+    count: usize,
+) -> ([f64; 2], [f64; 2]) {
+    let starts: Vec<Option<[f64; 2]>> = (0..count)
+        .into_par_iter()
+        .map(|n| {
+            let start = [
+                lo[0] + (hi[0] - lo[0]) * uniform(params.seed, 2 * n as u64, 1),
+                lo[1] + (hi[1] - lo[1]) * uniform(params.seed, 2 * n as u64 + 1, 1),
+                top,
+            ];
+            match fly(grid, centred, layers, params, start, k) {
+                Fate::Landed(_) => Some([start[0], start[1]]),
+                Fate::Lost => None,
+            }
+        })
+        .collect();
+    let mut blo = [f64::INFINITY; 2];
+    let mut bhi = [f64::NEG_INFINITY; 2];
+    for s in starts.iter().flatten() {
+        for a in 0..2 {
+            blo[a] = blo[a].min(s[a]);
+            bhi[a] = bhi[a].max(s[a]);
+        }
+    }
+    if blo[0] > bhi[0] {
+        return (lo, hi);
+    }
+    let mut out = (lo, hi);
+    for a in 0..2 {
+        let pad = 0.25 * (bhi[a] - blo[a]) + WINDOW_MARGIN;
+        out.0[a] = (blo[a] - pad).max(lo[a]);
+        out.1[a] = (bhi[a] + pad).min(hi[a]);
+    }
+    out
 }
 
 /// Quartile `q` of `values` (nearest rank).

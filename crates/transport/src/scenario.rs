@@ -180,6 +180,10 @@ pub struct RunOutputs {
     pub wind_report: IterationReport,
     /// Flakes that landed on the domain.
     pub flakes_landed: u64,
+    /// Whether the snowfall fell back to uniform because fewer flakes landed than there
+    /// are voxel columns (a map that noisy carries no information: on coarse grids of
+    /// large scenes, flakes released above the terrain drift for kilometres).
+    pub precipitation_fallback: bool,
     /// Transport steps taken.
     pub steps: usize,
 }
@@ -224,19 +228,24 @@ pub fn run(
     let u0 = to_transport(column_geometry.clone(), cu, geometry);
     let v0 = to_transport(column_geometry.clone(), cv, geometry);
     let (wind_u, wind_v) = modify_wind(&scenario.transport, geometry, heights, &u0, &v0)?;
-    let (precipitation_ratio, flakes_landed) = if scenario.uniform_precipitation {
-        (vec![1.0; geometry.len()], 0)
-    } else {
-        let map = precipitation_map(&voxels, &solver.mean_velocity(), &scenario.flakes)?;
-        let mut ratio = to_transport(column_geometry, map.ratio, geometry);
-        let mean = ratio.iter().map(|&r| f64::from(r)).sum::<f64>() / ratio.len() as f64;
-        if mean > 0.0 {
-            ratio
-                .iter_mut()
-                .for_each(|r| *r = (f64::from(*r) / mean) as f32);
-        }
-        (ratio, map.landed)
-    };
+    let (precipitation_ratio, flakes_landed, precipitation_fallback) =
+        if scenario.uniform_precipitation {
+            (vec![1.0; geometry.len()], 0, false)
+        } else {
+            let map = precipitation_map(&voxels, &solver.mean_velocity(), &scenario.flakes)?;
+            if map.landed < (map.width * map.height) as u64 {
+                (vec![1.0; geometry.len()], map.landed, true)
+            } else {
+                let mut ratio = to_transport(column_geometry, map.ratio, geometry);
+                let mean = ratio.iter().map(|&r| f64::from(r)).sum::<f64>() / ratio.len() as f64;
+                if mean > 0.0 {
+                    ratio
+                        .iter_mut()
+                        .for_each(|r| *r = (f64::from(*r) / mean) as f32);
+                }
+                (ratio, map.landed, false)
+            }
+        };
     let mut state = SnowState::uniform(
         geometry,
         scenario.initial_depth_m as f32,
@@ -309,6 +318,7 @@ pub fn run(
         q_subl: scratch.q_subl.clone(),
         wind_report,
         flakes_landed,
+        precipitation_fallback,
         steps,
     })
 }
