@@ -18,6 +18,7 @@ use crate::params::{Timeline, TransportParams, Weather};
 use crate::precipitation::{FlakeParams, precipitation_map};
 use crate::step::{MassBudget, SceneMaps, SnowState, StepScratch, step};
 use crate::terrain_wind::{check_len, modify_wind};
+use crate::wind3d::field::Velocity;
 use crate::wind3d::voxel::{VoxelGrid, castle_heights};
 use crate::wind3d::{IterationReport, WindParams, WindSolver};
 use serde::{Deserialize, Serialize};
@@ -178,6 +179,10 @@ pub struct RunOutputs {
     pub q_subl: Vec<f32>,
     /// The last wind iteration's report.
     pub wind_report: IterationReport,
+    /// The voxel grid of the wind.
+    pub voxels: VoxelGrid,
+    /// The mean 3D wind (Section 6.3).
+    pub mean_wind: Velocity,
     /// Flakes that landed on the domain.
     pub flakes_landed: u64,
     /// Whether the snowfall fell back to uniform because fewer flakes landed than there
@@ -317,6 +322,8 @@ pub fn run(
         q_susp: scratch.q_susp.clone(),
         q_subl: scratch.q_subl.clone(),
         wind_report,
+        mean_wind: solver.mean_velocity(),
+        voxels,
         flakes_landed,
         precipitation_fallback,
         steps,

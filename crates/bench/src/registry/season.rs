@@ -9,6 +9,7 @@ use snowscape_environment::{EnvironmentParams, precompute};
 use snowscape_season::melt::{self, MeltParams};
 use snowscape_season::powder_diffusion::{self, DiffusionParams, DiffusionScratch};
 use snowscape_season::scenario::Scenario;
+use snowscape_season::scheduler::EventKind;
 use snowscape_season::snowfall::{self, SnowfallParams, SnowfallScratch};
 use snowscape_season::stability::{self, StabilityParams, StabilityScratch};
 use snowscape_season::wind_transport::{self, WindMaps, WindScratch, WindTransportParams};
@@ -41,9 +42,11 @@ fn snowy(terrain: &Grid) -> LayeredTerrain {
 ///   (temperature, 4 layers read+written, surface), `season/powder_diffusion` 36 (5 layers
 ///   read, surface write+read, powder read+written, scale), `season/wind_transport` 72 (4 wind
 ///   maps, 5 layers, two flux maps written and read, powder and unstable written);
-/// - `season/100_days`: the event loop of a 100-day winter (environment precomputed once,
-///   outside the timing); cells = grid cells × events, 45 B per cell-event (the mean of the
-///   steps above).
+/// - `season/100_days`: the event loop of a 100-day winter without avalanches (environment
+///   precomputed once, outside the timing); cells = grid cells × grid-wide events, 45 B per
+///   cell-event (the mean of the steps above);
+/// - `season/100_days_with_avalanches`: the default winter, natural avalanches included (each
+///   run to rest); cells = grid cells × days, no bandwidth model.
 pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
     let cells = terrain.data().len();
     let base = snowy(terrain);
@@ -146,18 +149,44 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
             },
         ));
     }
+    // The grid event loop alone (no avalanches): cells × grid-wide events.
+    let mut calm = Scenario {
+        days: SEASON_DAYS,
+        ..Scenario::default()
+    };
+    calm.parameters.avalanche.natural = false;
+    let start = Winter::new(calm, LayeredTerrain::from_bedrock(terrain.clone()))?;
+    let mut probe = start.clone();
+    probe.run_until(SEASON_DAYS)?;
+    let events: u64 = probe
+        .event_counts()
+        .iter()
+        .filter(|(k, _)| !matches!(k, EventKind::AvalancheStep | EventKind::SkierStep))
+        .map(|(_, n)| n)
+        .sum();
+    kernels.push(Kernel::new(
+        "season/100_days",
+        cells * events as usize,
+        45.0,
+        move || {
+            let mut w = start.clone();
+            w.run_until(SEASON_DAYS)?;
+            black_box(w.budget());
+            Ok(())
+        },
+    ));
+    // The default winter with its natural avalanches, each run to rest: cells × days
+    // (cell-days; the avalanche cost follows their footprints, not the grid, so no bandwidth
+    // model).
     let scenario = Scenario {
         days: SEASON_DAYS,
         ..Scenario::default()
     };
     let start = Winter::new(scenario, LayeredTerrain::from_bedrock(terrain.clone()))?;
-    let mut probe = start.clone();
-    probe.run_until(SEASON_DAYS)?;
-    let events: u64 = probe.event_counts().values().sum();
     kernels.push(Kernel::new(
-        "season/100_days",
-        cells * events as usize,
-        45.0,
+        "season/100_days_with_avalanches",
+        cells * SEASON_DAYS as usize,
+        0.0,
         move || {
             let mut w = start.clone();
             w.run_until(SEASON_DAYS)?;

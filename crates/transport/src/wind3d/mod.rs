@@ -277,38 +277,41 @@ impl WindSolver {
         (u, v)
     }
 
-    /// Writes the mean wind at the voxel centres to `path` as a compact little-endian
-    /// binary file: the 8 bytes `SNOWWIND`, `nx ny nz` (u32), voxel size and base altitude
-    /// (f64), then `u`, `v`, `w` (f32, index `(k ny + j) nx + i`). Written to a temporary
-    /// name and renamed, so an interrupted write leaves no partial file.
+    /// Writes the mean wind to `path` (see [`write_mean_wind`]).
     pub fn write_mean_wind(&self, path: &std::path::Path) -> std::io::Result<()> {
-        let m = self.mean_velocity();
-        let g = &self.grid;
-        let mut bytes = Vec::with_capacity(40 + 12 * g.len());
-        bytes.extend_from_slice(b"SNOWWIND");
-        for d in [g.nx, g.ny, g.nz] {
-            bytes.extend_from_slice(&(d as u32).to_le_bytes());
-        }
-        bytes.extend_from_slice(&g.cell.to_le_bytes());
-        bytes.extend_from_slice(&g.base.to_le_bytes());
-        let centre = |c: &Component, axis: usize, i: usize, j: usize, k: usize| {
-            let a = c.index(i, j, k);
-            let o = [1, c.dims[0], c.dims[0] * c.dims[1]][axis];
-            0.5 * (c.data[a] + c.data[a + o])
-        };
-        for (axis, c) in m.components().into_iter().enumerate() {
-            for k in 0..g.nz {
-                for j in 0..g.ny {
-                    for i in 0..g.nx {
-                        bytes.extend_from_slice(&centre(c, axis, i, j, k).to_le_bytes());
-                    }
+        write_mean_wind(path, &self.grid, &self.mean_velocity())
+    }
+}
+
+/// Writes a mean wind `m` on `g` at the voxel centres to `path` as a compact little-endian
+/// binary file: the 8 bytes `SNOWWIND`, `nx ny nz` (u32), voxel size and base altitude
+/// (f64), then `u`, `v`, `w` (f32, index `(k ny + j) nx + i`). Written to a temporary name
+/// and renamed, so an interrupted write leaves no partial file.
+pub fn write_mean_wind(path: &std::path::Path, g: &VoxelGrid, m: &Velocity) -> std::io::Result<()> {
+    let mut bytes = Vec::with_capacity(40 + 12 * g.len());
+    bytes.extend_from_slice(b"SNOWWIND");
+    for d in [g.nx, g.ny, g.nz] {
+        bytes.extend_from_slice(&(d as u32).to_le_bytes());
+    }
+    bytes.extend_from_slice(&g.cell.to_le_bytes());
+    bytes.extend_from_slice(&g.base.to_le_bytes());
+    let centre = |c: &Component, axis: usize, i: usize, j: usize, k: usize| {
+        let a = c.index(i, j, k);
+        let o = [1, c.dims[0], c.dims[0] * c.dims[1]][axis];
+        0.5 * (c.data[a] + c.data[a + o])
+    };
+    for (axis, c) in m.components().into_iter().enumerate() {
+        for k in 0..g.nz {
+            for j in 0..g.ny {
+                for i in 0..g.nx {
+                    bytes.extend_from_slice(&centre(c, axis, i, j, k).to_le_bytes());
                 }
             }
         }
-        let tmp = path.with_extension("tmp");
-        std::fs::write(&tmp, &bytes)?;
-        std::fs::rename(&tmp, path)
     }
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, &bytes)?;
+    std::fs::rename(&tmp, path)
 }
 
 #[cfg(test)]

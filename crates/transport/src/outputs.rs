@@ -1,0 +1,111 @@
+//! The files of a transport run (issue 6, item 7): `depth.tif`, `density.tif`,
+//! `q_salt.tif`, `q_susp.tif`, `q_subl.tif`, `precipitation.tif`, `wind2d.tif` (2 bands:
+//! east, north m s⁻¹), `wind3d.bin` (the mean 3D wind, [`crate::wind3d::write_mean_wind`]),
+//! `preview.png` (shaded relief with the snow) and `report.json` (scenario, wind and flake
+//! statistics, the mass budget with its closure error, timings). Every file is written to
+//! a temporary name and renamed.
+
+use crate::scenario::{RunOutputs, Scenario};
+use crate::wind3d::write_mean_wind;
+use serde_json::json;
+use snowscape_io::{write_bytes_atomic, write_geotiff_bands};
+use snowscape_render::{PreviewOptions, encode_png, render_preview};
+use snowscape_terrain::{Grid, LayeredTerrain, NodataMask, SnowLayer};
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// A file that could not be written.
+#[derive(Debug, Error)]
+#[error("cannot write {path}: {message}")]
+pub struct OutputError {
+    /// The file.
+    pub path: PathBuf,
+    /// Why.
+    pub message: String,
+}
+
+fn fail(path: &Path, e: impl std::fmt::Display) -> OutputError {
+    OutputError {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// Writes every output of `out` into `dir` (created if missing); `heights` is the scene's
+/// height map and `timings` the named stage durations (s) for the report. Returns the paths
+/// written.
+pub fn write_outputs(
+    dir: &Path,
+    scenario: &Scenario,
+    heights: &[f32],
+    out: &RunOutputs,
+    timings: &[(&str, f64)],
+) -> Result<Vec<PathBuf>, OutputError> {
+    std::fs::create_dir_all(dir).map_err(|e| fail(dir, e))?;
+    let g = &out.geometry;
+    let mask = NodataMask::all_valid();
+    let mut written = Vec::new();
+    let depth = out.state.depth();
+    let maps: [(&str, Vec<&[f32]>); 7] = [
+        ("depth.tif", vec![&depth]),
+        ("density.tif", vec![&out.state.density]),
+        ("q_salt.tif", vec![&out.q_salt]),
+        ("q_susp.tif", vec![&out.q_susp]),
+        ("q_subl.tif", vec![&out.q_subl]),
+        ("precipitation.tif", vec![&out.precipitation_ratio]),
+        ("wind2d.tif", vec![&out.wind_u, &out.wind_v]),
+    ];
+    for (name, bands) in maps {
+        let path = dir.join(name);
+        write_geotiff_bands(&path, g, &mask, &bands).map_err(|e| fail(&path, e))?;
+        written.push(path);
+    }
+    let path = dir.join("wind3d.bin");
+    write_mean_wind(&path, &out.voxels, &out.mean_wind).map_err(|e| fail(&path, e))?;
+    written.push(path);
+    let path = dir.join("preview.png");
+    let bedrock =
+        Grid::new(g.clone(), heights.to_vec(), mask.clone()).map_err(|e| fail(&path, e))?;
+    let mut terrain = LayeredTerrain::from_bedrock(bedrock);
+    terrain.layer_mut(SnowLayer::Powder).copy_from_slice(&depth);
+    let image = render_preview(&terrain, &PreviewOptions::default()).map_err(|e| fail(&path, e))?;
+    let png = encode_png(&image).map_err(|e| fail(&path, e))?;
+    write_bytes_atomic(&path, &png).map_err(|e| fail(&path, e))?;
+    written.push(path);
+    let path = dir.join("report.json");
+    let n = depth.len().max(1) as f64;
+    let b = &out.budget;
+    let report = json!({
+        "scenario": scenario,
+        "grid": {"width": g.width(), "height": g.height(), "cell_size_m": g.cell_size_x()},
+        "voxels": {"nx": out.voxels.nx, "ny": out.voxels.ny, "nz": out.voxels.nz,
+                   "size_m": out.voxels.cell},
+        "wind": {
+            "last_iteration": out.wind_report,
+            "residual_divergence_per_s": out.wind_report.max_divergence,
+        },
+        "flakes": {"landed": out.flakes_landed, "uniform_fallback": out.precipitation_fallback},
+        "steps": out.steps,
+        "depth_m": {
+            "mean": depth.iter().map(|&d| f64::from(d)).sum::<f64>() / n,
+            "max": depth.iter().fold(0.0f32, |m, &d| m.max(d)),
+        },
+        "mass_budget": {
+            "unit": "kg",
+            "precipitation_in": b.precipitation_in,
+            "border_in": b.border_in,
+            "border_out": b.border_out,
+            "sublimation_out": b.sublimation_out,
+            "melt_out": b.melt_out,
+            "transported": b.transported,
+            "initial": b.initial_mass,
+            "final": b.final_mass,
+            "closure_error": b.closure_error,
+        },
+        "timings_s": timings.iter().map(|(k, v)| (k.to_string(), json!(v))).collect::<serde_json::Map<_, _>>(),
+    });
+    let text = serde_json::to_string_pretty(&report).map_err(|e| fail(&path, e))?;
+    write_bytes_atomic(&path, text.as_bytes()).map_err(|e| fail(&path, e))?;
+    written.push(path);
+    Ok(written)
+}
