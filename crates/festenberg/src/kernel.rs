@@ -1,0 +1,297 @@
+//! The snow diffusion kernel (von Festenberg & Gumhold 2011, Section 5.2, Eqs. 3-7).
+//!
+//! For every site `p`, the kernel members `N_p` are one site per column within the cylinder
+//! of radius `R` around `p` (chosen by [`SiteField::member`]). With
+//! `Δz = (z(p') + h0(p')) - (z(p) + h0(p))`:
+//! - Eq. 5, Gaussian weights `K(ρ) = exp(-ρ² / 2R²) / (√(2π) R)` of the horizontal distance
+//!   `ρ`, "clamped and normalized at R": the weights of the columns inside the cylinder sum to
+//!   one (columns outside the height-span map are left out and the rest renormalised, so the
+//!   map's border is no snow edge);
+//! - Eq. 6, clipped height differences `λ(Δz) = Δz` if `|Δz| < h0`, else `sgn(Δz)·h0`; an
+//!   empty column (nothing below: a drop) counts as `λ = -h0`;
+//! - Eq. 4, `Δh = Σ K(p, p') λ(Δz(p, p'))`, in `[-h0, h0]`;
+//! - Eq. 7, the edge correction `g1(r) = r (2 - r)`: "boundaries in the snow cover are ...
+//!   defined where Δz < -h0" (and at empty columns); `r` is the horizontal distance to the
+//!   nearest such member less one column spacing (the boundary lies between the last site and
+//!   the member beyond it, so the outermost site gets `r = 0` and no snow: "g1 guarantees
+//!   exactly vanishing snow heights at edges"), over `R`, clamped to [0, 1];
+//! - the visibility `v`: "summing up the visibility (either 0 or 1) of each p' ... weighted
+//!   with the kernel K", normalised by the members' weights; a site is visible when nothing is
+//!   above it;
+//! - Eq. 3, the final height `h = g1(r) · v · (h0(p) + Δh)`, capped at the capacity `c(p)`
+//!   so snow never pierces the geometry above. Sign: the paper prints `h0 - Δh`, but with its
+//!   own `Δz` (neighbour minus site) that would pile snow up at drops and thin it in hollows,
+//!   the reverse of diffusion (Eq. 2) and of its Fig. 3; `+` is the reading that matches both.
+//!
+//! The boundary direction (for the overhangs of Section 5.3) is the kernel-weighted mean of the
+//! unit vectors from `p` towards its boundary members: "the smoothed direction of r".
+//!
+//! Cost and determinism: the kernel is local, so members are found through a spatial grid of
+//! square buckets of columns (`bucket_columns` on a side) and only the buckets that meet the
+//! cylinder's square are visited: O(sites × kernel columns), never O(sites²) (the paper's
+//! O(n²) of Fig. 15 was an implementation accident). Weights and terms are summed as 64-bit
+//! fixed-point integers (weights in units of 2^-32, `λ / h0` in units of 2^-24), so the sums are
+//! exact and do not depend on the order of the members: results are bit-identical for every
+//! bucket size and every thread count.
+
+use crate::sites::SiteField;
+use rayon::prelude::*;
+
+const WEIGHT_ONE: f64 = 4_294_967_296.0; // 2^32
+const LAMBDA_ONE: f32 = 16_777_216.0; // 2^24
+
+/// The cylinder of radius `R` as a square table of columns with quantised weights.
+#[derive(Debug, Clone)]
+pub struct KernelTable {
+    /// Half side of the table, columns.
+    pub reach: i32,
+    /// Side of the table (2·reach + 1).
+    side: usize,
+    /// Quantised normalised weight of each table column; -1 outside the cylinder.
+    weight: Vec<i64>,
+    /// Horizontal distance of each table column, metres.
+    distance: Vec<f32>,
+    /// Weight times the unit vector towards the column (x east, y north), in 2^-24 units.
+    towards: Vec<[i64; 2]>,
+    /// Columns inside the cylinder.
+    pub columns: usize,
+}
+
+impl KernelTable {
+    /// The cylinder of radius `radius_m` over columns of `cell_m` metres (Eq. 5).
+    pub fn new(radius_m: f64, cell_m: f64) -> Self {
+        let reach = (radius_m / cell_m).floor() as i32;
+        let side = (2 * reach + 1) as usize;
+        let mut raw = vec![-1.0f64; side * side];
+        let mut distance = vec![0.0f32; side * side];
+        let mut total = 0.0;
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                let rho = cell_m * ((dx * dx + dy * dy) as f64).sqrt();
+                let t = ((dy + reach) as usize) * side + (dx + reach) as usize;
+                distance[t] = rho as f32;
+                if rho <= radius_m * (1.0 + 1e-12) {
+                    let k = (-rho * rho / (2.0 * radius_m * radius_m)).exp()
+                        / ((2.0 * std::f64::consts::PI).sqrt() * radius_m);
+                    raw[t] = k;
+                    total += k;
+                }
+            }
+        }
+        let mut weight = vec![-1i64; side * side];
+        let mut towards = vec![[0i64; 2]; side * side];
+        let mut columns = 0;
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                let t = ((dy + reach) as usize) * side + (dx + reach) as usize;
+                if raw[t] < 0.0 {
+                    continue;
+                }
+                let w = (raw[t] / total * WEIGHT_ONE).round() as i64;
+                weight[t] = w;
+                columns += 1;
+                let l = ((dx * dx + dy * dy) as f64).sqrt();
+                if l > 0.0 {
+                    // Row index grows southwards: north is -dy.
+                    let ux = (dx as f64 / l * LAMBDA_ONE as f64).round() as i64;
+                    let uy = (-dy as f64 / l * LAMBDA_ONE as f64).round() as i64;
+                    towards[t] = [w * ux, w * uy];
+                }
+            }
+        }
+        Self {
+            reach,
+            side,
+            weight,
+            distance,
+            towards,
+            columns,
+        }
+    }
+}
+
+/// What the kernel gives each site.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KernelField {
+    /// Final snow height `h` (Eq. 3), metres.
+    pub height: Vec<f32>,
+    /// Normalised edge distance `r` in [0, 1] (1: no boundary within `R`).
+    pub edge: Vec<f32>,
+    /// Smoothed unit direction towards the nearest boundary (x east, y north); zero if none.
+    pub towards_edge: Vec<[f32; 2]>,
+    /// Visibility `v` in [0, 1].
+    pub visibility: Vec<f32>,
+    /// Height change `Δh` (Eq. 4), metres.
+    pub change: Vec<f32>,
+    /// Kernel columns visited in all (inside the map and the cylinder).
+    pub members_visited: u64,
+}
+
+/// The edge correction of Eq. 7, a quarter circle: 0 at an edge, 1 from `R` on.
+#[inline]
+pub fn g1(r: f32) -> f32 {
+    let r = r.clamp(0.0, 1.0);
+    r * (2.0 - r)
+}
+
+/// The clipped height difference of Eq. 6.
+#[inline]
+pub fn clipped(dz: f32, h0: f32) -> f32 {
+    if dz.abs() < h0 { dz } else { h0.copysign(dz) }
+}
+
+/// Evaluates the kernel of radius `radius_m` at every site of `field`, visiting the columns
+/// bucket by bucket (`bucket_columns` >= 1 on a side; results do not depend on it).
+pub fn evaluate(field: &SiteField, radius_m: f64, bucket_columns: usize) -> KernelField {
+    let table = KernelTable::new(radius_m, field.cell_size);
+    let n = field.len();
+    let per_site: Vec<(f32, f32, [f32; 2], f32, f32, u64)> = (0..n)
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|i| site_kernel(field, &table, radius_m, bucket_columns.max(1), i))
+        .collect();
+    let mut out = KernelField {
+        height: Vec::with_capacity(n),
+        edge: Vec::with_capacity(n),
+        towards_edge: Vec::with_capacity(n),
+        visibility: Vec::with_capacity(n),
+        change: Vec::with_capacity(n),
+        members_visited: 0,
+    };
+    for (h, r, d, v, dh, m) in per_site {
+        out.height.push(h);
+        out.edge.push(r);
+        out.towards_edge.push(d);
+        out.visibility.push(v);
+        out.change.push(dh);
+        out.members_visited += m;
+    }
+    out
+}
+
+/// Sums of one site's kernel.
+#[derive(Default)]
+struct Sums {
+    /// Weights of the columns inside the map.
+    weight: i64,
+    /// Weights of the columns with a member.
+    member_weight: i64,
+    /// Σ K·λ/h0.
+    lambda: i64,
+    /// Σ K·visible.
+    visible: i64,
+    /// Σ K·(unit vector to a boundary member).
+    towards: [i64; 2],
+    /// Distance to the nearest boundary member, metres.
+    edge: f32,
+    visited: u64,
+}
+
+fn site_kernel(
+    field: &SiteField,
+    table: &KernelTable,
+    radius_m: f64,
+    bucket: usize,
+    i: usize,
+) -> (f32, f32, [f32; 2], f32, f32, u64) {
+    let (w, h) = (field.width as i64, field.height as i64);
+    let c = field.column[i] as i64;
+    let (cx, cy) = (c % w, c / w);
+    let reach = table.reach as i64;
+    let (x0, x1) = ((cx - reach).max(0), (cx + reach).min(w - 1));
+    let (y0, y1) = ((cy - reach).max(0), (cy + reach).min(h - 1));
+    let s = field.base(i);
+    let h0 = field.depth;
+    let roomy = field.roomy(i);
+    let b = bucket as i64;
+    let mut sums = Sums {
+        edge: f32::INFINITY,
+        ..Default::default()
+    };
+    for by in y0 / b..=y1 / b {
+        let (ya, yb) = ((by * b).max(y0), (by * b + b - 1).min(y1));
+        for bx in x0 / b..=x1 / b {
+            let (xa, xb) = ((bx * b).max(x0), (bx * b + b - 1).min(x1));
+            for y in ya..=yb {
+                let row = ((y - cy + reach) as usize) * table.side;
+                for x in xa..=xb {
+                    let t = row + (x - cx + reach) as usize;
+                    let wq = table.weight[t];
+                    if wq < 0 {
+                        continue;
+                    }
+                    member_term(
+                        field,
+                        table,
+                        &mut sums,
+                        t,
+                        wq,
+                        (y * w + x) as usize,
+                        s,
+                        h0,
+                        roomy,
+                    );
+                }
+            }
+        }
+    }
+    let dh = (sums.lambda as f64 / (sums.weight as f64 * LAMBDA_ONE as f64)) as f32 * h0;
+    let v = if sums.member_weight > 0 {
+        (sums.visible as f64 / sums.member_weight as f64) as f32
+    } else {
+        0.0
+    };
+    let r = if sums.edge.is_finite() {
+        ((sums.edge as f64 - field.cell_size) / radius_m).clamp(0.0, 1.0) as f32
+    } else {
+        1.0
+    };
+    let l = ((sums.towards[0] as f64).powi(2) + (sums.towards[1] as f64).powi(2)).sqrt();
+    let dir = if l > 0.0 {
+        [
+            (sums.towards[0] as f64 / l) as f32,
+            (sums.towards[1] as f64 / l) as f32,
+        ]
+    } else {
+        [0.0; 2]
+    };
+    let height = (g1(r) * v * (field.h0[i] + dh)).clamp(0.0, field.capacity[i]);
+    (height, r, dir, v, dh, sums.visited)
+}
+
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn member_term(
+    field: &SiteField,
+    table: &KernelTable,
+    sums: &mut Sums,
+    t: usize,
+    wq: i64,
+    column: usize,
+    s: f32,
+    h0: f32,
+    roomy: bool,
+) {
+    sums.visited += 1;
+    sums.weight += wq;
+    let boundary = match field.member(column, s, roomy) {
+        None => {
+            sums.lambda -= wq * LAMBDA_ONE as i64;
+            true
+        }
+        Some((m, dz)) => {
+            let q = (clipped(dz, h0) / h0 * LAMBDA_ONE).round() as i64;
+            sums.lambda += wq * q;
+            sums.member_weight += wq;
+            if field.visible(m) {
+                sums.visible += wq;
+            }
+            dz < -h0
+        }
+    };
+    if boundary {
+        sums.edge = sums.edge.min(table.distance[t]);
+        sums.towards[0] += table.towards[t][0];
+        sums.towards[1] += table.towards[t][1];
+    }
+}
