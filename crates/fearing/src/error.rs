@@ -1,0 +1,53 @@
+//! Typed errors of the Fearing 2000 cover: every variant names the offending value.
+
+use thiserror::Error;
+
+/// Why a Fearing cover could not be computed or written.
+#[derive(Debug, Error)]
+pub enum FearingError {
+    /// A parameter outside its valid range.
+    #[error("invalid {name} {value}: expected {expected}")]
+    InvalidParameter {
+        name: &'static str,
+        value: String,
+        expected: &'static str,
+    },
+    /// The scene has no upward-facing triangle to launch flakes from.
+    #[error(
+        "the scene has no upward-facing triangle (of {triangles} triangles, none has a normal \
+         with z above {min_normal_z}); check the up axis"
+    )]
+    NoLaunchSites { triangles: usize, min_normal_z: f64 },
+    /// The scene holds a non-finite vertex.
+    #[error("object {object:?} vertex {vertex} is not finite: {value:?}")]
+    NonFiniteVertex {
+        object: String,
+        vertex: usize,
+        value: [f32; 3],
+    },
+    /// The snow weighting image ("snow writing") cannot be used.
+    #[error("sky weight image {what}")]
+    SkyWeight { what: String },
+    /// Writing an output failed.
+    #[error(transparent)]
+    Mesh(#[from] snowscape_mesh::MeshError),
+    /// Writing the report failed.
+    #[error(transparent)]
+    Write(#[from] snowscape_io::AtomicWriteError),
+    /// The report could not be encoded.
+    #[error("cannot encode the report: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
+/// Shorthand for a [`FearingError::InvalidParameter`].
+pub(crate) fn invalid(
+    name: &'static str,
+    value: impl ToString,
+    expected: &'static str,
+) -> FearingError {
+    FearingError::InvalidParameter {
+        name,
+        value: value.to_string(),
+        expected,
+    }
+}

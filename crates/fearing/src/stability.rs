@@ -1,0 +1,399 @@
+//! Snow stability (Fearing 2000, Section 4): redistributes accumulated snow into a stable
+//! configuration by a series of small, simultaneous avalanches.
+//!
+//! All sites start in the unresolved list u1, sorted by height (base plus snow) and examined
+//! from the top down. The test of one site s (4.2): (1) find the neighbours lower than s whose
+//! angle from s (the snow heights over their horizontal distance) exceeds s's critical angle,
+//! drawn once per site from the transition curve around the AOR (4.1: a smoothstep law of the
+//! given width); (2) test for obstacles between s and each: (i) scene geometry blocks, (ii) a
+//! closing wall of another group's snow blocks, (iii) another group's snow top in the way
+//! receives the snow instead (its site replaces the neighbour); (3) shift snow evenly from s to
+//! every neighbour still in contention until at least one becomes stable; (4) repeat until none
+//! is unstable or s is bare. A border edge of s is a neighbour too (4.3): its height is the edge,
+//! or whatever lies just beyond it; a short horizontal probe toward it that meets something
+//! blocks the edge until the snow rises above the obstacle, else the excess leaves by
+//! [`crate::edge_transit`]. Every site affected (s, receivers, higher neighbours of s) goes to
+//! u2, which replaces u1 after the pass. A phase ends (4.4) when u2 is empty, when a pass moves
+//! less than a small share of the snow, or at the pass limit; it then re-checks every site once
+//! (the paper's re-run "to compensate for speed-accuracy tradeoffs"). The snow surfaces used by
+//! the obstacle tests are rebuilt every few passes (the paper's rebucketing "with a
+//! considerable lag").
+
+use crate::edge_groups::Topology;
+use crate::edge_transit::{Flight, Landing, SiteGrid, fly};
+use crate::launch_sites::LaunchSites;
+use crate::params::FearingParams;
+use crate::surface::SnowSurface;
+use crate::tracer::{Tag, Tracer};
+use serde::Serialize;
+use snowscape_mesh::Scene;
+use snowscape_terrain::random::uniform;
+use std::collections::HashSet;
+
+/// What one stability phase did.
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+pub struct StabilityReport {
+    pub passes: u32,
+    /// Site tests, avalanches (snow shifts), edge transits and their particles.
+    pub tests: u64,
+    pub avalanches: u64,
+    pub edge_transits: u64,
+    pub particles: u64,
+    /// Obstacle outcomes: blocked by geometry, by a snow wall, redirected to another surface.
+    pub blocked_by_geometry: u64,
+    pub blocked_by_snow_wall: u64,
+    pub redirected: u64,
+    pub blocked_edges: u64,
+    /// Volumes, m³: on the sites before and after, moved, left the scene.
+    pub volume_before_m3: f64,
+    pub volume_after_m3: f64,
+    pub moved_m3: f64,
+    pub left_scene_m3: f64,
+}
+
+/// A site's critical angle tan from the transition curve (inverse smoothstep of a keyed uniform).
+pub fn critical_tan(p: &FearingParams, cell: u32) -> f64 {
+    let m = &p.material;
+    let u = uniform(p.seed, 0x57ab, cell as u64);
+    let x = 0.5 - ((1.0 - 2.0 * u).asin() / 3.0).sin();
+    let deg = m.aor_deg + m.transition_deg * (x - 0.5);
+    deg.clamp(0.0, 89.9).to_radians().tan()
+}
+
+enum Target {
+    Site {
+        site: usize,
+        allowed: f64,
+    },
+    Edge {
+        slot: usize,
+        height: f64,
+        allowed: f64,
+    },
+}
+
+/// Cached outcome of an obstacle test between a site and a neighbour (valid until the snow
+/// surfaces are rebuilt).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Obs {
+    Unknown,
+    Clear,
+    Geometry,
+    Wall,
+    Redirect(u32),
+}
+
+/// Cached outcome of the probe over a border edge, and where its particles land.
+#[derive(Debug, Clone, PartialEq)]
+enum EdgeObs {
+    Unknown,
+    Blocked,
+    Open { height: f64, landings: Vec<Landing> },
+}
+
+/// Runs one stability phase on the current snow.
+pub fn stabilise(
+    scene: &Scene,
+    sites: &mut LaunchSites,
+    topo: &Topology,
+    params: &FearingParams,
+    deadline: std::time::Instant,
+) -> StabilityReport {
+    let sp = &params.stability;
+    let n = topo.leaves.len();
+    let cell = |i: usize| topo.leaves[i] as usize;
+    let centroids: Vec<[f64; 3]> = (0..n).map(|i| sites.cells[cell(i)].centroid()).collect();
+    let areas: Vec<f64> = (0..n)
+        .map(|i| sites.cells[cell(i)].area_xy().max(1e-300))
+        .collect();
+    let crit: Vec<f64> = (0..n)
+        .map(|i| critical_tan(params, topo.leaves[i]))
+        .collect();
+    let mut vol: Vec<f64> = (0..n).map(|i| sites.cells[cell(i)].volume).collect();
+    let owner: Vec<(u32, u32)> = (0..n)
+        .map(|i| (sites.cells[cell(i)].object, sites.cells[cell(i)].triangle))
+        .collect();
+    let site_tris: HashSet<(u32, u32)> = owner.iter().copied().collect();
+    let grid = SiteGrid::new(centroids.clone(), owner.clone(), sites.spacing.max(1e-6));
+    let bounds = scene
+        .bounds()
+        .expect("a scene with launch sites has bounds");
+    let eps = sites.spacing * 1e-3;
+    let total = |v: &[f64]| v.iter().sum::<f64>();
+    let mut rep = StabilityReport {
+        volume_before_m3: total(&vol),
+        ..Default::default()
+    };
+    let top = |vol: &[f64], i: usize| centroids[i][2] + vol[i] / areas[i];
+    let mut obs: Vec<Vec<Obs>> = topo
+        .neighbours
+        .iter()
+        .map(|v| vec![Obs::Unknown; v.len()])
+        .collect();
+    let mut edges: Vec<Vec<EdgeObs>> = topo
+        .borders
+        .iter()
+        .map(|v| vec![EdgeObs::Unknown; v.len()])
+        .collect();
+
+    let mut u1: Vec<usize> = (0..n).collect();
+    let mut rechecked = false;
+    let mut tracer = None;
+    let mut in_u2 = vec![false; n];
+    while rep.passes < sp.max_passes {
+        if rep.passes.is_multiple_of(sp.obstacle_refresh_passes) || tracer.is_none() {
+            sync(sites, topo, &vol);
+            let snow = SnowSurface::build(sites, topo, params.min_surface_depth_m);
+            tracer = Some(Tracer::new(scene, &snow.tagged()));
+            obs.iter_mut().flatten().for_each(|o| *o = Obs::Unknown);
+            edges
+                .iter_mut()
+                .flatten()
+                .for_each(|o| *o = EdgeObs::Unknown);
+        }
+        let tracer = tracer.as_ref().expect("built above");
+        let has_sites = |o: u32, t: u32| site_tris.contains(&(o, t));
+        let flight = Flight {
+            tracer,
+            sites: &grid,
+            has_sites: &has_sites,
+            z_floor: bounds.min[2] as f64 - sites.spacing,
+            step: (sites.spacing * 0.5).max(1e-4),
+            restitution: sp.restitution,
+            rings: 8,
+        };
+        u1.sort_by(|&a, &b| top(&vol, b).total_cmp(&top(&vol, a)).then(a.cmp(&b)));
+        let mut u2 = Vec::new();
+        let mut moved = 0.0;
+        for &s in &u1 {
+            rep.tests += 1;
+            let group = topo.group[s];
+            let own_tri = Tag::Scene {
+                object: owner[s].0,
+                triangle: owner[s].1,
+            };
+            let same_group_snow = |t: Tag| matches!(t, Tag::SnowTop { group: g, .. } | Tag::SnowWall { group: g } if g == group);
+            let mut touched = false;
+            for _ in 0..(2 * topo.neighbours[s].len() + 2 * topo.borders[s].len() + 4) {
+                if vol[s] <= 0.0 {
+                    break;
+                }
+                let ts = top(&vol, s);
+                let mut targets = Vec::new();
+                for (k, nb) in topo.neighbours[s].iter().enumerate() {
+                    let j = nb.site as usize;
+                    let allowed = nb.distance * crit[s] + sp.level_tolerance_m;
+                    if ts - top(&vol, j) <= allowed {
+                        continue;
+                    }
+                    if obs[s][k] == Obs::Unknown {
+                        let from = [centroids[s][0], centroids[s][1], ts + eps];
+                        let to = [centroids[j][0], centroids[j][1], top(&vol, j) + eps];
+                        let tri_j = Tag::Scene {
+                            object: owner[j].0,
+                            triangle: owner[j].1,
+                        };
+                        obs[s][k] = match tracer.first_hit(from, to, |t| {
+                            t == own_tri || t == tri_j || same_group_snow(t)
+                        }) {
+                            None => Obs::Clear,
+                            Some(h) => match h.tag {
+                                Tag::Scene { .. } => {
+                                    rep.blocked_by_geometry += 1;
+                                    Obs::Geometry
+                                }
+                                Tag::SnowWall { .. } => {
+                                    rep.blocked_by_snow_wall += 1;
+                                    Obs::Wall
+                                }
+                                Tag::SnowTop { site: m, .. } => {
+                                    rep.redirected += 1;
+                                    Obs::Redirect(m)
+                                }
+                            },
+                        };
+                    }
+                    match obs[s][k] {
+                        Obs::Clear => targets.push(Target::Site { site: j, allowed }),
+                        Obs::Redirect(m) => {
+                            let m = m as usize;
+                            let d = (centroids[m][0] - centroids[s][0])
+                                .hypot(centroids[m][1] - centroids[s][1]);
+                            let allowed = d * crit[s] + sp.level_tolerance_m;
+                            if ts - top(&vol, m) > allowed
+                                && !targets
+                                    .iter()
+                                    .any(|t| matches!(t, Target::Site { site, .. } if *site == m))
+                            {
+                                targets.push(Target::Site { site: m, allowed });
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                for (k, e) in topo.borders[s].iter().enumerate() {
+                    let mid = [0, 1, 2].map(|q| 0.5 * (e.a[q] + e.b[q]));
+                    let (dx, dy) = (mid[0] - centroids[s][0], mid[1] - centroids[s][1]);
+                    let d = dx.hypot(dy);
+                    let allowed = d * crit[s] + sp.level_tolerance_m;
+                    if ts - mid[2] <= allowed || edges[s][k] == EdgeObs::Blocked {
+                        continue;
+                    }
+                    if edges[s][k] == EdgeObs::Unknown {
+                        let out = if d > 1e-12 {
+                            [dx / d, dy / d]
+                        } else {
+                            [e.b[1] - e.a[1], e.a[0] - e.b[0]]
+                        };
+                        let ol = out[0].hypot(out[1]).max(1e-300);
+                        let out = [out[0] / ol, out[1] / ol];
+                        let margin = (0.05 * sites.spacing).max(4.0 * eps);
+                        let probe = [mid[0] + out[0] * margin, mid[1] + out[1] * margin, ts + eps];
+                        let skip = |t: Tag| t == own_tri || same_group_snow(t);
+                        edges[s][k] = if tracer.blocked(
+                            [centroids[s][0], centroids[s][1], ts + eps],
+                            probe,
+                            skip,
+                        ) {
+                            rep.blocked_edges += 1;
+                            EdgeObs::Blocked
+                        } else {
+                            let below = [probe[0], probe[1], mid[2] - sites.spacing];
+                            let beyond = tracer
+                                .first_hit(probe, below, skip)
+                                .map(|h| probe[2] + h.t as f64 * (below[2] - probe[2]));
+                            let np = sp.edge_particles;
+                            let landings = (0..np)
+                                .map(|p| {
+                                    rep.particles += 1;
+                                    let speed =
+                                        sp.edge_speed_m_s * (0.5 + (p as f64 + 0.5) / np as f64);
+                                    fly(
+                                        &flight,
+                                        probe,
+                                        [out[0] * speed, out[1] * speed, 0.0],
+                                        group,
+                                    )
+                                })
+                                .collect();
+                            EdgeObs::Open {
+                                height: beyond.map_or(mid[2], |z| z.max(mid[2])),
+                                landings,
+                            }
+                        };
+                    }
+                    if let EdgeObs::Open { height, .. } = edges[s][k]
+                        && ts - height > allowed
+                    {
+                        targets.push(Target::Edge {
+                            slot: k,
+                            height,
+                            allowed,
+                        });
+                    }
+                }
+                if targets.is_empty() {
+                    break;
+                }
+                // Even shift: the same volume to each, the least that makes one stable.
+                let kf = targets.len() as f64;
+                let mut dv = vol[s] / kf;
+                for t in &targets {
+                    let need = match *t {
+                        Target::Site { site, allowed } => {
+                            (ts - top(&vol, site) - allowed) / (kf / areas[s] + 1.0 / areas[site])
+                        }
+                        Target::Edge {
+                            height, allowed, ..
+                        } => (ts - height - allowed) / (kf / areas[s]),
+                    };
+                    dv = dv.min(need.max(0.0));
+                }
+                if dv <= 0.0 {
+                    break;
+                }
+                touched = true;
+                rep.avalanches += 1;
+                for t in &targets {
+                    match *t {
+                        Target::Site { site, .. } => {
+                            vol[s] -= dv;
+                            vol[site] += dv;
+                            moved += dv;
+                            mark(&mut u2, &mut in_u2, site);
+                        }
+                        Target::Edge { slot, .. } => {
+                            rep.edge_transits += 1;
+                            let EdgeObs::Open { landings, .. } = &edges[s][slot] else {
+                                unreachable!()
+                            };
+                            let share = dv / landings.len() as f64;
+                            let mut stuck = false;
+                            for l in landings {
+                                match *l {
+                                    Landing::Site(m) => {
+                                        vol[s] -= share;
+                                        vol[m as usize] += share;
+                                        moved += share;
+                                        mark(&mut u2, &mut in_u2, m as usize);
+                                    }
+                                    Landing::Lost => {
+                                        vol[s] -= share;
+                                        rep.left_scene_m3 += share;
+                                        moved += share;
+                                    }
+                                    Landing::Stuck => stuck = true,
+                                }
+                            }
+                            if stuck {
+                                edges[s][slot] = EdgeObs::Blocked;
+                            }
+                        }
+                    }
+                }
+                vol[s] = vol[s].max(0.0);
+            }
+            if touched {
+                mark(&mut u2, &mut in_u2, s);
+                let ts = top(&vol, s);
+                for nb in &topo.neighbours[s] {
+                    if top(&vol, nb.site as usize) > ts {
+                        mark(&mut u2, &mut in_u2, nb.site as usize);
+                    }
+                }
+            }
+        }
+        rep.passes += 1;
+        rep.moved_m3 += moved;
+        for &i in &u2 {
+            in_u2[i] = false;
+        }
+        let small = moved <= sp.min_moved_fraction * total(&vol).max(1e-300);
+        if u2.is_empty() || small || std::time::Instant::now() > deadline {
+            if rechecked || std::time::Instant::now() > deadline {
+                break;
+            }
+            rechecked = true;
+            u1 = (0..n).collect();
+        } else {
+            rechecked = false;
+            u1 = u2;
+        }
+    }
+    sync(sites, topo, &vol);
+    rep.volume_after_m3 = total(&vol);
+    rep
+}
+
+fn mark(list: &mut Vec<usize>, flag: &mut [bool], i: usize) {
+    if !flag[i] {
+        flag[i] = true;
+        list.push(i);
+    }
+}
+
+fn sync(sites: &mut LaunchSites, topo: &Topology, vol: &[f64]) {
+    for (i, &c) in topo.leaves.iter().enumerate() {
+        sites.cells[c as usize].volume = vol[i];
+    }
+}

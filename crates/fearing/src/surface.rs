@@ -1,0 +1,195 @@
+//! Surface construction (Fearing 2000, Sections 3.7 and 5).
+//!
+//! Each launch site is elevated by its snow volume over its projected area. The top snow
+//! surface is a fan per site from the elevated site to the corners of its cell (and the
+//! T-junction corners of finer neighbours on its edges, so the surface is watertight), with the
+//! corner vertices "set to the minimum of adjacent neighbours" (3.7). Vertical closing walls
+//! drop from the border corners to the base along every edge-group border. Corners are welded
+//! per edge group, so snow of different groups never shares a vertex.
+//!
+//! Section 5's implicit-function smoothing is optional in the paper; [`smooth_volumes`] is the
+//! simpler documented method used here: a few Jacobi steps of mass-conserving diffusion of the
+//! snow depth between neighbouring sites of a group (each pair exchanges a share of its depth
+//! difference times the smaller area, so the total volume is unchanged to rounding).
+
+use crate::edge_groups::Topology;
+use crate::launch_sites::LaunchSites;
+use crate::tracer::Tag;
+use snowscape_mesh::SnowMesh;
+use std::collections::HashMap;
+
+/// The snow surface of all edge groups, scene metres.
+#[derive(Debug, Clone, Default)]
+pub struct SnowSurface {
+    pub positions: Vec<[f32; 3]>,
+    /// Snow depth at each vertex, metres.
+    pub depth: Vec<f32>,
+    pub triangles: Vec<[u32; 3]>,
+    /// What each triangle is: a site's top or a group's wall.
+    pub tags: Vec<Tag>,
+}
+
+impl SnowSurface {
+    /// The surface of the current snow on `sites` (sites thinner than `min_depth` with thin
+    /// corners give no triangle).
+    #[allow(clippy::needless_range_loop)]
+    pub fn build(sites: &LaunchSites, topo: &Topology, min_depth: f64) -> Self {
+        let tol = (sites.spacing * 1e-4).max(1e-7);
+        let q = |p: [f64; 3]| p.map(|c| (c / tol).round() as i64);
+        let mut key_vertex: HashMap<(u32, [i64; 3]), u32> = HashMap::new();
+        let mut base: Vec<[f64; 3]> = Vec::new();
+        let mut vdepth: Vec<f64> = Vec::new();
+        let n = topo.leaves.len();
+        let mut polys: Vec<Vec<u32>> = Vec::with_capacity(n);
+        let cell = |i: usize| &sites.cells[topo.leaves[i] as usize];
+        for i in 0..n {
+            let c = cell(i);
+            let d = c.depth();
+            let mut poly = Vec::with_capacity(3 + topo.t_vertices[i].len());
+            for e in 0..3 {
+                let (a, b) = (c.corners[e], c.corners[(e + 1) % 3]);
+                let mut pts: Vec<(f64, [f64; 3])> = vec![(0.0, a)];
+                let len2: f64 = (0..3).map(|k| (b[k] - a[k]).powi(2)).sum();
+                for &(te, p) in &topo.t_vertices[i] {
+                    if te as usize == e {
+                        let s = (0..3).map(|k| (p[k] - a[k]) * (b[k] - a[k])).sum::<f64>()
+                            / len2.max(1e-300);
+                        pts.push((s, p));
+                    }
+                }
+                pts.sort_by(|x, y| x.0.total_cmp(&y.0));
+                for (_, p) in pts {
+                    let k = (topo.group[i], q(p));
+                    let v = *key_vertex.entry(k).or_insert_with(|| {
+                        base.push(p);
+                        vdepth.push(f64::INFINITY);
+                        (base.len() - 1) as u32
+                    });
+                    vdepth[v as usize] = vdepth[v as usize].min(d);
+                    if poly.last() != Some(&v) && poly.first() != Some(&v) {
+                        poly.push(v);
+                    }
+                }
+            }
+            polys.push(poly);
+        }
+        let mut s = SnowSurface::default();
+        let lift = |p: [f64; 3], d: f64| [p[0] as f32, p[1] as f32, (p[2] + d) as f32];
+        for (p, &d) in base.iter().zip(&vdepth) {
+            s.positions.push(lift(*p, d));
+            s.depth.push(d as f32);
+        }
+        // Base copies of border corners for the walls, created on demand.
+        let mut base_copy: HashMap<u32, u32> = HashMap::new();
+        for i in 0..n {
+            let c = cell(i);
+            let d = c.depth();
+            let poly = &polys[i];
+            let group = topo.group[i];
+            if d >= min_depth || poly.iter().any(|&v| vdepth[v as usize] >= min_depth) {
+                let centre = s.positions.len() as u32;
+                s.positions.push(lift(c.centroid(), d));
+                s.depth.push(d as f32);
+                for k in 0..poly.len() {
+                    s.triangles
+                        .push([centre, poly[k], poly[(k + 1) % poly.len()]]);
+                    s.tags.push(Tag::SnowTop {
+                        site: i as u32,
+                        group,
+                    });
+                }
+            }
+            for e in &topo.borders[i] {
+                let va = key_vertex[&(group, q(e.a))];
+                let vb = key_vertex[&(group, q(e.b))];
+                if vdepth[va as usize] < min_depth && vdepth[vb as usize] < min_depth {
+                    continue;
+                }
+                let mut bottom = |v: u32| {
+                    *base_copy.entry(v).or_insert_with(|| {
+                        let p = base[v as usize];
+                        s.positions.push(lift(p, 0.0));
+                        s.depth.push(0.0);
+                        (s.positions.len() - 1) as u32
+                    })
+                };
+                let (ba, bb) = (bottom(va), bottom(vb));
+                s.triangles.push([ba, bb, vb]);
+                s.triangles.push([ba, vb, va]);
+                s.tags.push(Tag::SnowWall { group });
+                s.tags.push(Tag::SnowWall { group });
+            }
+        }
+        s
+    }
+
+    /// Triangles with their tags, for the tracer.
+    pub fn tagged(&self) -> Vec<([[f32; 3]; 3], Tag)> {
+        self.triangles
+            .iter()
+            .zip(&self.tags)
+            .map(|(t, &tag)| (t.map(|i| self.positions[i as usize]), tag))
+            .collect()
+    }
+
+    /// The surface as a mesh to write (unused vertices dropped).
+    pub fn to_mesh(&self, name: &str) -> SnowMesh {
+        let mut remap = vec![u32::MAX; self.positions.len()];
+        let mut positions = Vec::new();
+        let triangles = self
+            .triangles
+            .iter()
+            .map(|t| {
+                t.map(|v| {
+                    if remap[v as usize] == u32::MAX {
+                        remap[v as usize] = positions.len() as u32;
+                        positions.push(self.positions[v as usize]);
+                    }
+                    remap[v as usize]
+                })
+            })
+            .collect();
+        SnowMesh {
+            name: name.into(),
+            positions,
+            normals: Vec::new(),
+            uvs: None,
+            triangles,
+            texture: None,
+        }
+    }
+}
+
+/// `iterations` Jacobi steps of mass-conserving depth diffusion between neighbouring sites.
+pub fn smooth_volumes(sites: &mut LaunchSites, topo: &Topology, iterations: u32) {
+    let n = topo.leaves.len();
+    for _ in 0..iterations {
+        let depth: Vec<f64> = topo
+            .leaves
+            .iter()
+            .map(|&c| sites.cells[c as usize].depth())
+            .collect();
+        let area: Vec<f64> = topo
+            .leaves
+            .iter()
+            .map(|&c| sites.cells[c as usize].area_xy())
+            .collect();
+        let mut delta = vec![0.0f64; n];
+        for i in 0..n {
+            for nb in &topo.neighbours[i] {
+                let j = nb.site as usize;
+                if j <= i {
+                    continue;
+                }
+                let deg = topo.neighbours[i].len().max(topo.neighbours[j].len()) as f64;
+                let flux = 0.5 / (deg + 1.0) * (depth[i] - depth[j]) * area[i].min(area[j]);
+                delta[i] -= flux;
+                delta[j] += flux;
+            }
+        }
+        for (&leaf, d) in topo.leaves.iter().zip(&delta) {
+            let c = &mut sites.cells[leaf as usize];
+            c.volume = (c.volume + d).max(0.0);
+        }
+    }
+}
