@@ -49,7 +49,7 @@ pub struct KernelTable {
     side: usize,
     /// Quantised normalised weight of each table column; -1 outside the cylinder.
     weight: Vec<i64>,
-    /// Horizontal distance of each table column, metres.
+    /// Horizontal distance of each table column, in column spacings.
     distance: Vec<f32>,
     /// Weight times the unit vector towards the column (x east, y north), in 2^-24 units.
     towards: Vec<[i64; 2]>,
@@ -69,7 +69,7 @@ impl KernelTable {
             for dx in -reach..=reach {
                 let rho = cell_m * ((dx * dx + dy * dy) as f64).sqrt();
                 let t = ((dy + reach) as usize) * side + (dx + reach) as usize;
-                distance[t] = rho as f32;
+                distance[t] = ((dx * dx + dy * dy) as f64).sqrt() as f32;
                 if rho <= radius_m * (1.0 + 1e-12) {
                     let k = (-rho * rho / (2.0 * radius_m * radius_m)).exp()
                         / ((2.0 * std::f64::consts::PI).sqrt() * radius_m);
@@ -182,7 +182,7 @@ struct Sums {
     visible: i64,
     /// Σ K·(unit vector to a boundary member).
     towards: [i64; 2],
-    /// Distance to the nearest boundary member, metres.
+    /// Distance to the nearest boundary member, column spacings.
     edge: f32,
     visited: u64,
 }
@@ -242,7 +242,7 @@ fn site_kernel(
         0.0
     };
     let r = if sums.edge.is_finite() {
-        ((sums.edge as f64 - field.cell_size) / radius_m).clamp(0.0, 1.0) as f32
+        ((sums.edge as f64 - 1.0) * field.cell_size / radius_m).clamp(0.0, 1.0) as f32
     } else {
         1.0
     };
