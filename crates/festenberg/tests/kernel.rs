@@ -101,7 +101,7 @@ fn capacity_is_never_exceeded() {
         let col = ((v[0] as f64 - field.origin[0]) / field.cell_size) as usize;
         let row = field.height - 1 - ((v[1] as f64 - field.origin[1]) / field.cell_size) as usize;
         let sites = field.column_sites(row * field.width + col);
-        let below = sites.clone().filter(|&k| field.z[k] <= v[2] + 1e-5).last();
+        let below = sites.clone().rfind(|&k| field.z[k] <= v[2] + 1e-5);
         let k = below.expect("a site under every vertex");
         assert!(v[2] <= field.z[k] + field.capacity[k] + 1e-5, "{v:?}");
     }
