@@ -19,6 +19,8 @@ Examples:
   snowscape avalanche --dem ../shared/data/dem/avaframe_avaWog/avaWog.asc \
       --release ../shared/data/dem/avaframe_avaWog/REL/relWog.shp --out out/wog
   snowscape avalanche --dem dem.tif --release 631250,5220400 --thickness 0.8
+  snowscape cover --mesh ../shared/data/meshes/spider.obj --method diffusion --out out/spider
+  snowscape cover --mesh teapot.obj --up z --scale 0.01 --dem dem.tif --bridge 0.05 --overhang
   snowscape serve --size 512 --project proj      # the browser editor on http://127.0.0.1:8080
   snowscape bench --size 1024                     # kernel throughput and memory-bandwidth share
 
@@ -66,6 +68,9 @@ pub enum Command {
     Avalanche(AvalancheArgs),
     /// Start the interactive browser editor (a local web server; prints its URL).
     Serve(ServeArgs),
+    /// Cover a triangle-mesh scene (alone or standing on a DEM) with snow: snow mesh (glb,
+    /// OBJ) with boundary texture, preview and report.
+    Cover(crate::commands::cover::CoverArgs),
 }
 
 #[derive(Debug, Args)]

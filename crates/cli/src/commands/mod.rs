@@ -3,6 +3,7 @@
 mod avalanche;
 mod bench;
 mod convert;
+pub mod cover;
 mod demo;
 mod info;
 mod render;
@@ -25,5 +26,6 @@ pub fn dispatch(cli: Cli) -> Result<(), Failure> {
         Command::Bench(a) => bench::run(a, g),
         Command::Avalanche(a) => avalanche::run(a, g),
         Command::Serve(a) => serve::run(a, g),
+        Command::Cover(a) => cover::run(a, g),
     }
 }
