@@ -294,7 +294,7 @@ mod tests {
         };
         assert!((total(&s) - 3.0).abs() < 1e-9, "{}", total(&s));
         let n0 = s.leaves().len();
-        assert_eq!(n0, 7 * 7);
+        assert_eq!(n0, 8 * 8, "k = ceil(3.6 / 0.5)");
         s.cells[0].volume = 2.0;
         let first = s.split(0);
         assert_eq!(s.leaves().len(), n0 + 3);

@@ -119,7 +119,7 @@ pub struct StabilityParams {
     /// avalanches in the last pass moved only a very small amount of snow"); ours: 1e-5.
     pub min_moved_fraction: f64,
     /// Height difference below which two sites count as level, metres (keeps water from
-    /// trading micro-amounts forever); ours: 0.2 mm.
+    /// trading micro-amounts forever); ours: 0.01 mm.
     pub level_tolerance_m: f64,
     /// Avalanche particles per edge transit (Section 4.3: "usually < 5").
     pub edge_particles: u32,
@@ -138,7 +138,7 @@ impl Default for StabilityParams {
         Self {
             max_passes: 400,
             min_moved_fraction: 1e-5,
-            level_tolerance_m: 2e-4,
+            level_tolerance_m: 1e-5,
             edge_particles: 4,
             edge_speed_m_s: 0.5,
             restitution: 0.3,

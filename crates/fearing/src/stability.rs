@@ -28,7 +28,8 @@ use crate::tracer::{Tag, Tracer};
 use serde::Serialize;
 use snowscape_mesh::Scene;
 use snowscape_terrain::random::uniform;
-use std::collections::HashSet;
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashSet};
 
 /// What one stability phase did.
 #[derive(Debug, Clone, Default, Serialize, PartialEq)]
@@ -162,10 +163,24 @@ pub fn stabilise(
             restitution: sp.restitution,
             rings: 8,
         };
-        u1.sort_by(|&a, &b| top(&vol, b).total_cmp(&top(&vol, a)).then(a.cmp(&b)));
+        // The pass examines u1 from the top down; higher neighbours that lose their support
+        // re-enter this pass at once (so a drawdown climbs a slope in one pass), receivers wait
+        // for the next one.
+        let mut heap: BinaryHeap<(u64, Reverse<usize>)> = u1
+            .iter()
+            .map(|&i| (order_key(top(&vol, i)), Reverse(i)))
+            .collect();
+        let mut in_heap = vec![false; n];
+        for &i in &u1 {
+            in_heap[i] = true;
+        }
+        let cap = 4 * u1.len() + 16;
+        let mut work = 0;
         let mut u2 = Vec::new();
         let mut moved = 0.0;
-        for &s in &u1 {
+        while let Some((_, Reverse(s))) = heap.pop() {
+            in_heap[s] = false;
+            work += 1;
             rep.tests += 1;
             let group = topo.group[s];
             let own_tri = Tag::Scene {
@@ -357,8 +372,14 @@ pub fn stabilise(
                 mark(&mut u2, &mut in_u2, s);
                 let ts = top(&vol, s);
                 for nb in &topo.neighbours[s] {
-                    if top(&vol, nb.site as usize) > ts {
-                        mark(&mut u2, &mut in_u2, nb.site as usize);
+                    let h = nb.site as usize;
+                    if top(&vol, h) > ts && !in_heap[h] {
+                        if work < cap {
+                            in_heap[h] = true;
+                            heap.push((order_key(top(&vol, h)), Reverse(h)));
+                        } else {
+                            mark(&mut u2, &mut in_u2, h);
+                        }
                     }
                 }
             }
@@ -383,6 +404,12 @@ pub fn stabilise(
     sync(sites, topo, &vol);
     rep.volume_after_m3 = total(&vol);
     rep
+}
+
+/// A u64 that orders like the f64 height (for the max-heap).
+fn order_key(z: f64) -> u64 {
+    let b = z.to_bits();
+    if b >> 63 == 1 { !b } else { b | (1 << 63) }
 }
 
 fn mark(list: &mut Vec<usize>, flag: &mut [bool], i: usize) {

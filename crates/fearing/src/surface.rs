@@ -160,7 +160,8 @@ impl SnowSurface {
     }
 }
 
-/// `iterations` Jacobi steps of mass-conserving depth diffusion between neighbouring sites.
+/// `iterations` Jacobi steps of mass-conserving depth diffusion between neighbouring sites
+/// (pairs where either site saw no sky are left alone, so occlusion boundaries stay sharp).
 pub fn smooth_volumes(sites: &mut LaunchSites, topo: &Topology, iterations: u32) {
     let n = topo.leaves.len();
     for _ in 0..iterations {
@@ -174,11 +175,17 @@ pub fn smooth_volumes(sites: &mut LaunchSites, topo: &Topology, iterations: u32)
             .iter()
             .map(|&c| sites.cells[c as usize].area_xy())
             .collect();
+        let frac: Vec<f64> = topo
+            .leaves
+            .iter()
+            .map(|&c| sites.cells[c as usize].sky_fraction())
+            .collect();
         let mut delta = vec![0.0f64; n];
         for i in 0..n {
             for nb in &topo.neighbours[i] {
                 let j = nb.site as usize;
-                if j <= i {
+                // Never smooth into a site no flake could reach from the sky (a roof's shadow).
+                if j <= i || frac[i] == 0.0 || frac[j] == 0.0 {
                     continue;
                 }
                 let deg = topo.neighbours[i].len().max(topo.neighbours[j].len()) as f64;
