@@ -202,6 +202,7 @@ fn site_kernel(
     let (y0, y1) = ((cy - reach).max(0), (cy + reach).min(h - 1));
     let s = field.base(i);
     let h0 = field.depth;
+    let inv_h0 = 1.0 / h0;
     let roomy = field.roomy(i);
     let b = bucket as i64;
     let mut sums = Sums {
@@ -229,6 +230,7 @@ fn site_kernel(
                         (y * w + x) as usize,
                         s,
                         h0,
+                        inv_h0,
                         roomy,
                     );
                 }
@@ -270,6 +272,7 @@ fn member_term(
     column: usize,
     s: f32,
     h0: f32,
+    inv_h0: f32,
     roomy: bool,
 ) {
     sums.visited += 1;
@@ -280,7 +283,8 @@ fn member_term(
             true
         }
         Some((m, dz)) => {
-            let q = (clipped(dz, h0) / h0 * LAMBDA_ONE).round() as i64;
+            // Truncated to 2^-24 h0: one instruction, the same on every machine.
+            let q = ((dz * inv_h0).clamp(-1.0, 1.0) * LAMBDA_ONE) as i64;
             sums.lambda += wq * q;
             sums.member_weight += wq;
             if field.visible(m) {

@@ -36,6 +36,8 @@ pub struct SiteField {
     pub capacity: Vec<f32>,
     /// Initial snow height `h0(p)`, metres.
     pub h0: Vec<f32>,
+    /// Base surface `s(p) = z(p) + h0(p)`, metres.
+    base: Vec<f32>,
     /// Column index of each site.
     pub column: Vec<u32>,
     /// For bridge sites, the distance coefficient to the supports in [0, 1] (0 at a support,
@@ -69,6 +71,7 @@ impl SiteField {
             z: Vec::with_capacity(n),
             capacity: Vec::with_capacity(n),
             h0: Vec::with_capacity(n),
+            base: Vec::with_capacity(n),
             column: Vec::with_capacity(n),
             bridge: Vec::with_capacity(n),
             depth,
@@ -104,7 +107,9 @@ impl SiteField {
         };
         self.z.push(z);
         self.capacity.push(capacity);
-        self.h0.push((self.depth * loss).min(capacity));
+        let h0 = (self.depth * loss).min(capacity);
+        self.h0.push(h0);
+        self.base.push(z + h0);
         self.column.push(column as u32);
         self.bridge.push(bridge);
     }
@@ -133,7 +138,7 @@ impl SiteField {
     /// Base surface `s(p) = z(p) + h0(p)`.
     #[inline]
     pub fn base(&self, i: usize) -> f32 {
-        self.z[i] + self.h0[i]
+        self.base[i]
     }
 
     /// Whether nothing is above site `i`.
@@ -161,9 +166,9 @@ impl SiteField {
             return None;
         }
         let mut best = lo;
-        let mut best_d = self.base(lo) - s;
+        let mut best_d = self.base[lo] - s;
         for k in lo + 1..hi {
-            let d = self.base(k) - s;
+            let d = self.base[k] - s;
             if d.abs() < best_d.abs() {
                 best = k;
                 best_d = d;
