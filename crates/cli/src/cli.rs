@@ -21,6 +21,8 @@ Examples:
   snowscape avalanche --dem dem.tif --release 631250,5220400 --thickness 0.8
   snowscape cover --mesh ../shared/data/meshes/spider.obj --method diffusion --out out/spider
   snowscape cover --mesh teapot.obj --up z --scale 0.01 --dem dem.tif --bridge 0.05 --overhang
+  snowscape transport --scenario castle --out out/castle   # Jubert 2018 Table 7.I
+  snowscape transport --dem dem.tif --scenario storm.toml --out out/storm
   snowscape serve --size 512 --project proj      # the browser editor on http://127.0.0.1:8080
   snowscape bench --size 1024                     # kernel throughput and memory-bandwidth share
 
@@ -71,6 +73,9 @@ pub enum Command {
     /// Cover a triangle-mesh scene (alone or standing on a DEM) with snow: snow mesh (glb,
     /// OBJ) with boundary texture, preview and report.
     Cover(crate::commands::cover::CoverArgs),
+    /// Physical snow transport (Jubert 2018): 3D wind, precipitation map, saltation,
+    /// suspension, sublimation and melt over a DEM or a mesh scene.
+    Transport(TransportArgs),
 }
 
 #[derive(Debug, Args)]
@@ -315,6 +320,64 @@ pub struct ServeArgs {
     /// Run live avalanches and skiers as fast as they compute instead of at 25 frames/s.
     #[arg(long)]
     pub no_pace: bool,
+    #[command(flatten)]
+    pub dem_input: DemInputArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct TransportArgs {
+    /// Terrain raster (.asc, .tif, .png, .raw/.r16, .npy): the scene, or the ground a
+    /// --mesh stands on.
+    #[arg(long)]
+    pub dem: Option<PathBuf>,
+    /// Triangle mesh (.obj, .gltf/.glb, .ply): the scene (on flat ground at its lowest
+    /// point), or objects standing on the --dem.
+    #[arg(long)]
+    pub mesh: Option<PathBuf>,
+    /// Scenario: a TOML file (Jubert 2018 Table 6.I parameters and weather timeline) or a
+    /// shipped one: castle, valley (Table 7.I). Default: 36 h of the Table 7.I weather on the
+    /// input, with a wind grid fitted to it.
+    #[arg(long)]
+    pub scenario: Option<String>,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "out/transport")]
+    pub out: PathBuf,
+    /// Simulated time, hours (overrides the scenario).
+    #[arg(long, allow_negative_numbers = true)]
+    pub hours: Option<f64>,
+    /// Flakes of the precipitation map (overrides the scenario).
+    #[arg(long)]
+    pub flakes: Option<usize>,
+    /// Seed of the flakes (overrides the scenario): the same seed gives the same bytes.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Stable Fluids iterations averaged into the mean wind (overrides the scenario).
+    #[arg(long)]
+    pub wind_iterations: Option<usize>,
+    /// Voxel side of the wind grid, metres (overrides the scenario or the fitted grid).
+    #[arg(long)]
+    pub voxel_size: Option<f64>,
+    /// Voxel layers of the wind grid (overrides the scenario or the fitted grid).
+    #[arg(long)]
+    pub voxel_layers: Option<usize>,
+    /// Uniform snowfall instead of the precipitation map (Jubert 2018 Fig. 7.10).
+    #[arg(long)]
+    pub uniform_precipitation: bool,
+    /// Up axis of the mesh file: y (glTF, most OBJ) or z.
+    #[arg(long, default_value = "y")]
+    pub up: String,
+    /// Metres per mesh unit.
+    #[arg(long, default_value_t = 1.0)]
+    pub scale: f64,
+    /// Cell size of a mesh's top view, metres (mesh alone; default: its longer side / 100).
+    #[arg(long)]
+    pub resolution: Option<f64>,
+    /// Open ground around a mesh alone, metres (default: its longer side).
+    #[arg(long)]
+    pub margin: Option<f64>,
+    /// Where a --mesh stands on the --dem: X,Y map coordinates (default: the DEM's centre).
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub at: Option<String>,
     #[command(flatten)]
     pub dem_input: DemInputArgs,
 }

@@ -20,6 +20,7 @@ pub mod read;
 pub mod report;
 pub mod scene;
 pub mod terrain;
+pub mod top_view;
 pub mod write;
 
 pub use error::MeshError;

@@ -14,6 +14,7 @@ pub mod scenario;
 pub mod scheduler;
 pub mod skiing;
 pub mod snowfall;
+pub mod snowtran_transport;
 pub mod stability;
 pub mod wind_transport;
 pub mod winter;

@@ -34,6 +34,9 @@ pub enum PhenomenonError {
     /// A time step that is negative, NaN or infinite.
     #[error("invalid time step {dt_days} days: it must be finite and non-negative")]
     InvalidTimeStep { dt_days: f64 },
+    /// The physical wind transport (Jubert 2018) rejected a parameter or met a bad value.
+    #[error("snowtran wind transport: {0}")]
+    Transport(#[from] snowscape_transport::TransportError),
 }
 
 /// Checks that a per-cell map covers the grid.

@@ -110,6 +110,8 @@ pub struct Parameters {
     pub stability: StabilityParams,
     pub powder_diffusion: DiffusionParams,
     pub wind_transport: WindTransportParams,
+    /// The physical wind transport, used when `wind_transport.model = "snowtran"`.
+    pub snowtran: crate::snowtran_transport::SnowTranParams,
     pub avalanche: crate::avalanches::AvalancheParameters,
 }
 

@@ -48,10 +48,24 @@ pub use stencils::{
     second_difference, tamping_share, vertical_wind_change,
 };
 
+/// Which physics moves snow with the wind in a season.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WindModel {
+    /// Cordonnier 2018 Section 5.4: curvature erosion, deposit downwind, wind shadows.
+    #[default]
+    Cordonnier,
+    /// Jubert 2018 Section 5.5 (SnowTran-3D): saltation with the fetch rule, suspension and
+    /// sublimation ([`crate::snowtran_transport`], parameters in `[parameters.snowtran]`).
+    Snowtran,
+}
+
 /// Parameters of wind transport.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct WindTransportParams {
+    /// The physics of the wind events (the scenario switch). Default: Cordonnier's.
+    pub model: WindModel,
     /// Erosion rate, m of snow per day per s⁻¹ of negative `curvW` (m·s/day). Cordonnier 2018
     /// Table 2 lists k_erosion = 0.1 (units garbled in the text; `k · curvW · δt` must be a
     /// depth, which fixes them). With a 10 m/s wind over a crest of curvature −0.02 /m this
@@ -73,6 +87,7 @@ pub struct WindTransportParams {
 impl Default for WindTransportParams {
     fn default() -> Self {
         Self {
+            model: WindModel::Cordonnier,
             k_erosion: 0.1,
             erode_unstable: true,
             slab_slope_deg: 30.0,

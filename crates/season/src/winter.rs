@@ -16,8 +16,9 @@ use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
 use crate::scheduler::{Event, EventKind, SECONDS_PER_DAY, Scheduler};
 use crate::skiing::SkiStats;
 use crate::snowfall::{self, SnowfallScratch};
+use crate::snowtran_transport::{self, SnowTranForcing, SnowTranScratch};
 use crate::stability::{self, StabilityScratch};
-use crate::wind_transport::{self, WindMaps, WindScratch};
+use crate::wind_transport::{self, WindMaps, WindModel, WindScratch};
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::AvalancheScratch;
 use snowscape_avalanche::release_area::release_at_point;
@@ -81,6 +82,9 @@ pub struct SeasonBudget {
     pub diffusion_outflow: f64,
     /// Snow blown out of the grid.
     pub wind_outflow: f64,
+    /// Blowing snow sublimated (the physical wind transport only).
+    #[serde(default)]
+    pub wind_sublimation: f64,
     /// Avalanche snow that flowed out of the grid.
     pub avalanche_outflow: f64,
 }
@@ -93,6 +97,7 @@ impl SeasonBudget {
             - self.densification
             - self.diffusion_outflow
             - self.wind_outflow
+            - self.wind_sublimation
             - self.avalanche_outflow
     }
 }
@@ -131,6 +136,7 @@ pub struct Winter {
     stability_scratch: StabilityScratch,
     diffusion_scratch: DiffusionScratch,
     wind_scratch: WindScratch,
+    snowtran_scratch: SnowTranScratch,
     /// Bedrock slope per cell, degrees (for the avalanche hazard).
     slope_deg: Vec<f32>,
     /// Avalanche hazard per cell, 1/day (recomputed when the snow changes).
@@ -214,6 +220,7 @@ impl Winter {
             stability_scratch: StabilityScratch::default(),
             diffusion_scratch: DiffusionScratch::default(),
             wind_scratch: WindScratch::default(),
+            snowtran_scratch: SnowTranScratch::default(),
             slope_deg: Vec::new(),
             hazard: Vec::new(),
             avalanche_maps: AvalancheMaps::default(),
@@ -631,6 +638,28 @@ impl Winter {
                 )
                 .map_err(err)?;
                 b.diffusion_outflow += r.border_outflow;
+            }
+            EventKind::WindTransportStep if p.wind_transport.model == WindModel::Snowtran => {
+                let e = &self.environment;
+                let sun = &self.base_environment.sun;
+                let forcing = SnowTranForcing {
+                    wind_u: &e.wind_u,
+                    wind_v: &e.wind_v,
+                    temperature,
+                    latitude_deg: sun.latitude_deg,
+                    day_of_year: f64::from(sun.start_day) + day,
+                    start_day: day,
+                };
+                let r = snowtran_transport::step_season(
+                    &p.snowtran,
+                    &mut self.terrain,
+                    &forcing,
+                    &mut self.snowtran_scratch,
+                    event.dt_days,
+                )
+                .map_err(err)?;
+                b.wind_outflow += r.border_net_outflow;
+                b.wind_sublimation += r.sublimated;
             }
             EventKind::WindTransportStep => {
                 let e = &self.environment;

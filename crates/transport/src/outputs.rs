@@ -31,19 +31,30 @@ fn fail(path: &Path, e: impl std::fmt::Display) -> OutputError {
     }
 }
 
+/// What the report says of the run besides its results.
+#[derive(Debug, Clone, Default)]
+pub struct RunContext<'a> {
+    /// Where the scene came from (file names, options), recorded as `input`.
+    pub input: serde_json::Value,
+    /// Cells outside the input (a DEM's nodata, filled for the wind): written as nodata.
+    pub mask: Option<&'a NodataMask>,
+    /// Wall-clock time of the whole command, s.
+    pub wall_s: f64,
+}
+
 /// Writes every output of `out` into `dir` (created if missing); `heights` is the scene's
-/// height map and `timings` the named stage durations (s) for the report. Returns the paths
-/// written.
+/// height map. Returns the paths written.
 pub fn write_outputs(
     dir: &Path,
     scenario: &Scenario,
     heights: &[f32],
     out: &RunOutputs,
-    timings: &[(&str, f64)],
+    context: &RunContext,
 ) -> Result<Vec<PathBuf>, OutputError> {
     std::fs::create_dir_all(dir).map_err(|e| fail(dir, e))?;
     let g = &out.geometry;
-    let mask = NodataMask::all_valid();
+    let all_valid = NodataMask::all_valid();
+    let mask = context.mask.unwrap_or(&all_valid);
     let mut written = Vec::new();
     let depth = out.state.depth();
     let maps: [(&str, Vec<&[f32]>); 7] = [
@@ -57,7 +68,7 @@ pub fn write_outputs(
     ];
     for (name, bands) in maps {
         let path = dir.join(name);
-        write_geotiff_bands(&path, g, &mask, &bands).map_err(|e| fail(&path, e))?;
+        write_geotiff_bands(&path, g, mask, &bands).map_err(|e| fail(&path, e))?;
         written.push(path);
     }
     let path = dir.join("wind3d.bin");
@@ -102,7 +113,15 @@ pub fn write_outputs(
             "final": b.final_mass,
             "closure_error": b.closure_error,
         },
-        "timings_s": timings.iter().map(|(k, v)| (k.to_string(), json!(v))).collect::<serde_json::Map<_, _>>(),
+        "input": context.input,
+        "timings_s": {
+            "voxelise": out.times.voxelise_s,
+            "wind": out.times.wind_s,
+            "terrain_wind": out.times.terrain_wind_s,
+            "precipitation": out.times.precipitation_s,
+            "transport": out.times.transport_s,
+            "wall": context.wall_s,
+        },
     });
     let text = serde_json::to_string_pretty(&report).map_err(|e| fail(&path, e))?;
     write_bytes_atomic(&path, text.as_bytes()).map_err(|e| fail(&path, e))?;

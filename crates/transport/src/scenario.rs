@@ -156,6 +156,69 @@ impl Scenario {
     }
 }
 
+/// The scenarios of Table 7.I shipped with the project, by name (`castle`, `valley`): the
+/// text of `crates/transport/scenarios/NAME.toml`.
+pub fn shipped_scenario(name: &str) -> Option<&'static str> {
+    match name {
+        "castle" => Some(include_str!("../scenarios/castle.toml")),
+        "valley" => Some(include_str!("../scenarios/valley.toml")),
+        _ => None,
+    }
+}
+
+/// A voxel grid for a scene of `geometry` whose surface spans `[lowest, highest]` m: voxels
+/// of at least `min_voxel_m`, at most `max_columns` along the longer side, and layers for
+/// the relief plus open air above it (two thirds of the relief, at least 15 voxels, as the
+/// thesis's valley: 2000 m of air column over 1200 m of relief). Returns `(size, layers)`.
+pub fn fit_voxels(
+    geometry: &GridGeometry,
+    lowest: f64,
+    highest: f64,
+    min_voxel_m: f64,
+    max_columns: usize,
+) -> (f64, usize) {
+    let (ex, ey) = geometry.extent_m();
+    let size = min_voxel_m.max(ex.max(ey) / max_columns.max(1) as f64);
+    let relief = (highest - lowest).max(0.0);
+    let air = (relief * 2.0 / 3.0).max(15.0 * size);
+    // One voxel of ground under the lowest point (the grid's base is `lowest - size`).
+    let layers = ((relief + air) / size).ceil() as usize + 1;
+    (size, layers.clamp(8, 256))
+}
+
+/// Checks that the voxel grid of `scenario` holds the scene's surface with air above it:
+/// its top must clear the highest point by two voxels.
+pub fn check_voxel_height(
+    scenario: &Scenario,
+    lowest: f64,
+    highest: f64,
+) -> Result<(), TransportError> {
+    let top = lowest - scenario.voxel_size_m + scenario.voxel_size_m * scenario.voxel_layers as f64;
+    if top < highest + 2.0 * scenario.voxel_size_m {
+        return Err(TransportError::InvalidParameter {
+            name: "voxel_layers",
+            value: scenario.voxel_layers as f64,
+            reason: "the wind grid's top must clear the scene's highest point by two voxels (raise voxel_layers or voxel_size_m)",
+        });
+    }
+    Ok(())
+}
+
+/// Wall-clock seconds of each stage of a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StageTimes {
+    /// Voxelisation.
+    pub voxelise_s: f64,
+    /// The 3D wind iterations (Chapter 3).
+    pub wind_s: f64,
+    /// The wind at `z_r` and its terrain modification (Section 5.4).
+    pub terrain_wind_s: f64,
+    /// The precipitation map (Chapter 4).
+    pub precipitation_s: f64,
+    /// The transport steps (Section 5.5).
+    pub transport_s: f64,
+}
+
 /// Everything a run produces.
 #[derive(Debug, Clone)]
 pub struct RunOutputs {
@@ -191,6 +254,8 @@ pub struct RunOutputs {
     pub precipitation_fallback: bool,
     /// Transport steps taken.
     pub steps: usize,
+    /// Wall-clock time of each stage.
+    pub times: StageTimes,
 }
 
 /// Resamples a map on the wind's column grid onto the transport grid.
@@ -212,6 +277,10 @@ pub fn run(
     check_len("height", heights, geometry)?;
     let timeline = Timeline(scenario.weather.clone());
     let lowest = heights.iter().fold(f32::INFINITY, |m, &z| m.min(z));
+    let highest = heights.iter().fold(f32::NEG_INFINITY, |m, &z| m.max(z));
+    check_voxel_height(scenario, f64::from(lowest), f64::from(highest))?;
+    let mut times = StageTimes::default();
+    let clock = std::time::Instant::now();
     let voxels = VoxelGrid::from_heights(
         geometry,
         heights,
@@ -222,17 +291,23 @@ pub fn run(
     let column_geometry = geometry
         .resampled(voxels.nx, voxels.ny)
         .map_err(|e| TransportError::Scene(e.to_string()))?;
+    times.voxelise_s = clock.elapsed().as_secs_f64();
+    let clock = std::time::Instant::now();
     let mut solver = WindSolver::new(voxels.clone(), scenario.wind.clone())?;
     let mut wind_report = None;
     for _ in 0..scenario.wind_iterations {
         wind_report = Some(solver.iterate());
     }
     let wind_report = wind_report.expect("at least one iteration (validated)");
+    times.wind_s = clock.elapsed().as_secs_f64();
+    let clock = std::time::Instant::now();
     let z_r = scenario.transport.reference_height_m;
     let (cu, cv) = solver.wind_at_height(z_r);
     let u0 = to_transport(column_geometry.clone(), cu, geometry);
     let v0 = to_transport(column_geometry.clone(), cv, geometry);
     let (wind_u, wind_v) = modify_wind(&scenario.transport, geometry, heights, &u0, &v0)?;
+    times.terrain_wind_s = clock.elapsed().as_secs_f64();
+    let clock = std::time::Instant::now();
     let (precipitation_ratio, flakes_landed, precipitation_fallback) =
         if scenario.uniform_precipitation {
             (vec![1.0; geometry.len()], 0, false)
@@ -251,6 +326,8 @@ pub fn run(
                 (ratio, map.landed, false)
             }
         };
+    times.precipitation_s = clock.elapsed().as_secs_f64();
+    let clock = std::time::Instant::now();
     let mut state = SnowState::uniform(
         geometry,
         scenario.initial_depth_m as f32,
@@ -311,6 +388,7 @@ pub fn run(
         t += dt;
         steps += 1;
     }
+    times.transport_s = clock.elapsed().as_secs_f64();
     Ok(RunOutputs {
         geometry: geometry.clone(),
         state,
@@ -327,6 +405,7 @@ pub fn run(
         flakes_landed,
         precipitation_fallback,
         steps,
+        times,
     })
 }
 

@@ -10,6 +10,7 @@ mod render;
 mod run;
 mod season;
 mod serve;
+mod transport;
 
 use crate::cli::{Cli, Command};
 use crate::failure::Failure;
@@ -27,5 +28,6 @@ pub fn dispatch(cli: Cli) -> Result<(), Failure> {
         Command::Avalanche(a) => avalanche::run(a, g),
         Command::Serve(a) => serve::run(a, g),
         Command::Cover(a) => cover::run(a, g),
+        Command::Transport(a) => transport::run_command(a, g),
     }
 }

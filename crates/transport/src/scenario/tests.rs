@@ -57,11 +57,38 @@ fn a_small_castle_run_closes_its_budget() {
     assert!(mean_swe > 60.0 && mean_swe < 91.0, "{mean_swe}");
     // Every output file is written, and the report carries the budget.
     let dir = tempfile::tempdir().unwrap();
-    let files = crate::outputs::write_outputs(dir.path(), &s, &z, &out, &[("total", 1.0)]).unwrap();
+    let files =
+        crate::outputs::write_outputs(dir.path(), &s, &z, &out, &Default::default()).unwrap();
     assert_eq!(files.len(), 10);
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
             .unwrap();
     let closure = report["mass_budget"]["closure_error"].as_f64().unwrap();
     assert_eq!(closure, b.closure_error);
+}
+
+#[test]
+fn fitted_voxels_hold_the_relief_with_air_above_and_low_grids_are_refused() {
+    // avaWog-like: 2450 m x 2775 m of 5 m cells, 1250..2550 m.
+    let g = GridGeometry::square(490, 555, 5.0).unwrap();
+    let (size, layers) = fit_voxels(&g, 1250.0, 2550.0, 5.0, 128);
+    assert!((size - 2775.0 / 128.0).abs() < 1e-9, "{size}");
+    let top = 1250.0 - size + size * layers as f64;
+    assert!(top >= 2550.0 + 1300.0 * 2.0 / 3.0, "top {top}");
+    let mut s = Scenario {
+        voxel_size_m: size,
+        voxel_layers: layers,
+        ..Scenario::default()
+    };
+    check_voxel_height(&s, 1250.0, 2550.0).unwrap();
+    // A flat scene still gets 15 voxels of air; fine cells set the smallest voxel.
+    let flat = GridGeometry::square(10, 10, 1.0).unwrap();
+    assert_eq!(fit_voxels(&flat, 0.0, 0.0, 2.0, 128), (2.0, 16));
+    s.voxel_layers = 10;
+    let e = check_voxel_height(&s, 1250.0, 2550.0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("voxel_layers = 10"), "{e}");
+    assert_eq!(shipped_scenario("castle"), Some(CASTLE));
+    assert!(shipped_scenario("glacier").is_none());
 }
