@@ -176,7 +176,8 @@ fn read_input(args: &CoverArgs) -> anyhow::Result<CoverInput> {
                     .map(|&i| o.positions[i as usize]),
             );
         }
-        all.triangles = vec![[0, 0, 0]];
+        // Bounds count the vertices of triangles: one point-triangle per vertex.
+        all.triangles = (0..all.positions.len() as u32).map(|i| [i, i, i]).collect();
         let before = all
             .bounds()
             .ok_or_else(|| anyhow!("the mesh has no triangles"))?;

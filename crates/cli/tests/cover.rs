@@ -1,0 +1,204 @@
+//! End-to-end tests of `snowscape cover --method diffusion` (von Festenberg & Gumhold 2011)
+//! on the real meshes of ../shared/data/meshes (spider legs, teapots with lids and handles;
+//! these tests fail when the folder is missing: they exist to check the method on real
+//! files), on a mesh standing on a real DEM, and on bad input (exit code 2 naming the value).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn data(rel: &str) -> PathBuf {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
+    assert!(
+        p.is_file(),
+        "{} is missing: the cover tests need ../shared/data beside the checkout",
+        p.display()
+    );
+    p
+}
+
+fn snowscape(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_snowscape"))
+        .args(args)
+        .output()
+        .expect("the snowscape binary runs")
+}
+
+fn report(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn spider_gets_bridged_rounded_snow_and_every_output() {
+    let mesh = data("meshes/spider.obj");
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("spider");
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--method",
+        "diffusion",
+        "--growth",
+        "3",
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "snow.glb",
+        "snow.obj",
+        "snow.mtl",
+        "snow_0.png",
+        "mask.png",
+        "preview.png",
+        "report.json",
+        "growth/frame_0002.glb",
+    ] {
+        assert!(dir.join(f).is_file(), "missing {f}");
+    }
+    let glb = std::fs::read(dir.join("snow.glb")).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+    let obj = std::fs::read_to_string(dir.join("snow.obj")).unwrap();
+    assert!(obj.contains("\nvt ") && obj.contains("\nvn ") && obj.contains("mtllib snow.mtl"));
+    let r = report(&dir);
+    assert_eq!(r["method"], "diffusion");
+    let h0 = r["parameters"]["depth_m"].as_f64().unwrap();
+    let max = r["snow"]["max_height_m"].as_f64().unwrap();
+    // Rounded: heights reach above h0 in hollows but never beyond 2 h0 (Eq. 6).
+    assert!(
+        max > 0.5 * h0 && max <= 2.0 * h0 + 1e-6,
+        "max {max}, h0 {h0}"
+    );
+    // The legs' gaps near the body are bridged.
+    assert!(
+        r["sites"]["bridge_sites"].as_u64().unwrap() > 50,
+        "{}",
+        r["sites"]
+    );
+    assert!(r["snow"]["triangles"].as_u64().unwrap() > 10_000);
+    assert!(
+        r["snow"]["boundary_loops"].as_u64().unwrap() > 10,
+        "every leg has an edge"
+    );
+    assert!(r["kernel"]["sites_per_s"].as_f64().unwrap() > 0.0);
+    assert!(r["growth"]["run"]["steps"].as_u64().unwrap() > 3);
+}
+
+#[test]
+fn teapots_z_up_with_overhangs() {
+    let mesh = data("meshes/teapot_assimp.obj");
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("teapots");
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--up",
+        "z",
+        "--scale",
+        "0.01",
+        "--overhang",
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = report(&dir);
+    assert!(r["parameters"]["overhang_m"].as_f64().unwrap() > 0.0);
+    assert!(r["sites"]["bridge_sites"].as_u64().unwrap() > 0);
+    // Lids on bodies and handles over empty space: several depth layers.
+    assert!(r["sites"]["layers"].as_u64().unwrap() >= 2);
+    // Metres: the teapots are about 2.6 m across at 1 cm per unit.
+    let d = r["parameters"]["diameter_m"].as_f64().unwrap();
+    assert!(d > 2.0 && d < 4.0, "{d}");
+}
+
+#[test]
+fn a_mesh_standing_on_a_dem_is_covered_with_the_ground_around_it() {
+    let mesh = data("meshes/bunny_npm.obj");
+    let dem = data("dem/rme_idaho_50m/dem.asc");
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("bunny");
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--scale",
+        "10",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = report(&dir);
+    let ground = r["input"]["dem"]["ground_m"].as_f64().unwrap();
+    assert!((2000.0..2200.0).contains(&ground), "{ground}");
+    // The ground around the bunny holds snow too: more sites than the bunny alone.
+    assert!(r["sites"]["ground_sites"].as_u64().unwrap() > 20_000);
+}
+
+#[test]
+fn bad_input_is_refused_with_exit_code_2_naming_the_value() {
+    let out = tempfile::tempdir().unwrap();
+    let spider = data("meshes/spider.obj");
+    let o = snowscape(&["cover", "--mesh", "/nonexistent/scene.obj", "--out", "x"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("/nonexistent/scene.obj"),
+        "{}",
+        stderr(&o)
+    );
+    let dir = out.path().join("r");
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        spider.to_str().unwrap(),
+        "--radius",
+        "-0.5",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("-0.5") && stderr(&o).contains("radius"),
+        "{}",
+        stderr(&o)
+    );
+    // A degenerate mesh: only zero-area triangles.
+    let flat = out.path().join("degenerate.obj");
+    std::fs::write(&flat, "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        flat.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("degenerate.obj"), "{}", stderr(&o));
+    // A vertical wall (y up: a triangle in the x-y plane of the file stands upright).
+    let wall = out.path().join("wall.obj");
+    std::fs::write(&wall, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        wall.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("nothing can hold snow") || stderr(&o).contains("footprint"),
+        "{}",
+        stderr(&o)
+    );
+}
