@@ -61,5 +61,5 @@ fn main() {
             p.stability.left_scene_m3
         );
     }
-    write_outputs(std::path::Path::new(&out), &scene, &c).expect("outputs");
+    write_outputs(std::path::Path::new(&out), &scene, &c, None).expect("outputs");
 }

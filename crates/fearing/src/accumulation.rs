@@ -263,7 +263,11 @@ fn refine(
         .map(|i| (dis[i], topo.leaves[i]))
         .collect();
     split.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    split.truncate((n / 4).max(64));
+    // Limits (Section 3.2): at most n/4 splits a round, and never more than three times the
+    // initial sites in all.
+    let roots = sites.cells.iter().filter(|c| c.level == 0).count();
+    let room = (3 * roots).saturating_sub(n) / 3;
+    split.truncate((n / 4).max(64).min(room));
     // Merge: parents whose four leaf children all agree on (nearly) full exposure or occlusion,
     // as do their neighbours.
     let site_of = topo.site_of_cell(sites.cells.len());

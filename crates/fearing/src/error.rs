@@ -28,6 +28,9 @@ pub enum FearingError {
     /// The snow weighting image ("snow writing") cannot be used.
     #[error("sky weight image {what}")]
     SkyWeight { what: String },
+    /// No snow lies deep enough to make a surface.
+    #[error("no snow settled: none of the {sites} launch sites holds {min_depth_m} m or more")]
+    NoSnow { sites: usize, min_depth_m: f64 },
     /// Writing an output failed.
     #[error(transparent)]
     Mesh(#[from] snowscape_mesh::MeshError),
