@@ -173,6 +173,21 @@ fn bad_input_is_refused_with_exit_code_2_naming_the_value() {
         "{}",
         stderr(&o)
     );
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        spider.to_str().unwrap(),
+        "--growth",
+        "0",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--growth") && stderr(&o).contains('0'),
+        "{}",
+        stderr(&o)
+    );
     // A degenerate mesh: only zero-area triangles.
     let flat = out.path().join("degenerate.obj");
     std::fs::write(&flat, "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
