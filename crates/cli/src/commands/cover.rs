@@ -33,15 +33,6 @@ pub enum CoverMethod {
     Fearing,
 }
 
-impl CoverMethod {
-    fn name(self) -> &'static str {
-        match self {
-            CoverMethod::Diffusion => "diffusion",
-            CoverMethod::Fearing => "fearing",
-        }
-    }
-}
-
 #[derive(Debug, Args)]
 pub struct CoverArgs {
     /// Triangle mesh (.obj, .ply, .gltf/.glb): the scene to cover with snow.
@@ -86,25 +77,34 @@ pub struct CoverArgs {
     /// Laplacian, no bridges or overhangs) as growth/frame_NNNN.glb.
     #[arg(long, value_name = "N")]
     pub growth: Option<usize>,
+    /// Time budget of the anytime accumulation loop, seconds (fearing; default 20).
+    #[arg(long, allow_negative_numbers = true)]
+    pub budget: Option<f64>,
+    /// Mean flake flutter radius fr, metres (fearing; default: the material's, 0.05 for snow,
+    /// 0 for water).
+    #[arg(long, allow_negative_numbers = true)]
+    pub flutter: Option<f64>,
+    /// Angle of repose, degrees (fearing; default: the material's, 50 for snow).
+    #[arg(long, allow_negative_numbers = true)]
+    pub aor: Option<f64>,
+    /// Constant wind X,Y (east, north), m/s (fearing).
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub wind: Option<String>,
+    /// Material preset (fearing): snow, flour, sand or water.
+    #[arg(long, default_value = "snow")]
+    pub material: String,
+    /// Random seed (fearing).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Launch sites aimed at (fearing; every upward triangle gets at least one).
+    #[arg(long)]
+    pub sites: Option<usize>,
+    /// Accumulation passes, each followed by stability (fearing).
+    #[arg(long)]
+    pub passes: Option<u32>,
     #[command(flatten)]
     pub dem_input: DemInputArgs,
 }
-
-/// The usage error of a method that is not built yet.
-#[derive(Debug)]
-pub struct MethodUnavailable(pub CoverMethod);
-
-impl std::fmt::Display for MethodUnavailable {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "method {} is not available yet: use --method diffusion",
-            self.0.name()
-        )
-    }
-}
-
-impl std::error::Error for MethodUnavailable {}
 
 /// What the front part read: the scene (mesh, and terrain when on a DEM) and its summary.
 pub struct CoverInput {
@@ -439,17 +439,109 @@ fn cover_diffusion(
     Ok(())
 }
 
-/// Fearing 2000 snow on meshes.
-// TODO(fearing helper): replace this body with the Fearing 2000 method (crates/fearing) and
-// add its flags (--budget, --flutter, --aor, --wind) to `CoverArgs`.
+/// Fearing 2000 snow on meshes (`snowscape-fearing`): `snow.glb`, `snow.obj` (+ MTL),
+/// `preview.png` and `report.json`.
 fn cover_fearing(
-    _args: &CoverArgs,
-    _global: &GlobalArgs,
-    _input: &CoverInput,
-    _t0: Instant,
+    args: &CoverArgs,
+    global: &GlobalArgs,
+    input: &CoverInput,
+    t0: Instant,
 ) -> Result<(), Failure> {
-    Err(Failure {
-        code: BAD_INPUT,
-        error: MethodUnavailable(CoverMethod::Fearing).into(),
-    })
+    use snowscape_fearing::{FearingError, FearingParams, Material};
+    let scene = &input.scene;
+    let material = Material::preset(&args.material).bad_input()?;
+    let mut params = FearingParams::with_material(material);
+    if let Some(a) = args.aor {
+        params.material.aor_deg = a;
+    }
+    params.depth_m = match args.depth {
+        Some(d) => d,
+        None => {
+            let b = scene
+                .bounds()
+                .ok_or_else(|| anyhow!("the mesh has no triangles"))
+                .bad_input()?;
+            0.02 * (b.size()[0] as f64).hypot(b.size()[1] as f64)
+        }
+    };
+    if let Some(b) = args.budget {
+        params.budget_s = b;
+    }
+    params.flutter_m = args.flutter;
+    if let Some(w) = &args.wind {
+        let (x, y) = parse_pair(w, "--wind").bad_input()?;
+        params.wind_m_s = [x, y];
+    }
+    params.seed = args.seed;
+    if let Some(n) = args.sites {
+        params.target_sites = n;
+    }
+    if let Some(p) = args.passes {
+        params.passes = p;
+    }
+    let c = snowscape_fearing::cover(scene, &params).bad_input()?;
+    let summary = json!({
+        "mesh": args.mesh.display().to_string(),
+        "up": args.up,
+        "metres_per_unit": args.scale,
+        "objects": input.mesh_report.objects.len(),
+        "vertices": input.mesh_report.vertices(),
+        "triangles": input.mesh_report.triangles(),
+        "degenerate_dropped": input.mesh_report.degenerate_dropped(),
+        "open_edges": input.mesh_report.open_edges(),
+        "non_manifold_edges": input.mesh_report.non_manifold_edges(),
+        "bounds_m": scene.bounds(),
+        "dem": input.dem,
+        "read_s": input.read_s,
+        "wall_s": t0.elapsed().as_secs_f64(),
+    });
+    snowscape_fearing::write_outputs(&args.out, scene, &c, Some(summary)).map_err(|e| {
+        let code = match e {
+            FearingError::NoSnow { .. } | FearingError::Mesh(_) | FearingError::Write(_) => {
+                crate::failure::JOB_FAILED
+            }
+            _ => BAD_INPUT,
+        };
+        Failure {
+            code,
+            error: e.into(),
+        }
+    })?;
+    if !global.quiet {
+        let r = &c.report;
+        println!(
+            "cover (fearing): {} sites in {} edge groups, {} flakes ({:.0} flakes/s), snow {} \
+             triangles, max {:.3} m, {:.3} m³ caught, {:.3} m³ left the scene, {:.2} s -> {}",
+            r.sites_final,
+            r.edge_groups,
+            r.flakes_shot,
+            r.flakes_per_s,
+            r.surface_triangles,
+            r.max_depth_m,
+            r.mass.allocated_m3,
+            r.mass.left_scene_m3,
+            t0.elapsed().as_secs_f64(),
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Parses `X,Y` (finite numbers), naming the flag and the value in errors.
+fn parse_pair(text: &str, flag: &str) -> anyhow::Result<(f64, f64)> {
+    let parts: Vec<&str> = text.split(',').collect();
+    let num = |s: &str| -> anyhow::Result<f64> {
+        let v: f64 = s
+            .trim()
+            .parse()
+            .with_context(|| format!("{flag} {text:?}: {s:?} is not a number"))?;
+        if !v.is_finite() {
+            bail!("{flag} {text:?}: {s:?} is not finite");
+        }
+        Ok(v)
+    };
+    match parts.as_slice() {
+        [x, y] => Ok((num(x)?, num(y)?)),
+        _ => bail!("{flag} {text:?}: expected two numbers X,Y"),
+    }
 }
