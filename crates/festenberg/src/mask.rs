@@ -20,15 +20,19 @@ pub fn boundary_mask(size: u32, seed: u64) -> RgbaImage {
     RgbaImage::from_fn(s, s, |x, y| {
         let u = (x as f32 + 0.5) / s as f32;
         let v = (y as f32 + 0.5) / s as f32;
-        let n = fbm(u, v, seed, 4);
-        let edge = 0.5 + 0.3 * (n - 0.5);
-        let mut a = smoothstep(edge - 0.06, edge + 0.06, v);
-        // Loose flakes in the transparent band.
-        let flakes = fbm(u, v, seed ^ 0x9e37_79b9_7f4a_7c15, 6);
-        if v > 0.1 && flakes > 0.68 {
-            a = a.max(smoothstep(0.68, 0.74, flakes) * smoothstep(0.1, 0.45, v));
-        }
-        let grain = 245.0 + 10.0 * fbm(u, v, seed.wrapping_add(7), 7);
+        // The main edge: a frayed line around v = 1/2.
+        let n = fbm(u, v, seed, 4, 6);
+        let edge = 0.5 + 0.4 * (n - 0.5);
+        let mut a = smoothstep(edge - 0.02, edge + 0.02, v);
+        // Holes in the snow just inside the edge, closing up further in.
+        let holes = fbm(u, v, seed ^ 0x5851_f42d_4c95_7f2d, 16, 4);
+        let depth = smoothstep(edge + 0.2, edge, v);
+        a *= 1.0 - depth * smoothstep(0.6, 0.66, holes);
+        // Loose flakes and clumps in the bare band below the edge.
+        let flakes = fbm(u, v, seed ^ 0x9e37_79b9_7f4a_7c15, 16, 4);
+        let near = smoothstep(edge - 0.3, edge, v);
+        a = a.max(near * smoothstep(0.64, 0.68, flakes));
+        let grain = 242.0 + 13.0 * fbm(u, v, seed.wrapping_add(7), 32, 3);
         let c = grain.clamp(0.0, 255.0) as u8;
         Rgba([c, c, 255, (255.0 * a.clamp(0.0, 1.0)).round() as u8])
     })
@@ -39,12 +43,12 @@ fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// Fractal value noise in [0, 1], periodic in `u` with period 1, `octaves` octaves from 4
-/// lattice cells per unit up.
-fn fbm(u: f32, v: f32, seed: u64, octaves: u32) -> f32 {
+/// Fractal value noise in [0, 1], periodic in `u` with period 1, `octaves` octaves from
+/// `base` lattice cells per unit up.
+fn fbm(u: f32, v: f32, seed: u64, base: u32, octaves: u32) -> f32 {
     let (mut sum, mut amp, mut total) = (0.0, 1.0, 0.0);
     for o in 0..octaves {
-        let cells = 4u32 << o;
+        let cells = base << o;
         sum += amp * value_noise(u * cells as f32, v * cells as f32, cells, seed + o as u64);
         total += amp;
         amp *= 0.5;
