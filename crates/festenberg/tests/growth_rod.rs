@@ -89,3 +89,46 @@ fn the_closed_form_is_the_steady_parabola_for_long_times() {
     let h = rod_solution(0.5, 2.0, 0.001, 0.01);
     assert!((h - 0.02).abs() < 1e-9, "{h}");
 }
+
+#[test]
+fn growth_frames_do_not_depend_on_the_thread_count() {
+    use snowscape_festenberg::grow_cover;
+    let s = scene(vec![
+        quad("floor", [0.0, 0.0, 3.0, 2.0], 0.0),
+        cube("box", [1.0, 0.5, 0.0], [1.6, 1.5, 0.5]),
+    ]);
+    let params = CoverParams {
+        depth_m: Some(0.1),
+        resolution_m: Some(0.05),
+        ..Default::default()
+    };
+    let growth = GrowthParams {
+        diffusion_m2: 0.02,
+        snowfall_m: 0.1,
+        duration: 1.0,
+        frames: 3,
+        stability: 0.9,
+    };
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut frames = Vec::new();
+                grow_cover::<FestenbergError>(&s, &params, &growth, |_, _, m| {
+                    frames.push(m);
+                    Ok(())
+                })
+                .unwrap();
+                frames
+            })
+    };
+    let (one, two) = (run(1), run(2));
+    assert_eq!(one.len(), 3);
+    assert!(one[2].triangles.len() > 100);
+    // The snow grows frame by frame.
+    let top = |m: &snowscape_mesh::SnowMesh| m.positions.iter().map(|p| p[2]).fold(0.0, f32::max);
+    assert!(top(&one[0]) < top(&one[2]));
+    assert_eq!(one, two);
+}
