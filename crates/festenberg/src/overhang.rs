@@ -6,9 +6,11 @@
 //! snow leans out over the edge like the "wad-like view of fresh snow". The paper leaves the
 //! length "up to the designer": here the peak offset is `overhang_m` (so `4·|g2|·overhang_m`).
 //!
-//! Bridges: the paper also bends bridges inwards "using (8) with r mapped on [-1..1]"; our
-//! bridges get that look from their parabolic base and lowered initial height instead
-//! ([`crate::bridges`]).
+//! Bridges: "bridges are given a more realistic look by using (8) with r mapped on [-1..1];
+//! this makes the snow height bended inwards at bridges". We read it as the offset turned
+//! round on bridge sites, scaled by their distance coefficient `d` (0 at a support, 1 in the
+//! middle, [`crate::bridges`]): `-4·|g2(r)|·d·overhang_m`, so the rims of a bridge curve in
+//! towards its middle (a waisted bridge) instead of leaning out over the gap.
 
 use crate::kernel::KernelField;
 
@@ -21,17 +23,22 @@ pub fn g2(r: f32) -> f32 {
 
 /// Horizontal offset (x east, y north, metres) of every site's snow vertex; zero where the
 /// site holds no snow or has no boundary within the kernel.
-pub fn offsets(kernel: &KernelField, overhang_m: f32) -> Vec<[f32; 2]> {
+/// `bridge` is each site's bridge coefficient (negative on ordinary sites).
+pub fn offsets(kernel: &KernelField, bridge: &[f32], overhang_m: f32) -> Vec<[f32; 2]> {
     kernel
         .edge
         .iter()
         .zip(&kernel.towards_edge)
         .zip(&kernel.height)
-        .map(|((&r, d), &h)| {
+        .zip(bridge)
+        .map(|(((&r, d), &h), &b)| {
             if h <= 0.0 {
                 return [0.0; 2];
             }
-            let len = 4.0 * g2(r) * overhang_m;
+            let mut len = 4.0 * g2(r) * overhang_m;
+            if b >= 0.0 {
+                len *= -b;
+            }
             [d[0] * len, d[1] * len]
         })
         .collect()
@@ -48,5 +55,23 @@ mod tests {
         let peak = 1.0 - std::f32::consts::FRAC_1_SQRT_2;
         assert!((g2(peak) - 0.25).abs() < 1e-6);
         assert!(g2(0.1) < 0.25 && g2(0.5) < 0.25);
+    }
+
+    #[test]
+    fn rims_lean_out_and_bridges_curve_in() {
+        let r = 1.0 - std::f32::consts::FRAC_1_SQRT_2;
+        let k = KernelField {
+            height: vec![0.1, 0.1, 0.0, 0.1],
+            edge: vec![r, r, r, 1.0],
+            towards_edge: vec![[1.0, 0.0]; 4],
+            visibility: vec![1.0; 4],
+            change: vec![0.0; 4],
+            members_visited: 0,
+        };
+        let o = offsets(&k, &[-1.0, 0.5, -1.0, -1.0], 2.0);
+        assert!((o[0][0] - 2.0).abs() < 1e-5, "peak offset: {:?}", o[0]);
+        assert!((o[1][0] + 1.0).abs() < 1e-5, "bridge half-way: {:?}", o[1]);
+        assert_eq!(o[2], [0.0, 0.0], "no snow, no offset");
+        assert_eq!(o[3], [0.0, 0.0], "far from edges");
     }
 }

@@ -146,7 +146,9 @@ pub fn cover(scene: &Scene, params: &CoverParams) -> Result<SnowCover, Festenber
         kernel::evaluate(&field, r.radius_m, r.bucket_columns)
     });
     let links = timer.run("links", || links(&field));
-    let offsets = r.overhang_m.map(|o| overhang::offsets(&kernel, o as f32));
+    let offsets = r
+        .overhang_m
+        .map(|o| overhang::offsets(&kernel, &field.bridge, o as f32));
     let surface = timer.run("mesh", || {
         surface_mesh::build(&field, &links, &kernel.height, offsets.as_deref())
     });
