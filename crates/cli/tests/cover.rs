@@ -65,6 +65,13 @@ fn spider_gets_bridged_rounded_snow_and_every_output() {
     }
     let glb = std::fs::read(dir.join("snow.glb")).unwrap();
     assert_eq!(&glb[..4], b"glTF");
+    // The JSON chunk: texture coordinates, the embedded mask and an alpha-masked material.
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let prim = &doc["meshes"][0]["primitives"][0];
+    assert!(prim["attributes"]["TEXCOORD_0"].is_u64(), "{prim}");
+    assert_eq!(doc["images"][0]["mimeType"], "image/png");
+    assert_eq!(doc["materials"][0]["alphaMode"], "MASK");
     let obj = std::fs::read_to_string(dir.join("snow.obj")).unwrap();
     assert!(obj.contains("\nvt ") && obj.contains("\nvn ") && obj.contains("mtllib snow.mtl"));
     let r = report(&dir);
