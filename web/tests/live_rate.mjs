@@ -1,0 +1,58 @@
+// Measures the live avalanche's update rate as the page sees it over loopback: the page of a
+// running `snowscape serve` (SNOWSCAPE_URL) in headless Chromium loads unstable snow on the
+// steepest slope, triggers an avalanche there and counts the binary flow frames (dirty tiles
+// of 16-bit heights) and avalanche status messages it receives per second while the flow runs.
+// Prints the numbers; asserts only that frames arrived (speed is measured, not tested).
+// Run through scripts/live-rate.sh.
+import { chromium } from 'playwright-core';
+import assert from 'node:assert/strict';
+
+const url = process.env.SNOWSCAPE_URL;
+if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
+const seconds = Number(process.env.SNOWSCAPE_SECONDS || 10);
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+});
+const page = await (await browser.newContext({ viewport: { width: 1200, height: 800 } })).newPage();
+page.on('pageerror', (e) => console.log('page error:', e.message));
+const t0 = Date.now();
+await page.goto(url);
+await page.waitForFunction(() => window.snowscape && window.snowscape.state && window.snowscape.grids.powder, null, { timeout: 300000 });
+await page.waitForTimeout(2000);
+const size = await page.evaluate(() => [window.snowscape.state.width, window.snowscape.state.height]);
+console.log(`terrain ${size[0]}x${size[1]}: page load to full state ${Date.now() - t0} ms`);
+const site = await page.evaluate(() => {
+  const { state: s, grids: g } = window.snowscape;
+  let best = [0, 0, 0];
+  for (let r = 8; r < s.height - 8; r++) for (let c = 8; c < s.width - 8; c++) {
+    const i = r * s.width + c;
+    const dz = Math.abs(g.bedrock[i + 1] - g.bedrock[i - 1]) + Math.abs(g.bedrock[i + s.width] - g.bedrock[i - s.width]);
+    if (dz > best[0]) best = [dz, c, r];
+  }
+  return { col: best[1], row: best[2] };
+});
+await page.evaluate((p) => window.snowscape.send({ type: 'brush', stroke: 1, op: 'add', target: 'unstable', col: p.col, row: p.row, radius_m: 400, strength: 2, value: 0 }), site);
+await page.waitForTimeout(1500);
+// Count from the first 'running' message, in the page's own clock.
+await page.evaluate(() => {
+  const a = window.snowscape;
+  a.rate = { frames0: null, t0: null };
+  a.watch = setInterval(() => {
+    const m = a.lastAvalanche;
+    if (m && m.phase === 'running' && a.rate.t0 === null) { a.rate.t0 = performance.now(); a.rate.frames0 = a.frames; }
+  }, 1);
+});
+await page.evaluate((p) => window.snowscape.send({ type: 'trigger_avalanche', col: p.col, row: p.row }), site);
+await page.waitForFunction(() => window.snowscape.rate.t0 !== null, null, { timeout: 60000 });
+await page.waitForFunction((s) => (window.snowscape.lastAvalanche && window.snowscape.lastAvalanche.phase === 'ended')
+  || performance.now() - window.snowscape.rate.t0 > s * 1000, seconds, { timeout: (seconds + 60) * 1000 });
+const r = await page.evaluate(() => {
+  const a = window.snowscape;
+  const dt = (performance.now() - a.rate.t0) / 1000;
+  return { frames: a.frames - a.rate.frames0, dt, phase: a.lastAvalanche.phase };
+});
+await browser.close();
+console.log(`live avalanche over loopback: ${r.frames} flow frames in ${r.dt.toFixed(2)} s = ${(r.frames / r.dt).toFixed(1)} updates/s (avalanche ${r.phase})`);
+assert.ok(r.frames > 0, 'no flow frame arrived');
