@@ -224,3 +224,37 @@ fn bad_input_is_refused_with_exit_code_2_naming_the_value() {
         stderr(&o)
     );
 }
+
+#[test]
+fn outputs_are_the_same_bytes_whatever_the_thread_count() {
+    let mesh = data("meshes/teapot_assimp.obj");
+    let out = tempfile::tempdir().unwrap();
+    let run = |threads: &str| {
+        let dir = out.path().join(format!("t{threads}"));
+        let o = snowscape(&[
+            "--threads",
+            threads,
+            "cover",
+            "--mesh",
+            mesh.to_str().unwrap(),
+            "--up",
+            "z",
+            "--overhang",
+            "--growth",
+            "2",
+            "--out",
+            dir.to_str().unwrap(),
+            "-q",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        dir
+    };
+    let (one, two) = (run("1"), run("2"));
+    for f in ["snow.glb", "snow.obj", "mask.png", "growth/frame_0001.glb"] {
+        let (a, b) = (
+            std::fs::read(one.join(f)).unwrap(),
+            std::fs::read(two.join(f)).unwrap(),
+        );
+        assert!(a == b, "{f} differs between 1 and 2 threads");
+    }
+}
