@@ -186,3 +186,39 @@ fn results_do_not_depend_on_the_thread_count() {
     assert_eq!(one.kernel, two.kernel);
     assert_eq!(one.mesh, two.mesh);
 }
+
+#[test]
+fn the_concave_corner_of_an_l_is_cut_and_the_mesh_is_manifold() {
+    let s = scene(vec![
+        quad("long arm", [0.0, 0.0, 2.0, 1.0], 1.0),
+        quad("short arm", [0.0, 1.0, 1.0, 2.0], 1.0),
+    ]);
+    let p = CoverParams {
+        depth_m: Some(0.05),
+        radius_m: Some(0.2),
+        resolution_m: Some(0.05),
+        bridge_m: Some(0.0),
+        ..Default::default()
+    };
+    let c = cover(&s, &p).unwrap();
+    assert!(c.stats.corner_triangles >= 1, "{:?}", c.stats);
+    assert!(c.stats.quads > 500);
+    let mut edges = std::collections::HashMap::new();
+    for t in &c.mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            // Positions, not indices: seam copies share a position.
+            let key = |i: u32| c.mesh.positions[i as usize].map(f32::to_bits);
+            let (ka, kb) = (key(a), key(b));
+            *edges
+                .entry(if ka < kb { (ka, kb) } else { (kb, ka) })
+                .or_insert(0) += 1;
+        }
+        // Counter-clockwise from above: the normal points up.
+        let [a, b, c3] = t.map(|i| c.mesh.positions[i as usize]);
+        let nz = (b[0] - a[0]) * (c3[1] - a[1]) - (b[1] - a[1]) * (c3[0] - a[0]);
+        assert!(nz > 0.0, "triangle {t:?} faces down");
+    }
+    assert!(edges.values().all(|&n| n <= 2), "a non-manifold edge");
+    assert_eq!(c.stats.boundary_loops, 1);
+}
