@@ -105,6 +105,7 @@ pub struct Flight<'a> {
 
 /// Flies a particle from `p` with velocity `v`, ignoring the snow of group `own_group`.
 pub fn fly(f: &Flight, mut p: [f64; 3], mut v: [f64; 3], own_group: u32) -> Landing {
+    let z_start = p[2];
     let skip = |t: Tag| matches!(t, Tag::SnowTop { group, .. } | Tag::SnowWall { group } if group == own_group);
     let eps = f.step * 1e-3;
     for _ in 0..2000 {
@@ -138,8 +139,12 @@ pub fn fly(f: &Flight, mut p: [f64; 3], mut v: [f64; 3], own_group: u32) -> Land
                     let Tag::Scene { object, triangle } = tag else {
                         unreachable!()
                     };
-                    let on_tri = f.sites.nearest(h, f.rings, |_, o| o == (object, triangle));
-                    let any = || f.sites.nearest(h, f.rings, |_, _| true);
+                    // Snow only falls: the receiving site lies no higher than the start.
+                    let low = |i: u32| f.sites.points[i as usize][2] <= z_start;
+                    let on_tri = f
+                        .sites
+                        .nearest(h, f.rings, |i, o| o == (object, triangle) && low(i));
+                    let any = || f.sites.nearest(h, f.rings, |i, _| low(i));
                     return on_tri.or_else(any).map_or(Landing::Stuck, Landing::Site);
                 }
                 // Bounce: reflect about the normal, lose speed, step off the surface.

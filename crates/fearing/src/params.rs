@@ -116,7 +116,7 @@ pub struct StabilityParams {
     /// Most passes through the unresolved list per stability phase (Section 4.4; ours: 400).
     pub max_passes: u32,
     /// A pass that moves less than this share of the snow ends the phase (Section 4.4: "all
-    /// avalanches in the last pass moved only a very small amount of snow"); ours: 1e-5.
+    /// avalanches in the last pass moved only a very small amount of snow"); ours: 1e-4.
     pub min_moved_fraction: f64,
     /// Height difference below which two sites count as level, metres (keeps water from
     /// trading micro-amounts forever); ours: 0.01 mm.
@@ -137,7 +137,7 @@ impl Default for StabilityParams {
     fn default() -> Self {
         Self {
             max_passes: 400,
-            min_moved_fraction: 1e-5,
+            min_moved_fraction: 1e-4,
             level_tolerance_m: 1e-5,
             edge_particles: 4,
             edge_speed_m_s: 0.5,

@@ -138,7 +138,7 @@ pub fn stabilise(
         .collect();
 
     let mut u1: Vec<usize> = (0..n).collect();
-    let mut rechecked = false;
+    let mut rechecking = false;
     let mut tracer = None;
     let mut in_u2 = vec![false; n];
     while rep.passes < sp.max_passes {
@@ -178,6 +178,21 @@ pub fn stabilise(
         let mut work = 0;
         let mut u2 = Vec::new();
         let mut moved = 0.0;
+        // A receiver is examined later in this pass (it is lower), or in the next one once the
+        // pass has done its share of work.
+        macro_rules! receive {
+            ($j:expr) => {{
+                let j = $j;
+                if work < cap {
+                    if !in_heap[j] {
+                        in_heap[j] = true;
+                        heap.push((order_key(top(&vol, j)), Reverse(j)));
+                    }
+                } else {
+                    mark(&mut u2, &mut in_u2, j);
+                }
+            }};
+        }
         while let Some((_, Reverse(s))) = heap.pop() {
             in_heap[s] = false;
             work += 1;
@@ -335,7 +350,7 @@ pub fn stabilise(
                             vol[s] -= dv;
                             vol[site] += dv;
                             moved += dv;
-                            mark(&mut u2, &mut in_u2, site);
+                            receive!(site);
                         }
                         Target::Edge { slot, .. } => {
                             rep.edge_transits += 1;
@@ -346,11 +361,14 @@ pub fn stabilise(
                             let mut stuck = false;
                             for l in landings {
                                 match *l {
+                                    // Never onto snow standing higher than the origin (the
+                                    // landing was found on older snow).
+                                    Landing::Site(m) if top(&vol, m as usize) >= ts => stuck = true,
                                     Landing::Site(m) => {
                                         vol[s] -= share;
                                         vol[m as usize] += share;
                                         moved += share;
-                                        mark(&mut u2, &mut in_u2, m as usize);
+                                        receive!(m as usize);
                                     }
                                     Landing::Lost => {
                                         vol[s] -= share;
@@ -373,8 +391,12 @@ pub fn stabilise(
                 let ts = top(&vol, s);
                 for nb in &topo.neighbours[s] {
                     let h = nb.site as usize;
-                    if top(&vol, h) > ts && !in_heap[h] {
-                        if work < cap {
+                    // Only a higher neighbour now unstable towards s needs another look; it
+                    // gets it in this pass when its excess is a real share of its snow (else
+                    // two sites on a chute trade ever smaller amounts), in the next otherwise.
+                    let excess = top(&vol, h) - ts - nb.distance * crit[h];
+                    if excess > sp.level_tolerance_m && !in_heap[h] {
+                        if work < cap && excess > 0.05 * vol[h] / areas[h] {
                             in_heap[h] = true;
                             heap.push((order_key(top(&vol, h)), Reverse(h)));
                         } else {
@@ -391,13 +413,15 @@ pub fn stabilise(
         }
         let small = moved <= sp.min_moved_fraction * total(&vol).max(1e-300);
         if u2.is_empty() || small || std::time::Instant::now() > deadline {
-            if rechecked || std::time::Instant::now() > deadline {
+            // Re-run the whole phase (Section 4.4: it "usually fixes a few missed sites and
+            // completes immediately"); a quiet re-run ends the phase.
+            if rechecking || std::time::Instant::now() > deadline {
                 break;
             }
-            rechecked = true;
+            rechecking = true;
             u1 = (0..n).collect();
         } else {
-            rechecked = false;
+            rechecking = false;
             u1 = u2;
         }
     }

@@ -30,6 +30,11 @@ pub fn mesh(name: &str, metres_per_unit: f64) -> Scene {
 /// Bunnies (about 1 m tall) and teapot pairs in a grid on a gently sloping ground of
 /// 2 x 72 x 72 triangles: about 100k triangles.
 pub fn big_scene() -> Scene {
+    scene_of(100_000)
+}
+
+/// The big scene's layout with objects added until it holds `triangles` triangles.
+pub fn scene_of(triangles: usize) -> Scene {
     let bunny = mesh("bunny_npm.obj", 0.1);
     let teapots = mesh("teapot_assimp.obj", 0.01);
     let g = GridGeometry::new(73, 73, 1.0, 1.0).unwrap();
@@ -39,7 +44,7 @@ pub fn big_scene() -> Scene {
         frame: SourceFrame::default(),
     };
     let mut k = 0;
-    while scene.triangle_count() < 100_000 {
+    while scene.triangle_count() < triangles {
         let (i, j) = (k % 5, k / 5);
         let source = if k % 3 == 2 { &teapots } else { &bunny };
         let mut o = source.objects[0].clone();
