@@ -18,6 +18,7 @@
 //! thread count, as long as the flake budget and not the time budget ends each pass.
 
 pub mod accumulation;
+pub mod dusting;
 pub mod edge_groups;
 pub mod edge_transit;
 pub mod error;
@@ -50,6 +51,8 @@ pub struct FearingCover {
     pub sites: LaunchSites,
     pub topology: Topology,
     pub surface: SnowSurface,
+    /// Flake dusting of the sites too thin for the surface (Section 3.8), if any.
+    pub dusting: Option<snowscape_mesh::SnowMesh>,
     pub report: FearingReport,
 }
 
@@ -156,15 +159,20 @@ pub fn cover(scene: &Scene, params: &FearingParams) -> Result<FearingCover, Fear
     }
     let t = Instant::now();
     let surface = SnowSurface::build(&sites, &topo, params.min_surface_depth_m);
+    let dusting = if params.dusting {
+        dusting::dusting_mesh(&sites, &topo, params.min_surface_depth_m, params.seed)
+    } else {
+        None
+    };
     report.timings.surface_s = t.elapsed().as_secs_f64();
     report.timings.total_s = start.elapsed().as_secs_f64();
-    let cover = FearingCover {
+    let mut cover = FearingCover {
         sites,
         topology: topo,
         surface,
+        dusting,
         report,
     };
-    let mut cover = cover;
     let vol = cover.volume();
     let max_depth = cover.site_depths().iter().map(|d| d.1).fold(0.0, f64::max);
     let r = &mut cover.report;

@@ -30,18 +30,31 @@ pub fn write_outputs(
                 .map_or(0.0, |p| p.min_surface_depth_m),
         });
     }
-    let meshes = [mesh];
+    // The snow surface, then the dusting (its alpha-masked texture travels with it).
+    let mut meshes = vec![mesh];
+    meshes.extend(cover.dusting.clone());
     let glb = dir.join("snow.glb");
     snowscape_mesh::write::write_glb(&glb, &meshes, &scene.frame)?;
     let obj = dir.join("snow.obj");
     snowscape_mesh::write::write_obj(&obj, &meshes, &scene.frame)?;
     let png = dir.join("preview.png");
-    preview::write_preview(&png, scene, &meshes, &preview::PreviewOptions::default())?;
+    // The preview draws triangles opaque: the dusting would show as solid snow, so it is left out.
+    preview::write_preview(
+        &png,
+        scene,
+        &meshes[..1],
+        &preview::PreviewOptions::default(),
+    )?;
     let json = dir.join("report.json");
     let mut report = serde_json::to_value(&cover.report)?;
     if let (Some(input), Some(obj)) = (input, report.as_object_mut()) {
         obj.insert("input".into(), input);
     }
     snowscape_io::write_bytes_atomic(&json, serde_json::to_string_pretty(&report)?.as_bytes())?;
-    Ok(vec![glb, obj, dir.join("snow.mtl"), png, json])
+    let mut files = vec![glb, obj, dir.join("snow.mtl")];
+    if meshes.len() > 1 {
+        files.push(dir.join("snow_1.png"));
+    }
+    files.extend([png, json]);
+    Ok(files)
 }

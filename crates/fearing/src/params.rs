@@ -205,6 +205,8 @@ pub struct FearingParams {
     pub smoothing_iterations: u32,
     /// Thinnest snow drawn as a surface, metres (thinner is flake dusting, Section 3.8).
     pub min_surface_depth_m: f64,
+    /// Whether to make the flake-dusting mesh (Section 3.8).
+    pub dusting: bool,
 }
 
 impl Default for FearingParams {
@@ -233,6 +235,7 @@ impl Default for FearingParams {
             stability: StabilityParams::default(),
             smoothing_iterations: 2,
             min_surface_depth_m: 1e-3,
+            dusting: true,
         }
     }
 }

@@ -531,3 +531,47 @@ fn bad_parameters_name_the_value() {
             .contains("upward-facing")
     );
 }
+
+#[test]
+fn swept_steep_faces_get_flake_dusting() {
+    // A 70° face (steeper than the 50° AOR) over open ground: its snow slides off, but it saw
+    // the sky, so it gets a dense dusting; the ground gets a surface.
+    let face = snowscape_mesh::SceneObject {
+        name: "face".into(),
+        positions: vec![
+            [0.0, -1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [-1.0, 1.0, 2.75],
+            [-1.0, -1.0, 2.75],
+        ],
+        normals: None,
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let scene = Scene {
+        objects: vec![scenes::plane("ground", 6.0, 0.0), face],
+        frame: scenes::frame(),
+    };
+    let c = cover(&scene, &quick(Material::snow())).unwrap();
+    let d = c.dusting.as_ref().expect("a dusting mesh");
+    assert!(d.triangles.len() > 50, "{}", d.triangles.len());
+    // The face's sites are in the densest band (v near the bottom of the atlas).
+    let dense = d
+        .uvs
+        .as_ref()
+        .unwrap()
+        .iter()
+        .filter(|uv| uv[1] > 7.0 / 8.0)
+        .count();
+    assert!(
+        dense as f64 > 0.5 * d.positions.len() as f64,
+        "{dense} of {}",
+        d.positions.len()
+    );
+    let tex = d.texture.as_ref().unwrap();
+    assert!(tex.pixels().any(|p| p.0[3] == 0) && tex.pixels().any(|p| p.0[3] == 255));
+    let out = tempfile::tempdir().unwrap();
+    let files = snowscape_fearing::write_outputs(out.path(), &scene, &c, None).unwrap();
+    assert!(files.iter().any(|f| f.ends_with("snow_1.png")), "{files:?}");
+    let obj = std::fs::read_to_string(out.path().join("snow.obj")).unwrap();
+    assert!(obj.contains("dusting"), "the OBJ holds the dusting object");
+}
