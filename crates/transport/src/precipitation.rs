@@ -183,7 +183,7 @@ fn fly(
         let w = sample(x);
         let rel = [w[0] - v[0], w[1] - v[1], w[2] - v[2]];
         let s = k * (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt();
-        let dt = cell / (w[0].hypot(w[1]) + vt + 1e-3);
+        let dt = cell / ((w[0] * w[0] + w[1] * w[1]).sqrt() + vt + 1e-3);
         for a in 0..3 {
             v[a] = (v[a] + dt * (s * w[a] + g[a])) / (1.0 + dt * s);
         }

@@ -110,7 +110,7 @@ impl Centred {
     }
 
     /// Trilinear interpolation at `p` (voxel units), clamped to the voxel centres.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, p: [f32; 3]) -> [f32; 3] {
         let mut base = [0usize; 3];
         let mut t = [0.0f32; 3];
