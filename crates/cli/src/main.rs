@@ -8,6 +8,7 @@ mod commands;
 mod dem_input;
 mod failure;
 mod outputs;
+mod pairs;
 mod progress;
 mod report;
 

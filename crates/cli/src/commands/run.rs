@@ -32,19 +32,8 @@ fn apply_skier_args(scenario: &mut Scenario, args: &SkierArgs) -> anyhow::Result
         scenario.skiers.per_day = f;
     }
     for text in &args.skier_start {
-        let parts: Vec<&str> = text.split(',').collect();
-        let parsed = match parts.as_slice() {
-            [x, y] => x
-                .trim()
-                .parse::<f64>()
-                .ok()
-                .zip(y.trim().parse::<f64>().ok()),
-            _ => None,
-        };
-        match parsed {
-            Some((x, y)) if x.is_finite() && y.is_finite() => scenario.skiers.starts.push([x, y]),
-            _ => bail!("--skier-start {text:?} must be X,Y map coordinates"),
-        }
+        let (x, y) = crate::pairs::parse_xy("--skier-start", text)?;
+        scenario.skiers.starts.push([x, y]);
     }
     if !args.skier_start.is_empty() && scenario.skiers.per_day == 0.0 {
         scenario.skiers.per_day = 24.0;

@@ -172,18 +172,7 @@ fn mesh_scene(
 
 /// `--at X,Y` in map coordinates, as scene metres from the DEM's south-west corner.
 fn parse_at(text: &str, g: &GridGeometry) -> anyhow::Result<(f64, f64)> {
-    let parts: Vec<&str> = text.split(',').collect();
-    let parsed = match parts.as_slice() {
-        [x, y] => x
-            .trim()
-            .parse::<f64>()
-            .ok()
-            .zip(y.trim().parse::<f64>().ok()),
-        _ => None,
-    };
-    let Some((x, y)) = parsed.filter(|(x, y)| x.is_finite() && y.is_finite()) else {
-        bail!("--at {text:?} must be X,Y map coordinates");
-    };
+    let (x, y) = crate::pairs::parse_xy("--at", text)?;
     let Some((col, row)) = g.map_to_cell(x, y) else {
         bail!("--at {text:?} lies outside the DEM");
     };
