@@ -131,7 +131,8 @@ pub fn normal_z(c: &[[f64; 3]; 3]) -> f64 {
 impl LaunchSites {
     /// Cells for every triangle with normal z above `min_normal_z`: spacing `spacing` if given,
     /// else chosen so that about `target` cells cover the upward area (each triangle gets at
-    /// least one cell; a triangle is cut into at most 256² cells).
+    /// least one cell; a triangle of area A is cut into k² cells, k = ceil(2 sqrt(A) / spacing),
+    /// at most 256²).
     pub fn build(scene: &Scene, min_normal_z: f64, spacing: Option<f64>, target: usize) -> Self {
         let mut up = Vec::new();
         let mut area = 0.0;
@@ -155,8 +156,18 @@ impl LaunchSites {
             spacing.unwrap_or_else(|| (4.0 * area / target.max(1) as f64).sqrt().max(1e-6));
         let mut cells = Vec::new();
         for &(o, t, c) in &up {
-            let longest = Cell::new(c, o, t, 0, NONE).size();
-            let k = ((longest / spacing).ceil() as usize).clamp(1, 256);
+            // k² cells of about spacing²/4 each (by 3D area, so slivers are not over-cut).
+            let area3 = 0.5 * {
+                let e1 = [0, 1, 2].map(|d| c[1][d] - c[0][d]);
+                let e2 = [0, 1, 2].map(|d| c[2][d] - c[0][d]);
+                let n = [
+                    e1[1] * e2[2] - e1[2] * e2[1],
+                    e1[2] * e2[0] - e1[0] * e2[2],
+                    e1[0] * e2[1] - e1[1] * e2[0],
+                ];
+                (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+            };
+            let k = ((2.0 * area3.sqrt() / spacing).ceil() as usize).clamp(1, 256);
             subdivide(&c, k, |corners| {
                 cells.push(Cell::new(corners, o, t, 0, NONE))
             });
@@ -294,7 +305,7 @@ mod tests {
         };
         assert!((total(&s) - 3.0).abs() < 1e-9, "{}", total(&s));
         let n0 = s.leaves().len();
-        assert_eq!(n0, 8 * 8, "k = ceil(3.6 / 0.5)");
+        assert_eq!(n0, 7 * 7, "k = ceil(2 sqrt(3.04) / 0.5)");
         s.cells[0].volume = 2.0;
         let first = s.split(0);
         assert_eq!(s.leaves().len(), n0 + 3);

@@ -113,7 +113,9 @@ impl SkyWeight {
 /// Stability phase settings (Section 4).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StabilityParams {
-    /// Most passes through the unresolved list per stability phase (Section 4.4; ours: 400).
+    /// Most passes through the unresolved list per stability phase (Section 4.4; ours: 400). A
+    /// phase that the time budget ends instead says so (`stopped_by_time`): its result then
+    /// depends on the machine's speed.
     pub max_passes: u32,
     /// A pass that moves less than this share of the snow ends the phase (Section 4.4: "all
     /// avalanches in the last pass moved only a very small amount of snow"); ours: 1e-4.

@@ -35,6 +35,8 @@ use std::collections::{BinaryHeap, HashSet};
 #[derive(Debug, Clone, Default, Serialize, PartialEq)]
 pub struct StabilityReport {
     pub passes: u32,
+    /// Whether the time budget ended the phase (then the result depends on the machine's speed).
+    pub stopped_by_time: bool,
     /// Site tests, avalanches (snow shifts), edge transits and their particles.
     pub tests: u64,
     pub avalanches: u64,
@@ -365,10 +367,14 @@ pub fn stabilise(
                                     // landing was found on older snow).
                                     Landing::Site(m) if top(&vol, m as usize) >= ts => stuck = true,
                                     Landing::Site(m) => {
-                                        vol[s] -= share;
-                                        vol[m as usize] += share;
-                                        moved += share;
-                                        receive!(m as usize);
+                                        // The receiver may fill to halfway up to the origin,
+                                        // no more (else the snow would flow back up).
+                                        let m = m as usize;
+                                        let give = share.min(0.5 * (ts - top(&vol, m)) * areas[m]);
+                                        vol[s] -= give;
+                                        vol[m] += give;
+                                        moved += give;
+                                        receive!(m);
                                     }
                                     Landing::Lost => {
                                         vol[s] -= share;
@@ -415,7 +421,11 @@ pub fn stabilise(
         if u2.is_empty() || small || std::time::Instant::now() > deadline {
             // Re-run the whole phase (Section 4.4: it "usually fixes a few missed sites and
             // completes immediately"); a quiet re-run ends the phase.
-            if rechecking || std::time::Instant::now() > deadline {
+            if std::time::Instant::now() > deadline {
+                rep.stopped_by_time = true;
+                break;
+            }
+            if rechecking {
                 break;
             }
             rechecking = true;
