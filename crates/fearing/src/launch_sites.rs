@@ -135,7 +135,7 @@ impl LaunchSites {
     /// at most 256²).
     pub fn build(scene: &Scene, min_normal_z: f64, spacing: Option<f64>, target: usize) -> Self {
         let mut up = Vec::new();
-        let mut area = 0.0;
+        let (mut area, mut area3_total) = (0.0, 0.0);
         for (oi, o) in scene.objects.iter().enumerate() {
             for t in 0..o.triangles.len() {
                 let c = o.corners(t).map(|p| p.map(f64::from));
@@ -148,12 +148,13 @@ impl LaunchSites {
                             - (c[1][1] - c[0][1]) * (c[2][0] - c[0][0]))
                             .abs();
                     area += a;
+                    area3_total += o.triangle_area(t) as f64;
                     up.push((oi as u32, t as u32, c));
                 }
             }
         }
         let spacing =
-            spacing.unwrap_or_else(|| (4.0 * area / target.max(1) as f64).sqrt().max(1e-6));
+            spacing.unwrap_or_else(|| (4.0 * area3_total / target.max(1) as f64).sqrt().max(1e-6));
         let mut cells = Vec::new();
         for &(o, t, c) in &up {
             // k² cells of about spacing²/4 each (by 3D area, so slivers are not over-cut).
