@@ -187,17 +187,27 @@ mod tests {
         }
         assert!(report.copy_bandwidth_gb_s.is_finite() && report.copy_bandwidth_gb_s > 0.0);
         for k in &report.kernels {
-            for v in [
-                k.seconds,
-                k.cells_per_s,
-                k.bytes_per_cell,
-                k.gb_per_s,
-                k.bandwidth_fraction,
-            ] {
+            for v in [k.seconds, k.cells_per_s] {
                 assert!(v.is_finite() && v > 0.0, "{}: {v}", k.name);
+            }
+            // A kernel without a memory-traffic model (bytes per cell 0, such as a season whose
+            // avalanche cost follows their footprints) reports no bandwidth; every other does.
+            for v in [k.gb_per_s, k.bandwidth_fraction] {
+                if k.bytes_per_cell > 0.0 {
+                    assert!(v.is_finite() && v > 0.0, "{}: {v}", k.name);
+                } else {
+                    assert_eq!(v, 0.0, "{}", k.name);
+                }
             }
             assert!(k.cells > 0);
         }
+        let unmodelled: Vec<&str> = report
+            .kernels
+            .iter()
+            .filter(|k| k.bytes_per_cell == 0.0)
+            .map(|k| k.name.as_str())
+            .collect();
+        assert_eq!(unmodelled, ["season/100_days_with_avalanches"]);
         assert_eq!(report.machine.threads, 2);
         assert_eq!(report.size, 64);
         assert!(lines.len() > report.kernels.len());
