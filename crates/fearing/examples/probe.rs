@@ -12,6 +12,9 @@ fn main() {
         common::mesh(&a[1], a[2].parse().unwrap())
     };
     let mut p = snowscape_fearing::FearingParams::default();
+    if let Ok(v) = std::env::var("MIN_NZ") {
+        p.min_normal_z = v.parse().unwrap();
+    }
     if let Some(s) = a.get(3) {
         p.target_sites = s.parse().unwrap();
     }

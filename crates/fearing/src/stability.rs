@@ -206,6 +206,8 @@ pub fn stabilise(
             };
             let same_group_snow = |t: Tag| matches!(t, Tag::SnowTop { group: g, .. } | Tag::SnowWall { group: g } if g == group);
             let mut touched = false;
+            // Border edges whose receivers are full for this test.
+            let mut full: Vec<usize> = Vec::new();
             for _ in 0..(2 * topo.neighbours[s].len() + 2 * topo.borders[s].len() + 4) {
                 if vol[s] <= 0.0 {
                     break;
@@ -268,7 +270,10 @@ pub fn stabilise(
                     let (dx, dy) = (mid[0] - centroids[s][0], mid[1] - centroids[s][1]);
                     let d = dx.hypot(dy);
                     let allowed = d * crit[s] + sp.level_tolerance_m;
-                    if ts - mid[2] <= allowed || edges[s][k] == EdgeObs::Blocked {
+                    if ts - mid[2] <= allowed
+                        || edges[s][k] == EdgeObs::Blocked
+                        || full.contains(&k)
+                    {
                         continue;
                     }
                     if edges[s][k] == EdgeObs::Unknown {
@@ -371,6 +376,9 @@ pub fn stabilise(
                                         // no more (else the snow would flow back up).
                                         let m = m as usize;
                                         let give = share.min(0.5 * (ts - top(&vol, m)) * areas[m]);
+                                        if give < share && !full.contains(&slot) {
+                                            full.push(slot);
+                                        }
                                         vol[s] -= give;
                                         vol[m] += give;
                                         moved += give;

@@ -575,3 +575,50 @@ fn swept_steep_faces_get_flake_dusting() {
     let obj = std::fs::read_to_string(out.path().join("snow.obj")).unwrap();
     assert!(obj.contains("dusting"), "the OBJ holds the dusting object");
 }
+
+#[test]
+fn more_flakes_give_a_smoothly_better_answer() {
+    // The anytime loop: the same sites with a growing flake budget approach the answer of a
+    // large budget (the flutter falloff under a roof), the error shrinking steadily.
+    let scene = scenes::roof(8.0, 3.0, 1.5, 0.1);
+    let steep = Material {
+        aor_deg: 85.0,
+        transition_deg: 0.0,
+        ..Material::snow()
+    };
+    let run = |flakes| {
+        let p = FearingParams {
+            flutter_m: Some(0.1),
+            flakes_per_site: flakes,
+            max_refinement: 0,
+            passes: 1,
+            smoothing_iterations: 0,
+            target_sites: 3000,
+            ..quick(steep.clone())
+        };
+        let c = cover(&scene, &p).unwrap();
+        c.topology
+            .leaves
+            .iter()
+            .map(|&i| c.sites.cells[i as usize].depth())
+            .collect::<Vec<f64>>()
+    };
+    let reference = run(512);
+    let errors: Vec<f64> = [8, 32, 128]
+        .iter()
+        .map(|&f| {
+            let d = run(f);
+            assert_eq!(d.len(), reference.len());
+            (d.iter()
+                .zip(&reference)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum::<f64>()
+                / d.len() as f64)
+                .sqrt()
+        })
+        .collect();
+    assert!(
+        errors[0] > 1.4 * errors[1] && errors[1] > 1.4 * errors[2],
+        "errors {errors:?}"
+    );
+}
