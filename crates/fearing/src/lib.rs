@@ -25,6 +25,7 @@ pub mod error;
 pub mod flakes;
 pub mod importance;
 pub mod launch_sites;
+pub mod obstacles;
 pub mod output;
 pub mod params;
 pub mod report;

@@ -20,8 +20,9 @@
 //! considerable lag").
 
 use crate::edge_groups::Topology;
-use crate::edge_transit::{Flight, Landing, SiteGrid, fly};
+use crate::edge_transit::{Flight, Landing, SiteGrid};
 use crate::launch_sites::LaunchSites;
+use crate::obstacles::{self, EdgeObs, Obs};
 use crate::params::FearingParams;
 use crate::surface::SnowSurface;
 use crate::tracer::{Tag, Tracer};
@@ -73,25 +74,6 @@ enum Target {
         height: f64,
         allowed: f64,
     },
-}
-
-/// Cached outcome of an obstacle test between a site and a neighbour (valid until the snow
-/// surfaces are rebuilt).
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Obs {
-    Unknown,
-    Clear,
-    Geometry,
-    Wall,
-    Redirect(u32),
-}
-
-/// Cached outcome of the probe over a border edge, and where its particles land.
-#[derive(Debug, Clone, PartialEq)]
-enum EdgeObs {
-    Unknown,
-    Blocked,
-    Open { height: f64, landings: Vec<Landing> },
 }
 
 /// Runs one stability phase on the current snow.
@@ -204,7 +186,6 @@ pub fn stabilise(
                 object: owner[s].0,
                 triangle: owner[s].1,
             };
-            let same_group_snow = |t: Tag| matches!(t, Tag::SnowTop { group: g, .. } | Tag::SnowWall { group: g } if g == group);
             let mut touched = false;
             // Border edges whose receivers are full for this test.
             let mut full: Vec<usize> = Vec::new();
@@ -227,25 +208,8 @@ pub fn stabilise(
                             object: owner[j].0,
                             triangle: owner[j].1,
                         };
-                        obs[s][k] = match tracer.first_hit(from, to, |t| {
-                            t == own_tri || t == tri_j || same_group_snow(t)
-                        }) {
-                            None => Obs::Clear,
-                            Some(h) => match h.tag {
-                                Tag::Scene { .. } => {
-                                    rep.blocked_by_geometry += 1;
-                                    Obs::Geometry
-                                }
-                                Tag::SnowWall { .. } => {
-                                    rep.blocked_by_snow_wall += 1;
-                                    Obs::Wall
-                                }
-                                Tag::SnowTop { site: m, .. } => {
-                                    rep.redirected += 1;
-                                    Obs::Redirect(m)
-                                }
-                            },
-                        };
+                        obs[s][k] =
+                            obstacles::between(tracer, from, to, [own_tri, tri_j], group, &mut rep);
                     }
                     match obs[s][k] {
                         Obs::Clear => targets.push(Target::Site { site: j, allowed }),
@@ -277,47 +241,17 @@ pub fn stabilise(
                         continue;
                     }
                     if edges[s][k] == EdgeObs::Unknown {
-                        let out = if d > 1e-12 {
-                            [dx / d, dy / d]
-                        } else {
-                            [e.b[1] - e.a[1], e.a[0] - e.b[0]]
-                        };
-                        let ol = out[0].hypot(out[1]).max(1e-300);
-                        let out = [out[0] / ol, out[1] / ol];
-                        let margin = (0.05 * sites.spacing).max(4.0 * eps);
-                        let probe = [mid[0] + out[0] * margin, mid[1] + out[1] * margin, ts + eps];
-                        let skip = |t: Tag| t == own_tri || same_group_snow(t);
-                        edges[s][k] = if tracer.blocked(
-                            [centroids[s][0], centroids[s][1], ts + eps],
-                            probe,
-                            skip,
-                        ) {
-                            rep.blocked_edges += 1;
-                            EdgeObs::Blocked
-                        } else {
-                            let below = [probe[0], probe[1], mid[2] - sites.spacing];
-                            let beyond = tracer
-                                .first_hit(probe, below, skip)
-                                .map(|h| probe[2] + h.t as f64 * (below[2] - probe[2]));
-                            let np = sp.edge_particles;
-                            let landings = (0..np)
-                                .map(|p| {
-                                    rep.particles += 1;
-                                    let speed =
-                                        sp.edge_speed_m_s * (0.5 + (p as f64 + 0.5) / np as f64);
-                                    fly(
-                                        &flight,
-                                        probe,
-                                        [out[0] * speed, out[1] * speed, 0.0],
-                                        group,
-                                    )
-                                })
-                                .collect();
-                            EdgeObs::Open {
-                                height: beyond.map_or(mid[2], |z| z.max(mid[2])),
-                                landings,
-                            }
-                        };
+                        let centre = [centroids[s][0], centroids[s][1], ts];
+                        edges[s][k] = obstacles::over_edge(
+                            &flight,
+                            centre,
+                            e,
+                            sites.spacing,
+                            own_tri,
+                            group,
+                            sp,
+                            &mut rep,
+                        );
                     }
                     if let EdgeObs::Open { height, .. } = edges[s][k]
                         && ts - height > allowed
