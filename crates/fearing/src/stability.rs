@@ -266,17 +266,21 @@ pub fn stabilise(
                 if targets.is_empty() {
                     break;
                 }
-                // Even shift: the same volume to each, the least that makes one stable.
+                // Even shift: the same volume to each, the least that makes one stable. A
+                // neighbour counts as unstable beyond its angle plus the level tolerance and is
+                // made stable at the angle itself, so rounding cannot re-trigger it at once.
+                let tol = sp.level_tolerance_m;
                 let kf = targets.len() as f64;
                 let mut dv = vol[s] / kf;
                 for t in &targets {
                     let need = match *t {
                         Target::Site { site, allowed } => {
-                            (ts - top(&vol, site) - allowed) / (kf / areas[s] + 1.0 / areas[site])
+                            (ts - top(&vol, site) - allowed + tol)
+                                / (kf / areas[s] + 1.0 / areas[site])
                         }
                         Target::Edge {
                             height, allowed, ..
-                        } => (ts - height - allowed) / (kf / areas[s]),
+                        } => (ts - height - allowed + tol) / (kf / areas[s]),
                     };
                     dv = dv.min(need.max(0.0));
                 }
@@ -360,20 +364,24 @@ pub fn stabilise(
             in_u2[i] = false;
         }
         let small = moved <= sp.min_moved_fraction * total(&vol).max(1e-300);
-        if u2.is_empty() || small || std::time::Instant::now() > deadline {
-            // Re-run the whole phase (Section 4.4: it "usually fixes a few missed sites and
-            // completes immediately"); a quiet re-run ends the phase.
-            if std::time::Instant::now() > deadline {
-                rep.stopped_by_time = true;
-                break;
-            }
+        if std::time::Instant::now() > deadline {
+            rep.stopped_by_time = true;
+            break;
+        }
+        // When a pass finds nothing to do, or moves only a little, the whole phase is re-run
+        // (Section 4.4: it "usually fixes a few missed sites and completes immediately"); after
+        // that, passes go on over the sites still touched until none is.
+        if u2.is_empty() {
             if rechecking {
                 break;
             }
             rechecking = true;
             u1 = (0..n).collect();
+        } else if small && !rechecking {
+            rechecking = true;
+            u1 = (0..n).collect();
         } else {
-            rechecking = false;
+            rechecking &= small;
             u1 = u2;
         }
     }

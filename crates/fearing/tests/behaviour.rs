@@ -189,8 +189,14 @@ fn snow_on_a_box_top_never_exceeds_the_aor_at_its_edges() {
             let drop = top(i) - top(nb.site as usize);
             assert!(
                 drop <= nb.distance * max_tan + tol,
-                "slope {} between box sites",
-                drop / nb.distance
+                "slope {} between box sites over {} m; {:?}",
+                drop / nb.distance,
+                nb.distance,
+                c.report
+                    .passes
+                    .iter()
+                    .map(|p| &p.stability)
+                    .collect::<Vec<_>>()
             );
         }
         for e in &t.borders[i] {
