@@ -10,7 +10,7 @@
 //!   improving.
 //! - **Effort**: `1 / sqrt(batches)`, so sites aim for equal confidence.
 //! - **Steepness**: sites steeper than the AOR (their snow slides away anyway) count a quarter.
-//! - **Camera**: `1 / (1 + distance / scene size)` when a camera is given.
+//! - **Camera**: `1 / (1 + 3 distance / scene diagonal)` when a camera is given.
 //! - **User**: objects tagged "boring" count a tenth.
 //!
 //! Refinement and merging use the same neighbour disagreement (Section 3.1).
@@ -69,7 +69,7 @@ pub fn importance(sites: &LaunchSites, topo: &Topology, w: &Weights, pass: u32) 
                 let d =
                     ((p[0] - cam[0]).powi(2) + (p[1] - cam[1]).powi(2) + (p[2] - cam[2]).powi(2))
                         .sqrt();
-                v /= 1.0 + d / size;
+                v /= 1.0 + 3.0 * d / size;
             }
             v * w
                 .object_weight

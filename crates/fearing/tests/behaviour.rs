@@ -628,3 +628,55 @@ fn more_flakes_give_a_smoothly_better_answer() {
         "errors {errors:?}"
     );
 }
+
+#[test]
+fn importance_gives_boring_objects_and_far_sites_fewer_flakes() {
+    let scene = scenes::roof(10.0, 4.0, 2.0, 0.1);
+    let shots = |p: &FearingParams| {
+        let c = cover(&scene, p).unwrap();
+        let mut by: std::collections::HashMap<String, (f64, usize)> = Default::default();
+        let mut near_far = [(0.0, 0usize); 2];
+        for &id in &c.topology.leaves {
+            let cell = &c.sites.cells[id as usize];
+            let e = by
+                .entry(scene.objects[cell.object as usize].name.clone())
+                .or_default();
+            e.0 += cell.shots;
+            e.1 += 1;
+            if cell.object == 0 {
+                let k = usize::from(cell.centroid()[0] > 0.0);
+                near_far[k].0 += cell.shots;
+                near_far[k].1 += 1;
+            }
+        }
+        let mean = |v: (f64, usize)| v.0 / v.1 as f64;
+        (
+            mean(by["roof"]),
+            mean(by["ground"]),
+            mean(near_far[0]),
+            mean(near_far[1]),
+        )
+    };
+    let base = FearingParams {
+        passes: 1,
+        max_refinement: 0,
+        target_sites: 3000,
+        ..quick(Material::snow())
+    };
+    let (roof, ground, _, _) = shots(&FearingParams {
+        boring_objects: vec!["roof".into()],
+        ..base.clone()
+    });
+    assert!(
+        roof < 0.5 * ground,
+        "a boring roof gets fewer flakes per site: {roof} vs {ground}"
+    );
+    let (_, _, west, east) = shots(&FearingParams {
+        camera: Some([-8.0, 0.0, 2.0]),
+        ..base
+    });
+    assert!(
+        west > 1.2 * east,
+        "sites near the camera (west) get more flakes: {west} vs {east}"
+    );
+}
