@@ -34,6 +34,7 @@ pub mod sky_buckets;
 pub mod stability;
 pub mod surface;
 pub mod tracer;
+pub mod wind_transport;
 
 pub use edge_groups::Topology;
 pub use error::FearingError;
@@ -143,7 +144,9 @@ pub fn cover(scene: &Scene, params: &FearingParams) -> Result<FearingCover, Fear
         let t = Instant::now();
         let stab_deadline = (start + budget.mul_f64((pass as f64 + 1.0) / passes as f64))
             .max(t + Duration::from_millis(200));
-        let stab = stability::stabilise(scene, &mut sites, &topo, params, stab_deadline);
+        let blown = wind_transport::blow(scene, &mut sites, &topo, params);
+        let mut stab = stability::stabilise(scene, &mut sites, &topo, params, stab_deadline);
+        stab.wind_moved_m3 = blown;
         report.timings.stability_s += t.elapsed().as_secs_f64();
         report.flakes_shot += acc.flakes;
         report.flakes_to_sky += acc.flakes_to_sky;

@@ -167,6 +167,9 @@ pub struct FearingParams {
     pub step_height_m: Option<f64>,
     /// Constant wind (east, north), m/s (Section 6).
     pub wind_m_s: [f64; 2],
+    /// Share of a site's snow the wind carries downwind per stability phase and per m/s
+    /// (Section 6's transport in the stability phase; capped at all of it); ours: 0, off.
+    pub wind_transport: f64,
     /// Seed of every random number (flakes, transition curve).
     pub seed: u64,
     /// Wall-clock budget of the anytime accumulation loop, seconds (Section 3.2); the loop also
@@ -220,6 +223,7 @@ impl Default for FearingParams {
             flutter_sd_fraction: 0.3,
             step_height_m: None,
             wind_m_s: [0.0, 0.0],
+            wind_transport: 0.0,
             seed: 1,
             budget_s: 20.0,
             flakes_per_site: 48,
@@ -304,6 +308,7 @@ impl FearingParams {
                 ));
             }
         }
+        non_neg("wind transport share", self.wind_transport)?;
         pos("budget (s)", self.budget_s)?;
         if self.flakes_per_site == 0 {
             return Err(invalid("flakes per site", 0, "at least 1"));

@@ -53,6 +53,8 @@ pub struct StabilityReport {
     pub volume_after_m3: f64,
     pub moved_m3: f64,
     pub left_scene_m3: f64,
+    /// Moved downwind before the phase (Section 6, [`crate::wind_transport`]).
+    pub wind_moved_m3: f64,
 }
 
 /// A site's critical angle tan from the transition curve (inverse smoothstep of a keyed uniform).

@@ -680,3 +680,54 @@ fn importance_gives_boring_objects_and_far_sites_fewer_flakes() {
         "sites near the camera (west) get more flakes: {west} vs {east}"
     );
 }
+
+#[test]
+fn wind_in_the_stability_phase_piles_snow_on_the_windward_side() {
+    let scene = scenes::box_on_ground(6.0, 1.0, 1.5);
+    let strip = |c: &FearingCover, x0: f64, x1: f64| {
+        let v: Vec<f64> = sites(&scene, c)
+            .iter()
+            .filter(|s| s.object == "ground" && s.p[1].abs() < 0.4 && s.p[0] > x0 && s.p[0] < x1)
+            .map(|s| s.depth)
+            .collect();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    let p = FearingParams {
+        flutter_m: Some(0.0),
+        wind_m_s: [4.0, 0.0],
+        wind_transport: 0.1,
+        passes: 1,
+        ..quick(Material::snow())
+    };
+    let calm = cover(
+        &scene,
+        &FearingParams {
+            wind_transport: 0.0,
+            ..p.clone()
+        },
+    )
+    .unwrap();
+    let windy = cover(&scene, &p).unwrap();
+    assert!(windy.report.passes[0].stability.wind_moved_m3 > 0.0);
+    // Snow piles against the box's windward (west) face and leaves the ground's upwind edge.
+    let (wall, calm_wall) = (strip(&windy, -0.75, -0.5), strip(&calm, -0.75, -0.5));
+    assert!(
+        wall > calm_wall * 1.05,
+        "against the wall: {wall} (calm {calm_wall})"
+    );
+    // The ground's snow moves east as a whole.
+    let centre_x = |c: &FearingCover| {
+        let s = sites(&scene, c);
+        let g = s.iter().filter(|s| s.object == "ground");
+        g.clone().map(|s| s.p[0] * s.depth).sum::<f64>() / g.map(|s| s.depth).sum::<f64>()
+    };
+    // (Modestly: what reaches the east border falls off it.)
+    assert!(
+        centre_x(&windy) > centre_x(&calm) + 0.001,
+        "{} vs {}",
+        centre_x(&windy),
+        centre_x(&calm)
+    );
+    let m = &windy.report.mass;
+    assert!(m.closure_error_m3.abs() < 1e-9 * m.allocated_m3, "{m:?}");
+}
