@@ -242,6 +242,7 @@ fn bad_values_are_usage_errors_naming_them() {
         ("--flutter", "-1", "-1"),
         ("--budget", "0", "budget"),
         ("--depth", "-0.5", "-0.5"),
+        ("--wind-transport", "-1", "wind transport"),
     ] {
         let o = snowscape(&[
             "cover",

@@ -102,6 +102,10 @@ pub struct CoverArgs {
     /// Accumulation passes, each followed by stability (fearing).
     #[arg(long)]
     pub passes: Option<u32>,
+    /// Share of a site's snow the wind carries downwind per stability phase and per m/s of
+    /// --wind (fearing, Section 6; default 0: the wind only bends the flakes).
+    #[arg(long, allow_negative_numbers = true)]
+    pub wind_transport: Option<f64>,
     #[command(flatten)]
     pub dem_input: DemInputArgs,
 }
@@ -478,6 +482,9 @@ fn cover_fearing(
     }
     if let Some(p) = args.passes {
         params.passes = p;
+    }
+    if let Some(w) = args.wind_transport {
+        params.wind_transport = w;
     }
     let c = snowscape_fearing::cover(scene, &params).bad_input()?;
     let summary = json!({
