@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Measures the editor's live avalanche update rate over loopback in headless Chromium on a
 # SIZE² procedural terrain (default 1024): starts `snowscape serve`, runs
-# web/tests/live_rate.mjs against it, stops the server. Needs Node.js (npm) and chromium.
+# web/tests/live_rate_ws.mjs (a bare WebSocket client: the server's stream) and
+# web/tests/live_rate.mjs (the page in Chromium: stream plus rendering) against it, stops the server. Needs Node.js (npm) and chromium.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 size="${1:-1024}"
@@ -21,4 +22,5 @@ for _ in $(seq 1 600); do
   sleep 0.5
 done
 if [ -z "$url" ]; then echo "error: snowscape serve did not start" >&2; cat "$scratch/serve.log" >&2; exit 1; fi
+SNOWSCAPE_URL="$url" node --experimental-websocket web/tests/live_rate_ws.mjs
 SNOWSCAPE_URL="$url" node web/tests/live_rate.mjs

@@ -91,6 +91,7 @@ function buildMesh(s) {
   const n = meshW * meshH;
   geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
   geo.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
+  geo.setAttribute('normal', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
   const idx = [];
   for (let j = 0; j < meshH - 1; j++) {
     for (let i = 0; i < meshW - 1; i++) {
@@ -160,10 +161,25 @@ function refreshMesh() {
       }
     }
   }
+  // Normals of the changed vertices and their neighbours only, from central differences of
+  // the grid heights (the mesh is a regular grid: no need to recompute the whole geometry).
+  const nrm = geo.attributes.normal.array;
+  const h = (i, j) => pos[3 * (Math.min(meshH - 1, Math.max(0, j)) * meshW + Math.min(meshW - 1, Math.max(0, i))) + 1];
+  const d = 2 * step * cs;
+  for (const [i0, i1, j0, j1] of ranges) {
+    for (let j = Math.max(0, j0 - 1); j <= Math.min(meshH - 1, j1 + 1); j++) {
+      for (let i = Math.max(0, i0 - 1); i <= Math.min(meshW - 1, i1 + 1); i++) {
+        const nx = -(h(i + 1, j) - h(i - 1, j)) / d, nz = -(h(i, j + 1) - h(i, j - 1)) / d;
+        const inv = 1 / Math.sqrt(nx * nx + 1 + nz * nz);
+        const v = 3 * (j * meshW + i);
+        nrm[v] = nx * inv; nrm[v + 1] = inv; nrm[v + 2] = nz * inv;
+      }
+    }
+  }
   geo.attributes.position.needsUpdate = true;
   geo.attributes.color.needsUpdate = true;
-  geo.computeVertexNormals();
-  geo.computeBoundingSphere();
+  geo.attributes.normal.needsUpdate = true;
+  if (ranges.length && ranges[0][1] - ranges[0][0] === meshW - 1) geo.computeBoundingSphere();
 }
 
 function onFrame(buf) {

@@ -35,19 +35,20 @@ const site = await page.evaluate(() => {
 });
 await page.evaluate((p) => window.snowscape.send({ type: 'brush', stroke: 1, op: 'add', target: 'unstable', col: p.col, row: p.row, radius_m: 400, strength: 2, value: 0 }), site);
 await page.waitForTimeout(1500);
-// Count from the first 'running' message, in the page's own clock.
+// Count from the trigger, in the page's own clock: frames received until the avalanche ends
+// (or SNOWSCAPE_SECONDS pass), over the time from its first status message.
 await page.evaluate(() => {
   const a = window.snowscape;
-  a.rate = { frames0: null, t0: null };
+  a.lastAvalanche = null;
+  a.rate = { frames0: a.frames, t0: null };
   a.watch = setInterval(() => {
-    const m = a.lastAvalanche;
-    if (m && m.phase === 'running' && a.rate.t0 === null) { a.rate.t0 = performance.now(); a.rate.frames0 = a.frames; }
+    if (a.lastAvalanche && a.rate.t0 === null) a.rate.t0 = performance.now();
   }, 1);
 });
 await page.evaluate((p) => window.snowscape.send({ type: 'trigger_avalanche', col: p.col, row: p.row }), site);
-await page.waitForFunction(() => window.snowscape.rate.t0 !== null, null, { timeout: 60000 });
+await page.waitForFunction(() => window.snowscape.rate.t0 !== null, null, { timeout: 180000 });
 await page.waitForFunction((s) => (window.snowscape.lastAvalanche && window.snowscape.lastAvalanche.phase === 'ended')
-  || performance.now() - window.snowscape.rate.t0 > s * 1000, seconds, { timeout: (seconds + 60) * 1000 });
+  || performance.now() - window.snowscape.rate.t0 > s * 1000, seconds, { timeout: (seconds + 120) * 1000 });
 const r = await page.evaluate(() => {
   const a = window.snowscape;
   const dt = (performance.now() - a.rate.t0) / 1000;

@@ -1,0 +1,52 @@
+// The live avalanche stream as a bare WebSocket client receives it over loopback (no page, no
+// rendering): connects to a running `snowscape serve` (SNOWSCAPE_URL), decodes the grids with the
+// page's own decoder, loads unstable snow on the steepest slope, triggers an avalanche there and
+// counts the flow frames per second until it ends (or SNOWSCAPE_SECONDS pass). Separates the
+// server's stream rate from the browser's rendering. Needs `node --experimental-websocket` on
+// Node 20 (a global WebSocket from Node 22). Run through scripts/live-rate.sh.
+import assert from 'node:assert/strict';
+import { applyFrame } from '../src/wire.js';
+
+const url = process.env.SNOWSCAPE_URL;
+if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
+const seconds = Number(process.env.SNOWSCAPE_SECONDS || 10);
+const grids = {};
+let state = null, avalanche = null, frames = 0, flowFrames = 0, bytes = 0;
+const ws = new WebSocket(url.replace(/^http/, 'ws').replace(/\/$/, '') + '/ws');
+ws.binaryType = 'arraybuffer';
+ws.onmessage = (ev) => {
+  if (typeof ev.data === 'string') {
+    const m = JSON.parse(ev.data);
+    if (m.type === 'state') state = m;
+    if (m.type === 'avalanche') avalanche = m;
+  } else {
+    const f = applyFrame(ev.data, grids);
+    frames++;
+    if (f && f.channel === 'flow') { flowFrames++; bytes += ev.data.byteLength; }
+  }
+};
+const until = async (cond, ms) => {
+  const t = Date.now();
+  while (!cond()) {
+    if (Date.now() - t > ms) throw new Error('timed out');
+    await new Promise((r) => setTimeout(r, 5));
+  }
+};
+await until(() => state && grids.bedrock && grids.powder, 300000);
+const { width: w, height: h } = state;
+let best = [0, 0, 0];
+for (let r = 8; r < h - 8; r++) for (let c = 8; c < w - 8; c++) {
+  const i = r * w + c, g = grids.bedrock;
+  const dz = Math.abs(g[i + 1] - g[i - 1]) + Math.abs(g[i + w] - g[i - w]);
+  if (dz > best[0]) best = [dz, c, r];
+}
+ws.send(JSON.stringify({ type: 'brush', stroke: 1, op: 'add', target: 'unstable', col: best[1], row: best[2], radius_m: 400, strength: 2, value: 0 }));
+await new Promise((r) => setTimeout(r, 1500));
+ws.send(JSON.stringify({ type: 'trigger_avalanche', col: best[1], row: best[2] }));
+await until(() => avalanche, 180000);
+const t0 = performance.now(), f0 = flowFrames, b0 = bytes;
+await until(() => avalanche.phase === 'ended' || performance.now() - t0 > seconds * 1000, (seconds + 120) * 1000);
+const dt = (performance.now() - t0) / 1000, n = flowFrames - f0;
+ws.close();
+console.log(`bare WebSocket client over loopback, ${w}x${h}: ${n} flow frames in ${dt.toFixed(2)} s = ${(n / dt).toFixed(1)} updates/s, ${((bytes - b0) / Math.max(n, 1) / 1024).toFixed(1)} KiB per frame (avalanche ${avalanche.phase})`);
+assert.ok(n > 0, 'no flow frame arrived');
