@@ -73,6 +73,9 @@ let geo = null;
 let step = 1;
 let meshW = 0, meshH = 0;
 const dirty = new Set();
+// Draws only when something changed (new data, the camera, the skiers, the window): on a
+// machine without a GPU the software renderer would otherwise take the CPU the server needs.
+let redraw = true;
 
 function resize() {
   const el = $('view');
@@ -199,6 +202,7 @@ function onState(m) {
 
 function showSkiers(m) {
   skierGroup.clear();
+  redraw = true;
   if (!app.state || !grids.bedrock) return;
   const s = app.state, cs = s.cell_size_m;
   const h = (p) => {
@@ -264,11 +268,14 @@ function onDone(m) {
   if (m.what === 'exported') panels.showFiles(m.files);
 }
 
+app.redraw = () => { redraw = true; };
+controls.addEventListener('change', app.redraw);
+window.addEventListener('resize', app.redraw);
 function loop() {
   if (painting && pending) { const at = pick(pending); pending = null; if (at) dab(at); }
-  refreshMesh();
+  if (dirty.size > 0) { refreshMesh(); redraw = true; }
   controls.update();
-  renderer.render(scene, camera);
+  if (redraw) { renderer.render(scene, camera); redraw = false; app.renders = (app.renders || 0) + 1; }
   requestAnimationFrame(loop);
 }
 resize();
