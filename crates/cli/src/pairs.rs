@@ -1,21 +1,22 @@
 //! `X,Y` pairs on the command line (map coordinates, wind vectors).
 
-use anyhow::bail;
+use anyhow::{Context, bail};
 
-/// Parses `X,Y` as two finite numbers; errors name the flag and the value.
+/// Parses `X,Y` as two finite numbers; errors name the flag, the value and the bad part.
 pub fn parse_xy(flag: &str, text: &str) -> anyhow::Result<(f64, f64)> {
-    let parts: Vec<&str> = text.split(',').collect();
-    let parsed = match parts.as_slice() {
-        [x, y] => x
+    let num = |s: &str| -> anyhow::Result<f64> {
+        let v: f64 = s
             .trim()
-            .parse::<f64>()
-            .ok()
-            .zip(y.trim().parse::<f64>().ok()),
-        _ => None,
+            .parse()
+            .with_context(|| format!("{flag} {text:?}: {s:?} is not a number"))?;
+        if !v.is_finite() {
+            bail!("{flag} {text:?}: {s:?} is not finite");
+        }
+        Ok(v)
     };
-    match parsed {
-        Some((x, y)) if x.is_finite() && y.is_finite() => Ok((x, y)),
-        _ => bail!("{flag} {text:?}: expected two finite numbers X,Y"),
+    match text.split(',').collect::<Vec<_>>().as_slice() {
+        [x, y] => Ok((num(x)?, num(y)?)),
+        _ => bail!("{flag} {text:?}: expected two numbers X,Y"),
     }
 }
 

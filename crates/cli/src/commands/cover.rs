@@ -154,7 +154,7 @@ fn read_input(args: &CoverArgs) -> anyhow::Result<CoverInput> {
         let (x, y) = match &args.at {
             None => (0.5 * g.extent_m().0, 0.5 * g.extent_m().1),
             Some(text) => {
-                let (mx, my) = parse_xy(text)?;
+                let (mx, my) = crate::pairs::parse_xy("--at", text)?;
                 let (c, r) = g.map_to_cell(mx, my).ok_or_else(|| {
                     anyhow!("--at {text:?} lies outside the DEM {}", path.display())
                 })?;
@@ -236,24 +236,6 @@ fn crop(mut o: SceneObject, e: [f64; 4], margin: f64) -> SceneObject {
     o.triangles
         .retain(|t| t.iter().any(|&i| inside(&pos[i as usize])));
     o
-}
-
-fn parse_xy(text: &str) -> anyhow::Result<(f64, f64)> {
-    let parts: Vec<&str> = text.split(',').collect();
-    let num = |s: &str| -> anyhow::Result<f64> {
-        let v: f64 = s
-            .trim()
-            .parse()
-            .with_context(|| format!("--at {text:?}: {s:?} is not a number"))?;
-        if !v.is_finite() {
-            bail!("--at {text:?}: {s:?} is not finite");
-        }
-        Ok(v)
-    };
-    match parts.as_slice() {
-        [x, y] => Ok((num(x)?, num(y)?)),
-        _ => bail!("--at {text:?}: expected X,Y map coordinates"),
-    }
 }
 
 /// The exit code of a snow-cover error: the user's input (2) unless it is an output problem.
@@ -473,7 +455,7 @@ fn cover_fearing(
     }
     params.flutter_m = args.flutter;
     if let Some(w) = &args.wind {
-        let (x, y) = parse_pair(w, "--wind").bad_input()?;
+        let (x, y) = crate::pairs::parse_xy("--wind", w).bad_input()?;
         params.wind_m_s = [x, y];
     }
     params.seed = args.seed;
@@ -532,23 +514,4 @@ fn cover_fearing(
         );
     }
     Ok(())
-}
-
-/// Parses `X,Y` (finite numbers), naming the flag and the value in errors.
-fn parse_pair(text: &str, flag: &str) -> anyhow::Result<(f64, f64)> {
-    let parts: Vec<&str> = text.split(',').collect();
-    let num = |s: &str| -> anyhow::Result<f64> {
-        let v: f64 = s
-            .trim()
-            .parse()
-            .with_context(|| format!("{flag} {text:?}: {s:?} is not a number"))?;
-        if !v.is_finite() {
-            bail!("{flag} {text:?}: {s:?} is not finite");
-        }
-        Ok(v)
-    };
-    match parts.as_slice() {
-        [x, y] => Ok((num(x)?, num(y)?)),
-        _ => bail!("{flag} {text:?}: expected two numbers X,Y"),
-    }
 }
