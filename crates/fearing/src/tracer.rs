@@ -11,6 +11,7 @@
 use glam::Vec3A;
 use obvhs::{BvhBuildParams, cwbvh::CwBvh, triangle::Triangle};
 use snowscape_mesh::Scene;
+use snowscape_mesh::raycast::intersect;
 
 /// What a triangle of the tracer is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,28 +37,6 @@ pub struct Tracer {
     bvh: Option<CwBvh>,
     tris: Vec<Triangle>,
     tags: Vec<Tag>,
-}
-
-#[inline(always)]
-fn intersect(tri: &Triangle, ray: &obvhs::ray::Ray) -> f32 {
-    let e1 = tri.v1 - tri.v0;
-    let e2 = tri.v2 - tri.v0;
-    let p = ray.direction.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
-        return f32::INFINITY;
-    }
-    let inv = 1.0 / det;
-    let s = ray.origin - tri.v0;
-    let u = s.dot(p) * inv;
-    let q = s.cross(e1);
-    let v = ray.direction.dot(q) * inv;
-    let t = e2.dot(q) * inv;
-    if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= ray.tmin && t <= ray.tmax {
-        t
-    } else {
-        f32::INFINITY
-    }
 }
 
 impl Tracer {

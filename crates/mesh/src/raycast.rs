@@ -18,7 +18,7 @@ use rayon::prelude::*;
 /// ray through the shared edge of two triangles hits them, where obvhs's own test, which reads
 /// the sign bits, misses both.
 #[inline(always)]
-fn intersect(tri: &Triangle, ray: &obvhs::ray::Ray) -> f32 {
+pub fn intersect(tri: &Triangle, ray: &obvhs::ray::Ray) -> f32 {
     let e1 = tri.v1 - tri.v0;
     let e2 = tri.v2 - tri.v0;
     let p = ray.direction.cross(e2);
