@@ -4,7 +4,7 @@
 // was applied (read back from the server), a triggered avalanche moves snow downhill, the
 // timeline steps a day, a second tab sees the same state, and malformed messages get error
 // replies without breaking the session. Writes screenshots to SNOWSCAPE_SHOTS (default /tmp).
-import { chromium } from 'playwright-core';
+import { launchChromium, steepestCellInPage } from './common.mjs';
 import assert from 'node:assert/strict';
 
 const url = process.env.SNOWSCAPE_URL;
@@ -19,11 +19,7 @@ async function check(name, fn) {
   catch (e) { results.push([name, 'FAILED', e]); console.log(`FAIL ${name}: ${e.stack || e}`); }
 }
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
+const browser = await launchChromium();
 const context = await browser.newContext({ viewport: { width: 1200, height: 800 } });
 const page = await context.newPage();
 page.on('pageerror', (e) => console.log('page error:', e.message));
@@ -98,16 +94,7 @@ await check('a second tab sees the same state', async () => {
 
 await check('a triggered avalanche moves snow downhill', async () => {
   // The steepest cell of the bedrock, loaded with unstable snow through brush messages.
-  const site = await page.evaluate(() => {
-    const { state: s, grids: g } = window.snowscape;
-    let best = [0, 0, 0];
-    for (let r = 8; r < s.height - 8; r++) for (let c = 8; c < s.width - 8; c++) {
-      const i = r * s.width + c;
-      const dz = Math.abs(g.bedrock[i + 1] - g.bedrock[i - 1]) + Math.abs(g.bedrock[i + s.width] - g.bedrock[i - s.width]);
-      if (dz > best[0]) best = [dz, c, r];
-    }
-    return { col: best[1], row: best[2] };
-  });
+  const site = await steepestCellInPage(page);
   await page.evaluate((p) => window.snowscape.send({ type: 'brush', stroke: 9000, op: 'add', target: 'unstable', col: p.col, row: p.row, radius_m: 150, strength: 2, value: 0 }), site);
   await page.waitForTimeout(500);
   const meanAlt = () => page.evaluate(() => {

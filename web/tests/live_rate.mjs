@@ -4,17 +4,13 @@
 // of 16-bit heights) and avalanche status messages it receives per second while the flow runs.
 // Prints the numbers; asserts only that frames arrived (speed is measured, not tested).
 // Run through scripts/live-rate.sh.
-import { chromium } from 'playwright-core';
+import { launchChromium, steepestCellInPage } from './common.mjs';
 import assert from 'node:assert/strict';
 
 const url = process.env.SNOWSCAPE_URL;
 if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
 const seconds = Number(process.env.SNOWSCAPE_SECONDS || 10);
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
+const browser = await launchChromium();
 const page = await (await browser.newContext({ viewport: { width: 1200, height: 800 } })).newPage();
 page.on('pageerror', (e) => console.log('page error:', e.message));
 const t0 = Date.now();
@@ -23,16 +19,7 @@ await page.waitForFunction(() => window.snowscape && window.snowscape.state && w
 await page.waitForTimeout(2000);
 const size = await page.evaluate(() => [window.snowscape.state.width, window.snowscape.state.height]);
 console.log(`terrain ${size[0]}x${size[1]}: page load to full state ${Date.now() - t0} ms`);
-const site = await page.evaluate(() => {
-  const { state: s, grids: g } = window.snowscape;
-  let best = [0, 0, 0];
-  for (let r = 8; r < s.height - 8; r++) for (let c = 8; c < s.width - 8; c++) {
-    const i = r * s.width + c;
-    const dz = Math.abs(g.bedrock[i + 1] - g.bedrock[i - 1]) + Math.abs(g.bedrock[i + s.width] - g.bedrock[i - s.width]);
-    if (dz > best[0]) best = [dz, c, r];
-  }
-  return { col: best[1], row: best[2] };
-});
+const site = await steepestCellInPage(page);
 await page.evaluate((p) => window.snowscape.send({ type: 'brush', stroke: 1, op: 'add', target: 'unstable', col: p.col, row: p.row, radius_m: 400, strength: 2, value: 0 }), site);
 await page.waitForTimeout(1500);
 // Count from the trigger, in the page's own clock: frames received until the avalanche ends

@@ -6,6 +6,7 @@
 // Node 20 (a global WebSocket from Node 22). Run through scripts/live-rate.sh.
 import assert from 'node:assert/strict';
 import { applyFrame } from '../src/wire.js';
+import { steepestCell } from './common.mjs';
 
 const url = process.env.SNOWSCAPE_URL;
 if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
@@ -34,15 +35,10 @@ const until = async (cond, ms) => {
 };
 await until(() => state && grids.bedrock && grids.powder, 300000);
 const { width: w, height: h } = state;
-let best = [0, 0, 0];
-for (let r = 8; r < h - 8; r++) for (let c = 8; c < w - 8; c++) {
-  const i = r * w + c, g = grids.bedrock;
-  const dz = Math.abs(g[i + 1] - g[i - 1]) + Math.abs(g[i + w] - g[i - w]);
-  if (dz > best[0]) best = [dz, c, r];
-}
-ws.send(JSON.stringify({ type: 'brush', stroke: 1, op: 'add', target: 'unstable', col: best[1], row: best[2], radius_m: 400, strength: 2, value: 0 }));
+const best = steepestCell(w, h, grids.bedrock);
+ws.send(JSON.stringify({ type: 'brush', stroke: 1, op: 'add', target: 'unstable', col: best.col, row: best.row, radius_m: 400, strength: 2, value: 0 }));
 await new Promise((r) => setTimeout(r, 1500));
-ws.send(JSON.stringify({ type: 'trigger_avalanche', col: best[1], row: best[2] }));
+ws.send(JSON.stringify({ type: 'trigger_avalanche', col: best.col, row: best.row }));
 await until(() => avalanche, 180000);
 const t0 = performance.now(), f0 = flowFrames, b0 = bytes;
 await until(() => avalanche.phase === 'ended' || performance.now() - t0 > seconds * 1000, (seconds + 120) * 1000);
