@@ -3,39 +3,13 @@
 //! these tests fail when the folder is missing: they exist to check the method on real
 //! files), on a mesh standing on a real DEM, and on bad input (exit code 2 naming the value).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn data(rel: &str) -> PathBuf {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    assert!(
-        p.is_file(),
-        "{} is missing: the cover tests need ../shared/data beside the checkout",
-        p.display()
-    );
-    p
-}
-
-fn snowscape(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_snowscape"))
-        .args(args)
-        .output()
-        .expect("the snowscape binary runs")
-}
-
-fn report(dir: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{report, shared, snowscape, stderr};
 
 #[test]
 fn spider_gets_bridged_rounded_snow_and_every_output() {
-    let mesh = data("meshes/spider.obj");
+    let mesh = shared("meshes/spider.obj");
     let out = tempfile::tempdir().unwrap();
     let dir = out.path().join("spider");
     let o = snowscape(&[
@@ -100,7 +74,7 @@ fn spider_gets_bridged_rounded_snow_and_every_output() {
 
 #[test]
 fn teapots_z_up_with_overhangs() {
-    let mesh = data("meshes/teapot_assimp.obj");
+    let mesh = shared("meshes/teapot_assimp.obj");
     let out = tempfile::tempdir().unwrap();
     let dir = out.path().join("teapots");
     let o = snowscape(&[
@@ -129,8 +103,8 @@ fn teapots_z_up_with_overhangs() {
 
 #[test]
 fn a_mesh_standing_on_a_dem_is_covered_with_the_ground_around_it() {
-    let mesh = data("meshes/bunny_npm.obj");
-    let dem = data("dem/rme_idaho_50m/dem.asc");
+    let mesh = shared("meshes/bunny_npm.obj");
+    let dem = shared("dem/rme_idaho_50m/dem.asc");
     let out = tempfile::tempdir().unwrap();
     let dir = out.path().join("bunny");
     let o = snowscape(&[
@@ -156,7 +130,7 @@ fn a_mesh_standing_on_a_dem_is_covered_with_the_ground_around_it() {
 #[test]
 fn bad_input_is_refused_with_exit_code_2_naming_the_value() {
     let out = tempfile::tempdir().unwrap();
-    let spider = data("meshes/spider.obj");
+    let spider = shared("meshes/spider.obj");
     let o = snowscape(&["cover", "--mesh", "/nonexistent/scene.obj", "--out", "x"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
@@ -227,7 +201,7 @@ fn bad_input_is_refused_with_exit_code_2_naming_the_value() {
 
 #[test]
 fn outputs_are_the_same_bytes_whatever_the_thread_count() {
-    let mesh = data("meshes/teapot_assimp.obj");
+    let mesh = shared("meshes/teapot_assimp.obj");
     let out = tempfile::tempdir().unwrap();
     let run = |threads: &str| {
         let dir = out.path().join(format!("t{threads}"));

@@ -3,33 +3,10 @@
 //! method on real files), the project's own roof-and-basin scene, determinism across thread
 //! counts, and bad input (exit code 2 naming the value).
 
+mod common;
+
+use common::{report, shared, snowscape, stderr};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn meshes() -> PathBuf {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes");
-    assert!(
-        p.is_dir(),
-        "{} is missing: these tests need ../shared/data beside the checkout",
-        p.display()
-    );
-    p
-}
-
-fn snowscape(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_snowscape"))
-        .args(args)
-        .output()
-        .expect("the snowscape binary runs")
-}
-
-fn report(dir: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// The `v` lines of an OBJ file.
 fn obj_vertices(path: &Path) -> Vec<[f32; 3]> {
@@ -46,7 +23,7 @@ fn obj_vertices(path: &Path) -> Vec<[f32; 3]> {
 
 #[test]
 fn every_shared_mesh_gets_snow_aligned_with_it() {
-    let mut names: Vec<PathBuf> = std::fs::read_dir(meshes())
+    let mut names: Vec<PathBuf> = std::fs::read_dir(shared("meshes"))
         .unwrap()
         .map(|e| e.unwrap().path())
         .collect();
@@ -196,7 +173,7 @@ fn roof_and_basin_scene_built_in_code() {
 
 #[test]
 fn same_bytes_on_one_and_two_threads() {
-    let bunny = meshes().join("bunny_npm.obj");
+    let bunny = shared("meshes").join("bunny_npm.obj");
     let out = tempfile::tempdir().unwrap();
     let run = |threads: &str| {
         let dir = out.path().join(threads);
@@ -231,7 +208,7 @@ fn same_bytes_on_one_and_two_threads() {
 
 #[test]
 fn bad_values_are_usage_errors_naming_them() {
-    let bunny = meshes().join("bunny_npm.obj");
+    let bunny = shared("meshes").join("bunny_npm.obj");
     let out = tempfile::tempdir().unwrap();
     let dir = out.path().join("x");
     for (flag, value, needle) in [

@@ -2,33 +2,9 @@
 //! mesh alone and standing on the DEM, on the shipped castle scenario, and bad input refused
 //! with exit code 2 and nothing written.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn shared(rel: &str) -> PathBuf {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    assert!(
-        p.is_file(),
-        "{} is missing: the transport CLI tests need the shared data folder beside the checkout",
-        p.display()
-    );
-    p
-}
-
-fn snowscape(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_snowscape"))
-        .args(args)
-        .output()
-        .expect("the snowscape binary runs")
-}
-
-fn tiff_size(path: &Path) -> (u32, u32) {
-    let f = std::fs::File::open(path).unwrap();
-    let mut d = tiff::decoder::Decoder::new(std::io::BufReader::new(f)).unwrap();
-    d.dimensions().unwrap()
-}
+use common::{report, shared, snowscape, tiff_size};
 
 const OUTPUTS: [&str; 10] = [
     "depth.tif",
@@ -42,10 +18,6 @@ const OUTPUTS: [&str; 10] = [
     "preview.png",
     "report.json",
 ];
-
-fn report(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
-}
 
 /// The mass budget closes to rounding of the snow that fell.
 fn assert_budget_closes(r: &serde_json::Value) {

@@ -1,0 +1,44 @@
+//! Helpers shared by the command-line tests: running the binary, the shared data folder, reports.
+#![allow(dead_code)] // each test crate uses some of them
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs `snowscape` with `args`.
+pub fn snowscape(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_snowscape"))
+        .args(args)
+        .output()
+        .expect("the snowscape binary runs")
+}
+
+/// A path under ../shared/data; fails loudly when it is missing (these tests exist to check
+/// the program on real files).
+pub fn shared(rel: &str) -> PathBuf {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
+    assert!(
+        p.exists(),
+        "{} is missing: these tests need the shared data folder ../shared/data beside the checkout",
+        p.display()
+    );
+    p
+}
+
+/// The `report.json` of an output folder.
+pub fn report(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+}
+
+/// A process's standard error as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Width and height of a GeoTIFF written by snowscape.
+pub fn tiff_size(path: &Path) -> (u32, u32) {
+    let f = std::fs::File::open(path).unwrap();
+    let mut d = tiff::decoder::Decoder::new(std::io::BufReader::new(f)).unwrap();
+    d.dimensions().unwrap()
+}
