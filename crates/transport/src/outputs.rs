@@ -92,8 +92,10 @@ pub fn write_outputs(
         "voxels": {"nx": out.voxels.nx, "ny": out.voxels.ny, "nz": out.voxels.nz,
                    "size_m": out.voxels.cell},
         "wind": {
-            "last_iteration": out.wind_report,
-            "residual_divergence_per_s": out.wind_report.max_divergence,
+            "last_iteration": out.wind_report.last_iteration,
+            "mean_projection": out.wind_report.mean,
+            "residual_divergence_per_s": out.wind_report.mean.max_divergence,
+            "relative_divergence": out.wind_report.mean.relative_divergence,
         },
         "flakes": {"landed": out.flakes_landed, "uniform_fallback": out.precipitation_fallback},
         "steps": out.steps,

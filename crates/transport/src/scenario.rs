@@ -219,6 +219,15 @@ pub struct StageTimes {
     pub transport_s: f64,
 }
 
+/// The wind solver's residual divergence.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct WindReport {
+    /// The last Stable Fluids iteration (projected to `wind.tolerance`).
+    pub last_iteration: IterationReport,
+    /// The mean wind, projected to `wind.mean_tolerance`: the wind every later stage uses.
+    pub mean: IterationReport,
+}
+
 /// Everything a run produces.
 #[derive(Debug, Clone)]
 pub struct RunOutputs {
@@ -241,7 +250,7 @@ pub struct RunOutputs {
     /// Sublimation rate of the last step, kg m⁻² s⁻¹.
     pub q_subl: Vec<f32>,
     /// The last wind iteration's report.
-    pub wind_report: IterationReport,
+    pub wind_report: WindReport,
     /// The voxel grid of the wind.
     pub voxels: VoxelGrid,
     /// The mean 3D wind (Section 6.3).
@@ -298,7 +307,11 @@ pub fn run(
     for _ in 0..scenario.wind_iterations {
         wind_report = Some(solver.iterate());
     }
-    let wind_report = wind_report.expect("at least one iteration (validated)");
+    let last_iteration = wind_report.expect("at least one iteration (validated)");
+    let wind_report = WindReport {
+        last_iteration,
+        mean: solver.project_mean(),
+    };
     times.wind_s = clock.elapsed().as_secs_f64();
     let clock = std::time::Instant::now();
     let z_r = scenario.transport.reference_height_m;

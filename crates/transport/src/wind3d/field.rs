@@ -73,14 +73,123 @@ impl Component {
     }
 }
 
+/// Per-axis constants of trilinear sampling on a regular lattice.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Axis {
+    /// Position of sample 0, voxel units.
+    offset: f32,
+    /// Largest lattice coordinate (`n − 1`).
+    max: f32,
+    /// Largest base index of a cell (`n − 2`, 0 when `n = 1`).
+    max_base: usize,
+    /// Index stride to the next sample (0 when `n = 1`: the sample is repeated).
+    step: usize,
+}
+
+impl Axis {
+    fn new(n: usize, offset: f64, stride: usize) -> Self {
+        Self {
+            offset: offset as f32,
+            max: n.saturating_sub(1) as f32,
+            max_base: n.saturating_sub(2),
+            step: if n > 1 { stride } else { 0 },
+        }
+    }
+
+    /// Base index and weight of the cell holding coordinate `p`, clamped to the lattice.
+    #[inline(always)]
+    fn locate(&self, p: f32) -> (usize, f32) {
+        let g = (p - self.offset).max(0.0).min(self.max);
+        let b = (g as usize).min(self.max_base);
+        (b, g - b as f32)
+    }
+}
+
+/// A lattice of `dims` samples at `offset + (i, j, k)`, for trilinear sampling in `f32`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Lattice {
+    axes: [Axis; 3],
+    strides: [usize; 3],
+    /// Number of samples.
+    len: usize,
+}
+
+impl Lattice {
+    /// The lattice of `dims` samples starting at `offset` (voxel units).
+    pub fn new(dims: [usize; 3], offset: [f64; 3]) -> Self {
+        let strides = [1, dims[0], dims[0] * dims[1]];
+        Self {
+            axes: std::array::from_fn(|a| Axis::new(dims[a], offset[a], strides[a])),
+            strides,
+            len: dims[0] * dims[1] * dims[2],
+        }
+    }
+
+    /// Index of the lower corner of the cell holding `p`, the index steps to its seven
+    /// other corners along x, y, z, and the weights along each axis.
+    #[inline(always)]
+    fn corners(&self, p: [f32; 3]) -> (usize, [usize; 3], [f32; 3]) {
+        let (bx, tx) = self.axes[0].locate(p[0]);
+        let (by, ty) = self.axes[1].locate(p[1]);
+        let (bz, tz) = self.axes[2].locate(p[2]);
+        let i0 = bx + self.strides[1] * by + self.strides[2] * bz;
+        let steps = [self.axes[0].step, self.axes[1].step, self.axes[2].step];
+        (i0, steps, [tx, ty, tz])
+    }
+
+    /// Trilinear interpolation of the scalar samples `data` at `p`.
+    ///
+    /// Panics if `data` is shorter than the lattice.
+    #[inline(always)]
+    pub fn sample(&self, data: &[f32], p: [f32; 3]) -> f32 {
+        assert!(data.len() >= self.len);
+        let (i0, [dx, dy, dz], [tx, ty, tz]) = self.corners(p);
+        // SAFETY: `locate` clamps each base to `n − 2` (0 when `n = 1`, where the step is
+        // 0), so the farthest corner `i0 + dx + dy + dz` is at most `len − 1 < data.len()`.
+        let v = |o: usize| unsafe { *data.get_unchecked(i0 + o) };
+        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+        let x00 = lerp(v(0), v(dx), tx);
+        let x10 = lerp(v(dy), v(dy + dx), tx);
+        let x01 = lerp(v(dz), v(dz + dx), tx);
+        let x11 = lerp(v(dz + dy), v(dz + dy + dx), tx);
+        lerp(lerp(x00, x10, ty), lerp(x01, x11, ty), tz)
+    }
+
+    /// Trilinear interpolation of the 4-vector samples `data` at `p`.
+    ///
+    /// Panics if `data` is shorter than the lattice.
+    #[inline(always)]
+    pub fn sample4(&self, data: &[[f32; 4]], p: [f32; 3]) -> [f32; 4] {
+        assert!(data.len() >= self.len);
+        let (i0, [dx, dy, dz], [tx, ty, tz]) = self.corners(p);
+        // SAFETY: as in `sample`, every corner index is below `len ≤ data.len()`.
+        let v = |o: usize| unsafe { *data.get_unchecked(i0 + o) };
+        let lerp = |a: [f32; 4], b: [f32; 4], t: f32| -> [f32; 4] {
+            [
+                a[0] + t * (b[0] - a[0]),
+                a[1] + t * (b[1] - a[1]),
+                a[2] + t * (b[2] - a[2]),
+                a[3] + t * (b[3] - a[3]),
+            ]
+        };
+        let x00 = lerp(v(0), v(dx), tx);
+        let x10 = lerp(v(dy), v(dy + dx), tx);
+        let x01 = lerp(v(dz), v(dz + dx), tx);
+        let x11 = lerp(v(dz + dy), v(dz + dy + dx), tx);
+        lerp(lerp(x00, x10, ty), lerp(x01, x11, ty), tz)
+    }
+}
+
 /// The velocity averaged to the voxel centres, interleaved, for fast back-tracing: one
-/// trilinear interpolation of a 3-vector instead of three staggered ones.
+/// trilinear interpolation of a vector instead of three staggered ones.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Centred {
     /// Voxels along x, y, z.
     pub dims: [usize; 3],
-    /// `(u, v, w)` at each voxel centre, index `(k ny + j) nx + i`.
-    pub data: Vec<[f32; 3]>,
+    /// `(u, v, w, 0)` at each voxel centre, index `(k ny + j) nx + i` (padded to four
+    /// lanes so a corner is one aligned load).
+    pub data: Vec<[f32; 4]>,
+    lattice: Lattice,
 }
 
 impl Centred {
@@ -88,7 +197,8 @@ impl Centred {
     pub fn update(&mut self, vel: &Velocity) {
         let [nx, ny, nz] = [vel.w.dims[0], vel.w.dims[1], vel.u.dims[2]];
         self.dims = [nx, ny, nz];
-        self.data.resize(nx * ny * nz, [0.0; 3]);
+        self.lattice = Lattice::new(self.dims, [0.5; 3]);
+        self.data.resize(nx * ny * nz, [0.0; 4]);
         let s = nx * ny;
         self.data
             .par_chunks_mut(s)
@@ -103,6 +213,7 @@ impl Centred {
                             0.5 * (vel.u.data[a] + vel.u.data[a + 1]),
                             0.5 * (vel.v.data[b] + vel.v.data[b + nx]),
                             0.5 * (vel.w.data[c] + vel.w.data[c + s]),
+                            0.0,
                         ];
                     }
                 }
@@ -112,31 +223,14 @@ impl Centred {
     /// Trilinear interpolation at `p` (voxel units), clamped to the voxel centres.
     #[inline(always)]
     pub fn sample(&self, p: [f32; 3]) -> [f32; 3] {
-        let mut base = [0usize; 3];
-        let mut t = [0.0f32; 3];
-        let mut step = [0usize; 3];
-        let strides = [1, self.dims[0], self.dims[0] * self.dims[1]];
-        for a in 0..3 {
-            let n = self.dims[a];
-            let g = (p[a] - 0.5).clamp(0.0, (n - 1) as f32);
-            let b = (g as usize).min(n.saturating_sub(2));
-            base[a] = b;
-            t[a] = if n > 1 { g - b as f32 } else { 0.0 };
-            step[a] = if n > 1 { strides[a] } else { 0 };
-        }
-        let i0 = base[0] + strides[1] * base[1] + strides[2] * base[2];
-        let d = &self.data;
-        let mut out = [0.0f32; 3];
-        for (c, o) in out.iter_mut().enumerate() {
-            let v = |off: usize| d[i0 + off][c];
-            let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
-            let x00 = lerp(v(0), v(step[0]), t[0]);
-            let x10 = lerp(v(step[1]), v(step[1] + step[0]), t[0]);
-            let x01 = lerp(v(step[2]), v(step[2] + step[0]), t[0]);
-            let x11 = lerp(v(step[2] + step[1]), v(step[2] + step[1] + step[0]), t[0]);
-            *o = lerp(lerp(x00, x10, t[1]), lerp(x01, x11, t[1]), t[2]);
-        }
-        out
+        let v = self.lattice.sample4(&self.data, p);
+        [v[0], v[1], v[2]]
+    }
+
+    /// [`Self::sample`] at `(p[0], p[1], p[2])`, as `(u, v, w, 0)`.
+    #[inline(always)]
+    pub fn sample4(&self, p: [f32; 4]) -> [f32; 4] {
+        self.lattice.sample4(&self.data, [p[0], p[1], p[2]])
     }
 }
 

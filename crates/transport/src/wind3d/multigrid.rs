@@ -1,6 +1,6 @@
 //! Multigrid preconditioner of the pressure solve (McAdams, Sifakis & Teran 2010, "A
 //! parallel multigrid Poisson solver for fluids simulation on large grids"): a symmetric
-//! V-cycle with damped Jacobi smoothing on a hierarchy of 2×2×2 aggregates.
+//! V-cycle with damped Jacobi smoothing on a hierarchy of 2×2×2 aggregates, in `f32`.
 //!
 //! Each coarse voxel aggregates up to eight fine ones; the coarse operator is the Galerkin
 //! product `Pᵀ A P` for the piecewise-constant prolongation `P` (exact for the masked
@@ -8,8 +8,11 @@
 //! inside an aggregate cancel). The coarse correction is scaled by `CORRECTION` (the
 //! piecewise-constant prolongation under-corrects smooth errors). Pre- and post-smoothing
 //! use the same sweeps and the cycle starts from zero, so the preconditioner is symmetric
-//! and conjugate gradients stay valid.
+//! and conjugate gradients stay valid. The stencils run a row at a time ([`super::stencil`]);
+//! the first sweep from zero is the diagonal scaling alone, and the fine residual is
+//! restricted as it is computed.
 
+use super::stencil::{apply_row, rows};
 use rayon::prelude::*;
 
 /// Damping of the Jacobi smoother (6/7, the usual choice for the 7-point Laplacian).
@@ -28,18 +31,37 @@ const COARSEST_CELLS: usize = 512;
 struct Level {
     dims: [usize; 3],
     diag: Vec<f32>,
+    /// `ω / d`, 0 for inactive voxels.
+    scaled_inverse: Vec<f32>,
     /// Coupling weights to the −x, +x, −y, +y, −z, +z neighbours (matrix entry `−w`);
-    /// empty on the finest level, whose weights are 0 or 1 and read from `mask`.
+    /// empty on the finest level, whose weights are all 1 (see [`super::stencil`]).
     off: Vec<[f32; 6]>,
-    /// Finest level: bit `d` set for a unit coupling in direction `d`.
-    mask: Vec<u8>,
+    /// Right-hand side and solution (unused on the finest level: the caller's vectors).
     x: Vec<f32>,
     b: Vec<f32>,
-    r: Vec<f32>,
+    /// Ping-pong buffer of the smoother.
     tmp: Vec<f32>,
+    zeros: Vec<f32>,
 }
 
 impl Level {
+    fn new(dims: [usize; 3], diag: Vec<f32>, off: Vec<[f32; 6]>) -> Self {
+        let n = dims[0] * dims[1] * dims[2];
+        Self {
+            scaled_inverse: diag
+                .iter()
+                .map(|&d| if d > 0.0 { OMEGA / d } else { 0.0 })
+                .collect(),
+            dims,
+            diag,
+            off,
+            x: vec![0.0; n],
+            b: vec![0.0; n],
+            tmp: vec![0.0; n],
+            zeros: vec![0.0; dims[0]],
+        }
+    }
+
     fn len(&self) -> usize {
         self.dims[0] * self.dims[1] * self.dims[2]
     }
@@ -48,68 +70,114 @@ impl Level {
         self.dims[0] * self.dims[1]
     }
 
-    #[inline]
-    fn neighbour(&self, i: usize, d: usize) -> usize {
-        let s = [1, self.dims[0], self.slice()][d / 2];
-        if d.is_multiple_of(2) { i - s } else { i + s }
+    fn weights(&self, start: usize, len: usize) -> Option<&[[f32; 6]]> {
+        (!self.off.is_empty()).then(|| &self.off[start..start + len])
     }
 
-    /// `(b − A x)_i` at an active voxel.
-    #[inline]
-    fn residual_at(&self, x: &[f32], b: &[f32], i: usize) -> f32 {
-        let mut ax = self.diag[i] * x[i];
-        if self.off.is_empty() {
-            let m = self.mask[i];
-            for d in 0..6 {
-                if m & (1 << d) != 0 {
-                    ax -= x[self.neighbour(i, d)];
-                }
-            }
-        } else {
-            for (d, w) in self.off[i].iter().enumerate() {
-                if *w != 0.0 {
-                    ax -= w * x[self.neighbour(i, d)];
-                }
-            }
-        }
-        b[i] - ax
-    }
-
-    /// `out = b − A x`.
-    fn residual(&self, x: &[f32], b: &[f32], out: &mut [f32]) {
-        let s = self.slice();
-        out.par_chunks_mut(s).enumerate().for_each(|(k, o)| {
-            for (t, ov) in o.iter_mut().enumerate() {
-                let i = k * s + t;
-                *ov = if self.diag[i] == 0.0 {
-                    0.0
-                } else {
-                    self.residual_at(x, b, i)
-                };
-            }
-        });
-    }
-
-    /// `sweeps` damped Jacobi sweeps on `A x = b`, each one fused pass into `r`, swapped.
-    fn smooth(&mut self, sweeps: usize) {
-        let mut next = std::mem::take(&mut self.r);
-        let s = self.slice();
-        for _ in 0..sweeps {
-            let (x, b) = (&self.x, &self.b);
-            next.par_chunks_mut(s).enumerate().for_each(|(k, o)| {
-                for (t, ov) in o.iter_mut().enumerate() {
-                    let i = k * s + t;
-                    let d = self.diag[i];
-                    *ov = if d == 0.0 {
-                        0.0
-                    } else {
-                        x[i] + OMEGA * self.residual_at(x, b, i) / d
-                    };
+    /// One damped Jacobi sweep `out = x + ω (b − A x) / d`.
+    fn sweep(&self, b: &[f32], x: &[f32], out: &mut [f32]) {
+        let [nx, ny, _] = self.dims;
+        out.par_chunks_mut(self.slice())
+            .enumerate()
+            .for_each(|(k, o)| {
+                for j in 0..ny {
+                    let s = (k * ny + j) * nx;
+                    let r = rows(x, self.dims, j, k, &self.zeros);
+                    let (bb, inv) = (&b[s..s + nx], &self.scaled_inverse[s..s + nx]);
+                    let orow = &mut o[j * nx..(j + 1) * nx];
+                    apply_row(&self.diag[s..s + nx], self.weights(s, nx), &r, orow);
+                    let xr = &x[s..s + nx];
+                    for (((o, x), b), inv) in orow.iter_mut().zip(xr).zip(bb).zip(inv) {
+                        *o = x + inv * (b - *o);
+                    }
                 }
             });
-            std::mem::swap(&mut self.x, &mut next);
+    }
+
+    /// `sweeps` Jacobi sweeps on `A x = b` from `x = 0` (the first is `x = ω b / d`),
+    /// leaving the result in `x`.
+    fn smooth_from_zero(&mut self, b: &[f32], x: &mut [f32], sweeps: usize) {
+        let mut tmp = std::mem::take(&mut self.tmp);
+        let (first, rest): (&mut [f32], &mut [f32]) = if sweeps % 2 == 1 {
+            (x, &mut tmp)
+        } else {
+            (&mut tmp, x)
+        };
+        first
+            .par_iter_mut()
+            .zip(b.par_iter().zip(self.scaled_inverse.par_iter()))
+            .for_each(|(x, (b, s))| *x = s * b);
+        for n in 1..sweeps {
+            if n % 2 == 1 {
+                self.sweep(b, first, rest);
+            } else {
+                self.sweep(b, rest, first);
+            }
         }
-        self.r = next;
+        self.tmp = tmp;
+    }
+
+    /// `sweeps` Jacobi sweeps on `A x = b` from the current `x`.
+    fn smooth(&mut self, b: &[f32], x: &mut [f32], sweeps: usize) {
+        let mut tmp = std::mem::take(&mut self.tmp);
+        for _ in 0..sweeps / 2 {
+            self.sweep(b, x, &mut tmp);
+            self.sweep(b, &tmp, x);
+        }
+        if sweeps % 2 == 1 {
+            self.sweep(b, x, &mut tmp);
+            x.par_iter_mut()
+                .zip(tmp.par_iter())
+                .for_each(|(x, t)| *x = *t);
+        }
+        self.tmp = tmp;
+    }
+
+    /// `b_c = Pᵀ (b − A x)`: each coarse slice sums the residuals of its two fine slices.
+    fn restrict_residual(&self, b: &[f32], x: &[f32], coarse_dims: [usize; 3], out: &mut [f32]) {
+        let [nx, ny, nz] = self.dims;
+        let cx = coarse_dims[0];
+        out.par_chunks_mut(cx * coarse_dims[1])
+            .enumerate()
+            .for_each(|(ck, o)| {
+                o.iter_mut().for_each(|v| *v = 0.0);
+                let mut ax = vec![0.0f32; nx];
+                for k in (2 * ck..2 * ck + 2).filter(|&k| k < nz) {
+                    for j in 0..ny {
+                        let s = (k * ny + j) * nx;
+                        let r = rows(x, self.dims, j, k, &self.zeros);
+                        let (bb, d) = (&b[s..s + nx], &self.diag[s..s + nx]);
+                        apply_row(d, self.weights(s, nx), &r, &mut ax);
+                        let orow = &mut o[(j / 2) * cx..(j / 2 + 1) * cx];
+                        for (i, ((ax, b), d)) in ax.iter().zip(bb).zip(d).enumerate() {
+                            if *d > 0.0 {
+                                orow[i / 2] += b - ax;
+                            }
+                        }
+                    }
+                }
+            });
+    }
+
+    /// `x += CORRECTION · P x_c` on the active voxels.
+    fn prolong(&self, coarse_x: &[f32], coarse_dims: [usize; 3], x: &mut [f32]) {
+        let [nx, ny, _] = self.dims;
+        let cd = coarse_dims;
+        x.par_chunks_mut(self.slice())
+            .enumerate()
+            .for_each(|(k, out)| {
+                for j in 0..ny {
+                    let s = (k * ny + j) * nx;
+                    let c = ((k / 2) * cd[1] + j / 2) * cd[0];
+                    let crow = &coarse_x[c..c + cd[0]];
+                    let d = &self.diag[s..s + nx];
+                    for (i, v) in out[j * nx..(j + 1) * nx].iter_mut().enumerate() {
+                        if d[i] > 0.0 {
+                            *v += CORRECTION * crow[i / 2];
+                        }
+                    }
+                }
+            });
     }
 
     /// The Galerkin coarse level `Pᵀ A P` over 2×2×2 aggregates.
@@ -129,40 +197,36 @@ impl Level {
                     let c = ((k / 2) * cd[1] + j / 2) * cd[0] + i / 2;
                     diag[c] += self.diag[f];
                     let pos = [i, j, k];
-                    let weights: [f32; 6] = if self.off.is_empty() {
-                        std::array::from_fn(|d| f32::from((self.mask[f] >> d) & 1))
-                    } else {
-                        self.off[f]
-                    };
-                    for (d, &w) in weights.iter().enumerate() {
+                    for (d, slot) in off[c].iter_mut().enumerate() {
+                        let axis = d / 2;
+                        let q = if d.is_multiple_of(2) {
+                            pos[axis].checked_sub(1)
+                        } else {
+                            Some(pos[axis] + 1).filter(|&q| q < self.dims[axis])
+                        };
+                        let Some(q) = q else { continue };
+                        let mut nb = pos;
+                        nb[axis] = q;
+                        let nf = (nb[2] * ny + nb[1]) * nx + nb[0];
+                        let w = if self.off.is_empty() {
+                            // Unit weights between two active voxels.
+                            if self.diag[nf] > 0.0 { 1.0 } else { 0.0 }
+                        } else {
+                            self.off[f][d]
+                        };
                         if w == 0.0 {
                             continue;
                         }
-                        let axis = d / 2;
-                        let q = if d.is_multiple_of(2) {
-                            pos[axis] - 1
-                        } else {
-                            pos[axis] + 1
-                        };
                         if q / 2 == pos[axis] / 2 {
                             diag[c] -= w; // coupling inside the aggregate
                         } else {
-                            off[c][d] += w;
+                            *slot += w;
                         }
                     }
                 }
             }
         }
-        Level {
-            dims: cd,
-            diag,
-            off,
-            mask: Vec::new(),
-            x: vec![0.0; n],
-            b: vec![0.0; n],
-            r: vec![0.0; n],
-            tmp: vec![0.0; n],
-        }
+        Level::new(cd, diag, off)
     }
 }
 
@@ -173,21 +237,10 @@ pub struct Multigrid {
 }
 
 impl Multigrid {
-    /// Builds the hierarchy from the fine operator (`diag` = number of open faces, `couple`
-    /// = bit mask of the fluid neighbours in −x, +x, −y, +y, −z, +z order).
-    pub fn new(dims: [usize; 3], diag: &[u8], couple: &[u8]) -> Self {
-        let n = dims[0] * dims[1] * dims[2];
-        let fine = Level {
-            dims,
-            diag: diag.iter().map(|&d| f32::from(d)).collect(),
-            off: Vec::new(),
-            mask: couple.to_vec(),
-            x: vec![0.0; n],
-            b: vec![0.0; n],
-            r: vec![0.0; n],
-            tmp: vec![0.0; n],
-        };
-        let mut levels = vec![fine];
+    /// Builds the hierarchy from the fine operator (`diag` = number of open faces of each
+    /// fluid voxel, 0 in solids; unit couplings between active neighbours).
+    pub fn new(dims: [usize; 3], diag: &[f32]) -> Self {
+        let mut levels = vec![Level::new(dims, diag.to_vec(), Vec::new())];
         while levels
             .last()
             .is_some_and(|l| l.len() > COARSEST_CELLS && l.dims.iter().any(|&d| d > 2))
@@ -199,84 +252,32 @@ impl Multigrid {
     }
 
     /// `z = M⁻¹ r`: one V-cycle from zero.
-    pub fn apply(&mut self, r: &[f64], z: &mut [f64]) {
-        {
-            let fine = &mut self.levels[0];
-            fine.b
-                .par_iter_mut()
-                .zip(r.par_iter())
-                .for_each(|(b, r)| *b = *r as f32);
-        }
-        self.cycle(0);
-        z.par_iter_mut()
-            .zip(self.levels[0].x.par_iter())
-            .for_each(|(z, x)| *z = f64::from(*x));
-    }
-
-    fn cycle(&mut self, l: usize) {
-        let last = self.levels.len() - 1;
-        {
-            let lv = &mut self.levels[l];
-            lv.x.par_iter_mut().for_each(|x| *x = 0.0);
-            if l == last {
-                lv.smooth(COARSEST_SWEEPS);
-                return;
-            }
-            lv.smooth(SWEEPS);
-            let mut tmp = std::mem::take(&mut lv.tmp);
-            lv.residual(&lv.x, &lv.b, &mut tmp);
-            lv.tmp = tmp;
-        }
-        // Restrict: sum of the children's residuals.
-        let (fine_part, coarse_part) = self.levels.split_at_mut(l + 1);
-        let (fine, coarse) = (&fine_part[l], &mut coarse_part[0]);
-        restrict(fine, coarse);
-        self.cycle(l + 1);
-        let (fine_part, coarse_part) = self.levels.split_at_mut(l + 1);
-        let (fine, coarse) = (&mut fine_part[l], &coarse_part[0]);
-        prolong(coarse, fine);
-        fine.smooth(SWEEPS);
+    pub fn apply(&mut self, r: &[f32], z: &mut [f32]) {
+        vcycle(&mut self.levels, r, z);
     }
 }
 
-/// `b_c = Pᵀ r_f` (the fine residual is in `fine.tmp`).
-fn restrict(fine: &Level, coarse: &mut Level) {
-    let [nx, ny, _] = fine.dims;
-    let cd = coarse.dims;
-    let cs = cd[0] * cd[1];
-    coarse
-        .b
-        .par_chunks_mut(cs)
-        .enumerate()
-        .for_each(|(ck, out)| {
-            out.iter_mut().for_each(|v| *v = 0.0);
-            for k in [2 * ck, 2 * ck + 1] {
-                if k >= fine.dims[2] {
-                    continue;
-                }
-                for j in 0..ny {
-                    for i in 0..nx {
-                        out[(j / 2) * cd[0] + i / 2] += fine.tmp[(k * ny + j) * nx + i];
-                    }
-                }
-            }
-        });
-}
-
-/// `x_f += CORRECTION · P x_c` on the active fine voxels.
-fn prolong(coarse: &Level, fine: &mut Level) {
-    let [nx, ny, _] = fine.dims;
-    let cd = coarse.dims;
-    let s = nx * ny;
-    let diag = &fine.diag;
-    fine.x.par_chunks_mut(s).enumerate().for_each(|(k, out)| {
-        for j in 0..ny {
-            for i in 0..nx {
-                let f = j * nx + i;
-                if diag[k * s + f] > 0.0 {
-                    out[f] += CORRECTION * coarse.x[((k / 2) * cd[1] + j / 2) * cd[0] + i / 2];
-                }
-            }
-        }
-    });
+/// One V-cycle on `levels[0] x = b` from `x = 0`.
+fn vcycle(levels: &mut [Level], b: &[f32], x: &mut [f32]) {
+    let Some((lv, coarser)) = levels.split_first_mut() else {
+        return;
+    };
+    if coarser.is_empty() {
+        lv.smooth_from_zero(b, x, COARSEST_SWEEPS);
+        return;
+    }
+    lv.smooth_from_zero(b, x, SWEEPS);
+    let coarse = &mut coarser[0];
+    let (cdims, mut cb, mut cx) = (
+        coarse.dims,
+        std::mem::take(&mut coarse.b),
+        std::mem::take(&mut coarse.x),
+    );
+    lv.restrict_residual(b, x, cdims, &mut cb);
+    vcycle(coarser, &cb, &mut cx);
+    lv.prolong(&cx, cdims, x);
+    let coarse = &mut coarser[0];
+    coarse.b = cb;
+    coarse.x = cx;
+    lv.smooth(b, x, SWEEPS);
 }
