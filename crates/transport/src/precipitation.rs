@@ -27,6 +27,10 @@
 //! blocked after sliding drops to the base of the obstacle, on its own column (Section
 //! 6.4: "la neige qui frappe un voxel ... tombe directement dans la cellule à sa base").
 //!
+//! A flake that leaves the domain across a side where the wind never blows back towards
+//! it is abandoned at once (it cannot return: its velocity only relaxes towards that wind);
+//! elsewhere it flies on outside until it sinks below the lowest surface.
+//!
 //! **Map** (6.4): counts per column divided by their mean give the ratio map (mean 1).
 //! Outliers (IQR rule, `1.5 (Q3 − Q1)` from the mean) are replaced by the mean of their
 //! non-outlier 8-neighbours where those are more than half, repeatedly. Only *high*
@@ -139,20 +143,76 @@ enum Fate {
     Lost,
 }
 
-/// One flake from launch to landing (4.5-4.7, 4.3). `layers` holds the solid layers of
-/// each column (voxelised scenes are solid below their top).
-fn fly(
-    grid: &VoxelGrid,
-    wind: &Centred,
-    layers: &[u32],
-    p: &FlakeParams,
-    start: [f64; 3],
+/// What the flakes fly through.
+struct Sky<'a> {
+    grid: &'a VoxelGrid,
+    wind: &'a Centred,
+    /// Solid layers of each column (voxelised scenes are solid below their top).
+    layers: &'a [u32],
+    /// Lowest column top, voxels: a flake outside the domain and below it is lost.
+    floor: f64,
+    /// Drag constant `k`, m⁻¹, and terminal speed `√(g / k)`, m s⁻¹.
     k: f64,
-) -> Fate {
+    vt: f64,
+    max_steps: usize,
+    /// Whether a flake beyond the west, east, south or north side can never come back:
+    /// the wind there (the side's voxels, clamped) never blows towards the domain, and a
+    /// flake's velocity only relaxes towards the wind, so it keeps moving away.
+    no_return: [bool; 4],
+}
+
+impl<'a> Sky<'a> {
+    fn new(grid: &'a VoxelGrid, wind: &'a Centred, layers: &'a [u32], p: &FlakeParams) -> Self {
+        let (nx, ny) = (grid.nx, grid.ny);
+        let mut inward = [f32::NEG_INFINITY; 4]; // largest wind towards the domain per side
+        for k in 0..grid.nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let w = wind.data[grid.index(i, j, k)];
+                    if i == 0 {
+                        inward[0] = inward[0].max(w[0]);
+                    }
+                    if i + 1 == nx {
+                        inward[1] = inward[1].max(-w[0]);
+                    }
+                    if j == 0 {
+                        inward[2] = inward[2].max(w[1]);
+                    }
+                    if j + 1 == ny {
+                        inward[3] = inward[3].max(-w[1]);
+                    }
+                }
+            }
+        }
+        let k = p.drag_constant();
+        Self {
+            grid,
+            wind,
+            layers,
+            floor: f64::from(layers.iter().copied().min().unwrap_or(0)),
+            k,
+            vt: (GRAVITY / k).sqrt(),
+            max_steps: p.max_steps,
+            no_return: inward.map(|w| w <= 0.0),
+        }
+    }
+
+    /// Whether a flake at `x` (voxel units, outside the domain) can never come back.
+    fn gone(&self, x: [f64; 3]) -> bool {
+        let (nx, ny) = (self.grid.nx as f64, self.grid.ny as f64);
+        (x[0] < 0.0 && self.no_return[0])
+            || (x[0] >= nx && self.no_return[1])
+            || (x[1] < 0.0 && self.no_return[2])
+            || (x[1] >= ny && self.no_return[3])
+    }
+}
+
+/// One flake from launch to landing (4.5-4.7, 4.3).
+fn fly(sky: &Sky, start: [f64; 3]) -> Fate {
+    let (grid, wind, layers, floor, k, vt) =
+        (sky.grid, sky.wind, sky.layers, sky.floor, sky.k, sky.vt);
     let cell = grid.cell;
     let (nx, ny, nz) = (grid.nx as f64, grid.ny as f64, grid.nz as f64);
-    let floor = f64::from(layers.iter().copied().min().unwrap_or(0));
-    let vt = (GRAVITY / k).sqrt();
     let inside = |x: [f64; 3]| x[0] >= 0.0 && x[1] >= 0.0 && x[0] < nx && x[1] < ny;
     let column = |x: [f64; 3]| (x[1] as usize) * grid.nx + x[0] as usize;
     // Lands where the step x → next crosses the plane z = face, if that is on the domain.
@@ -179,19 +239,22 @@ fn fly(
         [w[0], w[1], w[2] - vt]
     };
     let g = [0.0, 0.0, -GRAVITY];
-    for _ in 0..p.max_steps {
+    for _ in 0..sky.max_steps {
         let w = sample(x);
         let rel = [w[0] - v[0], w[1] - v[1], w[2] - v[2]];
         let s = k * (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt();
-        let dt = cell / ((w[0] * w[0] + w[1] * w[1]).sqrt() + vt + 1e-3);
+        // Δt of one voxel of travel, and Δt in voxels per (m s⁻¹).
+        let steps_per_voxel = 1.0 / ((w[0] * w[0] + w[1] * w[1]).sqrt() + vt + 1e-3);
+        let dt = cell * steps_per_voxel;
+        let implicit = 1.0 / (1.0 + dt * s);
         for a in 0..3 {
-            v[a] = (v[a] + dt * (s * w[a] + g[a])) / (1.0 + dt * s);
+            v[a] = (v[a] + dt * (s * w[a] + g[a])) * implicit;
         }
         let advance = |x: [f64; 3], v: [f64; 3]| {
             [
-                x[0] + dt * v[0] / cell,
-                x[1] + dt * v[1] / cell,
-                x[2] + dt * v[2] / cell,
+                x[0] + steps_per_voxel * v[0],
+                x[1] + steps_per_voxel * v[1],
+                x[2] + steps_per_voxel * v[2],
             ]
         };
         let next = advance(x, v);
@@ -202,7 +265,7 @@ fn fly(
                     return land(x, next, top);
                 }
             }
-            if next[2] <= floor {
+            if next[2] <= floor || sky.gone(next) {
                 return Fate::Lost;
             }
             x = next;
@@ -255,7 +318,6 @@ pub fn precipitation_map(
     params.validate()?;
     let mut centred = Centred::default();
     centred.update(wind);
-    let k = params.drag_constant();
     let vt = params.terminal_speed();
     // Launch plane and window (Fig. 6.5) from the extreme horizontal winds below it.
     let highest = grid
@@ -298,8 +360,9 @@ pub fn precipitation_map(
         .collect();
     // Pilot flakes over the conservative window find where landing flakes start; the
     // flakes proper are launched over that box, widened by a quarter and a margin.
+    let sky = Sky::new(grid, &centred, &layers, params);
     let pilot = (params.count / 50).clamp(5000, 50_000);
-    let (plo, phi) = pilot_window(grid, &centred, &layers, params, k, top, lo, hi, pilot);
+    let (plo, phi) = pilot_window(&sky, params.seed, top, lo, hi, pilot);
     let (lo, hi) = (plo, phi);
     let fly_range = |first: u64, count: usize, stream: u64| -> Vec<(Vec<u32>, u64)> {
         const CHUNK: usize = 4096;
@@ -315,7 +378,7 @@ pub fn precipitation_map(
                         lo[1] + (hi[1] - lo[1]) * uniform(params.seed, key + 1, stream),
                         top,
                     ];
-                    match fly(grid, &centred, &layers, params, start, k) {
+                    match fly(&sky, start) {
                         Fate::Landed(col) => counts[col] += 1,
                         Fate::Lost => lost += 1,
                     }
@@ -364,13 +427,9 @@ pub fn precipitation_map(
 /// The launch box of the pilot flakes that landed, widened by a quarter of its size and
 /// [`WINDOW_MARGIN`], within the conservative window `lo..hi`; the whole window if none
 /// landed.
-#[allow(clippy::too_many_arguments)]
 fn pilot_window(
-    grid: &VoxelGrid,
-    centred: &Centred,
-    layers: &[u32],
-    params: &FlakeParams,
-    k: f64,
+    sky: &Sky,
+    seed: u64,
     top: f64,
     lo: [f64; 2],
     hi: [f64; 2],
@@ -380,11 +439,11 @@ fn pilot_window(
         .into_par_iter()
         .map(|n| {
             let start = [
-                lo[0] + (hi[0] - lo[0]) * uniform(params.seed, 2 * n as u64, 1),
-                lo[1] + (hi[1] - lo[1]) * uniform(params.seed, 2 * n as u64 + 1, 1),
+                lo[0] + (hi[0] - lo[0]) * uniform(seed, 2 * n as u64, 1),
+                lo[1] + (hi[1] - lo[1]) * uniform(seed, 2 * n as u64 + 1, 1),
                 top,
             ];
-            match fly(grid, centred, layers, params, start, k) {
+            match fly(sky, start) {
                 Fate::Landed(_) => Some([start[0], start[1]]),
                 Fate::Lost => None,
             }

@@ -7,11 +7,14 @@
 //!    body force is needed for a steady wind.
 //! 2. **Advection** (3.12-3.14): semi-Lagrangian, each face value is the velocity found at
 //!    the point its particle came from, back-traced with fourth-order Runge-Kutta through
-//!    the current field (Fig. 3.1).
+//!    the current field (Fig. 3.1). The RK4 trace runs from every voxel centre; a face's
+//!    departure point is its position minus the mean displacement of its two voxels
+//!    (second-order accurate in the smooth displacement field, a third of the traces).
 //! 3. **Viscosity** (3.15-3.16): implicit, `(I − ν Δt ∇²) u_new = u`, by Jacobi sweeps
 //!    (the system is strongly diagonally dominant for the small `ν Δt / Δ²` of a wind).
 //! 4. **Projection** (3.20-3.24): [`project`], multigrid-preconditioned conjugate gradients
-//!    instead of Jacobi.
+//!    instead of Jacobi, to the loose `tolerance` in each iteration; the mean wind the
+//!    later stages use is projected again to `mean_tolerance` ([`WindSolver::project_mean`]).
 //!
 //! The velocity is stored on the voxel faces ([`field`]). Faces touching a solid voxel carry
 //! no flow (no flow into solids, Section 3.5.2), the ground and the lid are closed, faces on

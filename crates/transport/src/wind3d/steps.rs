@@ -246,8 +246,10 @@ fn trace_centres(centred: &Centred, h: f32, out: &mut Vec<[f32; 4]>) {
 }
 
 /// Semi-Lagrangian advection with an RK4 back-trace (3.12-3.14, Fig. 3.1). The trace
-/// runs through the velocity averaged to the voxel centres; the advected value is then
-/// interpolated on the face's own staggered grid.
+/// runs from each voxel centre through the velocity averaged to the voxel centres; a
+/// face's departure point is its position minus the mean displacement of the two voxels it
+/// separates (the one voxel at a domain side), and the advected value is interpolated
+/// there on the face's own staggered grid.
 pub(super) fn advect(s: &mut WindSolver) {
     for (dst, src) in [
         (&mut s.previous.u, &s.velocity.u),
