@@ -127,7 +127,9 @@ enum Face {
 pub struct IterationReport {
     /// Conjugate-gradient iterations of the projection.
     pub solver_iterations: usize,
-    /// Largest divergence of a fluid voxel after the projection, s⁻¹.
+    /// Largest divergence of a fluid voxel after the projection, s⁻¹ (for an iteration,
+    /// the residual of its pressure solve; for [`WindSolver::project_mean`], measured on
+    /// the projected mean).
     pub max_divergence: f64,
     /// The same relative to `U / Δ` (the divergence scale of the flow).
     pub relative_divergence: f64,
@@ -195,6 +197,8 @@ impl WindSolver {
         steps::initialise(&mut s);
         let tolerance = s.params.mean_tolerance;
         s.project(tolerance);
+        // Both buffers hold the fixed faces (advection swaps them).
+        s.previous = s.velocity.clone();
         Ok(s)
     }
 
@@ -227,26 +231,26 @@ impl WindSolver {
     fn project(&mut self, tolerance: f64) -> IterationReport {
         let mut velocity = std::mem::replace(&mut self.velocity, Velocity::zeros(0, 0, 0));
         let mut phi = std::mem::take(&mut self.phi);
-        let report = self.project_field(&mut velocity, &mut phi, tolerance);
+        let report = self.project_field(&mut velocity, &mut phi, tolerance, false);
         self.velocity = velocity;
         self.phi = phi;
         report
     }
 
     /// Makes `vel` divergence-free to `tolerance`, warm-starting the potential from `phi`.
+    /// The report gives the divergence of the projected field, measured on it when
+    /// `measured`, else the residual of the pressure solve (`max |b − A φ| / Δ²`, the same
+    /// but for the `f32` rounding of the velocity update).
     fn project_field(
         &mut self,
         vel: &mut Velocity,
         phi: &mut [f64],
         tolerance: f64,
+        measured: bool,
     ) -> IterationReport {
-        steps::divergence(
-            &self.grid,
-            vel,
-            -self.grid.cell * self.grid.cell,
-            &mut self.rhs,
-        );
-        let (its, _) = self.poisson.solve(
+        let area = self.grid.cell * self.grid.cell;
+        steps::divergence(&self.grid, vel, -area, &mut self.rhs);
+        let (its, residual) = self.poisson.solve(
             &self.rhs,
             phi,
             tolerance,
@@ -254,12 +258,15 @@ impl WindSolver {
             &mut self.work,
         );
         steps::subtract_gradient(&self.grid, &self.kinds, phi, vel);
-        steps::divergence(&self.grid, vel, 1.0, &mut self.rhs);
-        let max_div = self
-            .rhs
-            .par_iter()
-            .map(|d| d.abs())
-            .reduce(|| 0.0, f64::max);
+        let max_div = if measured {
+            steps::divergence(&self.grid, vel, 1.0, &mut self.rhs);
+            self.rhs
+                .par_iter()
+                .map(|d| d.abs())
+                .reduce(|| 0.0, f64::max)
+        } else {
+            residual / area
+        };
         IterationReport {
             solver_iterations: its,
             max_divergence: max_div,
@@ -273,7 +280,7 @@ impl WindSolver {
     pub fn project_mean(&mut self) -> IterationReport {
         let mut mean = self.raw_mean();
         let mut phi = self.phi.clone();
-        let report = self.project_field(&mut mean, &mut phi, self.params.mean_tolerance);
+        let report = self.project_field(&mut mean, &mut phi, self.params.mean_tolerance, true);
         self.projected_mean = Some(mean);
         report
     }

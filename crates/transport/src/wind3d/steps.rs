@@ -170,51 +170,49 @@ fn free(kind: Face) -> bool {
     matches!(kind, Face::Fluid | Face::Outflow)
 }
 
-/// Faces back-traced together: independent traces interleave, hiding the latency of each
-/// trace's chain of dependent samples.
+/// Voxel centres back-traced together: independent traces interleave, hiding the latency
+/// of each trace's chain of dependent samples.
 const LANES: usize = 8;
 
-/// RK4 back-trace of `LANES` points through `centred` over `h` voxels per (m s⁻¹)
-/// (3.13-3.14): `x − h (k1 + 2 k2 + 2 k3 + k4) / 6`.
+/// RK4 displacement over `h` voxels per (m s⁻¹) of `LANES` voxel centres `p` whose
+/// velocities are `k1` (3.13-3.14): `h (k1 + 2 k2 + 2 k3 + k4) / 6`, the departure point
+/// being `p` minus it.
 #[inline(always)]
-fn back_trace(centred: &Centred, p: &[[f32; 4]; LANES], h: f32) -> [[f32; 3]; LANES] {
+fn displacement(
+    centred: &Centred,
+    p: &[[f32; 4]; LANES],
+    k1: &[[f32; 4]; LANES],
+    h: f32,
+) -> [[f32; 4]; LANES] {
     // Four-lane arithmetic (the fourth lane is padding) so that each step is one vector op.
     #[inline(always)]
-    fn at(q: [f32; 4], k: [f32; 4], f: f32) -> [f32; 4] {
+    fn axpy(q: [f32; 4], k: [f32; 4], f: f32) -> [f32; 4] {
         [
-            q[0] - f * k[0],
-            q[1] - f * k[1],
-            q[2] - f * k[2],
-            q[3] - f * k[3],
+            q[0] + f * k[0],
+            q[1] + f * k[1],
+            q[2] + f * k[2],
+            q[3] + f * k[3],
         ]
     }
-    let mut sum = [[0.0f32; 4]; LANES];
-    let mut q = *p;
-    for (stage, (weight, reach)) in [(1.0, 0.5), (2.0, 0.5), (2.0, 1.0), (1.0, 0.0)]
-        .into_iter()
-        .enumerate()
-    {
+    let mut sum = *k1;
+    let mut q = [[0.0f32; 4]; LANES];
+    for l in 0..LANES {
+        q[l] = axpy(p[l], k1[l], -0.5 * h);
+    }
+    for (weight, reach) in [(2.0, 0.5), (2.0, 1.0), (1.0, 0.0)] {
         let mut k = [[0.0f32; 4]; LANES];
         for l in 0..LANES {
             k[l] = centred.sample4(q[l]);
         }
         for l in 0..LANES {
-            let (s, kl) = (&mut sum[l], k[l]);
-            *s = [
-                s[0] + weight * kl[0],
-                s[1] + weight * kl[1],
-                s[2] + weight * kl[2],
-                s[3] + weight * kl[3],
-            ];
-            if stage < 3 {
-                q[l] = at(p[l], kl, reach * h);
-            }
+            sum[l] = axpy(sum[l], k[l], weight);
+            q[l] = axpy(p[l], k[l], -reach * h);
         }
     }
-    let mut out = [[0.0f32; 3]; LANES];
+    let f = h / 6.0;
+    let mut out = [[0.0f32; 4]; LANES];
     for l in 0..LANES {
-        let b = at(p[l], sum[l], h / 6.0);
-        out[l] = [b[0], b[1], b[2]];
+        out[l] = [f * sum[l][0], f * sum[l][1], f * sum[l][2], 0.0];
     }
     out
 }
@@ -228,18 +226,18 @@ fn trace_centres(centred: &Centred, h: f32, out: &mut Vec<[f32; 4]>) {
         .for_each(|(k, slice)| {
             let z = k as f32 + 0.5;
             for j in 0..ny {
+                let start = (k * ny + j) * nx;
                 let row = &mut slice[j * nx..(j + 1) * nx];
                 for i0 in (0..nx).step_by(LANES) {
                     let lanes = LANES.min(nx - i0);
                     let mut p = [[0.5, j as f32 + 0.5, z, 0.0]; LANES];
-                    for (l, q) in p.iter_mut().enumerate() {
-                        q[0] = (i0 + l) as f32 + 0.5;
-                    }
-                    let b = back_trace(centred, &p, h);
+                    let mut k1 = [[0.0f32; 4]; LANES];
                     for l in 0..lanes {
-                        row[i0 + l] =
-                            [p[l][0] - b[l][0], p[l][1] - b[l][1], p[l][2] - b[l][2], 0.0];
+                        p[l][0] = (i0 + l) as f32 + 0.5;
+                        k1[l] = centred.data[start + i0 + l];
                     }
+                    let d = displacement(centred, &p, &k1, h);
+                    row[i0..i0 + lanes].copy_from_slice(&d[..lanes]);
                 }
             }
         });
@@ -251,13 +249,9 @@ fn trace_centres(centred: &Centred, h: f32, out: &mut Vec<[f32; 4]>) {
 /// separates (the one voxel at a domain side), and the advected value is interpolated
 /// there on the face's own staggered grid.
 pub(super) fn advect(s: &mut WindSolver) {
-    for (dst, src) in [
-        (&mut s.previous.u, &s.velocity.u),
-        (&mut s.previous.v, &s.velocity.v),
-        (&mut s.previous.w, &s.velocity.w),
-    ] {
-        dst.data.copy_from_slice(&src.data);
-    }
+    // The advected field overwrites every free face; the other faces hold the same fixed
+    // values in both buffers (0 or the inflow profile), so a swap replaces a copy.
+    std::mem::swap(&mut s.previous, &mut s.velocity);
     s.centred.update(&s.previous);
     let h = (s.dt / s.grid.cell) as f32; // voxels per (m/s)
     trace_centres(&s.centred, h, &mut s.displacement);
