@@ -1,7 +1,7 @@
 //! The per-cell passes of [`super::step`]: shear (pass 1), outflows (pass 3) and the
 //! gathering update (pass 4).
 
-use super::{Fields, MAX_DENSITY, SceneMaps, SnowState, StepScratch};
+use super::{Fields, MAX_DENSITY, Outflows, SceneMaps, SnowState};
 use crate::params::TransportParams;
 use crate::physics::density::{densification_rate, new_snow_density};
 use crate::physics::shear::{ShearSite, threshold_friction_velocity};
@@ -14,10 +14,14 @@ const MAX_TABLE_DENSITY: f64 = 1000.0;
 /// Winds tabulated for the new-snow density and the densification factor, m s⁻¹.
 const MAX_TABLE_WIND: f64 = 80.0;
 
-/// Per-step tables of the cheap but transcendental per-cell formulas, so the passes run on
-/// `f32` lookups: `u*t(ρs)` (5.25), new-snow density `ρ(W)` (5.18-5.20) and the
-/// densification rate `∂ρs/∂t(ρs, W)` (5.21-5.22) factored as `f(W) · g(ρs)`.
+/// Tables of the cheap but transcendental per-cell formulas, so the passes run on `f32`
+/// lookups: `u*t(ρs)` (5.25), new-snow density `ρ(W)` (5.18-5.20) and the densification
+/// rate `∂ρs/∂t(ρs, W)` (5.21-5.22) factored as `f(W) · g(ρs)`. They depend on the air
+/// temperature alone and are rebuilt when it changes.
+#[derive(Debug, Clone)]
 pub(super) struct CellRates {
+    /// Air temperature the tables were built for, K.
+    t_k: f64,
     threshold: Table1,
     new_snow: Table1,
     densify_wind: Table1,
@@ -25,12 +29,21 @@ pub(super) struct CellRates {
 }
 
 impl CellRates {
-    pub(super) fn new(t_k: f64) -> Self {
+    /// The rates for an air temperature of `t_k` K, rebuilding `cached` if it is stale.
+    pub(super) fn update(cached: &mut Option<Self>, t_k: f64) -> &Self {
+        if !cached.as_ref().is_some_and(|r| r.t_k == t_k) {
+            *cached = Some(Self::new(t_k));
+        }
+        cached.as_ref().expect("just built")
+    }
+
+    fn new(t_k: f64) -> Self {
         let t_snow = t_k.min(FREEZING_K);
         // densification_rate(ρ, W, T) = U(W) · [C A1 ρ e^(−B(Tf−Ts)) e^(−A2 ρ)]:
         // tabulate the two factors (U(W) = rate(ρ = 1, W) / rate(ρ = 1, W = 0)).
         let base = densification_rate(1.0, 0.0, t_snow);
         Self {
+            t_k,
             threshold: Table1::new(0.0, MAX_TABLE_DENSITY, 4096, threshold_friction_velocity),
             new_snow: Table1::new(0.0, MAX_TABLE_WIND, 2048, |w| new_snow_density(t_k, w)),
             densify_wind: Table1::new(0.0, MAX_TABLE_WIND, 2048, |w| {
@@ -45,7 +58,7 @@ impl CellRates {
 
 /// What every pass reads.
 pub(super) struct Context<'a> {
-    pub rates: CellRates,
+    pub rates: &'a CellRates,
     pub width: usize,
     pub height: usize,
     pub params: &'a TransportParams,
@@ -127,19 +140,24 @@ pub(super) fn shear_pass(ctx: &Context, state: &SnowState, fields: &mut Fields) 
 
 /// Pass 3: suspension and sublimation from the saltation flux (5.40-5.47), melt (5.48),
 /// and each cell's outflows scaled so it never sends more than it holds.
-pub(super) fn outflow_pass(ctx: &Context, state: &SnowState, s: &mut StepScratch) {
+pub(super) fn outflow_pass(
+    ctx: &Context,
+    state: &SnowState,
+    (fields, q_x, q_y): (&Fields, &[f32], &[f32]),
+    out: &mut Outflows,
+    (q_salt, q_susp, q_subl): (&mut [f32], &mut [f32], &mut [f32]),
+) {
     let w = ctx.width;
     let on = ctx.params.phenomena;
     let holding = ctx.params.vegetation_snow_depth_m as f32;
-    let (fields, q_x, q_y) = (&s.fields, &s.q_x, &s.q_y);
-    s.send_x
+    out.send_x
         .par_chunks_mut(w)
-        .zip(s.send_y.par_chunks_mut(w))
-        .zip(s.loss_subl.par_chunks_mut(w))
-        .zip(s.loss_melt.par_chunks_mut(w))
-        .zip(s.q_salt.par_chunks_mut(w))
-        .zip(s.q_susp.par_chunks_mut(w))
-        .zip(s.q_subl.par_chunks_mut(w))
+        .zip(out.send_y.par_chunks_mut(w))
+        .zip(out.sublimation.par_chunks_mut(w))
+        .zip(out.melt.par_chunks_mut(w))
+        .zip(q_salt.par_chunks_mut(w))
+        .zip(q_susp.par_chunks_mut(w))
+        .zip(q_subl.par_chunks_mut(w))
         .enumerate()
         .for_each(|(r, ((((((sx, sy), ls), lm), qsa), qsu), qsb))| {
             for c in 0..w {
@@ -151,8 +169,9 @@ pub(super) fn outflow_pass(ctx: &Context, state: &SnowState, s: &mut StepScratch
                 if fields.q_max[i] > 0.0 && q_salt > 0.0 {
                     let (us, ut) = (fields.u_star[i], fields.u_star_t[i]);
                     let per_up = q_salt / (2.8 * ut); // φr h* = Qsalt / u_p (5.44-5.45)
-                    q_susp = per_up * ctx.blowing_table.suspension_per_flux(us);
-                    q_subl = (per_up * ctx.blowing_table.sublimation_per_flux(us, ut)).min(0.0);
+                    let (susp, subl) = ctx.blowing_table.per_flux(us, ut);
+                    q_susp = per_up * susp;
+                    q_subl = (per_up * subl).min(0.0);
                 }
                 qsa[c] = q_salt;
                 qsu[c] = q_susp;
@@ -190,9 +209,14 @@ pub(super) fn outflow_pass(ctx: &Context, state: &SnowState, s: &mut StepScratch
 
 /// Pass 4: every cell removes its own outflows and gathers what its four neighbours send
 /// it, plus snowfall and border inflow; updates the density (5.18-5.22).
-pub(super) fn update_pass(ctx: &Context, state: &mut SnowState, s: &StepScratch) -> Vec<RowBudget> {
+pub(super) fn update_pass(
+    ctx: &Context,
+    state: &mut SnowState,
+    fields: &Fields,
+    outflows: &Outflows,
+) -> Vec<RowBudget> {
     let (w, h) = (ctx.width, ctx.height);
-    let (send_x, send_y) = (&s.send_x, &s.send_y);
+    let (send_x, send_y) = (&outflows.send_x, &outflows.send_y);
     let on = ctx.params.phenomena;
     let border_inflow = ctx.params.saturated_inflow && on.saltation;
     let scene = ctx.scene;
@@ -207,8 +231,11 @@ pub(super) fn update_pass(ctx: &Context, state: &mut SnowState, s: &StepScratch)
             for c in 0..w {
                 let i = r * w + c;
                 let (u, v) = (scene.wind_u[i], scene.wind_v[i]);
-                let speed = s.fields.speed[i];
-                let out = send_x[i].abs() + send_y[i].abs() + s.loss_subl[i] + s.loss_melt[i];
+                let speed = fields.speed[i];
+                // The new-snow and densification wind tables share their sampling.
+                let wind = ctx.rates.new_snow.axis().locate(speed);
+                let out =
+                    send_x[i].abs() + send_y[i].abs() + outflows.sublimation[i] + outflows.melt[i];
                 let mut gain = 0.0f32;
                 if c > 0 && send_x[i - 1] > 0.0 {
                     gain += send_x[i - 1];
@@ -225,7 +252,7 @@ pub(super) fn update_pass(ctx: &Context, state: &mut SnowState, s: &StepScratch)
                 // Border inflow at saturation and border outflow.
                 let mut inflow = 0.0f32;
                 if border_inflow && speed > 0.0 {
-                    let cap = s.fields.q_max[i] * ctx.dt / speed;
+                    let cap = fields.q_max[i] * ctx.dt / speed;
                     let edge_x = (c == 0 && u > 0.0) || (c + 1 == w && u < 0.0);
                     let edge_y = (r + 1 == h && v > 0.0) || (r == 0 && v < 0.0);
                     if edge_x {
@@ -250,7 +277,7 @@ pub(super) fn update_pass(ctx: &Context, state: &mut SnowState, s: &StepScratch)
                 let new_mass = kept + drifted + snowfall;
                 let mut new_rho = rho;
                 if drifted > 0.0 || snowfall > 0.0 {
-                    let rho_fall = ctx.rates.new_snow.at(speed);
+                    let rho_fall = ctx.rates.new_snow.at_point(wind);
                     let rho_drift = rho_fall.max(rho_drift_floor);
                     let volume = kept / rho + drifted / rho_drift + snowfall / rho_fall;
                     if volume > 0.0 {
@@ -258,8 +285,8 @@ pub(super) fn update_pass(ctx: &Context, state: &mut SnowState, s: &StepScratch)
                     }
                 }
                 if ctx.densify && new_mass > 0.0 && new_rho < MAX_DENSITY {
-                    let rate =
-                        ctx.rates.densify_wind.at(speed) * ctx.rates.densify_density.at(new_rho);
+                    let rate = ctx.rates.densify_wind.at_point(wind)
+                        * ctx.rates.densify_density.at(new_rho);
                     new_rho = (new_rho + ctx.dt * rate).min(MAX_DENSITY);
                 }
                 if !new_mass.is_finite() && b.non_finite.is_none() {
@@ -270,8 +297,8 @@ pub(super) fn update_pass(ctx: &Context, state: &mut SnowState, s: &StepScratch)
                 b.precipitation += f64::from(snowfall);
                 b.border_in += f64::from(inflow);
                 b.border_out += f64::from(leaving);
-                b.sublimation += f64::from(s.loss_subl[i]);
-                b.melt += f64::from(s.loss_melt[i]);
+                b.sublimation += f64::from(outflows.sublimation[i]);
+                b.melt += f64::from(outflows.melt[i]);
                 b.transported += f64::from(send_x[i].abs() + send_y[i].abs());
             }
             b

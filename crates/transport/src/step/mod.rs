@@ -156,13 +156,11 @@ impl MassBudget {
 #[derive(Debug, Clone, Default)]
 pub struct StepScratch {
     tables: Tables,
+    rates: Option<cells::CellRates>,
     fields: Fields,
     q_x: Vec<f32>,
     q_y: Vec<f32>,
-    send_x: Vec<f32>,
-    send_y: Vec<f32>,
-    loss_subl: Vec<f32>,
-    loss_melt: Vec<f32>,
+    outflows: Outflows,
     /// Saltation flux magnitude of the last step, kg m⁻¹ s⁻¹.
     pub q_salt: Vec<f32>,
     /// Suspension flux magnitude of the last step, kg m⁻¹ s⁻¹.
@@ -180,6 +178,19 @@ pub(crate) struct Fields {
     pub u_star_t: Vec<f32>,
     /// Saltation capacity magnitude `Qs_max`, kg m⁻¹ s⁻¹ (0 where no saltation).
     pub q_max: Vec<f32>,
+}
+
+/// What each cell sends and loses in the current step, kg m⁻², after the positivity limiter.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Outflows {
+    /// Sent east (positive) or west (negative).
+    pub send_x: Vec<f32>,
+    /// Sent north (positive) or south (negative).
+    pub send_y: Vec<f32>,
+    /// Lost to sublimation.
+    pub sublimation: Vec<f32>,
+    /// Lost to melt.
+    pub melt: Vec<f32>,
 }
 
 /// Sizes a buffer; every pass overwrites all its cells, so no clearing is needed.
@@ -216,8 +227,6 @@ pub fn step(
     }
     let n = g.len();
     let initial_mass = state.total_mass(g);
-    let (shear_table, blowing_table) = scratch.tables.update(params, weather);
-    let (shear_table, blowing_table) = (shear_table.clone(), blowing_table.clone());
     for v in [
         &mut scratch.fields.speed,
         &mut scratch.fields.u_star,
@@ -225,19 +234,19 @@ pub fn step(
         &mut scratch.fields.q_max,
         &mut scratch.q_x,
         &mut scratch.q_y,
-        &mut scratch.send_x,
-        &mut scratch.send_y,
-        &mut scratch.loss_subl,
-        &mut scratch.loss_melt,
+        &mut scratch.outflows.send_x,
+        &mut scratch.outflows.send_y,
+        &mut scratch.outflows.sublimation,
+        &mut scratch.outflows.melt,
         &mut scratch.q_salt,
         &mut scratch.q_susp,
         &mut scratch.q_subl,
     ] {
         resize(v, n);
     }
-    let t_k = weather.air_temperature_k();
+    let (shear_table, blowing_table) = scratch.tables.update(params, weather);
     let ctx = cells::Context {
-        rates: cells::CellRates::new(t_k),
+        rates: cells::CellRates::update(&mut scratch.rates, weather.air_temperature_k()),
         width: g.width(),
         height: g.height(),
         params,
@@ -248,8 +257,8 @@ pub fn step(
             z0_veg: params.vegetation_roughness_m,
             holding_depth: params.vegetation_snow_depth_m,
         },
-        shear_table: &shear_table,
-        blowing_table: &blowing_table,
+        shear_table,
+        blowing_table,
         dt: dt_s as f32,
         inv_dx: (1.0 / g.cell_size_x()) as f32,
         inv_dy: (1.0 / g.cell_size_y()) as f32,
@@ -287,9 +296,15 @@ pub fn step(
     sweep::sweep_x(&sweep_inputs, &mut scratch.q_x);
     sweep::sweep_y(&sweep_inputs, &mut scratch.q_y);
     // Pass 3: suspension, sublimation, melt and the limited outflows.
-    cells::outflow_pass(&ctx, state, scratch);
+    let blowing = (
+        &mut scratch.q_salt[..],
+        &mut scratch.q_susp[..],
+        &mut scratch.q_subl[..],
+    );
+    let flux = (&scratch.fields, &scratch.q_x[..], &scratch.q_y[..]);
+    cells::outflow_pass(&ctx, state, flux, &mut scratch.outflows, blowing);
     // Pass 4: gather the inflows, update mass and density.
-    let rows = cells::update_pass(&ctx, state, scratch);
+    let rows = cells::update_pass(&ctx, state, &scratch.fields, &scratch.outflows);
     let area = g.cell_area();
     let mut budget = MassBudget {
         initial_mass,
