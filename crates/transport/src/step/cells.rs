@@ -1,7 +1,8 @@
-//! The per-cell passes of [`super::step`]: shear (pass 1), outflows (pass 3) and the
-//! gathering update (pass 4).
+//! The per-cell passes of [`super::step`]: shear with the x sweep (pass 1), outflows
+//! (pass 3) and the gathering update (pass 4).
 
-use super::{Fields, MAX_DENSITY, Outflows, SceneMaps, SnowState};
+use super::sweep::{self, Sweep};
+use super::{MAX_DENSITY, Outflow, SceneMaps, Shear, SnowState};
 use crate::params::TransportParams;
 use crate::physics::density::{densification_rate, new_snow_density};
 use crate::physics::shear::{ShearSite, threshold_friction_velocity};
@@ -91,8 +92,14 @@ pub(super) struct RowBudget {
 
 /// Pass 1: `u*t` (5.25), `u*` (5.26-5.36) and `Qs_max` (5.37) per cell, in `f32`: the
 /// same branches as [`crate::physics::shear::surface_shear`], with the saltating `u*` from
-/// the Newton-Raphson table.
-pub(super) fn shear_pass(ctx: &Context, state: &SnowState, fields: &mut Fields) {
+/// the Newton-Raphson table. Each row is then swept along x while it is in cache.
+pub(super) fn shear_pass(
+    ctx: &Context,
+    state: &SnowState,
+    along_x: &Sweep,
+    shear: &mut [Shear],
+    q_x: &mut [f32],
+) {
     let w = ctx.width;
     let site = ctx.site;
     let z_r = site.z_r as f32;
@@ -102,40 +109,57 @@ pub(super) fn shear_pass(ctx: &Context, state: &SnowState, fields: &mut Fields) 
     // Qs_max = 0.68 (ρa/g) u*t (u*² − u*t²) / u* (5.37).
     let capacity = (0.68 * ctx.params.air_density / GRAVITY) as f32;
     let kappa = VON_KARMAN as f32;
-    fields
-        .speed
-        .par_chunks_mut(w)
-        .zip(fields.u_star.par_chunks_mut(w))
-        .zip(fields.u_star_t.par_chunks_mut(w))
-        .zip(fields.q_max.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(r, (((sp_row, us_row), ut_row), qm_row))| {
-            for c in 0..w {
-                let i = r * w + c;
-                let rho = state.density[i];
-                let depth = if rho > 0.0 { state.swe[i] / rho } else { 0.0 };
-                let (u, v) = (ctx.scene.wind_u[i], ctx.scene.wind_v[i]);
-                let speed = (u * u + v * v).sqrt();
-                let ut = ctx.rates.threshold.at(rho);
-                let (us, q_max) = if depth <= holding {
-                    // Vegetation not yet filled (5.27-5.28, 5.26).
-                    let fs = if holding > 0.0 { depth / holding } else { 1.0 };
-                    let z0 = fs * z0_snow + (1.0 - fs) * z0_veg;
-                    (speed * kappa / (z_r / z0).ln(), 0.0)
-                } else {
-                    let salt = ctx.shear_table.saltating_u_star(speed.min(ctx.max_wind));
-                    if salt > ut {
-                        (salt, capacity * ut * (salt * salt - ut * ut) / salt)
-                    } else {
-                        (speed * snow_log, 0.0)
-                    }
-                };
-                sp_row[c] = speed;
-                us_row[c] = us;
-                ut_row[c] = ut;
-                qm_row[c] = q_max;
+    let cell = |rho: f32, swe: f32, u: f32, v: f32| {
+        let depth = if rho > 0.0 { swe / rho } else { 0.0 };
+        let speed = (u * u + v * v).sqrt();
+        let u_star_t = ctx.rates.threshold.at(rho);
+        let (u_star, q_max) = if depth <= holding {
+            // Vegetation not yet filled (5.27-5.28, 5.26).
+            let fs = if holding > 0.0 { depth / holding } else { 1.0 };
+            let z0 = fs * z0_snow + (1.0 - fs) * z0_veg;
+            (speed * kappa / (z_r / z0).ln(), 0.0)
+        } else {
+            let salt = ctx.shear_table.saltating_u_star(speed.min(ctx.max_wind));
+            if salt > u_star_t {
+                let q_max = capacity * u_star_t * (salt * salt - u_star_t * u_star_t) / salt;
+                (salt, q_max)
+            } else {
+                (speed * snow_log, 0.0)
             }
+        };
+        Shear {
+            speed,
+            u_star,
+            u_star_t,
+            q_max,
+        }
+    };
+    let scene = ctx.scene;
+    shear
+        .par_chunks_mut(w)
+        .zip(q_x.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(r, (shear_row, q_row))| {
+            let cells = r * w..(r + 1) * w;
+            let u = &scene.wind_u[cells.clone()];
+            let inputs = state.density[cells.clone()]
+                .iter()
+                .zip(&state.swe[cells.clone()])
+                .zip(u)
+                .zip(&scene.wind_v[cells]);
+            for (s, (((&rho, &swe), &u), &v)) in shear_row.iter_mut().zip(inputs) {
+                *s = cell(rho, swe, u, v);
+            }
+            sweep::sweep_line(along_x, shear_row, u, q_row);
         });
+}
+
+/// The public per-cell results of pass 3: saltation, suspension and sublimation.
+#[derive(Debug, Clone, Copy)]
+struct BlowingSnow {
+    q_salt: f32,
+    q_susp: f32,
+    q_subl: f32,
 }
 
 /// Pass 3: suspension and sublimation from the saltation flux (5.40-5.47), melt (5.48),
@@ -143,66 +167,85 @@ pub(super) fn shear_pass(ctx: &Context, state: &SnowState, fields: &mut Fields) 
 pub(super) fn outflow_pass(
     ctx: &Context,
     state: &SnowState,
-    (fields, q_x, q_y): (&Fields, &[f32], &[f32]),
-    out: &mut Outflows,
+    (shear, q_x, q_y): (&[Shear], &[f32], &[f32]),
+    outflows: &mut [Outflow],
     (q_salt, q_susp, q_subl): (&mut [f32], &mut [f32], &mut [f32]),
 ) {
     let w = ctx.width;
     let on = ctx.params.phenomena;
     let holding = ctx.params.vegetation_snow_depth_m as f32;
-    out.send_x
+    let salt = if on.saltation { 1.0 } else { 0.0 };
+    let (step_x, step_y) = (ctx.dt * ctx.inv_dx, ctx.dt * ctx.inv_dy);
+    let cell = |s: &Shear, q_x: f32, q_y: f32, u: f32, v: f32, mass: f32, rho: f32| {
+        let q_salt = (q_x * q_x + q_y * q_y).sqrt();
+        let (mut q_susp, mut q_subl) = (0.0f32, 0.0f32);
+        if s.q_max > 0.0 && q_salt > 0.0 {
+            let per_up = q_salt / (2.8 * s.u_star_t); // φr h* = Qsalt / u_p (5.44-5.45)
+            let (susp, subl) = ctx.blowing_table.per_flux(s.u_star, s.u_star_t);
+            q_susp = per_up * susp;
+            q_subl = (per_up * subl).min(0.0);
+        }
+        let (susp_x, susp_y) = if on.suspension && s.speed > 0.0 {
+            (q_susp * u / s.speed, q_susp * v / s.speed)
+        } else {
+            (0.0, 0.0)
+        };
+        let ox = step_x * (salt * q_x + susp_x);
+        let oy = step_y * (salt * q_y + susp_y);
+        let subl = if on.sublimation {
+            -ctx.dt * q_subl
+        } else {
+            0.0
+        };
+        let wanted = ox.abs() + oy.abs() + subl;
+        let erodible = (mass - holding * rho).max(0.0);
+        let scale = if wanted > erodible {
+            erodible / wanted
+        } else {
+            1.0
+        };
+        let left = (mass - scale * wanted).max(0.0);
+        let outflow = Outflow {
+            send_x: scale * ox,
+            send_y: scale * oy,
+            sublimation: scale * subl,
+            melt: (ctx.melt_rate * rho * ctx.dt).min(left),
+        };
+        let blowing = BlowingSnow {
+            q_salt,
+            q_susp,
+            q_subl,
+        };
+        (outflow, blowing)
+    };
+    let scene = ctx.scene;
+    outflows
         .par_chunks_mut(w)
-        .zip(out.send_y.par_chunks_mut(w))
-        .zip(out.sublimation.par_chunks_mut(w))
-        .zip(out.melt.par_chunks_mut(w))
         .zip(q_salt.par_chunks_mut(w))
         .zip(q_susp.par_chunks_mut(w))
         .zip(q_subl.par_chunks_mut(w))
         .enumerate()
-        .for_each(|(r, ((((((sx, sy), ls), lm), qsa), qsu), qsb))| {
-            for c in 0..w {
-                let i = r * w + c;
-                let (u, v) = (ctx.scene.wind_u[i], ctx.scene.wind_v[i]);
-                let speed = fields.speed[i];
-                let q_salt = (q_x[i] * q_x[i] + q_y[i] * q_y[i]).sqrt();
-                let (mut q_susp, mut q_subl) = (0.0f32, 0.0f32);
-                if fields.q_max[i] > 0.0 && q_salt > 0.0 {
-                    let (us, ut) = (fields.u_star[i], fields.u_star_t[i]);
-                    let per_up = q_salt / (2.8 * ut); // φr h* = Qsalt / u_p (5.44-5.45)
-                    let (susp, subl) = ctx.blowing_table.per_flux(us, ut);
-                    q_susp = per_up * susp;
-                    q_subl = (per_up * subl).min(0.0);
-                }
-                qsa[c] = q_salt;
-                qsu[c] = q_susp;
-                qsb[c] = q_subl;
-                let (susp_x, susp_y) = if on.suspension && speed > 0.0 {
-                    (q_susp * u / speed, q_susp * v / speed)
-                } else {
-                    (0.0, 0.0)
-                };
-                let salt = if on.saltation { 1.0 } else { 0.0 };
-                let ox = ctx.dt * ctx.inv_dx * (salt * q_x[i] + susp_x);
-                let oy = ctx.dt * ctx.inv_dy * (salt * q_y[i] + susp_y);
-                let subl = if on.sublimation {
-                    -ctx.dt * q_subl
-                } else {
-                    0.0
-                };
-                let wanted = ox.abs() + oy.abs() + subl;
-                let mass = state.swe[i];
-                let rho = state.density[i];
-                let erodible = (mass - holding * rho).max(0.0);
-                let scale = if wanted > erodible {
-                    erodible / wanted
-                } else {
-                    1.0
-                };
-                sx[c] = scale * ox;
-                sy[c] = scale * oy;
-                ls[c] = scale * subl;
-                let left = (mass - scale * wanted).max(0.0);
-                lm[c] = (ctx.melt_rate * rho * ctx.dt).min(left);
+        .for_each(|(r, (((out_row, salt_row), susp_row), subl_row))| {
+            let cells = r * w..(r + 1) * w;
+            let inputs = shear[cells.clone()]
+                .iter()
+                .zip(&q_x[cells.clone()])
+                .zip(&q_y[cells.clone()])
+                .zip(&scene.wind_u[cells.clone()])
+                .zip(&scene.wind_v[cells.clone()])
+                .zip(&state.swe[cells.clone()])
+                .zip(&state.density[cells]);
+            let outputs = out_row
+                .iter_mut()
+                .zip(salt_row.iter_mut())
+                .zip(susp_row.iter_mut())
+                .zip(subl_row.iter_mut());
+            for ((((o, sa), su), sb), ((((((s, &qx), &qy), &u), &v), &m), &rho)) in
+                outputs.zip(inputs)
+            {
+                let (outflow, blowing) = cell(s, qx, qy, u, v, m, rho);
+                *o = outflow;
+                (*sa, *su, *sb) = (blowing.q_salt, blowing.q_susp, blowing.q_subl);
             }
         });
 }
@@ -212,11 +255,10 @@ pub(super) fn outflow_pass(
 pub(super) fn update_pass(
     ctx: &Context,
     state: &mut SnowState,
-    fields: &Fields,
-    outflows: &Outflows,
+    shear: &[Shear],
+    outflows: &[Outflow],
 ) -> Vec<RowBudget> {
     let (w, h) = (ctx.width, ctx.height);
-    let (send_x, send_y) = (&outflows.send_x, &outflows.send_y);
     let on = ctx.params.phenomena;
     let border_inflow = ctx.params.saturated_inflow && on.saltation;
     let scene = ctx.scene;
@@ -227,32 +269,43 @@ pub(super) fn update_pass(
         .zip(state.density.par_chunks_mut(w))
         .enumerate()
         .map(|(r, (swe_row, rho_row))| {
+            let cells = r * w..(r + 1) * w;
+            let row = &outflows[cells.clone()];
+            // The rows to the north (r − 1) and to the south (r + 1).
+            let north = (r > 0).then(|| &outflows[cells.start - w..cells.start]);
+            let south = (r + 1 < h).then(|| &outflows[cells.end..cells.end + w]);
+            let shear = &shear[cells.clone()];
+            let (wind_u, wind_v) = (&scene.wind_u[cells.clone()], &scene.wind_v[cells.clone()]);
+            let ratio = scene.precipitation_ratio.map(|p| &p[cells]);
             let mut b = RowBudget::default();
             for c in 0..w {
-                let i = r * w + c;
-                let (u, v) = (scene.wind_u[i], scene.wind_v[i]);
-                let speed = fields.speed[i];
+                let (u, v) = (wind_u[c], wind_v[c]);
+                let speed = shear[c].speed;
+                let o = row[c];
                 // The new-snow and densification wind tables share their sampling.
                 let wind = ctx.rates.new_snow.axis().locate(speed);
-                let out =
-                    send_x[i].abs() + send_y[i].abs() + outflows.sublimation[i] + outflows.melt[i];
+                let out = o.send_x.abs() + o.send_y.abs() + o.sublimation + o.melt;
                 let mut gain = 0.0f32;
-                if c > 0 && send_x[i - 1] > 0.0 {
-                    gain += send_x[i - 1];
+                if c > 0 && row[c - 1].send_x > 0.0 {
+                    gain += row[c - 1].send_x;
                 }
-                if c + 1 < w && send_x[i + 1] < 0.0 {
-                    gain -= send_x[i + 1];
+                if c + 1 < w && row[c + 1].send_x < 0.0 {
+                    gain -= row[c + 1].send_x;
                 }
-                if r > 0 && send_y[i - w] < 0.0 {
-                    gain -= send_y[i - w];
+                if let Some(n) = north
+                    && n[c].send_y < 0.0
+                {
+                    gain -= n[c].send_y;
                 }
-                if r + 1 < h && send_y[i + w] > 0.0 {
-                    gain += send_y[i + w];
+                if let Some(s) = south
+                    && s[c].send_y > 0.0
+                {
+                    gain += s[c].send_y;
                 }
                 // Border inflow at saturation and border outflow.
                 let mut inflow = 0.0f32;
                 if border_inflow && speed > 0.0 {
-                    let cap = fields.q_max[i] * ctx.dt / speed;
+                    let cap = shear[c].q_max * ctx.dt / speed;
                     let edge_x = (c == 0 && u > 0.0) || (c + 1 == w && u < 0.0);
                     let edge_y = (r + 1 == h && v > 0.0) || (r == 0 && v < 0.0);
                     if edge_x {
@@ -263,14 +316,13 @@ pub(super) fn update_pass(
                     }
                 }
                 let mut leaving = 0.0f32;
-                if (c + 1 == w && send_x[i] > 0.0) || (c == 0 && send_x[i] < 0.0) {
-                    leaving += send_x[i].abs();
+                if (c + 1 == w && o.send_x > 0.0) || (c == 0 && o.send_x < 0.0) {
+                    leaving += o.send_x.abs();
                 }
-                if (r == 0 && send_y[i] > 0.0) || (r + 1 == h && send_y[i] < 0.0) {
-                    leaving += send_y[i].abs();
+                if (r == 0 && o.send_y > 0.0) || (r + 1 == h && o.send_y < 0.0) {
+                    leaving += o.send_y.abs();
                 }
-                let snowfall =
-                    ctx.snowfall * scene.precipitation_ratio.map_or(1.0, |p| p[i].max(0.0));
+                let snowfall = ctx.snowfall * ratio.map_or(1.0, |p| p[c].max(0.0));
                 let rho = rho_row[c];
                 let kept = (swe_row[c] - out).max(0.0);
                 let drifted = gain + inflow;
@@ -297,9 +349,9 @@ pub(super) fn update_pass(
                 b.precipitation += f64::from(snowfall);
                 b.border_in += f64::from(inflow);
                 b.border_out += f64::from(leaving);
-                b.sublimation += f64::from(outflows.sublimation[i]);
-                b.melt += f64::from(outflows.melt[i]);
-                b.transported += f64::from(send_x[i].abs() + send_y[i].abs());
+                b.sublimation += f64::from(o.sublimation);
+                b.melt += f64::from(o.melt);
+                b.transported += f64::from(o.send_x.abs() + o.send_y.abs());
             }
             b
         })

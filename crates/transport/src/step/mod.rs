@@ -40,7 +40,7 @@ use crate::tables::Tables;
 use crate::terrain_wind::check_len;
 use rayon::prelude::*;
 use snowscape_terrain::GridGeometry;
-use sweep::SweepInputs;
+use sweep::Sweep;
 
 /// Highest density reached by densification, kg m⁻³ (SnowModel's `ro_snowmax`).
 pub const MAX_DENSITY: f32 = 550.0;
@@ -157,10 +157,10 @@ impl MassBudget {
 pub struct StepScratch {
     tables: Tables,
     rates: Option<cells::CellRates>,
-    fields: Fields,
+    shear: Vec<Shear>,
     q_x: Vec<f32>,
     q_y: Vec<f32>,
-    outflows: Outflows,
+    outflows: Vec<Outflow>,
     /// Saltation flux magnitude of the last step, kg m⁻¹ s⁻¹.
     pub q_salt: Vec<f32>,
     /// Suspension flux magnitude of the last step, kg m⁻¹ s⁻¹.
@@ -169,35 +169,35 @@ pub struct StepScratch {
     pub q_subl: Vec<f32>,
 }
 
-/// Per-cell shear state of the current step.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct Fields {
+/// Shear state of a cell in the current step.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Shear {
     /// Wind speed `W` at `z_r`, m s⁻¹.
-    pub speed: Vec<f32>,
-    pub u_star: Vec<f32>,
-    pub u_star_t: Vec<f32>,
+    pub speed: f32,
+    pub u_star: f32,
+    pub u_star_t: f32,
     /// Saltation capacity magnitude `Qs_max`, kg m⁻¹ s⁻¹ (0 where no saltation).
-    pub q_max: Vec<f32>,
+    pub q_max: f32,
 }
 
-/// What each cell sends and loses in the current step, kg m⁻², after the positivity limiter.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct Outflows {
+/// What a cell sends and loses in the current step, kg m⁻², after the positivity limiter.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Outflow {
     /// Sent east (positive) or west (negative).
-    pub send_x: Vec<f32>,
+    pub send_x: f32,
     /// Sent north (positive) or south (negative).
-    pub send_y: Vec<f32>,
+    pub send_y: f32,
     /// Lost to sublimation.
-    pub sublimation: Vec<f32>,
+    pub sublimation: f32,
     /// Lost to melt.
-    pub melt: Vec<f32>,
+    pub melt: f32,
 }
 
 /// Sizes a buffer; every pass overwrites all its cells, so no clearing is needed.
-fn resize(v: &mut Vec<f32>, n: usize) {
+fn resize<T: Copy + Default>(v: &mut Vec<T>, n: usize) {
     if v.len() != n {
         v.clear();
-        v.resize(n, 0.0);
+        v.resize(n, T::default());
     }
 }
 
@@ -227,17 +227,11 @@ pub fn step(
     }
     let n = g.len();
     let initial_mass = state.total_mass(g);
+    resize(&mut scratch.shear, n);
+    resize(&mut scratch.outflows, n);
     for v in [
-        &mut scratch.fields.speed,
-        &mut scratch.fields.u_star,
-        &mut scratch.fields.u_star_t,
-        &mut scratch.fields.q_max,
         &mut scratch.q_x,
         &mut scratch.q_y,
-        &mut scratch.outflows.send_x,
-        &mut scratch.outflows.send_y,
-        &mut scratch.outflows.sublimation,
-        &mut scratch.outflows.melt,
         &mut scratch.q_salt,
         &mut scratch.q_susp,
         &mut scratch.q_subl,
@@ -279,32 +273,39 @@ pub fn step(
         densify: params.phenomena.densification && weather.precipitation_mm_per_h == 0.0,
         max_wind: shear_table.max_wind() as f32,
     };
-    // Pass 1: threshold, shear and capacity per cell.
-    cells::shear_pass(&ctx, state, &mut scratch.fields);
-    // Pass 2: fetch-limited saltation along x and y.
     let relax = |d: f64| ((params.fetch_scale * d / params.fetch_m) as f32).min(1.0);
-    let sweep_inputs = SweepInputs {
-        width: g.width(),
-        height: g.height(),
-        fields: &scratch.fields,
-        wind_u: scene.wind_u,
-        wind_v: scene.wind_v,
-        relax_x: relax(g.cell_size_x()),
-        relax_y: relax(g.cell_size_y()),
+    let along = |d: f64| Sweep {
+        relax: relax(d),
         saturated_inflow: params.saturated_inflow,
     };
-    sweep::sweep_x(&sweep_inputs, &mut scratch.q_x);
-    sweep::sweep_y(&sweep_inputs, &mut scratch.q_y);
+    // Pass 1: threshold, shear and capacity per cell, and the fetch-limited saltation
+    // along x.
+    cells::shear_pass(
+        &ctx,
+        state,
+        &along(g.cell_size_x()),
+        &mut scratch.shear,
+        &mut scratch.q_x,
+    );
+    // Pass 2: fetch-limited saltation along y.
+    let along_y = along(g.cell_size_y());
+    sweep::sweep_y(
+        &along_y,
+        g.width(),
+        &scratch.shear,
+        scene.wind_v,
+        &mut scratch.q_y,
+    );
     // Pass 3: suspension, sublimation, melt and the limited outflows.
     let blowing = (
         &mut scratch.q_salt[..],
         &mut scratch.q_susp[..],
         &mut scratch.q_subl[..],
     );
-    let flux = (&scratch.fields, &scratch.q_x[..], &scratch.q_y[..]);
+    let flux = (&scratch.shear[..], &scratch.q_x[..], &scratch.q_y[..]);
     cells::outflow_pass(&ctx, state, flux, &mut scratch.outflows, blowing);
     // Pass 4: gather the inflows, update mass and density.
-    let rows = cells::update_pass(&ctx, state, &scratch.fields, &scratch.outflows);
+    let rows = cells::update_pass(&ctx, state, &scratch.shear, &scratch.outflows);
     let area = g.cell_area();
     let mut budget = MassBudget {
         initial_mass,
