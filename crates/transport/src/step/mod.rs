@@ -160,7 +160,9 @@ pub struct StepScratch {
     shear: Vec<Shear>,
     q_x: Vec<f32>,
     q_y: Vec<f32>,
-    outflows: Vec<Outflow>,
+    /// The state at the end of the step, swapped into the [`SnowState`].
+    next_swe: Vec<f32>,
+    next_density: Vec<f32>,
     /// Saltation flux magnitude of the last step, kg m⁻¹ s⁻¹.
     pub q_salt: Vec<f32>,
     /// Suspension flux magnitude of the last step, kg m⁻¹ s⁻¹.
@@ -180,19 +182,6 @@ pub(crate) struct Shear {
     pub q_max: f32,
 }
 
-/// What a cell sends and loses in the current step, kg m⁻², after the positivity limiter.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Outflow {
-    /// Sent east (positive) or west (negative).
-    pub send_x: f32,
-    /// Sent north (positive) or south (negative).
-    pub send_y: f32,
-    /// Lost to sublimation.
-    pub sublimation: f32,
-    /// Lost to melt.
-    pub melt: f32,
-}
-
 /// Sizes a buffer; every pass overwrites all its cells, so no clearing is needed.
 fn resize<T: Copy + Default>(v: &mut Vec<T>, n: usize) {
     if v.len() != n {
@@ -202,6 +191,7 @@ fn resize<T: Copy + Default>(v: &mut Vec<T>, n: usize) {
 }
 
 mod cells;
+mod transfer;
 
 /// Advances the snow cover by `dt_s` seconds under `weather` (Eqs. 5.16-5.17).
 pub fn step(
@@ -228,8 +218,9 @@ pub fn step(
     let n = g.len();
     let initial_mass = state.total_mass(g);
     resize(&mut scratch.shear, n);
-    resize(&mut scratch.outflows, n);
     for v in [
+        &mut scratch.next_swe,
+        &mut scratch.next_density,
         &mut scratch.q_x,
         &mut scratch.q_y,
         &mut scratch.q_salt,
@@ -296,16 +287,22 @@ pub fn step(
         scene.wind_v,
         &mut scratch.q_y,
     );
-    // Pass 3: suspension, sublimation, melt and the limited outflows.
-    let blowing = (
-        &mut scratch.q_salt[..],
-        &mut scratch.q_susp[..],
-        &mut scratch.q_subl[..],
-    );
-    let flux = (&scratch.shear[..], &scratch.q_x[..], &scratch.q_y[..]);
-    cells::outflow_pass(&ctx, state, flux, &mut scratch.outflows, blowing);
-    // Pass 4: gather the inflows, update mass and density.
-    let rows = cells::update_pass(&ctx, state, &scratch.shear, &scratch.outflows);
+    // Passes 3 and 4: suspension, sublimation, melt and the limited outflows; gather the
+    // inflows, update mass and density.
+    let salt = transfer::Saltation {
+        shear: &scratch.shear,
+        q_x: &scratch.q_x,
+        q_y: &scratch.q_y,
+    };
+    let blowing = transfer::Blowing {
+        q_salt: &mut scratch.q_salt,
+        q_susp: &mut scratch.q_susp,
+        q_subl: &mut scratch.q_subl,
+    };
+    let next = (&mut scratch.next_swe[..], &mut scratch.next_density[..]);
+    let rows = transfer::transfer_pass(&ctx, state, salt, blowing, next);
+    std::mem::swap(&mut state.swe, &mut scratch.next_swe);
+    std::mem::swap(&mut state.density, &mut scratch.next_density);
     let area = g.cell_area();
     let mut budget = MassBudget {
         initial_mass,
