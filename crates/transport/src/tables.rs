@@ -57,9 +57,17 @@ impl Axis {
 
     #[inline]
     pub(crate) fn locate(&self, x: f32) -> Point {
-        let t = ((x - self.lo) * self.inv_step).clamp(0.0, self.last);
+        // Clamped to [0, last] with comparisons that keep NaN (one instruction each).
+        let t = (x - self.lo) * self.inv_step;
+        let t = if t < 0.0 { 0.0 } else { t };
+        let t = if t > self.last { self.last } else { t };
         // The last sample falls at the end of the last segment.
-        let segment = t.min(self.last - 1.0) as u32 as usize;
+        let start = if t > self.last - 1.0 {
+            self.last - 1.0
+        } else {
+            t
+        };
+        let segment = start as u32 as usize;
         Point {
             segment,
             weight: t - segment as f32,

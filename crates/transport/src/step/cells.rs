@@ -98,31 +98,6 @@ pub(super) fn shear_pass(
     // Qs_max = 0.68 (ρa/g) u*t (u*² − u*t²) / u* (5.37).
     let capacity = (0.68 * ctx.params.air_density / GRAVITY) as f32;
     let kappa = VON_KARMAN as f32;
-    let cell = |rho: f32, swe: f32, u: f32, v: f32| {
-        let depth = if rho > 0.0 { swe / rho } else { 0.0 };
-        let speed = (u * u + v * v).sqrt();
-        let u_star_t = ctx.rates.threshold.at(rho);
-        let (u_star, q_max) = if depth <= holding {
-            // Vegetation not yet filled (5.27-5.28, 5.26).
-            let fs = if holding > 0.0 { depth / holding } else { 1.0 };
-            let z0 = fs * z0_snow + (1.0 - fs) * z0_veg;
-            (speed * kappa / (z_r / z0).ln(), 0.0)
-        } else {
-            let salt = ctx.shear_table.saltating_u_star(speed.min(ctx.max_wind));
-            if salt > u_star_t {
-                let q_max = capacity * u_star_t * (salt * salt - u_star_t * u_star_t) / salt;
-                (salt, q_max)
-            } else {
-                (speed * snow_log, 0.0)
-            }
-        };
-        Shear {
-            speed,
-            u_star,
-            u_star_t,
-            q_max,
-        }
-    };
     let scene = ctx.scene;
     shear
         .par_chunks_mut(w)
@@ -130,14 +105,33 @@ pub(super) fn shear_pass(
         .enumerate()
         .for_each(|(r, (shear_row, q_row))| {
             let cells = r * w..(r + 1) * w;
-            let u = &scene.wind_u[cells.clone()];
-            let inputs = state.density[cells.clone()]
-                .iter()
-                .zip(&state.swe[cells.clone()])
-                .zip(u)
-                .zip(&scene.wind_v[cells]);
-            for (s, (((&rho, &swe), &u), &v)) in shear_row.iter_mut().zip(inputs) {
-                *s = cell(rho, swe, u, v);
+            let (u, v) = (&scene.wind_u[cells.clone()], &scene.wind_v[cells.clone()]);
+            let (swe, density) = (&state.swe[cells.clone()], &state.density[cells]);
+            // The table lookups first, in a loop of their own so that the processor
+            // overlaps many cells: `u*t`, and `u*` as if the surface saltated.
+            for (s, ((&u, &v), &rho)) in shear_row.iter_mut().zip(u.iter().zip(v).zip(density)) {
+                let speed = (u * u + v * v).sqrt();
+                *s = Shear {
+                    speed,
+                    u_star: ctx.shear_table.saltating_u_star(speed.min(ctx.max_wind)),
+                    u_star_t: ctx.rates.threshold.at(rho),
+                    q_max: 0.0,
+                };
+            }
+            for (s, (&swe, &rho)) in shear_row.iter_mut().zip(swe.iter().zip(density)) {
+                let depth = if rho > 0.0 { swe / rho } else { 0.0 };
+                let (speed, salt, u_star_t) = (s.speed, s.u_star, s.u_star_t);
+                (s.u_star, s.q_max) = if depth <= holding {
+                    // Vegetation not yet filled (5.27-5.28, 5.26).
+                    let fs = if holding > 0.0 { depth / holding } else { 1.0 };
+                    let z0 = fs * z0_snow + (1.0 - fs) * z0_veg;
+                    (speed * kappa / (z_r / z0).ln(), 0.0)
+                } else if salt > u_star_t {
+                    let q_max = capacity * u_star_t * (salt * salt - u_star_t * u_star_t) / salt;
+                    (salt, q_max)
+                } else {
+                    (speed * snow_log, 0.0)
+                };
             }
             sweep::sweep_line(along_x, shear_row, u, q_row);
         });

@@ -80,32 +80,41 @@ pub(super) fn transfer_pass(
             let r1 = r0 + swe.len() / w;
             let mut ring = vec![Outflow::default(); 3 * w];
             let slot = |r: usize| (r % 3) * w..(r % 3 + 1) * w;
+            // The published results of the rows on either side go to `halo`.
+            let mut halo = vec![0.0f32; 3 * w];
+            let mut halo_row = |ring: &mut [Outflow], k: usize| {
+                let [a, b, c] = [0, 1, 2].map(|j| j * w..(j + 1) * w);
+                let [sa, su, sb] = halo.get_disjoint_mut([a, b, c]).expect("disjoint rows");
+                outflow_row(ctx, state, salt, k, &mut ring[slot(k)], [sa, su, sb]);
+            };
             if r0 > 0 {
-                outflow_row(ctx, state, salt, r0 - 1, &mut ring[slot(r0 - 1)], None);
+                halo_row(&mut ring, r0 - 1);
             }
             // Cells of row `k` in the block's chunks.
             let local = |k: usize| (k - r0) * w..(k - r0 + 1) * w;
-            let first = [
+            let own = [
                 &mut q_salt[local(r0)],
                 &mut q_susp[local(r0)],
                 &mut q_subl[local(r0)],
             ];
-            outflow_row(ctx, state, salt, r0, &mut ring[slot(r0)], Some(first));
+            outflow_row(ctx, state, salt, r0, &mut ring[slot(r0)], own);
+            let mut gathered = vec![0.0f32; 2 * w];
             let mut rows = Vec::with_capacity(r1 - r0);
             for r in r0..r1 {
                 let k = r + 1;
-                if k < h {
-                    let own = (k < r1).then(|| {
-                        [
-                            &mut q_salt[local(k)],
-                            &mut q_susp[local(k)],
-                            &mut q_subl[local(k)],
-                        ]
-                    });
+                if k < r1 {
+                    let own = [
+                        &mut q_salt[local(k)],
+                        &mut q_susp[local(k)],
+                        &mut q_subl[local(k)],
+                    ];
                     outflow_row(ctx, state, salt, k, &mut ring[slot(k)], own);
+                } else if k < h {
+                    halo_row(&mut ring, k);
                 }
                 let next = (&mut swe[local(r)], &mut rho[local(r)]);
-                rows.push(update_row(ctx, state, salt.shear, &ring, r, next));
+                let g = &mut gathered;
+                rows.push(update_row(ctx, state, salt.shear, &ring, r, next, g));
             }
             rows
         })
@@ -113,14 +122,16 @@ pub(super) fn transfer_pass(
     blocks.into_iter().flatten().collect()
 }
 
-/// The outflows of row `r` into `out`, and its published results when it is the block's.
+/// The outflows of row `r` into `out`, and its saltation flux magnitude, suspension flux
+/// and sublimation rate into `blowing`. Two loops with short bodies, so the processor
+/// overlaps the table lookups of many cells.
 fn outflow_row(
     ctx: &Context,
     state: &SnowState,
     salt: Saltation,
     r: usize,
     out: &mut [Outflow],
-    published: Option<[&mut [f32]; 3]>,
+    [q_salt, q_susp, q_subl]: [&mut [f32]; 3],
 ) {
     let w = ctx.width;
     let on = ctx.params.phenomena;
@@ -128,17 +139,19 @@ fn outflow_row(
     let saltation = if on.saltation { 1.0 } else { 0.0 };
     let (step_x, step_y) = (ctx.dt * ctx.inv_dx, ctx.dt * ctx.inv_dy);
     let cells = r * w..(r + 1) * w;
-    let inputs = salt.shear[cells.clone()]
-        .iter()
-        .zip(&salt.q_x[cells.clone()])
-        .zip(&salt.q_y[cells.clone()])
-        .zip(&ctx.scene.wind_u[cells.clone()])
-        .zip(&ctx.scene.wind_v[cells.clone()])
-        .zip(&state.swe[cells.clone()])
-        .zip(&state.density[cells]);
-    let mut published = published;
-    for (c, (o, ((((((s, &q_x), &q_y), &u), &v), &mass), &rho))) in
-        out.iter_mut().zip(inputs).enumerate()
+    let (shear, q_x, q_y) = (
+        &salt.shear[cells.clone()],
+        &salt.q_x[cells.clone()],
+        &salt.q_y[cells.clone()],
+    );
+    let blowing = q_salt
+        .iter_mut()
+        .zip(q_susp.iter_mut())
+        .zip(q_subl.iter_mut());
+    for (((sa, su, sb), s), (&q_x, &q_y)) in blowing
+        .map(|((a, b), c)| (a, b, c))
+        .zip(shear)
+        .zip(q_x.iter().zip(q_y))
     {
         let q_salt = (q_x * q_x + q_y * q_y).sqrt();
         let (mut q_susp, mut q_subl) = (0.0f32, 0.0f32);
@@ -148,9 +161,21 @@ fn outflow_row(
             q_susp = per_up * susp;
             q_subl = (per_up * subl).min(0.0);
         }
-        if let Some([sa, su, sb]) = published.as_mut() {
-            (sa[c], su[c], sb[c]) = (q_salt, q_susp, q_subl);
-        }
+        (*sa, *su, *sb) = (q_salt, q_susp, q_subl);
+    }
+    let inputs = shear
+        .iter()
+        .zip(q_x.iter().zip(q_y))
+        .zip(q_susp.iter().zip(q_subl.iter()))
+        .zip(
+            ctx.scene.wind_u[cells.clone()]
+                .iter()
+                .zip(&ctx.scene.wind_v[cells.clone()]),
+        )
+        .zip(state.swe[cells.clone()].iter().zip(&state.density[cells]));
+    for (o, ((((s, (&q_x, &q_y)), (&q_susp, &q_subl)), (&u, &v)), (&mass, &rho))) in
+        out.iter_mut().zip(inputs)
+    {
         let (susp_x, susp_y) = if on.suspension && s.speed > 0.0 {
             (q_susp * u / s.speed, q_susp * v / s.speed)
         } else {
@@ -180,7 +205,9 @@ fn outflow_row(
     }
 }
 
-/// Updates row `r` from the outflows of rows `r − 1 ..= r + 1` in `ring` into `next`.
+/// Updates row `r` from the outflows of rows `r − 1 ..= r + 1` in `ring` into `next`: the
+/// mass first, keeping the kept and drifted masses in `gathered` (two rows), then the
+/// density, in a loop of its own for its table lookups and divisions.
 fn update_row(
     ctx: &Context,
     state: &SnowState,
@@ -188,12 +215,12 @@ fn update_row(
     ring: &[Outflow],
     r: usize,
     (next_swe, next_rho): (&mut [f32], &mut [f32]),
+    gathered: &mut [f32],
 ) -> RowBudget {
     let (w, h) = (ctx.width, ctx.height);
     let on = ctx.params.phenomena;
     let border_inflow = ctx.params.saturated_inflow && on.saltation;
     let scene = ctx.scene;
-    let rho_drift_floor = ctx.rates.new_snow.at(super::DRIFT_PACKING_WIND as f32);
     let slot = |k: usize| &ring[(k % 3) * w..(k % 3 + 1) * w];
     let row = slot(r);
     // The rows to the north (r − 1) and to the south (r + 1).
@@ -204,13 +231,13 @@ fn update_row(
     let (wind_u, wind_v) = (&scene.wind_u[cells.clone()], &scene.wind_v[cells.clone()]);
     let (swe, density) = (&state.swe[cells.clone()], &state.density[cells.clone()]);
     let ratio = scene.precipitation_ratio.map(|p| &p[cells]);
+    let snowfall = |c: usize| ctx.snowfall * ratio.map_or(1.0, |p| p[c].max(0.0));
+    let (kept_row, drifted_row) = gathered.split_at_mut(w);
     let mut b = RowBudget::default();
     for c in 0..w {
         let (u, v) = (wind_u[c], wind_v[c]);
         let speed = shear[c].speed;
         let o = row[c];
-        // The new-snow and densification wind tables share their sampling.
-        let wind = ctx.rates.new_snow.axis().locate(speed);
         let out = o.send_x.abs() + o.send_y.abs() + o.sublimation + o.melt;
         let mut gain = 0.0f32;
         if c > 0 && row[c - 1].send_x > 0.0 {
@@ -249,11 +276,27 @@ fn update_row(
         if (r == 0 && o.send_y > 0.0) || (r + 1 == h && o.send_y < 0.0) {
             leaving += o.send_y.abs();
         }
-        let snowfall = ctx.snowfall * ratio.map_or(1.0, |p| p[c].max(0.0));
-        let rho = density[c];
+        let snowfall = snowfall(c);
         let kept = (swe[c] - out).max(0.0);
         let drifted = gain + inflow;
         let new_mass = kept + drifted + snowfall;
+        if !new_mass.is_finite() && b.non_finite.is_none() {
+            b.non_finite = Some((c, r, new_mass));
+        }
+        (next_swe[c], kept_row[c], drifted_row[c]) = (new_mass, kept, drifted);
+        b.precipitation += f64::from(snowfall);
+        b.border_in += f64::from(inflow);
+        b.border_out += f64::from(leaving);
+        b.sublimation += f64::from(o.sublimation);
+        b.melt += f64::from(o.melt);
+        b.transported += f64::from(o.send_x.abs() + o.send_y.abs());
+    }
+    let rho_drift_floor = ctx.rates.new_snow.at(super::DRIFT_PACKING_WIND as f32);
+    for c in 0..w {
+        let (kept, drifted, snowfall) = (kept_row[c], drifted_row[c], snowfall(c));
+        let (rho, new_mass) = (density[c], next_swe[c]);
+        // The new-snow and densification wind tables share their sampling.
+        let wind = ctx.rates.new_snow.axis().locate(shear[c].speed);
         let mut new_rho = rho;
         if drifted > 0.0 || snowfall > 0.0 {
             let rho_fall = ctx.rates.new_snow.at_point(wind);
@@ -268,17 +311,7 @@ fn update_row(
                 ctx.rates.densify_wind.at_point(wind) * ctx.rates.densify_density.at(new_rho);
             new_rho = (new_rho + ctx.dt * rate).min(MAX_DENSITY);
         }
-        if !new_mass.is_finite() && b.non_finite.is_none() {
-            b.non_finite = Some((c, r, new_mass));
-        }
-        next_swe[c] = new_mass;
         next_rho[c] = new_rho;
-        b.precipitation += f64::from(snowfall);
-        b.border_in += f64::from(inflow);
-        b.border_out += f64::from(leaving);
-        b.sublimation += f64::from(o.sublimation);
-        b.melt += f64::from(o.melt);
-        b.transported += f64::from(o.send_x.abs() + o.send_y.abs());
     }
     b
 }
