@@ -18,8 +18,11 @@ use super::Shear;
 use crate::physics::saltation::fetch_limited_flux;
 use rayon::prelude::*;
 
-/// Width of the column bands of the y sweep.
-const BAND: usize = 64;
+/// Widest column band of the y sweep: a band row is read as one run of memory, and wide
+/// runs are what the hardware prefetcher follows from row to row.
+const MAX_BAND: usize = 256;
+/// Narrowest column band, for many threads on a narrow grid.
+const MIN_BAND: usize = 64;
 
 /// The fixed settings of a sweep along one axis.
 #[derive(Debug, Clone, Copy)]
@@ -94,18 +97,22 @@ pub(super) fn sweep_y(
 ) {
     let w = width;
     let h = shear.len() / w;
-    let bands: Vec<Vec<f32>> = (0..w.div_ceil(BAND))
+    // About two bands per thread; the width does not change the result.
+    let band = w
+        .div_ceil(2 * rayon::current_num_threads())
+        .clamp(MIN_BAND, MAX_BAND);
+    let bands: Vec<Vec<f32>> = (0..w.div_ceil(band))
         .into_par_iter()
         .map(|b| {
-            let c0 = b * BAND;
-            let bw = BAND.min(w - c0);
+            let c0 = b * band;
+            let bw = band.min(w - c0);
             let mut buf = vec![0.0f32; bw * h];
             let band_row = |r: usize| {
                 let cells = r * w + c0..r * w + c0 + bw;
                 shear[cells.clone()].iter().zip(&wind_v[cells])
             };
             // Southward cells (v < 0), north to south: upwind is row − 1 (stored negative).
-            let mut up: [Upwind; BAND] = [None; BAND];
+            let mut up: [Upwind; MAX_BAND] = [None; MAX_BAND];
             for (r, q_row) in buf.chunks_exact_mut(bw).enumerate() {
                 for ((up, (cell, &v)), q) in up.iter_mut().zip(band_row(r)).zip(q_row) {
                     *up = if v < 0.0 {
@@ -118,7 +125,7 @@ pub(super) fn sweep_y(
                 }
             }
             // Northward cells (v > 0), south to north: upwind is row + 1.
-            let mut up: [Upwind; BAND] = [None; BAND];
+            let mut up: [Upwind; MAX_BAND] = [None; MAX_BAND];
             for (r, q_row) in buf.chunks_exact_mut(bw).enumerate().rev() {
                 for ((up, (cell, &v)), q) in up.iter_mut().zip(band_row(r)).zip(q_row) {
                     *up = if v > 0.0 {
@@ -135,8 +142,8 @@ pub(super) fn sweep_y(
         .collect();
     q_y.par_chunks_mut(w).enumerate().for_each(|(r, row)| {
         for (b, buf) in bands.iter().enumerate() {
-            let c0 = b * BAND;
-            let bw = BAND.min(w - c0);
+            let c0 = b * band;
+            let bw = band.min(w - c0);
             row[c0..c0 + bw].copy_from_slice(&buf[r * bw..(r + 1) * bw]);
         }
     });
