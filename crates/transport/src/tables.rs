@@ -113,6 +113,35 @@ impl Table1 {
     }
 }
 
+/// Functions of one variable sampled on one axis, their segments stored one row after the
+/// other, so that a point located once evaluates any row with one load.
+#[derive(Debug, Clone, PartialEq)]
+struct TableRows {
+    axis: Axis,
+    per_row: usize,
+    segments: Vec<[f32; 2]>,
+}
+
+impl TableRows {
+    fn new(lo: f64, hi: f64, n: usize, rows: usize, f: impl Fn(usize, f64) -> f64) -> Self {
+        let tables: Vec<Table1> = (0..rows)
+            .map(|k| Table1::new(lo, hi, n, |x| f(k, x)))
+            .collect();
+        Self {
+            axis: tables[0].axis,
+            per_row: n - 1,
+            segments: tables.into_iter().flat_map(|t| t.segments).collect(),
+        }
+    }
+
+    /// Row `row` at a point located on `self.axis`.
+    #[inline]
+    fn at(&self, row: usize, p: Point) -> f32 {
+        let [value, rise] = self.segments[row * self.per_row + p.segment];
+        value + p.weight * rise
+    }
+}
+
 /// The Newton-Raphson `u*` of a saltating surface as a function of the wind at `z_r`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShearTable {
@@ -176,8 +205,8 @@ pub struct BlowingSnowTable {
     key: (Atmosphere, f64, usize, f64),
     suspension: Table1,
     sublimation: Table1,
-    /// `ψs` over `(u*, u*t)`, row-major in `u*t`.
-    saltation_loss: Vec<Table1>,
+    /// `ψs` over `(u*, u*t)`, one row per sampled `u*t`.
+    saltation_loss: TableRows,
     u_star_t_axis: Axis,
 }
 
@@ -196,14 +225,11 @@ impl BlowingSnowTable {
             profile(u).sublimation / saltation_height(u)
         });
         let t_step = MAX_U_STAR_T / (THRESHOLD_SAMPLES - 1) as f64;
-        let saltation_loss = (0..THRESHOLD_SAMPLES)
-            .map(|k| {
-                let ut = k as f64 * t_step;
-                Table1::new(MIN_U_STAR, hi, PROFILE_SAMPLES / 4, |u| {
-                    saltation_layer_loss_rate(u, ut, &atm)
-                })
-            })
-            .collect();
+        let loss_samples = PROFILE_SAMPLES / 4;
+        let saltation_loss =
+            TableRows::new(MIN_U_STAR, hi, loss_samples, THRESHOLD_SAMPLES, |k, u| {
+                saltation_layer_loss_rate(u, k as f64 * t_step, &atm)
+            });
         Self {
             key: (atm, s, n, hi),
             suspension,
@@ -219,9 +245,9 @@ impl BlowingSnowTable {
     pub fn per_flux(&self, u_star: f32, u_star_t: f32) -> (f32, f32) {
         let p = self.suspension.axis().locate(u_star);
         let t = self.u_star_t_axis.locate(u_star_t);
-        let q = self.saltation_loss[0].axis().locate(u_star);
-        let a = self.saltation_loss[t.segment].at_point(q);
-        let b = self.saltation_loss[t.segment + 1].at_point(q);
+        let q = self.saltation_loss.axis.locate(u_star);
+        let a = self.saltation_loss.at(t.segment, q);
+        let b = self.saltation_loss.at(t.segment + 1, q);
         (
             self.suspension.at_point(p),
             self.sublimation.at_point(p) + a + t.weight * (b - a),
