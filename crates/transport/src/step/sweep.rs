@@ -57,29 +57,32 @@ impl Sweep {
 }
 
 /// Signed saltation flux along a line of cells (positive towards increasing index) whose
-/// wind component along the line is `comp`, into `q`.
+/// wind component along the line is `comp`, into `q`. The cells blowing towards increasing
+/// index are swept from the start and the others from the far end in the same loop: the
+/// two recurrences touch different cells, and interleaving them lets the processor run
+/// both dependency chains at once.
 pub(super) fn sweep_line(sweep: &Sweep, shear: &[Shear], comp: &[f32], q: &mut [f32]) {
-    // Cells blowing towards increasing index, in that order.
-    let mut up: Upwind = None;
-    for ((cell, &comp), q) in shear.iter().zip(comp).zip(q.iter_mut()) {
-        up = if comp > 0.0 {
-            let flux = sweep.relax_cell(cell, up, comp);
-            *q = flux;
+    let n = q.len();
+    let (shear, comp) = (&shear[..n], &comp[..n]);
+    let (mut forward, mut backward): (Upwind, Upwind) = (None, None);
+    for i in 0..n {
+        let (cell, c) = (&shear[i], comp[i]);
+        forward = if c > 0.0 {
+            let flux = sweep.relax_cell(cell, forward, c);
+            q[i] = flux;
             Some((flux, cell.u_star))
         } else {
             None
         };
-    }
-    // Cells blowing the other way, from the far end (stored negative).
-    let mut up: Upwind = None;
-    for ((cell, &comp), q) in shear.iter().zip(comp).zip(q.iter_mut()).rev() {
-        up = if comp < 0.0 {
-            let flux = sweep.relax_cell(cell, up, comp);
-            *q = -flux;
+        let j = n - 1 - i;
+        let (cell, c) = (&shear[j], comp[j]);
+        backward = if c < 0.0 {
+            let flux = sweep.relax_cell(cell, backward, c);
+            q[j] = -flux;
             Some((flux, cell.u_star))
         } else {
-            if comp == 0.0 {
-                *q = 0.0;
+            if c == 0.0 {
+                q[j] = 0.0;
             }
             None
         };
