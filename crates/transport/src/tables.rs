@@ -30,31 +30,115 @@ const MIN_U_STAR: f64 = 0.09;
 /// Highest tabulated threshold friction velocity, m s⁻¹ (ρs ≈ 490 kg m⁻³).
 const MAX_U_STAR_T: f64 = 3.0;
 
-/// A uniformly sampled function with linear interpolation, clamped at both ends.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Table1 {
+/// A uniform grid of `n` samples from `lo`: where a point falls on it, clamped at both ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Axis {
     lo: f32,
     inv_step: f32,
-    values: Vec<f32>,
+    /// Index of the last sample, `n − 1`.
+    last: f32,
+}
+
+/// A point on an [`Axis`]: the segment it falls in and its weight towards the segment's end.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Point {
+    segment: usize,
+    weight: f32,
+}
+
+impl Axis {
+    fn new(lo: f64, step: f64, n: usize) -> Self {
+        Self {
+            lo: lo as f32,
+            inv_step: (1.0 / step) as f32,
+            last: (n - 1) as f32,
+        }
+    }
+
+    #[inline]
+    pub(crate) fn locate(&self, x: f32) -> Point {
+        // Clamped to [0, last] with comparisons that keep NaN (one instruction each).
+        let t = (x - self.lo) * self.inv_step;
+        let t = if t < 0.0 { 0.0 } else { t };
+        let t = if t > self.last { self.last } else { t };
+        // The last sample falls at the end of the last segment.
+        let start = if t > self.last - 1.0 {
+            self.last - 1.0
+        } else {
+            t
+        };
+        let segment = start as u32 as usize;
+        Point {
+            segment,
+            weight: t - segment as f32,
+        }
+    }
+}
+
+/// A uniformly sampled function with linear interpolation, clamped at both ends. Each
+/// segment keeps its start value and its rise, so an evaluation is one load and one
+/// multiply-add.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Table1 {
+    axis: Axis,
+    segments: Vec<[f32; 2]>,
 }
 
 impl Table1 {
     pub(crate) fn new(lo: f64, hi: f64, n: usize, f: impl Fn(f64) -> f64) -> Self {
         let step = (hi - lo) / (n - 1) as f64;
+        let values: Vec<f32> = (0..n).map(|i| f(lo + i as f64 * step) as f32).collect();
         Self {
-            lo: lo as f32,
-            inv_step: (1.0 / step) as f32,
-            values: (0..n).map(|i| f(lo + i as f64 * step) as f32).collect(),
+            axis: Axis::new(lo, step, n),
+            segments: values.windows(2).map(|v| [v[0], v[1] - v[0]]).collect(),
         }
+    }
+
+    /// The sampling of the table, to locate a point once for tables that share it.
+    #[inline]
+    pub(crate) fn axis(&self) -> &Axis {
+        &self.axis
+    }
+
+    /// The value at a point located on [`Table1::axis`].
+    #[inline]
+    pub(crate) fn at_point(&self, p: Point) -> f32 {
+        let [value, rise] = self.segments[p.segment];
+        value + p.weight * rise
     }
 
     #[inline]
     pub(crate) fn at(&self, x: f32) -> f32 {
-        let last = self.values.len() - 1;
-        let t = ((x - self.lo) * self.inv_step).clamp(0.0, last as f32);
-        let i = (t as usize).min(last - 1);
-        let w = t - i as f32;
-        self.values[i] + w * (self.values[i + 1] - self.values[i])
+        self.at_point(self.axis.locate(x))
+    }
+}
+
+/// Functions of one variable sampled on one axis, their segments stored one row after the
+/// other, so that a point located once evaluates any row with one load.
+#[derive(Debug, Clone, PartialEq)]
+struct TableRows {
+    axis: Axis,
+    per_row: usize,
+    segments: Vec<[f32; 2]>,
+}
+
+impl TableRows {
+    fn new(lo: f64, hi: f64, n: usize, rows: usize, f: impl Fn(usize, f64) -> f64) -> Self {
+        let tables: Vec<Table1> = (0..rows)
+            .map(|k| Table1::new(lo, hi, n, |x| f(k, x)))
+            .collect();
+        Self {
+            axis: tables[0].axis,
+            per_row: n - 1,
+            segments: tables.into_iter().flat_map(|t| t.segments).collect(),
+        }
+    }
+
+    /// Row `row` at a point located on `self.axis`.
+    #[inline]
+    fn at(&self, row: usize, p: Point) -> f32 {
+        let [value, rise] = self.segments[row * self.per_row + p.segment];
+        value + p.weight * rise
     }
 }
 
@@ -121,9 +205,9 @@ pub struct BlowingSnowTable {
     key: (Atmosphere, f64, usize, f64),
     suspension: Table1,
     sublimation: Table1,
-    /// `ψs` over `(u*, u*t)`, row-major in `u*t`.
-    saltation_loss: Vec<Table1>,
-    u_star_t_inv_step: f32,
+    /// `ψs` over `(u*, u*t)`, one row per sampled `u*t`.
+    saltation_loss: TableRows,
+    u_star_t_axis: Axis,
 }
 
 impl BlowingSnowTable {
@@ -141,39 +225,33 @@ impl BlowingSnowTable {
             profile(u).sublimation / saltation_height(u)
         });
         let t_step = MAX_U_STAR_T / (THRESHOLD_SAMPLES - 1) as f64;
-        let saltation_loss = (0..THRESHOLD_SAMPLES)
-            .map(|k| {
-                let ut = k as f64 * t_step;
-                Table1::new(MIN_U_STAR, hi, PROFILE_SAMPLES / 4, |u| {
-                    saltation_layer_loss_rate(u, ut, &atm)
-                })
-            })
-            .collect();
+        let loss_samples = PROFILE_SAMPLES / 4;
+        let saltation_loss =
+            TableRows::new(MIN_U_STAR, hi, loss_samples, THRESHOLD_SAMPLES, |k, u| {
+                saltation_layer_loss_rate(u, k as f64 * t_step, &atm)
+            });
         Self {
             key: (atm, s, n, hi),
             suspension,
             sublimation,
             saltation_loss,
-            u_star_t_inv_step: (1.0 / t_step) as f32,
+            u_star_t_axis: Axis::new(0.0, t_step, THRESHOLD_SAMPLES),
         }
     }
 
-    /// `S(u*) = Qsusp u_p / Qsalt`, m s⁻¹.
+    /// `S(u*) = Qsusp u_p / Qsalt`, m s⁻¹, and `V(u*) + ψs(u*, u*t) = Qsubl u_p / Qsalt`,
+    /// s⁻¹ (≤ 0).
     #[inline]
-    pub fn suspension_per_flux(&self, u_star: f32) -> f32 {
-        self.suspension.at(u_star)
-    }
-
-    /// `V(u*) + ψs(u*, u*t) = Qsubl u_p / Qsalt`, s⁻¹ (≤ 0).
-    #[inline]
-    pub fn sublimation_per_flux(&self, u_star: f32, u_star_t: f32) -> f32 {
-        let last = self.saltation_loss.len() - 1;
-        let t = (u_star_t * self.u_star_t_inv_step).clamp(0.0, last as f32);
-        let k = (t as usize).min(last - 1);
-        let w = t - k as f32;
-        let a = self.saltation_loss[k].at(u_star);
-        let b = self.saltation_loss[k + 1].at(u_star);
-        self.sublimation.at(u_star) + a + w * (b - a)
+    pub fn per_flux(&self, u_star: f32, u_star_t: f32) -> (f32, f32) {
+        let p = self.suspension.axis().locate(u_star);
+        let t = self.u_star_t_axis.locate(u_star_t);
+        let q = self.saltation_loss.axis.locate(u_star);
+        let a = self.saltation_loss.at(t.segment, q);
+        let b = self.saltation_loss.at(t.segment + 1, q);
+        (
+            self.suspension.at_point(p),
+            self.sublimation.at_point(p) + a + t.weight * (b - a),
+        )
     }
 
     fn fresh_for(&self, params: &TransportParams, weather: &Weather, max_u_star: f64) -> bool {
@@ -257,8 +335,8 @@ mod tests {
         for (u, ut) in [(0.3, 0.15), (0.5, 0.25), (0.9, 0.3), (1.5, 0.5)] {
             let (qs, qv) = blowing_snow_fluxes(0.01, u, ut, 0.3, 40, &atm);
             let up = particle_speed(ut);
-            let qs_tab = 0.01 / up * f64::from(b.suspension_per_flux(u as f32));
-            let qv_tab = 0.01 / up * f64::from(b.sublimation_per_flux(u as f32, ut as f32));
+            let (s, v) = b.per_flux(u as f32, ut as f32);
+            let (qs_tab, qv_tab) = (0.01 / up * f64::from(s), 0.01 / up * f64::from(v));
             assert!((qs_tab / qs - 1.0).abs() < 5e-3, "u* {u}: {qs_tab} vs {qs}");
             assert!((qv_tab / qv - 1.0).abs() < 5e-3, "u* {u}: {qv_tab} vs {qv}");
         }
@@ -271,17 +349,15 @@ mod tests {
         let dry = tables
             .update(&p, &Weather::default())
             .1
-            .sublimation_per_flux(0.5, 0.2);
+            .per_flux(0.5, 0.2)
+            .1;
         let wet_weather = Weather {
             relative_humidity_pct: 100.0,
             cloud_cover_pct: 100.0,
             hour_angle_deg: 180.0,
             ..Default::default()
         };
-        let wet = tables
-            .update(&p, &wet_weather)
-            .1
-            .sublimation_per_flux(0.5, 0.2);
+        let wet = tables.update(&p, &wet_weather).1.per_flux(0.5, 0.2).1;
         assert!(dry < 0.0);
         assert_eq!(wet, 0.0);
     }

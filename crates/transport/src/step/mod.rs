@@ -40,7 +40,7 @@ use crate::tables::Tables;
 use crate::terrain_wind::check_len;
 use rayon::prelude::*;
 use snowscape_terrain::GridGeometry;
-use sweep::SweepInputs;
+use sweep::Sweep;
 
 /// Highest density reached by densification, kg m⁻³ (SnowModel's `ro_snowmax`).
 pub const MAX_DENSITY: f32 = 550.0;
@@ -156,13 +156,13 @@ impl MassBudget {
 #[derive(Debug, Clone, Default)]
 pub struct StepScratch {
     tables: Tables,
-    fields: Fields,
+    rates: Option<cells::CellRates>,
+    shear: Vec<Shear>,
     q_x: Vec<f32>,
     q_y: Vec<f32>,
-    send_x: Vec<f32>,
-    send_y: Vec<f32>,
-    loss_subl: Vec<f32>,
-    loss_melt: Vec<f32>,
+    /// The state at the end of the step, swapped into the [`SnowState`].
+    next_swe: Vec<f32>,
+    next_density: Vec<f32>,
     /// Saltation flux magnitude of the last step, kg m⁻¹ s⁻¹.
     pub q_salt: Vec<f32>,
     /// Suspension flux magnitude of the last step, kg m⁻¹ s⁻¹.
@@ -171,26 +171,27 @@ pub struct StepScratch {
     pub q_subl: Vec<f32>,
 }
 
-/// Per-cell shear state of the current step.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct Fields {
+/// Shear state of a cell in the current step.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Shear {
     /// Wind speed `W` at `z_r`, m s⁻¹.
-    pub speed: Vec<f32>,
-    pub u_star: Vec<f32>,
-    pub u_star_t: Vec<f32>,
+    pub speed: f32,
+    pub u_star: f32,
+    pub u_star_t: f32,
     /// Saltation capacity magnitude `Qs_max`, kg m⁻¹ s⁻¹ (0 where no saltation).
-    pub q_max: Vec<f32>,
+    pub q_max: f32,
 }
 
 /// Sizes a buffer; every pass overwrites all its cells, so no clearing is needed.
-fn resize(v: &mut Vec<f32>, n: usize) {
+fn resize<T: Copy + Default>(v: &mut Vec<T>, n: usize) {
     if v.len() != n {
         v.clear();
-        v.resize(n, 0.0);
+        v.resize(n, T::default());
     }
 }
 
 mod cells;
+mod transfer;
 
 /// Advances the snow cover by `dt_s` seconds under `weather` (Eqs. 5.16-5.17).
 pub fn step(
@@ -216,28 +217,21 @@ pub fn step(
     }
     let n = g.len();
     let initial_mass = state.total_mass(g);
-    let (shear_table, blowing_table) = scratch.tables.update(params, weather);
-    let (shear_table, blowing_table) = (shear_table.clone(), blowing_table.clone());
+    resize(&mut scratch.shear, n);
     for v in [
-        &mut scratch.fields.speed,
-        &mut scratch.fields.u_star,
-        &mut scratch.fields.u_star_t,
-        &mut scratch.fields.q_max,
+        &mut scratch.next_swe,
+        &mut scratch.next_density,
         &mut scratch.q_x,
         &mut scratch.q_y,
-        &mut scratch.send_x,
-        &mut scratch.send_y,
-        &mut scratch.loss_subl,
-        &mut scratch.loss_melt,
         &mut scratch.q_salt,
         &mut scratch.q_susp,
         &mut scratch.q_subl,
     ] {
         resize(v, n);
     }
-    let t_k = weather.air_temperature_k();
+    let (shear_table, blowing_table) = scratch.tables.update(params, weather);
     let ctx = cells::Context {
-        rates: cells::CellRates::new(t_k),
+        rates: cells::CellRates::update(&mut scratch.rates, weather.air_temperature_k()),
         width: g.width(),
         height: g.height(),
         params,
@@ -248,8 +242,8 @@ pub fn step(
             z0_veg: params.vegetation_roughness_m,
             holding_depth: params.vegetation_snow_depth_m,
         },
-        shear_table: &shear_table,
-        blowing_table: &blowing_table,
+        shear_table,
+        blowing_table,
         dt: dt_s as f32,
         inv_dx: (1.0 / g.cell_size_x()) as f32,
         inv_dy: (1.0 / g.cell_size_y()) as f32,
@@ -270,26 +264,45 @@ pub fn step(
         densify: params.phenomena.densification && weather.precipitation_mm_per_h == 0.0,
         max_wind: shear_table.max_wind() as f32,
     };
-    // Pass 1: threshold, shear and capacity per cell.
-    cells::shear_pass(&ctx, state, &mut scratch.fields);
-    // Pass 2: fetch-limited saltation along x and y.
     let relax = |d: f64| ((params.fetch_scale * d / params.fetch_m) as f32).min(1.0);
-    let sweep_inputs = SweepInputs {
-        width: g.width(),
-        height: g.height(),
-        fields: &scratch.fields,
-        wind_u: scene.wind_u,
-        wind_v: scene.wind_v,
-        relax_x: relax(g.cell_size_x()),
-        relax_y: relax(g.cell_size_y()),
+    let along = |d: f64| Sweep {
+        relax: relax(d),
         saturated_inflow: params.saturated_inflow,
     };
-    sweep::sweep_x(&sweep_inputs, &mut scratch.q_x);
-    sweep::sweep_y(&sweep_inputs, &mut scratch.q_y);
-    // Pass 3: suspension, sublimation, melt and the limited outflows.
-    cells::outflow_pass(&ctx, state, scratch);
-    // Pass 4: gather the inflows, update mass and density.
-    let rows = cells::update_pass(&ctx, state, scratch);
+    // Pass 1: threshold, shear and capacity per cell, and the fetch-limited saltation
+    // along x.
+    cells::shear_pass(
+        &ctx,
+        state,
+        &along(g.cell_size_x()),
+        &mut scratch.shear,
+        &mut scratch.q_x,
+    );
+    // Pass 2: fetch-limited saltation along y.
+    let along_y = along(g.cell_size_y());
+    sweep::sweep_y(
+        &along_y,
+        g.width(),
+        &scratch.shear,
+        scene.wind_v,
+        &mut scratch.q_y,
+    );
+    // Passes 3 and 4: suspension, sublimation, melt and the limited outflows; gather the
+    // inflows, update mass and density.
+    let salt = transfer::Saltation {
+        shear: &scratch.shear,
+        q_x: &scratch.q_x,
+        q_y: &scratch.q_y,
+    };
+    let blowing = transfer::Blowing {
+        q_salt: &mut scratch.q_salt,
+        q_susp: &mut scratch.q_susp,
+        q_subl: &mut scratch.q_subl,
+    };
+    let next = (&mut scratch.next_swe[..], &mut scratch.next_density[..]);
+    let rows = transfer::transfer_pass(&ctx, state, salt, blowing, next);
+    std::mem::swap(&mut state.swe, &mut scratch.next_swe);
+    std::mem::swap(&mut state.density, &mut scratch.next_density);
     let area = g.cell_area();
     let mut budget = MassBudget {
         initial_mass,

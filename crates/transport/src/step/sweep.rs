@@ -9,108 +9,135 @@
 //! upwind flux is 0: a divergence line starts a new fetch). At the domain border the
 //! inflow is 0, or the cell's own capacity with `saturated_inflow`.
 //!
-//! Rows are independent along x (rayon over rows); along y, bands of columns are swept
-//! independently (rayon over bands), each in its own buffer, then copied back. Every value
-//! depends only on its upwind chain, so the result is the same for any thread count.
+//! Rows are independent along x (each is swept right after its shear pass); along y, bands
+//! of columns are swept independently (rayon over bands), each in its own buffer, then
+//! copied back. Every value depends only on its upwind chain, so the result is the same for
+//! any thread count.
 
-use super::Fields;
+use super::Shear;
 use crate::physics::saltation::fetch_limited_flux;
 use rayon::prelude::*;
 
-/// Width of the column bands of the y sweep.
-const BAND: usize = 64;
+/// Widest column band of the y sweep: a band row is read as one run of memory, and wide
+/// runs are what the hardware prefetcher follows from row to row.
+const MAX_BAND: usize = 256;
+/// Narrowest column band, for many threads on a narrow grid.
+const MIN_BAND: usize = 64;
 
-/// The fixed inputs of a sweep.
-pub(super) struct SweepInputs<'a> {
-    pub width: usize,
-    pub height: usize,
-    pub fields: &'a Fields,
-    pub wind_u: &'a [f32],
-    pub wind_v: &'a [f32],
-    /// `μ Δx / f` capped at 1, along x and along y.
-    pub relax_x: f32,
-    pub relax_y: f32,
+/// The fixed settings of a sweep along one axis.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Sweep {
+    /// `μ Δ / f` capped at 1, `Δ` the cell size along the axis.
+    pub relax: f32,
     pub saturated_inflow: bool,
 }
 
-/// Capacity component of cell `i` along an axis whose wind component is `comp`.
-#[inline]
-fn capacity_component(fields: &Fields, i: usize, comp: f32, speed: f32) -> f32 {
-    if speed > 0.0 {
-        fields.q_max[i] * comp.abs() / speed
-    } else {
-        0.0
+/// The flux leaving an upwind cell and its `u*`.
+type Upwind = Option<(f32, f32)>;
+
+impl Sweep {
+    /// One step of the recurrence: the flux (magnitude) leaving a cell of wind component
+    /// `comp` along the axis, given its upwind cell (`None` at the border or across a
+    /// change of wind direction).
+    #[inline]
+    fn relax_cell(&self, cell: &Shear, up: Upwind, comp: f32) -> f32 {
+        // The capacity component along the axis: Qs_max |comp| / W.
+        let q_max = if cell.speed > 0.0 {
+            cell.q_max * comp.abs() / cell.speed
+        } else {
+            0.0
+        };
+        let (q_up, u_star_up) = match up {
+            Some(upwind) => upwind,
+            None if self.saturated_inflow => (q_max, cell.u_star),
+            None => (0.0, cell.u_star),
+        };
+        fetch_limited_flux(q_up, q_max, cell.u_star >= u_star_up, self.relax)
     }
 }
 
-/// One step of the recurrence: the flux leaving cell `i` given its upwind cell `up`
-/// (`None` at the border or across a change of wind direction).
-#[inline]
-fn relax_cell(inp: &SweepInputs, i: usize, up: Option<(usize, f32)>, comp: f32, relax: f32) -> f32 {
-    let f = inp.fields;
-    let q_max = capacity_component(f, i, comp, f.speed[i]);
-    let (q_up, u_star_up) = match up {
-        Some((j, qj)) => (qj, f.u_star[j]),
-        None if inp.saturated_inflow => (q_max, f.u_star[i]),
-        None => (0.0, f.u_star[i]),
-    };
-    fetch_limited_flux(q_up, q_max, f.u_star[i] >= u_star_up, relax)
+/// Signed saltation flux along a line of cells (positive towards increasing index) whose
+/// wind component along the line is `comp`, into `q`. The cells blowing towards increasing
+/// index are swept from the start and the others from the far end in the same loop: the
+/// two recurrences touch different cells, and interleaving them lets the processor run
+/// both dependency chains at once.
+pub(super) fn sweep_line(sweep: &Sweep, shear: &[Shear], comp: &[f32], q: &mut [f32]) {
+    let n = q.len();
+    let (shear, comp) = (&shear[..n], &comp[..n]);
+    let (mut forward, mut backward): (Upwind, Upwind) = (None, None);
+    for i in 0..n {
+        let (cell, c) = (&shear[i], comp[i]);
+        forward = if c > 0.0 {
+            let flux = sweep.relax_cell(cell, forward, c);
+            q[i] = flux;
+            Some((flux, cell.u_star))
+        } else {
+            None
+        };
+        let j = n - 1 - i;
+        let (cell, c) = (&shear[j], comp[j]);
+        backward = if c < 0.0 {
+            let flux = sweep.relax_cell(cell, backward, c);
+            q[j] = -flux;
+            Some((flux, cell.u_star))
+        } else {
+            if c == 0.0 {
+                q[j] = 0.0;
+            }
+            None
+        };
+    }
 }
 
-/// Signed saltation flux along x (east positive), kg m⁻¹ s⁻¹, into `q_x`.
-pub(super) fn sweep_x(inp: &SweepInputs, q_x: &mut [f32]) {
-    let w = inp.width;
-    q_x.par_chunks_mut(w).enumerate().for_each(|(r, row)| {
-        let base = r * w;
-        let u = &inp.wind_u[base..base + w];
-        // Eastward cells, west to east.
-        for c in 0..w {
-            if u[c] > 0.0 {
-                let up = (c > 0 && u[c - 1] > 0.0).then(|| (base + c - 1, row[c - 1]));
-                row[c] = relax_cell(inp, base + c, up, u[c], inp.relax_x);
-            }
-        }
-        // Westward cells, east to west (stored negative).
-        for c in (0..w).rev() {
-            if u[c] < 0.0 {
-                let up = (c + 1 < w && u[c + 1] < 0.0).then(|| (base + c + 1, -row[c + 1]));
-                row[c] = -relax_cell(inp, base + c, up, u[c], inp.relax_x);
-            } else if u[c] == 0.0 {
-                row[c] = 0.0;
-            }
-        }
-    });
-}
-
-/// Signed saltation flux along y (north positive), kg m⁻¹ s⁻¹, into `q_y`. Row 0 is north.
-pub(super) fn sweep_y(inp: &SweepInputs, q_y: &mut [f32]) {
-    let (w, h) = (inp.width, inp.height);
-    let bands: Vec<Vec<f32>> = (0..w.div_ceil(BAND))
+/// Signed saltation flux along y (north positive), kg m⁻¹ s⁻¹, into `q_y`, on a grid
+/// `width` cells wide. Row 0 is north.
+pub(super) fn sweep_y(
+    sweep: &Sweep,
+    width: usize,
+    shear: &[Shear],
+    wind_v: &[f32],
+    q_y: &mut [f32],
+) {
+    let w = width;
+    let h = shear.len() / w;
+    // About two bands per thread; the width does not change the result.
+    let band = w
+        .div_ceil(2 * rayon::current_num_threads())
+        .clamp(MIN_BAND, MAX_BAND);
+    let bands: Vec<Vec<f32>> = (0..w.div_ceil(band))
         .into_par_iter()
         .map(|b| {
-            let c0 = b * BAND;
-            let bw = BAND.min(w - c0);
+            let c0 = b * band;
+            let bw = band.min(w - c0);
             let mut buf = vec![0.0f32; bw * h];
-            let v = |r: usize, k: usize| inp.wind_v[r * w + c0 + k];
-            // Southward cells (v < 0), north to south: upwind is row − 1.
-            for r in 0..h {
-                for k in 0..bw {
-                    if v(r, k) < 0.0 {
-                        let up = (r > 0 && v(r - 1, k) < 0.0)
-                            .then(|| ((r - 1) * w + c0 + k, -buf[(r - 1) * bw + k]));
-                        buf[r * bw + k] =
-                            -relax_cell(inp, r * w + c0 + k, up, v(r, k), inp.relax_y);
-                    }
+            let band_row = |r: usize| {
+                let cells = r * w + c0..r * w + c0 + bw;
+                shear[cells.clone()].iter().zip(&wind_v[cells])
+            };
+            // Southward cells (v < 0), north to south: upwind is row − 1 (stored negative).
+            let mut up: [Upwind; MAX_BAND] = [None; MAX_BAND];
+            for (r, q_row) in buf.chunks_exact_mut(bw).enumerate() {
+                for ((up, (cell, &v)), q) in up.iter_mut().zip(band_row(r)).zip(q_row) {
+                    *up = if v < 0.0 {
+                        let flux = sweep.relax_cell(cell, *up, v);
+                        *q = -flux;
+                        Some((flux, cell.u_star))
+                    } else {
+                        None
+                    };
                 }
             }
             // Northward cells (v > 0), south to north: upwind is row + 1.
-            for r in (0..h).rev() {
-                for k in 0..bw {
-                    if v(r, k) > 0.0 {
-                        let up = (r + 1 < h && v(r + 1, k) > 0.0)
-                            .then(|| ((r + 1) * w + c0 + k, buf[(r + 1) * bw + k]));
-                        buf[r * bw + k] = relax_cell(inp, r * w + c0 + k, up, v(r, k), inp.relax_y);
-                    }
+            let mut up: [Upwind; MAX_BAND] = [None; MAX_BAND];
+            for (r, q_row) in buf.chunks_exact_mut(bw).enumerate().rev() {
+                for ((up, (cell, &v)), q) in up.iter_mut().zip(band_row(r)).zip(q_row) {
+                    *up = if v > 0.0 {
+                        let flux = sweep.relax_cell(cell, *up, v);
+                        *q = flux;
+                        Some((flux, cell.u_star))
+                    } else {
+                        None
+                    };
                 }
             }
             buf
@@ -118,8 +145,8 @@ pub(super) fn sweep_y(inp: &SweepInputs, q_y: &mut [f32]) {
         .collect();
     q_y.par_chunks_mut(w).enumerate().for_each(|(r, row)| {
         for (b, buf) in bands.iter().enumerate() {
-            let c0 = b * BAND;
-            let bw = BAND.min(w - c0);
+            let c0 = b * band;
+            let bw = band.min(w - c0);
             row[c0..c0 + bw].copy_from_slice(&buf[r * bw..(r + 1) * bw]);
         }
     });
