@@ -33,6 +33,9 @@ pub enum KernelError {
     /// An avalanche step failed.
     #[error(transparent)]
     Avalanche(#[from] snowscape_avalanche::AvalancheError),
+    /// A physical-transport stage failed.
+    #[error(transparent)]
+    Transport(Box<snowscape_transport::TransportError>),
     /// A file-system operation (temporary directory) failed.
     #[error("{what}: {source}")]
     Io {

@@ -179,6 +179,9 @@ mod tests {
             "terrain/resample_bilinear",
             "io/geotiff_round_trip",
             "render/preview",
+            "transport/step",
+            "transport/wind_iteration",
+            "transport/flakes",
         ] {
             assert!(
                 names.contains(&expected),
@@ -207,7 +210,10 @@ mod tests {
             .filter(|k| k.bytes_per_cell == 0.0)
             .map(|k| k.name.as_str())
             .collect();
-        assert_eq!(unmodelled, ["season/100_days_with_avalanches"]);
+        assert_eq!(
+            unmodelled,
+            ["season/100_days_with_avalanches", "transport/flakes"]
+        );
         assert_eq!(report.machine.threads, 2);
         assert_eq!(report.size, 64);
         assert!(lines.len() > report.kernels.len());

@@ -7,12 +7,14 @@ mod io;
 mod render;
 mod season;
 mod terrain;
+mod transport;
 
 pub use avalanche::avalanche_kernels;
 pub use io::io_kernels;
 pub use render::render_kernels;
 pub use season::season_kernels;
 pub use terrain::{sample_terrain, terrain_kernels};
+pub use transport::transport_kernels;
 
 use crate::kernel::{Kernel, KernelError};
 
@@ -24,5 +26,6 @@ pub fn all_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
     kernels.extend(render_kernels(&terrain)?);
     kernels.extend(season_kernels(&terrain)?);
     kernels.extend(avalanche_kernels(size)?);
+    kernels.extend(transport_kernels(&terrain, size)?);
     Ok(kernels)
 }
