@@ -294,7 +294,7 @@ pub fn run_command(args: &TransportArgs, global: &GlobalArgs) -> Result<(), Fail
             args.out.display(),
             started.elapsed().as_secs_f64(),
             out.steps,
-            out.wind_report.max_divergence,
+            out.wind_report.mean.max_divergence,
             b.closure_error,
             b.final_mass
         );
