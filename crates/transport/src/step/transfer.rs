@@ -38,6 +38,9 @@ pub(super) struct RowBudget {
     pub sublimation: f64,
     pub melt: f64,
     pub transported: f64,
+    /// Stored snow at the start and at the end of the step.
+    pub initial_mass: f64,
+    pub final_mass: f64,
     pub non_finite: Option<(usize, usize, f32)>,
 }
 
@@ -284,6 +287,8 @@ fn update_row(
             b.non_finite = Some((c, r, new_mass));
         }
         (next_swe[c], kept_row[c], drifted_row[c]) = (new_mass, kept, drifted);
+        b.initial_mass += f64::from(swe[c]);
+        b.final_mass += f64::from(new_mass);
         b.precipitation += f64::from(snowfall);
         b.border_in += f64::from(inflow);
         b.border_out += f64::from(leaving);
