@@ -37,6 +37,8 @@ pub(crate) struct Axis {
     inv_step: f32,
     /// Index of the last sample, `n − 1`.
     last: f32,
+    /// Index of the last segment, `n − 2`.
+    last_segment: u32,
 }
 
 /// A point on an [`Axis`]: the segment it falls in and its weight towards the segment's end.
@@ -46,12 +48,29 @@ pub(crate) struct Point {
     weight: f32,
 }
 
+/// `t` rounded towards zero, for `0 ≤ t < 2³¹`; NaN gives `2³¹`. One instruction on
+/// x86-64, where `as` would add the saturation checks it does not need here.
+#[inline]
+fn truncate(t: f32) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvttss_si32, _mm_set_ss};
+        // SAFETY: SSE is part of the x86-64 baseline, so these instructions always exist.
+        unsafe { _mm_cvttss_si32(_mm_set_ss(t)) as u32 }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        if t.is_nan() { 1 << 31 } else { t as u32 }
+    }
+}
+
 impl Axis {
     fn new(lo: f64, step: f64, n: usize) -> Self {
         Self {
             lo: lo as f32,
             inv_step: (1.0 / step) as f32,
             last: (n - 1) as f32,
+            last_segment: (n - 2) as u32,
         }
     }
 
@@ -61,15 +80,11 @@ impl Axis {
         let t = (x - self.lo) * self.inv_step;
         let t = if t < 0.0 { 0.0 } else { t };
         let t = if t > self.last { self.last } else { t };
-        // The last sample falls at the end of the last segment.
-        let start = if t > self.last - 1.0 {
-            self.last - 1.0
-        } else {
-            t
-        };
-        let segment = start as u32 as usize;
+        // The last sample falls at the end of the last segment, and so does NaN (whose
+        // weight stays NaN).
+        let segment = truncate(t).min(self.last_segment);
         Point {
-            segment,
+            segment: segment as usize,
             weight: t - segment as f32,
         }
     }
