@@ -9,7 +9,8 @@
 //!   sublimation integrals per unit saltation flux (Eqs. 5.40-5.47) depend on `u*` and the
 //!   weather alone: `Qsusp = Qsalt / u_p · S(u*)` and
 //!   `Qsubl = Qsalt / u_p · (V(u*) + ψs(u*, u*t))` with `S = ∫(φt/φr) u dz / h*`,
-//!   `V = ∫ψt (φt/φr) dz / h*`; `ψs` (Annex I at `h*/2`) is tabulated over `(u*, u*t)`.
+//!   `V = ∫ψt (φt/φr) dz / h*`; `V + ψs` (`ψs`: Annex I at `h*/2`) is tabulated over
+//!   `(u*, u*t)` on the `u*` sampling of `S`, so one location of `u*` serves both.
 //!
 //! Tables are rebuilt only when the parameters or the weather they depend on change.
 //! Linear interpolation keeps them within 0.5 % of the direct evaluation (tested).
@@ -37,6 +38,8 @@ pub(crate) struct Axis {
     inv_step: f32,
     /// Index of the last sample, `n − 1`.
     last: f32,
+    /// Index of the last segment, `n − 2`.
+    last_segment: u32,
 }
 
 /// A point on an [`Axis`]: the segment it falls in and its weight towards the segment's end.
@@ -46,12 +49,29 @@ pub(crate) struct Point {
     weight: f32,
 }
 
+/// `t` rounded towards zero, for `0 ≤ t < 2³¹`; NaN gives `2³¹`. One instruction on
+/// x86-64, where `as` would add the saturation checks it does not need here.
+#[inline]
+fn truncate(t: f32) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvttss_si32, _mm_set_ss};
+        // SAFETY: SSE is part of the x86-64 baseline, so these instructions always exist.
+        unsafe { _mm_cvttss_si32(_mm_set_ss(t)) as u32 }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        if t.is_nan() { 1 << 31 } else { t as u32 }
+    }
+}
+
 impl Axis {
     fn new(lo: f64, step: f64, n: usize) -> Self {
         Self {
             lo: lo as f32,
             inv_step: (1.0 / step) as f32,
             last: (n - 1) as f32,
+            last_segment: (n - 2) as u32,
         }
     }
 
@@ -61,15 +81,11 @@ impl Axis {
         let t = (x - self.lo) * self.inv_step;
         let t = if t < 0.0 { 0.0 } else { t };
         let t = if t > self.last { self.last } else { t };
-        // The last sample falls at the end of the last segment.
-        let start = if t > self.last - 1.0 {
-            self.last - 1.0
-        } else {
-            t
-        };
-        let segment = start as u32 as usize;
+        // The last sample falls at the end of the last segment, and so does NaN (whose
+        // weight stays NaN).
+        let segment = truncate(t).min(self.last_segment);
         Point {
-            segment,
+            segment: segment as usize,
             weight: t - segment as f32,
         }
     }
@@ -199,42 +215,49 @@ pub fn atmosphere(params: &TransportParams, weather: &Weather) -> Atmosphere {
     }
 }
 
-/// Suspension and sublimation per unit saltation flux, for one weather period.
+/// Suspension and sublimation per unit saltation flux, for one weather period, on one
+/// `u*` sampling, so a lookup locates `u*` once.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BlowingSnowTable {
     key: (Atmosphere, f64, usize, f64),
     suspension: Table1,
-    sublimation: Table1,
-    /// `ψs` over `(u*, u*t)`, one row per sampled `u*t`.
-    saltation_loss: TableRows,
+    /// `V(u*) + ψs(u*, u*t)` over `(u*, u*t)`, one row per sampled `u*t`, on the sampling
+    /// of `suspension`.
+    sublimation: TableRows,
     u_star_t_axis: Axis,
 }
 
 impl BlowingSnowTable {
-    /// Tabulates `S(u*)`, `V(u*)` and `ψs(u*, u*t)` (Eqs. 5.40-5.47, Annex I).
+    /// Tabulates `S(u*)` and `V(u*) + ψs(u*, u*t)` (Eqs. 5.40-5.47, Annex I).
     pub fn new(params: &TransportParams, weather: &Weather, max_u_star: f64) -> Self {
         let atm = atmosphere(params, weather);
         let s = params.settling_velocity;
         let n = params.integration_samples;
         let hi = max_u_star.max(MIN_U_STAR + 0.1);
-        let profile = |u: f64| blowing_snow_profile(u, s, n, &atm);
-        let suspension = Table1::new(MIN_U_STAR, hi, PROFILE_SAMPLES, |u| {
-            profile(u).suspension / saltation_height(u)
-        });
-        let sublimation = Table1::new(MIN_U_STAR, hi, PROFILE_SAMPLES, |u| {
-            profile(u).sublimation / saltation_height(u)
-        });
+        let step = (hi - MIN_U_STAR) / (PROFILE_SAMPLES - 1) as f64;
+        let profiles: Vec<_> = (0..PROFILE_SAMPLES)
+            .map(|i| {
+                let u = MIN_U_STAR + i as f64 * step;
+                let p = blowing_snow_profile(u, s, n, &atm);
+                let h = saltation_height(u);
+                (p.suspension / h, p.sublimation / h)
+            })
+            .collect();
+        // The samples of `Table1::new` and `TableRows::new` fall at these same `u*`.
+        let sample = |u: f64| (((u - MIN_U_STAR) / step).round() as usize).min(PROFILE_SAMPLES - 1);
+        let suspension = Table1::new(MIN_U_STAR, hi, PROFILE_SAMPLES, |u| profiles[sample(u)].0);
         let t_step = MAX_U_STAR_T / (THRESHOLD_SAMPLES - 1) as f64;
-        let loss_samples = PROFILE_SAMPLES / 4;
-        let saltation_loss =
-            TableRows::new(MIN_U_STAR, hi, loss_samples, THRESHOLD_SAMPLES, |k, u| {
-                saltation_layer_loss_rate(u, k as f64 * t_step, &atm)
-            });
+        let sublimation = TableRows::new(
+            MIN_U_STAR,
+            hi,
+            PROFILE_SAMPLES,
+            THRESHOLD_SAMPLES,
+            |k, u| profiles[sample(u)].1 + saltation_layer_loss_rate(u, k as f64 * t_step, &atm),
+        );
         Self {
             key: (atm, s, n, hi),
             suspension,
             sublimation,
-            saltation_loss,
             u_star_t_axis: Axis::new(0.0, t_step, THRESHOLD_SAMPLES),
         }
     }
@@ -245,13 +268,9 @@ impl BlowingSnowTable {
     pub fn per_flux(&self, u_star: f32, u_star_t: f32) -> (f32, f32) {
         let p = self.suspension.axis().locate(u_star);
         let t = self.u_star_t_axis.locate(u_star_t);
-        let q = self.saltation_loss.axis.locate(u_star);
-        let a = self.saltation_loss.at(t.segment, q);
-        let b = self.saltation_loss.at(t.segment + 1, q);
-        (
-            self.suspension.at_point(p),
-            self.sublimation.at_point(p) + a + t.weight * (b - a),
-        )
+        let a = self.sublimation.at(t.segment, p);
+        let b = self.sublimation.at(t.segment + 1, p);
+        (self.suspension.at_point(p), a + t.weight * (b - a))
     }
 
     fn fresh_for(&self, params: &TransportParams, weather: &Weather, max_u_star: f64) -> bool {

@@ -216,7 +216,6 @@ pub fn step(
         check_len("precipitation_ratio", p, g)?;
     }
     let n = g.len();
-    let initial_mass = state.total_mass(g);
     resize(&mut scratch.shear, n);
     for v in [
         &mut scratch.next_swe,
@@ -304,10 +303,7 @@ pub fn step(
     std::mem::swap(&mut state.swe, &mut scratch.next_swe);
     std::mem::swap(&mut state.density, &mut scratch.next_density);
     let area = g.cell_area();
-    let mut budget = MassBudget {
-        initial_mass,
-        ..Default::default()
-    };
+    let mut budget = MassBudget::default();
     for r in &rows {
         if let Some((col, row, value)) = r.non_finite {
             return Err(TransportError::NonFinite {
@@ -324,8 +320,12 @@ pub fn step(
         budget.sublimation_out += r.sublimation * area;
         budget.melt_out += r.melt * area;
         budget.transported += r.transported * area;
+        budget.initial_mass += r.initial_mass;
+        budget.final_mass += r.final_mass;
     }
-    budget.final_mass = state.total_mass(g);
+    // As `SnowState::total_mass`: summed per row, then in row order, then times the area.
+    budget.initial_mass *= area;
+    budget.final_mass *= area;
     budget.closure_error = budget.final_mass
         - budget.initial_mass
         - (budget.precipitation_in + budget.border_in

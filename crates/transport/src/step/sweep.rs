@@ -10,8 +10,8 @@
 //! inflow is 0, or the cell's own capacity with `saturated_inflow`.
 //!
 //! Rows are independent along x (each is swept right after its shear pass); along y, bands
-//! of columns are swept independently (rayon over bands), each in its own buffer, then
-//! copied back. Every value depends only on its upwind chain, so the result is the same for
+//! of columns are swept independently (rayon over bands), each writing its share of every
+//! row in place. Every value depends only on its upwind chain, so the result is the same for
 //! any thread count.
 
 use super::Shear;
@@ -104,33 +104,42 @@ pub(super) fn sweep_y(
     let band = w
         .div_ceil(2 * rayon::current_num_threads())
         .clamp(MIN_BAND, MAX_BAND);
-    let bands: Vec<Vec<f32>> = (0..w.div_ceil(band))
+    // Each band's share of every row of `q_y`, so the bands write their cells in place.
+    let n_bands = w.div_ceil(band);
+    let mut bands: Vec<Vec<&mut [f32]>> = (0..n_bands).map(|_| Vec::with_capacity(h)).collect();
+    for row in q_y.chunks_mut(w) {
+        for (cells, rows) in row.chunks_mut(band).zip(&mut bands) {
+            rows.push(cells);
+        }
+    }
+    bands
         .into_par_iter()
-        .map(|b| {
-            let c0 = b * band;
-            let bw = band.min(w - c0);
-            let mut buf = vec![0.0f32; bw * h];
+        .enumerate()
+        .for_each(|(b, mut q_rows)| {
+            let (c0, bw) = (b * band, band.min(w - b * band));
             let band_row = |r: usize| {
                 let cells = r * w + c0..r * w + c0 + bw;
                 shear[cells.clone()].iter().zip(&wind_v[cells])
             };
-            // Southward cells (v < 0), north to south: upwind is row − 1 (stored negative).
+            // Southward cells (v < 0), north to south: upwind is row − 1 (stored negative);
+            // the others get 0 until the northward pass.
             let mut up: [Upwind; MAX_BAND] = [None; MAX_BAND];
-            for (r, q_row) in buf.chunks_exact_mut(bw).enumerate() {
-                for ((up, (cell, &v)), q) in up.iter_mut().zip(band_row(r)).zip(q_row) {
+            for (r, q_row) in q_rows.iter_mut().enumerate() {
+                for ((up, (cell, &v)), q) in up.iter_mut().zip(band_row(r)).zip(q_row.iter_mut()) {
                     *up = if v < 0.0 {
                         let flux = sweep.relax_cell(cell, *up, v);
                         *q = -flux;
                         Some((flux, cell.u_star))
                     } else {
+                        *q = 0.0;
                         None
                     };
                 }
             }
             // Northward cells (v > 0), south to north: upwind is row + 1.
             let mut up: [Upwind; MAX_BAND] = [None; MAX_BAND];
-            for (r, q_row) in buf.chunks_exact_mut(bw).enumerate().rev() {
-                for ((up, (cell, &v)), q) in up.iter_mut().zip(band_row(r)).zip(q_row) {
+            for (r, q_row) in q_rows.iter_mut().enumerate().rev() {
+                for ((up, (cell, &v)), q) in up.iter_mut().zip(band_row(r)).zip(q_row.iter_mut()) {
                     *up = if v > 0.0 {
                         let flux = sweep.relax_cell(cell, *up, v);
                         *q = flux;
@@ -140,14 +149,5 @@ pub(super) fn sweep_y(
                     };
                 }
             }
-            buf
-        })
-        .collect();
-    q_y.par_chunks_mut(w).enumerate().for_each(|(r, row)| {
-        for (b, buf) in bands.iter().enumerate() {
-            let c0 = b * band;
-            let bw = band.min(w - c0);
-            row[c0..c0 + bw].copy_from_slice(&buf[r * bw..(r + 1) * bw]);
-        }
-    });
+        });
 }

@@ -16,20 +16,36 @@ use rayon::prelude::*;
 /// Rows per rayon task.
 const BLOCK_ROWS: usize = 32;
 
-/// What a cell sends and loses in the step, kg m⁻², after the positivity limiter.
-#[derive(Debug, Clone, Copy, Default)]
-struct Outflow {
+/// What the cells of one row send and lose in the step, kg m⁻², after the positivity
+/// limiter, one array per quantity so the loops over them vectorise.
+#[derive(Debug, Clone, Default)]
+struct Outflows {
     /// Sent east (positive) or west (negative).
-    send_x: f32,
+    send_x: Vec<f32>,
     /// Sent north (positive) or south (negative).
-    send_y: f32,
+    send_y: Vec<f32>,
+    /// Everything leaving the cell: both sends, sublimation and melt.
+    lost: Vec<f32>,
     /// Lost to sublimation.
-    sublimation: f32,
+    sublimation: Vec<f32>,
     /// Lost to melt.
-    melt: f32,
+    melt: Vec<f32>,
 }
 
-/// Budget of one row, kg m⁻² summed over its cells.
+impl Outflows {
+    fn new(w: usize) -> Self {
+        let row = vec![0.0; w];
+        Self {
+            send_x: row.clone(),
+            send_y: row.clone(),
+            lost: row.clone(),
+            sublimation: row.clone(),
+            melt: row,
+        }
+    }
+}
+
+/// Budget of one row, kg m⁻² summed over its cells in column order.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct RowBudget {
     pub precipitation: f64,
@@ -38,6 +54,9 @@ pub(super) struct RowBudget {
     pub sublimation: f64,
     pub melt: f64,
     pub transported: f64,
+    /// Stored snow at the start and at the end of the step.
+    pub initial_mass: f64,
+    pub final_mass: f64,
     pub non_finite: Option<(usize, usize, f32)>,
 }
 
@@ -55,6 +74,18 @@ pub(super) struct Blowing<'a> {
     pub q_salt: &'a mut [f32],
     pub q_susp: &'a mut [f32],
     pub q_subl: &'a mut [f32],
+}
+
+/// The rows a block works in: the three-row ring of outflows and the update's rows.
+struct Rows {
+    ring: [Outflows; 3],
+    /// Sent outflows of the missing row beyond the northern or southern border.
+    none: Vec<f32>,
+    /// Snowfall, received mass, kept and drifted mass of the row being updated.
+    snowfall: Vec<f32>,
+    gain: Vec<f32>,
+    kept: Vec<f32>,
+    drifted: Vec<f32>,
 }
 
 /// Passes 3 and 4: writes the state at the end of the step into `next` (water equivalent,
@@ -78,17 +109,24 @@ pub(super) fn transfer_pass(
         .map(|(b, ((((swe, rho), q_salt), q_susp), q_subl))| {
             let r0 = b * BLOCK_ROWS;
             let r1 = r0 + swe.len() / w;
-            let mut ring = vec![Outflow::default(); 3 * w];
-            let slot = |r: usize| (r % 3) * w..(r % 3 + 1) * w;
+            let row = vec![0.0f32; w];
+            let mut rows = Rows {
+                ring: [0, 1, 2].map(|_| Outflows::new(w)),
+                none: row.clone(),
+                snowfall: row.clone(),
+                gain: row.clone(),
+                kept: row.clone(),
+                drifted: row,
+            };
             // The published results of the rows on either side go to `halo`.
             let mut halo = vec![0.0f32; 3 * w];
-            let mut halo_row = |ring: &mut [Outflow], k: usize| {
+            let mut halo_row = |ring: &mut [Outflows; 3], k: usize| {
                 let [a, b, c] = [0, 1, 2].map(|j| j * w..(j + 1) * w);
                 let [sa, su, sb] = halo.get_disjoint_mut([a, b, c]).expect("disjoint rows");
-                outflow_row(ctx, state, salt, k, &mut ring[slot(k)], [sa, su, sb]);
+                outflow_row(ctx, state, salt, k, &mut ring[k % 3], [sa, su, sb]);
             };
             if r0 > 0 {
-                halo_row(&mut ring, r0 - 1);
+                halo_row(&mut rows.ring, r0 - 1);
             }
             // Cells of row `k` in the block's chunks.
             let local = |k: usize| (k - r0) * w..(k - r0 + 1) * w;
@@ -97,42 +135,44 @@ pub(super) fn transfer_pass(
                 &mut q_susp[local(r0)],
                 &mut q_subl[local(r0)],
             ];
-            outflow_row(ctx, state, salt, r0, &mut ring[slot(r0)], own);
-            let mut gathered = vec![0.0f32; 2 * w];
-            let mut rows = Vec::with_capacity(r1 - r0);
+            let mut budget = outflow_row(ctx, state, salt, r0, &mut rows.ring[r0 % 3], own);
+            let mut budgets = Vec::with_capacity(r1 - r0);
             for r in r0..r1 {
                 let k = r + 1;
+                let mut next_budget = RowBudget::default();
                 if k < r1 {
                     let own = [
                         &mut q_salt[local(k)],
                         &mut q_susp[local(k)],
                         &mut q_subl[local(k)],
                     ];
-                    outflow_row(ctx, state, salt, k, &mut ring[slot(k)], own);
+                    next_budget = outflow_row(ctx, state, salt, k, &mut rows.ring[k % 3], own);
                 } else if k < h {
-                    halo_row(&mut ring, k);
+                    halo_row(&mut rows.ring, k);
                 }
                 let next = (&mut swe[local(r)], &mut rho[local(r)]);
-                let g = &mut gathered;
-                rows.push(update_row(ctx, state, salt.shear, &ring, r, next, g));
+                update_row(ctx, state, salt.shear, &mut rows, r, next, &mut budget);
+                budgets.push(budget);
+                budget = next_budget;
             }
-            rows
+            budgets
         })
         .collect();
     blocks.into_iter().flatten().collect()
 }
 
 /// The outflows of row `r` into `out`, and its saltation flux magnitude, suspension flux
-/// and sublimation rate into `blowing`. Two loops with short bodies, so the processor
-/// overlaps the table lookups of many cells.
+/// and sublimation rate into `blowing`; returns the row's budget of sublimation, melt and
+/// transport. Short loops: the table lookups apart, so the processor overlaps many cells,
+/// the limiter branch-free so it vectorises, the sums in column order.
 fn outflow_row(
     ctx: &Context,
     state: &SnowState,
     salt: Saltation,
     r: usize,
-    out: &mut [Outflow],
+    out: &mut Outflows,
     [q_salt, q_susp, q_subl]: [&mut [f32]; 3],
-) {
+) -> RowBudget {
     let w = ctx.width;
     let on = ctx.params.phenomena;
     let holding = ctx.params.vegetation_snow_depth_m as f32;
@@ -163,32 +203,34 @@ fn outflow_row(
         }
         (*sa, *su, *sb) = (q_salt, q_susp, q_subl);
     }
-    let inputs = shear
-        .iter()
-        .zip(q_x.iter().zip(q_y))
-        .zip(q_susp.iter().zip(q_subl.iter()))
-        .zip(
-            ctx.scene.wind_u[cells.clone()]
-                .iter()
-                .zip(&ctx.scene.wind_v[cells.clone()]),
-        )
-        .zip(state.swe[cells.clone()].iter().zip(&state.density[cells]));
-    for (o, ((((s, (&q_x, &q_y)), (&q_susp, &q_subl)), (&u, &v)), (&mass, &rho))) in
-        out.iter_mut().zip(inputs)
-    {
-        let (susp_x, susp_y) = if on.suspension && s.speed > 0.0 {
-            (q_susp * u / s.speed, q_susp * v / s.speed)
+    let (wind_u, wind_v) = (
+        &ctx.scene.wind_u[cells.clone()],
+        &ctx.scene.wind_v[cells.clone()],
+    );
+    let (swe, density) = (&state.swe[cells.clone()], &state.density[cells]);
+    let (q_susp, q_subl) = (&q_susp[..w], &q_subl[..w]);
+    let Outflows {
+        send_x,
+        send_y,
+        lost,
+        sublimation,
+        melt,
+    } = out;
+    let (send_x, send_y, lost) = (&mut send_x[..w], &mut send_y[..w], &mut lost[..w]);
+    let (sublimation, melt) = (&mut sublimation[..w], &mut melt[..w]);
+    let (suspension, sublimates) = (on.suspension, on.sublimation);
+    for c in 0..w {
+        let (speed, u, v) = (shear[c].speed, wind_u[c], wind_v[c]);
+        let (susp_x, susp_y) = if suspension && speed > 0.0 {
+            (q_susp[c] * u / speed, q_susp[c] * v / speed)
         } else {
             (0.0, 0.0)
         };
-        let ox = step_x * (saltation * q_x + susp_x);
-        let oy = step_y * (saltation * q_y + susp_y);
-        let subl = if on.sublimation {
-            -ctx.dt * q_subl
-        } else {
-            0.0
-        };
+        let ox = step_x * (saltation * q_x[c] + susp_x);
+        let oy = step_y * (saltation * q_y[c] + susp_y);
+        let subl = if sublimates { -ctx.dt * q_subl[c] } else { 0.0 };
         let wanted = ox.abs() + oy.abs() + subl;
+        let (mass, rho) = (swe[c], density[c]);
         let erodible = (mass - holding * rho).max(0.0);
         let scale = if wanted > erodible {
             erodible / wanted
@@ -196,67 +238,102 @@ fn outflow_row(
             1.0
         };
         let left = (mass - scale * wanted).max(0.0);
-        *o = Outflow {
-            send_x: scale * ox,
-            send_y: scale * oy,
-            sublimation: scale * subl,
-            melt: (ctx.melt_rate * rho * ctx.dt).min(left),
-        };
+        (send_x[c], send_y[c]) = (scale * ox, scale * oy);
+        sublimation[c] = scale * subl;
+        melt[c] = (ctx.melt_rate * rho * ctx.dt).min(left);
+        lost[c] = send_x[c].abs() + send_y[c].abs() + sublimation[c] + melt[c];
     }
+    let mut b = RowBudget::default();
+    for c in 0..w {
+        b.sublimation += f64::from(sublimation[c]);
+        b.melt += f64::from(melt[c]);
+        b.transported += f64::from(send_x[c].abs() + send_y[c].abs());
+    }
+    b
 }
 
-/// Updates row `r` from the outflows of rows `r − 1 ..= r + 1` in `ring` into `next`: the
-/// mass first, keeping the kept and drifted masses in `gathered` (two rows), then the
-/// density, in a loop of its own for its table lookups and divisions.
+/// What a cell receives from its four neighbours' sends (0 where a neighbour is missing).
+#[inline]
+fn received(west: f32, east: f32, north: f32, south: f32) -> f32 {
+    let mut gain = 0.0f32;
+    gain += if west > 0.0 { west } else { 0.0 };
+    gain -= if east < 0.0 { east } else { 0.0 };
+    gain -= if north < 0.0 { north } else { 0.0 };
+    gain + if south > 0.0 { south } else { 0.0 }
+}
+
+/// Updates row `r` from the outflows of rows `r − 1 ..= r + 1` in `rows.ring` into `next`
+/// and completes its budget `b`: the mass first, branch-free over the row, then what
+/// enters or leaves across the grid border in the border cells, then the density, in a
+/// loop of its own for its table lookups and divisions.
 fn update_row(
     ctx: &Context,
     state: &SnowState,
     shear: &[Shear],
-    ring: &[Outflow],
+    rows: &mut Rows,
     r: usize,
     (next_swe, next_rho): (&mut [f32], &mut [f32]),
-    gathered: &mut [f32],
-) -> RowBudget {
+    b: &mut RowBudget,
+) {
     let (w, h) = (ctx.width, ctx.height);
     let on = ctx.params.phenomena;
     let border_inflow = ctx.params.saturated_inflow && on.saltation;
     let scene = ctx.scene;
-    let slot = |k: usize| &ring[(k % 3) * w..(k % 3 + 1) * w];
-    let row = slot(r);
-    // The rows to the north (r − 1) and to the south (r + 1).
-    let north = (r > 0).then(|| slot(r - 1));
-    let south = (r + 1 < h).then(|| slot(r + 1));
+    let Rows {
+        ring,
+        none,
+        snowfall,
+        gain,
+        kept,
+        drifted,
+    } = rows;
+    let row = &ring[r % 3];
+    // The sends of the rows to the north (r − 1) and to the south (r + 1).
+    let north = if r > 0 {
+        &ring[(r - 1) % 3].send_y
+    } else {
+        &*none
+    };
+    let south = if r + 1 < h {
+        &ring[(r + 1) % 3].send_y
+    } else {
+        &*none
+    };
     let cells = r * w..(r + 1) * w;
     let shear = &shear[cells.clone()];
     let (wind_u, wind_v) = (&scene.wind_u[cells.clone()], &scene.wind_v[cells.clone()]);
     let (swe, density) = (&state.swe[cells.clone()], &state.density[cells.clone()]);
-    let ratio = scene.precipitation_ratio.map(|p| &p[cells]);
-    let snowfall = |c: usize| ctx.snowfall * ratio.map_or(1.0, |p| p[c].max(0.0));
-    let (kept_row, drifted_row) = gathered.split_at_mut(w);
-    let mut b = RowBudget::default();
+    let (send_x, send_y, lost) = (&row.send_x[..w], &row.send_y[..w], &row.lost[..w]);
+    let (north, south) = (&north[..w], &south[..w]);
+    let (snowfall, gain) = (&mut snowfall[..w], &mut gain[..w]);
+    let (kept, drifted, next_swe) = (&mut kept[..w], &mut drifted[..w], &mut next_swe[..w]);
+    match scene.precipitation_ratio {
+        Some(p) => {
+            for (f, &p) in snowfall.iter_mut().zip(&p[cells]) {
+                *f = ctx.snowfall * p.max(0.0);
+            }
+        }
+        None => snowfall.fill(ctx.snowfall),
+    }
+    for c in 1..w.saturating_sub(1) {
+        gain[c] = received(send_x[c - 1], send_x[c + 1], north[c], south[c]);
+    }
+    let east = |c: usize| if c + 1 < w { send_x[c + 1] } else { 0.0 };
+    gain[0] = received(0.0, east(0), north[0], south[0]);
+    if w > 1 {
+        gain[w - 1] = received(send_x[w - 2], 0.0, north[w - 1], south[w - 1]);
+    }
     for c in 0..w {
-        let (u, v) = (wind_u[c], wind_v[c]);
-        let speed = shear[c].speed;
-        let o = row[c];
-        let out = o.send_x.abs() + o.send_y.abs() + o.sublimation + o.melt;
-        let mut gain = 0.0f32;
-        if c > 0 && row[c - 1].send_x > 0.0 {
-            gain += row[c - 1].send_x;
-        }
-        if c + 1 < w && row[c + 1].send_x < 0.0 {
-            gain -= row[c + 1].send_x;
-        }
-        if let Some(n) = north
-            && n[c].send_y < 0.0
-        {
-            gain -= n[c].send_y;
-        }
-        if let Some(s) = south
-            && s[c].send_y > 0.0
-        {
-            gain += s[c].send_y;
-        }
-        // Border inflow at saturation and border outflow.
+        kept[c] = (swe[c] - lost[c]).max(0.0);
+        drifted[c] = gain[c];
+        next_swe[c] = kept[c] + drifted[c] + snowfall[c];
+    }
+    // Border inflow at saturation and border outflow: only border cells have any, so
+    // summing them alone in column order gives the sums over the row.
+    let border_row = r == 0 || r + 1 == h;
+    let border_cells = (0..w).filter(|&c| border_row || c == 0 || c + 1 == w);
+    for c in border_cells {
+        let (u, v, speed) = (wind_u[c], wind_v[c], shear[c].speed);
         let mut inflow = 0.0f32;
         if border_inflow && speed > 0.0 {
             let cap = shear[c].q_max * ctx.dt / speed;
@@ -269,31 +346,31 @@ fn update_row(
                 inflow += cap * v.abs() * ctx.inv_dy;
             }
         }
+        let (sx, sy) = (send_x[c], send_y[c]);
         let mut leaving = 0.0f32;
-        if (c + 1 == w && o.send_x > 0.0) || (c == 0 && o.send_x < 0.0) {
-            leaving += o.send_x.abs();
+        if (c + 1 == w && sx > 0.0) || (c == 0 && sx < 0.0) {
+            leaving += sx.abs();
         }
-        if (r == 0 && o.send_y > 0.0) || (r + 1 == h && o.send_y < 0.0) {
-            leaving += o.send_y.abs();
+        if (r == 0 && sy > 0.0) || (r + 1 == h && sy < 0.0) {
+            leaving += sy.abs();
         }
-        let snowfall = snowfall(c);
-        let kept = (swe[c] - out).max(0.0);
-        let drifted = gain + inflow;
-        let new_mass = kept + drifted + snowfall;
+        drifted[c] = gain[c] + inflow;
+        next_swe[c] = kept[c] + drifted[c] + snowfall[c];
+        b.border_in += f64::from(inflow);
+        b.border_out += f64::from(leaving);
+    }
+    for c in 0..w {
+        let new_mass = next_swe[c];
         if !new_mass.is_finite() && b.non_finite.is_none() {
             b.non_finite = Some((c, r, new_mass));
         }
-        (next_swe[c], kept_row[c], drifted_row[c]) = (new_mass, kept, drifted);
-        b.precipitation += f64::from(snowfall);
-        b.border_in += f64::from(inflow);
-        b.border_out += f64::from(leaving);
-        b.sublimation += f64::from(o.sublimation);
-        b.melt += f64::from(o.melt);
-        b.transported += f64::from(o.send_x.abs() + o.send_y.abs());
+        b.precipitation += f64::from(snowfall[c]);
+        b.initial_mass += f64::from(swe[c]);
+        b.final_mass += f64::from(new_mass);
     }
     let rho_drift_floor = ctx.rates.new_snow.at(super::DRIFT_PACKING_WIND as f32);
     for c in 0..w {
-        let (kept, drifted, snowfall) = (kept_row[c], drifted_row[c], snowfall(c));
+        let (kept, drifted, snowfall) = (kept[c], drifted[c], snowfall[c]);
         let (rho, new_mass) = (density[c], next_swe[c]);
         // The new-snow and densification wind tables share their sampling.
         let wind = ctx.rates.new_snow.axis().locate(shear[c].speed);
@@ -313,5 +390,4 @@ fn update_row(
         }
         next_rho[c] = new_rho;
     }
-    b
 }
