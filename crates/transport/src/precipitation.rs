@@ -70,7 +70,10 @@ pub struct FlakeParams {
     /// Height of the launch plane above the highest surface of the scene, m (Section 6.4:
     /// "une hauteur h laissée en paramètre"). Chosen here: 50 m; capped at the grid's top.
     pub launch_clearance_m: f64,
-    /// Most steps of one flake before it is abandoned.
+    /// Most steps (each about one voxel of travel) of one flake before it is abandoned as
+    /// lost. Chosen here: 20 000, twenty times the fall through 80 voxels with a wind ten
+    /// times the fall speed; flakes held aloft by updrafts stronger than their fall speed
+    /// (over ridges) would otherwise fly on for ever.
     pub max_steps: usize,
 }
 
@@ -84,7 +87,7 @@ impl Default for FlakeParams {
             drag_coefficient: 0.47,
             air_density: 1.225,
             launch_clearance_m: 50.0,
-            max_steps: 100_000,
+            max_steps: 20_000,
         }
     }
 }
