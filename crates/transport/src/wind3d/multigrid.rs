@@ -36,7 +36,7 @@ struct Level {
     /// Coupling weights to the −x, +x, −y, +y, −z, +z neighbours (matrix entry `−w`);
     /// empty on the finest level, whose weights are all 1 (see [`super::stencil`]).
     off: Vec<[f32; 6]>,
-    /// Right-hand side and solution (unused on the finest level: the caller's vectors).
+    /// Right-hand side and solution (empty on the finest level: the caller's vectors).
     x: Vec<f32>,
     b: Vec<f32>,
     /// Ping-pong buffer of the smoother.
@@ -240,7 +240,10 @@ impl Multigrid {
     /// Builds the hierarchy from the fine operator (`diag` = number of open faces of each
     /// fluid voxel, 0 in solids; unit couplings between active neighbours).
     pub fn new(dims: [usize; 3], diag: &[f32]) -> Self {
-        let mut levels = vec![Level::new(dims, diag.to_vec(), Vec::new())];
+        let mut fine = Level::new(dims, diag.to_vec(), Vec::new());
+        // The finest level works on the caller's vectors.
+        (fine.x, fine.b) = (Vec::new(), Vec::new());
+        let mut levels = vec![fine];
         while levels
             .last()
             .is_some_and(|l| l.len() > COARSEST_CELLS && l.dims.iter().any(|&d| d > 2))

@@ -18,7 +18,7 @@
 //! same for any thread count.
 
 use super::multigrid::Multigrid;
-use super::stencil::{Real, apply_row, rows};
+use super::stencil::{apply_row, rows};
 use rayon::prelude::*;
 
 /// Residual reduction asked of one inner `f32` solve (well above `f32` rounding).
@@ -52,14 +52,14 @@ impl Poisson {
     /// `out = A x` (0 in solids), a row at a time; `f(start, row)` is called on each
     /// finished row of `out` (`start` its first index) and its results are summed per
     /// z-slice, returned in slice order.
-    fn for_rows<T: Real>(
+    fn for_rows(
         &self,
-        x: &[T],
-        out: &mut [T],
-        f: impl Fn(usize, &mut [T]) -> f64 + Sync,
+        x: &[f32],
+        out: &mut [f32],
+        f: impl Fn(usize, &mut [f32]) -> f64 + Sync,
     ) -> Vec<f64> {
         let [nx, ny, _] = self.dims;
-        let zeros = vec![T::default(); nx];
+        let zeros = vec![0.0f32; nx];
         out.par_chunks_mut(self.slice())
             .enumerate()
             .map(|(k, o)| {
@@ -72,7 +72,7 @@ impl Poisson {
                     apply_row(d, None, &r, orow);
                     for (o, d) in orow.iter_mut().zip(d) {
                         if *d <= 0.0 {
-                            *o = T::default();
+                            *o = 0.0;
                         }
                     }
                     acc += f(s, orow);
