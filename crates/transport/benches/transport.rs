@@ -106,17 +106,23 @@ fn flakes(c: &mut Criterion) {
         solver.iterate();
     }
     let wind = solver.mean_velocity();
+    let inflow = WindParams::default().inflow();
     let params = FlakeParams {
         count,
         ..Default::default()
     };
-    let map = precipitation_map(&vox, &wind, &params).unwrap();
-    eprintln!("flakes: {} landed, {} lost", map.landed, map.lost);
+    let map = precipitation_map(&vox, &wind, inflow, &params).unwrap();
+    eprintln!(
+        "flakes: {} landed, {} lost, {:.0} % through the sides",
+        map.landed,
+        map.lost,
+        100.0 * map.side_share
+    );
     let mut group = c.benchmark_group("flakes");
     group.throughput(Throughput::Elements(count as u64));
     group.sample_size(10);
     group.bench_function(format!("map_{count}"), |b| {
-        b.iter(|| black_box(precipitation_map(&vox, &wind, &params).unwrap()))
+        b.iter(|| black_box(precipitation_map(&vox, &wind, inflow, &params).unwrap()))
     });
     group.finish();
 }

@@ -97,7 +97,12 @@ pub fn write_outputs(
             "residual_divergence_per_s": out.wind_report.mean.max_divergence,
             "relative_divergence": out.wind_report.mean.relative_divergence,
         },
-        "flakes": {"landed": out.flakes_landed, "uniform_fallback": out.precipitation_fallback},
+        "flakes": {
+            "landed": out.flakes_landed,
+            "lost": out.flakes_lost,
+            "side_share": out.flakes_side_share,
+            "uniform_fallback": out.precipitation_fallback,
+        },
         "steps": out.steps,
         "depth_m": {
             "mean": depth.iter().map(|&d| f64::from(d)).sum::<f64>() / n,

@@ -12,14 +12,11 @@
 //! 4.5-4.7 with the drag taken implicitly in `v` (`|v_rel|` lagged), stable for any `Δt`,
 //! with `Δt` one voxel of travel.
 //!
-//! **Launch window** (Fig. 6.5): flakes start at random, uniformly, on a plane at height
-//! `h` (the user's parameter: here a clearance above the highest surface), within the
-//! rectangle from which the slowest and fastest horizontal mean winds can carry a flake
-//! onto the domain during its fall, the extreme winds taken over the fluid voxels below the
-//! launch plane, and the fall slowed by the strongest updraft (at most to a quarter). That
-//! window is conservative; a pilot batch of flakes (2 % of them, 5000 to 50 000) launched
-//! over it finds the box their landing flakes start from, and the flakes proper are
-//! launched over that box widened by a quarter of its size and 4 voxels.
+//! **Launch** (Fig. 6.5): flakes are released uniformly on a plane at height `h` (the
+//! user's parameter: here a clearance above the highest surface). The thesis launches them
+//! over a window upwind of the domain; here the plane is folded onto the domain's faces
+//! ([`launch`]): the plane over the domain, and the upwind side faces below it, through
+//! which the inflow carries the snow released upwind, each in proportion to its flux.
 //!
 //! **Collisions** (4.3): entering a solid voxel through its top (the voxel above is free)
 //! lands the flake on that column; entering through a side, the flake slides: the velocity
@@ -27,9 +24,8 @@
 //! blocked after sliding drops to the base of the obstacle, on its own column (Section
 //! 6.4: "la neige qui frappe un voxel ... tombe directement dans la cellule à sa base").
 //!
-//! A flake that leaves the domain across a side where the wind never blows back towards
-//! it is abandoned at once (it cannot return: its velocity only relaxes towards that wind);
-//! elsewhere it flies on outside until it sinks below the lowest surface.
+//! A flake that leaves the domain across a side is lost (the snow entering through the
+//! sides is already counted by the launch).
 //!
 //! **Map** (6.4): counts per column divided by their mean give the ratio map (mean 1).
 //! Outliers (IQR rule, `1.5 (Q3 − Q1)` from the mean) are replaced by the mean of their
@@ -41,13 +37,15 @@
 //! **Determinism**: flake `n` draws its launch point from the counter-based generator keyed
 //! by `(seed, n)`, and counts are integers: the map does not depend on the thread count.
 
+mod launch;
+
 use crate::error::{TransportError, check_positive, check_range};
 use crate::physics::GRAVITY;
 use crate::wind3d::field::{Centred, Velocity};
 use crate::wind3d::voxel::VoxelGrid;
+use launch::{Launch, Launcher};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::random::uniform;
 
 /// Parameters of the flake simulation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -130,20 +128,50 @@ pub struct PrecipitationMap {
     pub counts: Vec<u32>,
     /// Flakes that landed in the domain.
     pub landed: u64,
-    /// Flakes that missed it or were abandoned.
+    /// Flakes that missed it (blown out across a side) or were abandoned.
     pub lost: u64,
+    /// Share of the launched flakes that entered across the upwind sides rather than from
+    /// the launch plane over the domain ([`launch`]).
+    pub side_share: f64,
     /// Columns replaced as outliers.
     pub outliers: usize,
 }
-
-/// Margin added around the launch window, voxels, so flakes reach the domain's edges as
-/// densely as its middle (the thesis is "conservateur" too).
-const WINDOW_MARGIN: f64 = 4.0;
 
 /// What a flake did.
 enum Fate {
     Landed(usize),
     Lost,
+}
+
+/// The flake's equation of motion (4.5-4.7): gravity and the drag on the velocity
+/// relative to the air, Euler steps of one voxel of travel with the drag implicit in `v`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Drag {
+    /// Drag constant `k`, m⁻¹.
+    k: f64,
+    /// Terminal speed `√(g / k)`, m s⁻¹.
+    vt: f64,
+    /// Voxel side, m.
+    cell: f64,
+}
+
+impl Drag {
+    /// Advances `v` (m s⁻¹) by one step in the wind `w`; returns the step's `Δt` per voxel
+    /// (s m⁻¹ times the voxel side: the position advances by that times `v`, in voxels).
+    #[inline]
+    fn step(&self, w: [f64; 3], v: &mut [f64; 3]) -> f64 {
+        let rel = [w[0] - v[0], w[1] - v[1], w[2] - v[2]];
+        let s = self.k * (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt();
+        // Δt of one voxel of travel, and Δt in voxels per (m s⁻¹).
+        let per_voxel = 1.0 / ((w[0] * w[0] + w[1] * w[1]).sqrt() + self.vt + 1e-3);
+        let dt = self.cell * per_voxel;
+        let implicit = 1.0 / (1.0 + dt * s);
+        let g = [0.0, 0.0, -GRAVITY];
+        for a in 0..3 {
+            v[a] = (v[a] + dt * (s * w[a] + g[a])) * implicit;
+        }
+        per_voxel
+    }
 }
 
 /// What the flakes fly through.
@@ -152,69 +180,13 @@ struct Sky<'a> {
     wind: &'a Centred,
     /// Solid layers of each column (voxelised scenes are solid below their top).
     layers: &'a [u32],
-    /// Lowest column top, voxels: a flake outside the domain and below it is lost.
-    floor: f64,
-    /// Drag constant `k`, m⁻¹, and terminal speed `√(g / k)`, m s⁻¹.
-    k: f64,
-    vt: f64,
+    drag: Drag,
     max_steps: usize,
-    /// Whether a flake beyond the west, east, south or north side can never come back:
-    /// the wind there (the side's voxels, clamped) never blows towards the domain, and a
-    /// flake's velocity only relaxes towards the wind, so it keeps moving away.
-    no_return: [bool; 4],
-}
-
-impl<'a> Sky<'a> {
-    fn new(grid: &'a VoxelGrid, wind: &'a Centred, layers: &'a [u32], p: &FlakeParams) -> Self {
-        let (nx, ny) = (grid.nx, grid.ny);
-        let mut inward = [f32::NEG_INFINITY; 4]; // largest wind towards the domain per side
-        for k in 0..grid.nz {
-            for j in 0..ny {
-                for i in 0..nx {
-                    let w = wind.data[grid.index(i, j, k)];
-                    if i == 0 {
-                        inward[0] = inward[0].max(w[0]);
-                    }
-                    if i + 1 == nx {
-                        inward[1] = inward[1].max(-w[0]);
-                    }
-                    if j == 0 {
-                        inward[2] = inward[2].max(w[1]);
-                    }
-                    if j + 1 == ny {
-                        inward[3] = inward[3].max(-w[1]);
-                    }
-                }
-            }
-        }
-        let k = p.drag_constant();
-        Self {
-            grid,
-            wind,
-            layers,
-            floor: f64::from(layers.iter().copied().min().unwrap_or(0)),
-            k,
-            vt: (GRAVITY / k).sqrt(),
-            max_steps: p.max_steps,
-            no_return: inward.map(|w| w <= 0.0),
-        }
-    }
-
-    /// Whether a flake at `x` (voxel units, outside the domain) can never come back.
-    fn gone(&self, x: [f64; 3]) -> bool {
-        let (nx, ny) = (self.grid.nx as f64, self.grid.ny as f64);
-        (x[0] < 0.0 && self.no_return[0])
-            || (x[0] >= nx && self.no_return[1])
-            || (x[1] < 0.0 && self.no_return[2])
-            || (x[1] >= ny && self.no_return[3])
-    }
 }
 
 /// One flake from launch to landing (4.5-4.7, 4.3).
-fn fly(sky: &Sky, start: [f64; 3]) -> Fate {
-    let (grid, wind, layers, floor, k, vt) =
-        (sky.grid, sky.wind, sky.layers, sky.floor, sky.k, sky.vt);
-    let cell = grid.cell;
+fn fly(sky: &Sky, launch: Launch) -> Fate {
+    let (grid, wind, layers) = (sky.grid, sky.wind, sky.layers);
     let (nx, ny, nz) = (grid.nx as f64, grid.ny as f64, grid.nz as f64);
     let inside = |x: [f64; 3]| x[0] >= 0.0 && x[1] >= 0.0 && x[0] < nx && x[1] < ny;
     let column = |x: [f64; 3]| (x[1] as usize) * grid.nx + x[0] as usize;
@@ -236,43 +208,28 @@ fn fly(sky: &Sky, start: [f64; 3]) -> Fate {
         let w = wind.sample([x[0] as f32, x[1] as f32, x[2] as f32]);
         [f64::from(w[0]), f64::from(w[1]), f64::from(w[2])]
     };
-    let mut x = start; // voxel units
-    let mut v = {
+    let mut x = launch.position; // voxel units
+    let mut v = launch.velocity.unwrap_or_else(|| {
         let w = sample(x);
-        [w[0], w[1], w[2] - vt]
-    };
-    let g = [0.0, 0.0, -GRAVITY];
+        [w[0], w[1], w[2] - sky.drag.vt]
+    });
     for _ in 0..sky.max_steps {
-        let w = sample(x);
-        let rel = [w[0] - v[0], w[1] - v[1], w[2] - v[2]];
-        let s = k * (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt();
-        // Δt of one voxel of travel, and Δt in voxels per (m s⁻¹).
-        let steps_per_voxel = 1.0 / ((w[0] * w[0] + w[1] * w[1]).sqrt() + vt + 1e-3);
-        let dt = cell * steps_per_voxel;
-        let implicit = 1.0 / (1.0 + dt * s);
-        for a in 0..3 {
-            v[a] = (v[a] + dt * (s * w[a] + g[a])) * implicit;
-        }
+        let per_voxel = sky.drag.step(sample(x), &mut v);
         let advance = |x: [f64; 3], v: [f64; 3]| {
             [
-                x[0] + steps_per_voxel * v[0],
-                x[1] + steps_per_voxel * v[1],
-                x[2] + steps_per_voxel * v[2],
+                x[0] + per_voxel * v[0],
+                x[1] + per_voxel * v[1],
+                x[2] + per_voxel * v[2],
             ]
         };
         let next = advance(x, v);
         if !inside(next) {
-            if inside(x) {
-                let top = f64::from(layers[column(x)]);
-                if next[2] < top {
-                    return land(x, next, top);
-                }
-            }
-            if next[2] <= floor || sky.gone(next) {
-                return Fate::Lost;
-            }
-            x = next;
-            continue;
+            let top = f64::from(layers[column(x)]);
+            return if next[2] < top {
+                land(x, next, top)
+            } else {
+                Fate::Lost
+            };
         }
         if next[2] < 0.0 {
             return land(x, next, 0.0);
@@ -312,62 +269,44 @@ fn fly(sky: &Sky, start: [f64; 3]) -> Fate {
     Fate::Lost
 }
 
-/// Simulates the flakes through the mean wind `wind` over `grid` and builds the map.
+/// Simulates the flakes through the mean wind `wind` over `grid` and builds the map;
+/// `inflow` is the wind (east, north, m s⁻¹) the wind simulation held on its upwind sides
+/// ([`crate::wind3d::WindParams::inflow`]): snow enters across those sides.
 pub fn precipitation_map(
     grid: &VoxelGrid,
     wind: &Velocity,
+    inflow: [f64; 2],
     params: &FlakeParams,
 ) -> Result<PrecipitationMap, TransportError> {
     params.validate()?;
     let mut centred = Centred::default();
     centred.update(wind);
     let vt = params.terminal_speed();
-    // Launch plane and window (Fig. 6.5) from the extreme horizontal winds below it.
+    // Launch plane (Fig. 6.5) and the faces it folds onto.
     let highest = grid
         .column_top
         .iter()
         .fold(f32::NEG_INFINITY, |m, &t| m.max(t));
     let top = ((f64::from(highest) - grid.base + params.launch_clearance_m) / grid.cell)
         .min(grid.nz as f64 - 0.5);
-    let (mut wmin, mut wmax) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    let mut updraft = 0.0f64;
-    let below = (top.ceil() as usize).min(grid.nz) * grid.nx * grid.ny;
-    for (c, s) in centred.data.iter().zip(&grid.solid).take(below) {
-        if !s {
-            for a in 0..2 {
-                wmin[a] = wmin[a].min(f64::from(c[a]));
-                wmax[a] = wmax[a].max(f64::from(c[a]));
-            }
-            updraft = updraft.max(f64::from(c[2]));
-        }
-    }
-    // Updrafts slow the fall: size the window for the slowest one.
-    let vt = (vt - updraft).max(0.25 * vt);
-    let lowest = grid.column_top.iter().fold(f32::INFINITY, |m, &t| m.min(t));
-    let fall_time = (top - ((f64::from(lowest) - grid.base) / grid.cell).max(0.0)) * grid.cell / vt;
-    let extent = [grid.nx as f64, grid.ny as f64];
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for a in 0..2 {
-        for edge in [0.0, extent[a]] {
-            for w in [wmin[a], wmax[a]] {
-                let launch = edge - w.clamp(-1e3, 1e3) * fall_time / grid.cell;
-                lo[a] = lo[a].min(launch - WINDOW_MARGIN);
-                hi[a] = hi[a].max(launch + WINDOW_MARGIN);
-            }
-        }
-    }
+    let drag = Drag {
+        k: params.drag_constant(),
+        vt,
+        cell: grid.cell,
+    };
+    let launcher = Launcher::new(grid, &centred, &drag, inflow, top);
     let columns = grid.nx * grid.ny;
     let layers: Vec<u32> = (0..columns)
         .map(|c| grid.ground_layers(c % grid.nx, c / grid.nx) as u32)
         .collect();
-    // Pilot flakes over the conservative window find where landing flakes start; the
-    // flakes proper are launched over that box, widened by a quarter and a margin.
-    let sky = Sky::new(grid, &centred, &layers, params);
-    let pilot = (params.count / 50).clamp(5000, 50_000);
-    let (plo, phi) = pilot_window(&sky, params.seed, top, lo, hi, pilot);
-    let (lo, hi) = (plo, phi);
-    let fly_range = |first: u64, count: usize, stream: u64| -> Vec<(Vec<u32>, u64)> {
+    let sky = Sky {
+        grid,
+        wind: &centred,
+        layers: &layers,
+        drag,
+        max_steps: params.max_steps,
+    };
+    let fly_range = |count: usize| -> Vec<(Vec<u32>, u64)> {
         const CHUNK: usize = 4096;
         (0..count.div_ceil(CHUNK))
             .into_par_iter()
@@ -375,22 +314,16 @@ pub fn precipitation_map(
                 let mut counts = vec![0u32; columns];
                 let mut lost = 0u64;
                 for n in c * CHUNK..((c + 1) * CHUNK).min(count) {
-                    let key = first + 2 * n as u64;
-                    let start = [
-                        lo[0] + (hi[0] - lo[0]) * uniform(params.seed, key, stream),
-                        lo[1] + (hi[1] - lo[1]) * uniform(params.seed, key + 1, stream),
-                        top,
-                    ];
-                    match fly(&sky, start) {
-                        Fate::Landed(col) => counts[col] += 1,
-                        Fate::Lost => lost += 1,
+                    match launcher.start(params.seed, n, count).map(|s| fly(&sky, s)) {
+                        Some(Fate::Landed(col)) => counts[col] += 1,
+                        _ => lost += 1,
                     }
                 }
                 (counts, lost)
             })
             .collect()
     };
-    let partial = fly_range(0, params.count, 0);
+    let partial = fly_range(params.count);
     let mut counts = vec![0u32; columns];
     let mut lost = 0u64;
     for (c, l) in &partial {
@@ -423,53 +356,9 @@ pub fn precipitation_map(
         counts: counts_north,
         landed,
         lost,
+        side_share: launcher.side_share,
         outliers,
     })
-}
-
-/// The launch box of the pilot flakes that landed, widened by a quarter of its size and
-/// [`WINDOW_MARGIN`], within the conservative window `lo..hi`; the whole window if none
-/// landed.
-fn pilot_window(
-    sky: &Sky,
-    seed: u64,
-    top: f64,
-    lo: [f64; 2],
-    hi: [f64; 2],
-    count: usize,
-) -> ([f64; 2], [f64; 2]) {
-    let starts: Vec<Option<[f64; 2]>> = (0..count)
-        .into_par_iter()
-        .map(|n| {
-            let start = [
-                lo[0] + (hi[0] - lo[0]) * uniform(seed, 2 * n as u64, 1),
-                lo[1] + (hi[1] - lo[1]) * uniform(seed, 2 * n as u64 + 1, 1),
-                top,
-            ];
-            match fly(sky, start) {
-                Fate::Landed(_) => Some([start[0], start[1]]),
-                Fate::Lost => None,
-            }
-        })
-        .collect();
-    let mut blo = [f64::INFINITY; 2];
-    let mut bhi = [f64::NEG_INFINITY; 2];
-    for s in starts.iter().flatten() {
-        for a in 0..2 {
-            blo[a] = blo[a].min(s[a]);
-            bhi[a] = bhi[a].max(s[a]);
-        }
-    }
-    if blo[0] > bhi[0] {
-        return (lo, hi);
-    }
-    let mut out = (lo, hi);
-    for a in 0..2 {
-        let pad = 0.25 * (bhi[a] - blo[a]) + WINDOW_MARGIN;
-        out.0[a] = (blo[a] - pad).max(lo[a]);
-        out.1[a] = (bhi[a] + pad).min(hi[a]);
-    }
-    out
 }
 
 /// Quartile `q` of `values` (nearest rank).

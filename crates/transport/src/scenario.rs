@@ -257,6 +257,10 @@ pub struct RunOutputs {
     pub mean_wind: Velocity,
     /// Flakes that landed on the domain.
     pub flakes_landed: u64,
+    /// Flakes blown out of the domain or abandoned.
+    pub flakes_lost: u64,
+    /// Share of the flakes launched across the upwind sides.
+    pub flakes_side_share: f64,
     /// Whether the snowfall fell back to uniform because fewer flakes landed than there
     /// are voxel columns (a map that noisy carries no information: on coarse grids of
     /// large scenes, flakes released above the terrain drift for kilometres).
@@ -321,11 +325,18 @@ pub fn run(
     let (wind_u, wind_v) = modify_wind(&scenario.transport, geometry, heights, &u0, &v0)?;
     times.terrain_wind_s = clock.elapsed().as_secs_f64();
     let clock = std::time::Instant::now();
+    let (mut flakes_lost, mut flakes_side_share) = (0, 0.0);
     let (precipitation_ratio, flakes_landed, precipitation_fallback) =
         if scenario.uniform_precipitation {
             (vec![1.0; geometry.len()], 0, false)
         } else {
-            let map = precipitation_map(&voxels, &solver.mean_velocity(), &scenario.flakes)?;
+            let map = precipitation_map(
+                &voxels,
+                &solver.mean_velocity(),
+                scenario.wind.inflow(),
+                &scenario.flakes,
+            )?;
+            (flakes_lost, flakes_side_share) = (map.lost, map.side_share);
             if map.landed < (map.width * map.height) as u64 {
                 (vec![1.0; geometry.len()], map.landed, true)
             } else {
@@ -416,6 +427,8 @@ pub fn run(
         mean_wind: solver.mean_velocity(),
         voxels,
         flakes_landed,
+        flakes_lost,
+        flakes_side_share,
         precipitation_fallback,
         steps,
         times,

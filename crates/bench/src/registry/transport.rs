@@ -93,12 +93,13 @@ pub fn transport_kernels(terrain: &Grid, size: usize) -> Result<Vec<Kernel>, Ker
     }
     flake_wind.project_mean();
     let mean = flake_wind.mean_velocity();
+    let inflow = WindParams::default().inflow();
     let flakes = FlakeParams {
         count: (size * size).max(20_000),
         ..Default::default()
     };
     let flake_kernel = Kernel::new("transport/flakes", flakes.count, 0.0, move || {
-        black_box(precipitation_map(&voxels, &mean, &flakes)?);
+        black_box(precipitation_map(&voxels, &mean, inflow, &flakes)?);
         Ok(())
     });
     Ok(vec![step_kernel, wind_kernel, flake_kernel])

@@ -19,7 +19,10 @@
 //! The velocity is stored on the voxel faces ([`field`]). Faces touching a solid voxel carry
 //! no flow (no flow into solids, Section 3.5.2), the ground and the lid are closed, faces on
 //! the upwind sides of the domain hold the inflow profile, and the downwind sides are open
-//! (zero-gradient velocity, `φ = 0`). The mean wind is the average of the fields after each
+//! (zero-gradient velocity, `φ = 0`). Sides the inflow runs parallel to (a wind from a
+//! multiple of 90°) are symmetry planes, closed: left open, the air lifted by the relief
+//! under the lid leaves sideways, and the snow with it (a valley lost its snow over the
+//! 400 m along both sides), where in the wider world the neighbouring air pushes back. The mean wind is the average of the fields after each
 //! iteration (Section 6.3: "une texture 3D qui conserve la moyenne des itérations").
 //!
 //! The inflow profile is the log law `U(z) = U_r ln(z'/z0) / ln(z_r/z0)` of the height `z'`
@@ -102,10 +105,18 @@ impl WindParams {
         Ok(())
     }
 
-    /// The inflow wind (east, north) at the reference height, m s⁻¹ (Eqs. 5.1-5.2).
+    /// The inflow wind (east, north) at the reference height, m s⁻¹ (Eqs. 5.1-5.2). A
+    /// component below 1e-9 of the speed (the rounding of `sin` and `cos` at multiples of
+    /// 90°) is exactly 0: the wind runs parallel to those sides.
     pub fn inflow(&self) -> [f64; 2] {
         let t = self.from_deg.to_radians();
-        [-self.speed_m_s * t.sin(), -self.speed_m_s * t.cos()]
+        [t.sin(), t.cos()].map(|c| {
+            if c.abs() < 1e-9 {
+                0.0
+            } else {
+                -self.speed_m_s * c
+            }
+        })
     }
 }
 
@@ -118,6 +129,7 @@ enum Face {
     Closed,
     /// Upwind domain boundary: holds the inflow profile.
     Inflow,
+    // (Sides parallel to the inflow are `Closed`, symmetry planes.)
     /// Downwind domain boundary: zero-gradient, `φ = 0` beyond.
     Outflow,
 }

@@ -12,10 +12,16 @@ use rayon::prelude::*;
 pub(super) fn face_kinds(g: &VoxelGrid, p: &WindParams) -> [Vec<Face>; 3] {
     let [ux, uy] = p.inflow();
     let v = Velocity::zeros(g.nx, g.ny, g.nz);
-    let boundary = |solid: bool, inflow_here: bool| match (solid, inflow_here) {
-        (true, _) => Face::Closed,
-        (false, true) => Face::Inflow,
-        (false, false) => Face::Outflow,
+    // A side's faces by the inflow's component into the domain across it: closed where
+    // the wind runs parallel to the side (a symmetry plane) or the voxel is solid.
+    let boundary = |solid: bool, inward: f64| {
+        if solid || inward == 0.0 {
+            Face::Closed
+        } else if inward > 0.0 {
+            Face::Inflow
+        } else {
+            Face::Outflow
+        }
     };
     let mut ku = vec![Face::Fluid; v.u.data.len()];
     let mut kv = vec![Face::Fluid; v.v.data.len()];
@@ -24,9 +30,9 @@ pub(super) fn face_kinds(g: &VoxelGrid, p: &WindParams) -> [Vec<Face>; 3] {
         for j in 0..g.ny {
             for i in 0..=g.nx {
                 ku[v.u.index(i, j, k)] = if i == 0 {
-                    boundary(g.is_solid(0, j, k), ux > 0.0)
+                    boundary(g.is_solid(0, j, k), ux)
                 } else if i == g.nx {
-                    boundary(g.is_solid(g.nx - 1, j, k), ux < 0.0)
+                    boundary(g.is_solid(g.nx - 1, j, k), -ux)
                 } else if g.is_solid(i - 1, j, k) || g.is_solid(i, j, k) {
                     Face::Closed
                 } else {
@@ -37,9 +43,9 @@ pub(super) fn face_kinds(g: &VoxelGrid, p: &WindParams) -> [Vec<Face>; 3] {
         for j in 0..=g.ny {
             for i in 0..g.nx {
                 kv[v.v.index(i, j, k)] = if j == 0 {
-                    boundary(g.is_solid(i, 0, k), uy > 0.0)
+                    boundary(g.is_solid(i, 0, k), uy)
                 } else if j == g.ny {
-                    boundary(g.is_solid(i, g.ny - 1, k), uy < 0.0)
+                    boundary(g.is_solid(i, g.ny - 1, k), -uy)
                 } else if g.is_solid(i, j - 1, k) || g.is_solid(i, j, k) {
                     Face::Closed
                 } else {
