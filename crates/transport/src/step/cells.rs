@@ -113,22 +113,25 @@ pub(super) fn shear_pass(
                 let speed = (u * u + v * v).sqrt();
                 *s = Shear {
                     speed,
-                    u_star: ctx.shear_table.saltating_u_star(speed.min(ctx.max_wind)),
+                    u_star: ctx
+                        .shear_table
+                        .saltating_u_star(super::at_most(speed, ctx.max_wind)),
                     u_star_t: ctx.rates.threshold.at(rho),
-                    q_max: 0.0,
+                    q_max_per_speed: 0.0,
                 };
             }
             for (s, (&swe, &rho)) in shear_row.iter_mut().zip(swe.iter().zip(density)) {
                 let depth = if rho > 0.0 { swe / rho } else { 0.0 };
                 let (speed, salt, u_star_t) = (s.speed, s.u_star, s.u_star_t);
-                (s.u_star, s.q_max) = if depth <= holding {
+                (s.u_star, s.q_max_per_speed) = if depth <= holding {
                     // Vegetation not yet filled (5.27-5.28, 5.26).
                     let fs = if holding > 0.0 { depth / holding } else { 1.0 };
                     let z0 = fs * z0_snow + (1.0 - fs) * z0_veg;
                     (speed * kappa / (z_r / z0).ln(), 0.0)
                 } else if salt > u_star_t {
-                    let q_max = capacity * u_star_t * (salt * salt - u_star_t * u_star_t) / salt;
-                    (salt, q_max)
+                    // Qs_max / W; W > 0 here, since u*(W) > u*t ≥ 0.
+                    let q = capacity * u_star_t * (salt * salt - u_star_t * u_star_t);
+                    (salt, q / (salt * speed))
                 } else {
                     (speed * snow_log, 0.0)
                 };

@@ -178,8 +178,22 @@ pub(crate) struct Shear {
     pub speed: f32,
     pub u_star: f32,
     pub u_star_t: f32,
-    /// Saltation capacity magnitude `Qs_max`, kg m⁻¹ s⁻¹ (0 where no saltation).
-    pub q_max: f32,
+    /// Saltation capacity magnitude per unit wind speed, `Qs_max / W`, kg m⁻² (0 where no
+    /// saltation): the capacity along an axis is this times the wind component.
+    pub q_max_per_speed: f32,
+}
+
+/// `f32::max(x, lo)` as one `maxss`: the comparison form gives `lo` for a NaN `x` too,
+/// without the library's NaN handling (three more instructions in the hottest loops).
+#[inline(always)]
+fn at_least(x: f32, lo: f32) -> f32 {
+    if x > lo { x } else { lo }
+}
+
+/// `f32::min(x, hi)` as one `minss` (`hi` for a NaN `x`, as [`f32::min`]).
+#[inline(always)]
+fn at_most(x: f32, hi: f32) -> f32 {
+    if x < hi { x } else { hi }
 }
 
 /// Sizes a buffer; every pass overwrites all its cells, so no clearing is needed.

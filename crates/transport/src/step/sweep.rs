@@ -42,11 +42,7 @@ impl Sweep {
     #[inline]
     fn relax_cell(&self, cell: &Shear, up: Upwind, comp: f32) -> f32 {
         // The capacity component along the axis: Qs_max |comp| / W.
-        let q_max = if cell.speed > 0.0 {
-            cell.q_max * comp.abs() / cell.speed
-        } else {
-            0.0
-        };
+        let q_max = cell.q_max_per_speed * comp.abs();
         let (q_up, u_star_up) = match up {
             Some(upwind) => upwind,
             None if self.saturated_inflow => (q_max, cell.u_star),

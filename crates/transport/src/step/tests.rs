@@ -203,7 +203,7 @@ fn saltation_grows_along_the_fetch_from_a_clean_border() {
     )
     .unwrap();
     let q: Vec<f32> = (0..120).map(|c| scratch.q_salt[120 + c]).collect();
-    let q_max = scratch.shear[120].q_max;
+    let q_max = scratch.shear[120].q_max_per_speed * scratch.shear[120].speed;
     // First cell: (μ Δx / f) Qs_max = 0.1 Qs_max; then monotone growth towards Qs_max.
     assert!((q[0] - 0.1 * q_max).abs() < 1e-6 * q_max);
     assert!(q.windows(2).all(|p| p[1] >= p[0]));

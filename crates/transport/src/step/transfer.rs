@@ -10,7 +10,7 @@
 //! every outflow reads the state at the start of the step.
 
 use super::cells::Context;
-use super::{MAX_DENSITY, Shear, SnowState};
+use super::{MAX_DENSITY, Shear, SnowState, at_least, at_most};
 use rayon::prelude::*;
 
 /// Rows per rayon task.
@@ -195,11 +195,11 @@ fn outflow_row(
     {
         let q_salt = (q_x * q_x + q_y * q_y).sqrt();
         let (mut q_susp, mut q_subl) = (0.0f32, 0.0f32);
-        if s.q_max > 0.0 && q_salt > 0.0 {
+        if s.q_max_per_speed > 0.0 && q_salt > 0.0 {
             let per_up = q_salt / (2.8 * s.u_star_t); // φr h* = Qsalt / u_p (5.44-5.45)
             let (susp, subl) = ctx.blowing_table.per_flux(s.u_star, s.u_star_t);
             q_susp = per_up * susp;
-            q_subl = (per_up * subl).min(0.0);
+            q_subl = at_most(per_up * subl, 0.0);
         }
         (*sa, *su, *sb) = (q_salt, q_susp, q_subl);
     }
@@ -231,16 +231,16 @@ fn outflow_row(
         let subl = if sublimates { -ctx.dt * q_subl[c] } else { 0.0 };
         let wanted = ox.abs() + oy.abs() + subl;
         let (mass, rho) = (swe[c], density[c]);
-        let erodible = (mass - holding * rho).max(0.0);
+        let erodible = at_least(mass - holding * rho, 0.0);
         let scale = if wanted > erodible {
             erodible / wanted
         } else {
             1.0
         };
-        let left = (mass - scale * wanted).max(0.0);
+        let left = at_least(mass - scale * wanted, 0.0);
         (send_x[c], send_y[c]) = (scale * ox, scale * oy);
         sublimation[c] = scale * subl;
-        melt[c] = (ctx.melt_rate * rho * ctx.dt).min(left);
+        melt[c] = at_most(ctx.melt_rate * rho * ctx.dt, left);
         lost[c] = send_x[c].abs() + send_y[c].abs() + sublimation[c] + melt[c];
     }
     let mut b = RowBudget::default();
@@ -310,7 +310,7 @@ fn update_row(
     match scene.precipitation_ratio {
         Some(p) => {
             for (f, &p) in snowfall.iter_mut().zip(&p[cells]) {
-                *f = ctx.snowfall * p.max(0.0);
+                *f = ctx.snowfall * at_least(p, 0.0);
             }
         }
         None => snowfall.fill(ctx.snowfall),
@@ -324,7 +324,7 @@ fn update_row(
         gain[w - 1] = received(send_x[w - 2], 0.0, north[w - 1], south[w - 1]);
     }
     for c in 0..w {
-        kept[c] = (swe[c] - lost[c]).max(0.0);
+        kept[c] = at_least(swe[c] - lost[c], 0.0);
         drifted[c] = gain[c];
         next_swe[c] = kept[c] + drifted[c] + snowfall[c];
     }
@@ -336,7 +336,7 @@ fn update_row(
         let (u, v, speed) = (wind_u[c], wind_v[c], shear[c].speed);
         let mut inflow = 0.0f32;
         if border_inflow && speed > 0.0 {
-            let cap = shear[c].q_max * ctx.dt / speed;
+            let cap = shear[c].q_max_per_speed * ctx.dt;
             let edge_x = (c == 0 && u > 0.0) || (c + 1 == w && u < 0.0);
             let edge_y = (r + 1 == h && v > 0.0) || (r == 0 && v < 0.0);
             if edge_x {
@@ -377,7 +377,7 @@ fn update_row(
         let mut new_rho = rho;
         if drifted > 0.0 || snowfall > 0.0 {
             let rho_fall = ctx.rates.new_snow.at_point(wind);
-            let rho_drift = rho_fall.max(rho_drift_floor);
+            let rho_drift = at_least(rho_fall, rho_drift_floor);
             let volume = kept / rho + drifted / rho_drift + snowfall / rho_fall;
             if volume > 0.0 {
                 new_rho = new_mass / volume;
@@ -386,7 +386,7 @@ fn update_row(
         if ctx.densify && new_mass > 0.0 && new_rho < MAX_DENSITY {
             let rate =
                 ctx.rates.densify_wind.at_point(wind) * ctx.rates.densify_density.at(new_rho);
-            new_rho = (new_rho + ctx.dt * rate).min(MAX_DENSITY);
+            new_rho = at_most(new_rho + ctx.dt * rate, MAX_DENSITY);
         }
         next_rho[c] = new_rho;
     }

@@ -57,6 +57,44 @@ fn log_profile_over_a_flat_plate_keeps_its_speed_with_viscosity() {
     }
 }
 
+/// A north wind over a hill: the west and east sides, parallel to it, are symmetry planes
+/// (no air crosses them, where left open the lifted air would leave sideways), and the
+/// flow still goes round and over the hill, divergence-free.
+#[test]
+fn sides_parallel_to_the_wind_are_closed() {
+    let (n, cell) = (24, 10.0);
+    let g = GridGeometry::square(n, n, cell).unwrap();
+    let z: Vec<f32> = (0..n * n)
+        .map(|c| {
+            let (x, y) = ((c % n) as f32 - 11.5, (c / n) as f32 - 11.5);
+            10.0 + 60.0 * (-(x * x + y * y) / 20.0).exp()
+        })
+        .collect();
+    let grid = VoxelGrid::from_heights(&g, &z, cell, 12, 0.0).unwrap();
+    let params = WindParams {
+        speed_m_s: 10.0,
+        from_deg: 0.0,
+        ..Default::default()
+    };
+    assert_eq!(params.inflow()[0], 0.0);
+    let mut s = WindSolver::new(grid, params).unwrap();
+    for _ in 0..6 {
+        s.iterate();
+    }
+    let report = s.project_mean();
+    assert!(report.relative_divergence < 1e-5, "{report:?}");
+    let m = s.mean_velocity();
+    for k in 0..12 {
+        for j in 0..n {
+            assert_eq!(m.u.data[m.u.index(0, j, k)], 0.0);
+            assert_eq!(m.u.data[m.u.index(n, j, k)], 0.0);
+        }
+    }
+    // The hill deflects the flow sideways inside the domain.
+    let side = m.u.data.iter().fold(0.0f32, |a, &u| a.max(u.abs()));
+    assert!(side > 0.5, "largest east-west wind {side}");
+}
+
 fn castle_solver() -> WindSolver {
     let n = 48;
     let cell = 4.0;
