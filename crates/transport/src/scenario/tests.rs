@@ -92,3 +92,55 @@ fn fitted_voxels_hold_the_relief_with_air_above_and_low_grids_are_refused() {
     assert_eq!(shipped_scenario("castle"), Some(CASTLE));
     assert!(shipped_scenario("glacier").is_none());
 }
+
+/// The valley of Table 7.I at 80 m cells: against a run without wind transport, the wind
+/// erodes the slopes facing it (windward) and deposits on those turned away (lee), as in
+/// the thesis's Fig. 7.9 and SnowTran-3D.
+#[test]
+fn the_valley_wind_erodes_windward_slopes_and_loads_lee_slopes() {
+    let n = 100;
+    let mut s = Scenario::from_toml(VALLEY).unwrap();
+    s.scene = SceneSpec::Procedural {
+        size: n,
+        cell_m: 80.0,
+        seed: 4,
+        relief_m: 1200.0,
+    };
+    s.voxel_size_m = 80.0;
+    s.voxel_layers = 40;
+    s.wind_iterations = 10;
+    s.flakes.count = 200_000;
+    let (g, z) = s.build_scene().unwrap().unwrap();
+    let full = run(&s, &g, &z).unwrap();
+    assert!(!full.precipitation_fallback && full.flakes_landed > 50_000);
+    let mut still = s.clone();
+    still.transport.phenomena.saltation = false;
+    still.transport.phenomena.suspension = false;
+    still.transport.phenomena.sublimation = false;
+    let still = run(&still, &g, &z).unwrap();
+    let (a, b) = (full.state.depth(), still.state.depth());
+    // The wind blows from the north, towards increasing rows: a slope rising towards the
+    // south faces it.
+    let (mut windward, mut lee) = (Vec::new(), Vec::new());
+    for r in 2..n - 2 {
+        for c in 2..n - 2 {
+            let i = r * n + c;
+            let rise = (z[i + n] - z[i - n]) / (2.0 * 80.0);
+            let change = f64::from(a[i] - b[i]);
+            if rise > 0.3 {
+                windward.push(change);
+            } else if rise < -0.3 {
+                lee.push(change);
+            }
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (w, l) = (mean(&windward), mean(&lee));
+    eprintln!(
+        "windward {} cells: {w:+.4} m; lee {} cells: {l:+.4} m",
+        windward.len(),
+        lee.len()
+    );
+    assert!(windward.len() > 200 && lee.len() > 200);
+    assert!(w < 0.0 && l > 0.0, "windward {w}, lee {l}");
+}
