@@ -25,19 +25,33 @@ fn unknown_keys_name_themselves() {
     assert!(err.to_string().contains("cell"), "{err}");
 }
 
+/// A shipped scenario on a coarser `scene`, with voxels of `(size m, layers)`, fewer wind
+/// iterations and flakes.
+fn coarse(
+    text: &str,
+    scene: SceneSpec,
+    (voxel_size_m, voxel_layers): (f64, usize),
+    wind_iterations: usize,
+    flakes: usize,
+) -> Scenario {
+    let mut s = Scenario::from_toml(text).unwrap();
+    s.scene = scene;
+    s.voxel_size_m = voxel_size_m;
+    s.voxel_layers = voxel_layers;
+    s.wind_iterations = wind_iterations;
+    s.flakes.count = flakes;
+    s
+}
+
 /// The castle scenario at a coarse resolution, shortened: every stage runs and the mass
 /// budget closes.
 #[test]
 fn a_small_castle_run_closes_its_budget() {
-    let mut s = Scenario::from_toml(CASTLE).unwrap();
-    s.scene = SceneSpec::Castle {
+    let scene = SceneSpec::Castle {
         size_m: 850.0,
         cell_m: 10.0,
     };
-    s.voxel_size_m = 17.0;
-    s.voxel_layers = 12;
-    s.wind_iterations = 4;
-    s.flakes.count = 40_000;
+    let mut s = coarse(CASTLE, scene, (17.0, 12), 4, 40_000);
     s.duration_h = 14.0; // 12 h of snowfall, 2 warm hours
     s.transport.time_step_s = 1800.0;
     let (g, z) = s.build_scene().unwrap().unwrap();
@@ -99,17 +113,13 @@ fn fitted_voxels_hold_the_relief_with_air_above_and_low_grids_are_refused() {
 #[test]
 fn the_valley_wind_erodes_windward_slopes_and_loads_lee_slopes() {
     let n = 100;
-    let mut s = Scenario::from_toml(VALLEY).unwrap();
-    s.scene = SceneSpec::Procedural {
+    let scene = SceneSpec::Procedural {
         size: n,
         cell_m: 80.0,
         seed: 4,
         relief_m: 1200.0,
     };
-    s.voxel_size_m = 80.0;
-    s.voxel_layers = 40;
-    s.wind_iterations = 10;
-    s.flakes.count = 200_000;
+    let s = coarse(VALLEY, scene, (80.0, 40), 10, 200_000);
     let (g, z) = s.build_scene().unwrap().unwrap();
     let full = run(&s, &g, &z).unwrap();
     assert!(!full.precipitation_fallback && full.flakes_landed > 50_000);
