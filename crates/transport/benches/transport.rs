@@ -114,9 +114,9 @@ fn flakes(c: &mut Criterion) {
     let map = precipitation_map(&vox, &wind, inflow, &params).unwrap();
     eprintln!(
         "flakes: {} landed, {} lost, {:.0} % through the sides",
-        map.landed,
-        map.lost,
-        100.0 * map.side_share
+        map.flakes.landed,
+        map.flakes.lost,
+        100.0 * map.flakes.side_share
     );
     let mut group = c.benchmark_group("flakes");
     group.throughput(Throughput::Elements(count as u64));

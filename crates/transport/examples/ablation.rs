@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .fold(0.0f32, f32::max);
     println!(
         "max wind {wmax}, flakes landed {} (uniform snowfall fallback: {})",
-        out.flakes_landed, out.precipitation_fallback
+        out.flakes.landed, out.precipitation_fallback
     );
     let full = out.state.depth();
     let mean_full = full.iter().map(|&d| f64::from(d)).sum::<f64>() / full.len() as f64;

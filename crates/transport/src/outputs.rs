@@ -98,9 +98,9 @@ pub fn write_outputs(
             "relative_divergence": out.wind_report.mean.relative_divergence,
         },
         "flakes": {
-            "landed": out.flakes_landed,
-            "lost": out.flakes_lost,
-            "side_share": out.flakes_side_share,
+            "landed": out.flakes.landed,
+            "lost": out.flakes.lost,
+            "side_share": out.flakes.side_share,
             "uniform_fallback": out.precipitation_fallback,
         },
         "steps": out.steps,

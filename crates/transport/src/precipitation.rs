@@ -115,6 +115,18 @@ impl FlakeParams {
     }
 }
 
+/// What became of the flakes of a precipitation map.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct FlakeSummary {
+    /// Flakes that landed in the domain.
+    pub landed: u64,
+    /// Flakes that missed it (blown out across a side) or were abandoned.
+    pub lost: u64,
+    /// Share of the launched flakes that entered across the upwind sides rather than from
+    /// the launch plane over the domain ([`launch`]).
+    pub side_share: f64,
+}
+
 /// A precipitation map on the voxel columns (`nx × ny`, row 0 at the north).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PrecipitationMap {
@@ -126,13 +138,8 @@ pub struct PrecipitationMap {
     pub ratio: Vec<f32>,
     /// Flakes landed on each column, before filtering.
     pub counts: Vec<u32>,
-    /// Flakes that landed in the domain.
-    pub landed: u64,
-    /// Flakes that missed it (blown out across a side) or were abandoned.
-    pub lost: u64,
-    /// Share of the launched flakes that entered across the upwind sides rather than from
-    /// the launch plane over the domain ([`launch`]).
-    pub side_share: f64,
+    /// What became of the flakes.
+    pub flakes: FlakeSummary,
     /// Columns replaced as outliers.
     pub outliers: usize,
 }
@@ -146,7 +153,7 @@ enum Fate {
 /// The flake's equation of motion (4.5-4.7): gravity and the drag on the velocity
 /// relative to the air, Euler steps of one voxel of travel with the drag implicit in `v`.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Drag {
+struct Drag {
     /// Drag constant `k`, m⁻¹.
     k: f64,
     /// Terminal speed `√(g / k)`, m s⁻¹.
@@ -294,11 +301,11 @@ pub fn precipitation_map(
         vt,
         cell: grid.cell,
     };
-    let launcher = Launcher::new(grid, &centred, &drag, inflow, top);
     let columns = grid.nx * grid.ny;
     let layers: Vec<u32> = (0..columns)
         .map(|c| grid.ground_layers(c % grid.nx, c / grid.nx) as u32)
         .collect();
+    let launcher = Launcher::new(grid, &layers, &centred, &drag, inflow, top);
     let sky = Sky {
         grid,
         wind: &centred,
@@ -354,9 +361,11 @@ pub fn precipitation_map(
         height: grid.ny,
         ratio,
         counts: counts_north,
-        landed,
-        lost,
-        side_share: launcher.side_share,
+        flakes: FlakeSummary {
+            landed,
+            lost,
+            side_share: launcher.side_share,
+        },
         outliers,
     })
 }

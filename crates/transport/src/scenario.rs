@@ -15,7 +15,7 @@
 
 use crate::error::{TransportError, check_positive, check_range};
 use crate::params::{Timeline, TransportParams, Weather};
-use crate::precipitation::{FlakeParams, precipitation_map};
+use crate::precipitation::{FlakeParams, FlakeSummary, precipitation_map};
 use crate::step::{MassBudget, SceneMaps, SnowState, StepScratch, step};
 use crate::terrain_wind::{check_len, modify_wind};
 use crate::wind3d::field::Velocity;
@@ -255,15 +255,12 @@ pub struct RunOutputs {
     pub voxels: VoxelGrid,
     /// The mean 3D wind (Section 6.3).
     pub mean_wind: Velocity,
-    /// Flakes that landed on the domain.
-    pub flakes_landed: u64,
-    /// Flakes blown out of the domain or abandoned.
-    pub flakes_lost: u64,
-    /// Share of the flakes launched across the upwind sides.
-    pub flakes_side_share: f64,
+    /// What became of the flakes of the precipitation map (zeros with
+    /// `uniform_precipitation`).
+    pub flakes: FlakeSummary,
     /// Whether the snowfall fell back to uniform because fewer flakes landed than there
-    /// are voxel columns (a map that noisy carries no information: on coarse grids of
-    /// large scenes, flakes released above the terrain drift for kilometres).
+    /// are voxel columns (a map that noisy carries no information: too few flakes for the
+    /// grid, or a wind that blows most of them across the domain).
     pub precipitation_fallback: bool,
     /// Transport steps taken.
     pub steps: usize,
@@ -325,31 +322,28 @@ pub fn run(
     let (wind_u, wind_v) = modify_wind(&scenario.transport, geometry, heights, &u0, &v0)?;
     times.terrain_wind_s = clock.elapsed().as_secs_f64();
     let clock = std::time::Instant::now();
-    let (mut flakes_lost, mut flakes_side_share) = (0, 0.0);
-    let (precipitation_ratio, flakes_landed, precipitation_fallback) =
-        if scenario.uniform_precipitation {
-            (vec![1.0; geometry.len()], 0, false)
+    let (precipitation_ratio, flakes, precipitation_fallback) = if scenario.uniform_precipitation {
+        (vec![1.0; geometry.len()], FlakeSummary::default(), false)
+    } else {
+        let map = precipitation_map(
+            &voxels,
+            &solver.mean_velocity(),
+            scenario.wind.inflow(),
+            &scenario.flakes,
+        )?;
+        if map.flakes.landed < (map.width * map.height) as u64 {
+            (vec![1.0; geometry.len()], map.flakes, true)
         } else {
-            let map = precipitation_map(
-                &voxels,
-                &solver.mean_velocity(),
-                scenario.wind.inflow(),
-                &scenario.flakes,
-            )?;
-            (flakes_lost, flakes_side_share) = (map.lost, map.side_share);
-            if map.landed < (map.width * map.height) as u64 {
-                (vec![1.0; geometry.len()], map.landed, true)
-            } else {
-                let mut ratio = to_transport(column_geometry, map.ratio, geometry);
-                let mean = ratio.iter().map(|&r| f64::from(r)).sum::<f64>() / ratio.len() as f64;
-                if mean > 0.0 {
-                    ratio
-                        .iter_mut()
-                        .for_each(|r| *r = (f64::from(*r) / mean) as f32);
-                }
-                (ratio, map.landed, false)
+            let mut ratio = to_transport(column_geometry, map.ratio, geometry);
+            let mean = ratio.iter().map(|&r| f64::from(r)).sum::<f64>() / ratio.len() as f64;
+            if mean > 0.0 {
+                ratio
+                    .iter_mut()
+                    .for_each(|r| *r = (f64::from(*r) / mean) as f32);
             }
-        };
+            (ratio, map.flakes, false)
+        }
+    };
     times.precipitation_s = clock.elapsed().as_secs_f64();
     let clock = std::time::Instant::now();
     let mut state = SnowState::uniform(
@@ -426,9 +420,7 @@ pub fn run(
         wind_report,
         mean_wind: solver.mean_velocity(),
         voxels,
-        flakes_landed,
-        flakes_lost,
-        flakes_side_share,
+        flakes,
         precipitation_fallback,
         steps,
         times,

@@ -100,10 +100,18 @@ fn upwind_fall(
 
 impl Launcher {
     /// The launch surface for a plane at height `top` (voxel units above the grid's base)
+    /// over columns solid up to `layers`
     /// and flakes of motion `drag`, through the voxel-centred wind `wind` the flakes fly
     /// through, whose upwind sides held the inflow `inflow` (east, north; only its signs
     /// matter).
-    pub fn new(grid: &VoxelGrid, wind: &Centred, drag: &Drag, inflow: [f64; 2], top: f64) -> Self {
+    pub fn new(
+        grid: &VoxelGrid,
+        layers: &[u32],
+        wind: &Centred,
+        drag: &Drag,
+        inflow: [f64; 2],
+        top: f64,
+    ) -> Self {
         let (nx, ny) = (grid.nx, grid.ny);
         let mut sites = Vec::new();
         let mut cumulative = Vec::new();
@@ -118,7 +126,7 @@ impl Launcher {
         // The launch plane over the columns it clears.
         for j in 0..ny {
             for i in 0..nx {
-                if (grid.ground_layers(i, j) as f64) < top {
+                if f64::from(layers[j * nx + i]) < top {
                     let site = Site {
                         origin: [i as f64, j as f64, top],
                         span: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
@@ -146,7 +154,7 @@ impl Launcher {
                 let mut origin = [at, at, 0.0];
                 origin[1 - axis] = l as f64;
                 let (i, j) = (origin[0] as usize, origin[1] as usize);
-                let ground = grid.ground_layers(i, j) as f64;
+                let ground = f64::from(layers[j * nx + i]);
                 if ground >= top {
                     continue;
                 }

@@ -31,7 +31,7 @@ fn open_flat_ground_gets_uniform_snow() {
         ..Default::default()
     };
     let map = precipitation_map(&grid, &wind, [5.0, 0.0], &params).unwrap();
-    assert!(map.landed > 20_000, "{}", map.landed);
+    assert!(map.flakes.landed > 20_000, "{}", map.flakes.landed);
     let mean = map.ratio.iter().map(|&r| f64::from(r)).sum::<f64>() / map.ratio.len() as f64;
     assert!((mean - 1.0).abs() < 0.02, "mean {mean}");
     for (i, r) in map.ratio.iter().enumerate() {
@@ -60,8 +60,12 @@ fn strong_sheared_wind_still_gives_uniform_snow() {
         ..Default::default()
     };
     let map = precipitation_map(&grid, &wind, [10.0, 0.0], &params).unwrap();
-    assert!(map.side_share > 0.8, "side share {}", map.side_share);
-    assert!(map.landed > 15_000, "{}", map.landed);
+    assert!(
+        map.flakes.side_share > 0.8,
+        "side share {}",
+        map.flakes.side_share
+    );
+    assert!(map.flakes.landed > 15_000, "{}", map.flakes.landed);
     let cols: Vec<f64> = (0..24)
         .map(|c| (0..24).map(|r| map.counts[r * 24 + c] as f64).sum::<f64>() / 24.0)
         .collect();

@@ -63,7 +63,7 @@ fn a_small_castle_run_closes_its_budget() {
     assert!(b.closure_error.abs() < 1e-5 * scale, "{b:?}");
     assert!(out.state.swe.iter().all(|m| m.is_finite() && *m >= 0.0));
     assert!(out.wind_report.mean.relative_divergence < 1e-5);
-    assert!(out.flakes_landed > 0 && !out.precipitation_fallback);
+    assert!(out.flakes.landed > 0 && !out.precipitation_fallback);
     // 7.5 mm/h water equivalent for 12 h is 90 kg/m² on average, less what melted and blew
     // away in the warm hours.
     let area = g.cell_area() * g.len() as f64;
@@ -122,7 +122,7 @@ fn the_valley_wind_erodes_windward_slopes_and_loads_lee_slopes() {
     let s = coarse(VALLEY, scene, (80.0, 40), 10, 200_000);
     let (g, z) = s.build_scene().unwrap().unwrap();
     let full = run(&s, &g, &z).unwrap();
-    assert!(!full.precipitation_fallback && full.flakes_landed > 50_000);
+    assert!(!full.precipitation_fallback && full.flakes.landed > 50_000);
     let mut still = s.clone();
     still.transport.phenomena.saltation = false;
     still.transport.phenomena.suspension = false;

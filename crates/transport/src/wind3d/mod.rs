@@ -22,8 +22,9 @@
 //! (zero-gradient velocity, `φ = 0`). Sides the inflow runs parallel to (a wind from a
 //! multiple of 90°) are symmetry planes, closed: left open, the air lifted by the relief
 //! under the lid leaves sideways, and the snow with it (a valley lost its snow over the
-//! 400 m along both sides), where in the wider world the neighbouring air pushes back. The mean wind is the average of the fields after each
-//! iteration (Section 6.3: "une texture 3D qui conserve la moyenne des itérations").
+//! 400 m along both sides), where in the wider world the neighbouring air pushes back.
+//! The mean wind is the average of the fields after each iteration (Section 6.3: "une
+//! texture 3D qui conserve la moyenne des itérations").
 //!
 //! The inflow profile is the log law `U(z) = U_r ln(z'/z0) / ln(z_r/z0)` of the height `z'`
 //! above the ground of the boundary column (uniform `U_r` when `inflow_roughness_m` is 0).
@@ -125,11 +126,11 @@ impl WindParams {
 enum Face {
     /// Between two fluid voxels: advected, diffused, projected.
     Fluid,
-    /// Touching a solid voxel, the ground or the lid: always 0.
+    /// Touching a solid voxel, the ground or the lid, or on a side the inflow runs parallel
+    /// to (a symmetry plane): always 0.
     Closed,
     /// Upwind domain boundary: holds the inflow profile.
     Inflow,
-    // (Sides parallel to the inflow are `Closed`, symmetry planes.)
     /// Downwind domain boundary: zero-gradient, `φ = 0` beyond.
     Outflow,
 }

@@ -47,6 +47,8 @@ struct Level {
 impl Level {
     fn new(dims: [usize; 3], diag: Vec<f32>, off: Vec<[f32; 6]>) -> Self {
         let n = dims[0] * dims[1] * dims[2];
+        // The finest level (unit couplings, `off` empty) works on the caller's vectors.
+        let vectors = if off.is_empty() { 0 } else { n };
         Self {
             scaled_inverse: diag
                 .iter()
@@ -55,8 +57,8 @@ impl Level {
             dims,
             diag,
             off,
-            x: vec![0.0; n],
-            b: vec![0.0; n],
+            x: vec![0.0; vectors],
+            b: vec![0.0; vectors],
             tmp: vec![0.0; n],
             zeros: vec![0.0; dims[0]],
         }
@@ -240,10 +242,7 @@ impl Multigrid {
     /// Builds the hierarchy from the fine operator (`diag` = number of open faces of each
     /// fluid voxel, 0 in solids; unit couplings between active neighbours).
     pub fn new(dims: [usize; 3], diag: &[f32]) -> Self {
-        let mut fine = Level::new(dims, diag.to_vec(), Vec::new());
-        // The finest level works on the caller's vectors.
-        (fine.x, fine.b) = (Vec::new(), Vec::new());
-        let mut levels = vec![fine];
+        let mut levels = vec![Level::new(dims, diag.to_vec(), Vec::new())];
         while levels
             .last()
             .is_some_and(|l| l.len() > COARSEST_CELLS && l.dims.iter().any(|&d| d > 2))
