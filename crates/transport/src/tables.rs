@@ -51,7 +51,7 @@ pub(crate) struct Point {
 
 /// `t` rounded towards zero, for `0 ≤ t < 2³¹`; NaN gives `2³¹`. One instruction on
 /// x86-64, where `as` would add the saturation checks it does not need here.
-#[inline]
+#[inline(always)]
 fn truncate(t: f32) -> u32 {
     #[cfg(target_arch = "x86_64")]
     {
@@ -75,7 +75,7 @@ impl Axis {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn locate(&self, x: f32) -> Point {
         // Clamped to [0, last] with comparisons that keep NaN (one instruction each).
         let t = (x - self.lo) * self.inv_step;
@@ -111,19 +111,19 @@ impl Table1 {
     }
 
     /// The sampling of the table, to locate a point once for tables that share it.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn axis(&self) -> &Axis {
         &self.axis
     }
 
     /// The value at a point located on [`Table1::axis`].
-    #[inline]
+    #[inline(always)]
     pub(crate) fn at_point(&self, p: Point) -> f32 {
         let [value, rise] = self.segments[p.segment];
         value + p.weight * rise
     }
 
-    #[inline]
+    #[inline(always)]
     pub(crate) fn at(&self, x: f32) -> f32 {
         self.at_point(self.axis.locate(x))
     }
@@ -151,7 +151,7 @@ impl TableRows {
     }
 
     /// Row `row` at a point located on `self.axis`.
-    #[inline]
+    #[inline(always)]
     fn at(&self, row: usize, p: Point) -> f32 {
         let [value, rise] = self.segments[row * self.per_row + p.segment];
         value + p.weight * rise
@@ -190,7 +190,7 @@ impl ShearTable {
     }
 
     /// Saltating friction velocity for a wind `u_r`, m s⁻¹.
-    #[inline]
+    #[inline(always)]
     pub fn saltating_u_star(&self, u_r: f32) -> f32 {
         self.table.at(u_r)
     }
@@ -264,7 +264,7 @@ impl BlowingSnowTable {
 
     /// `S(u*) = Qsusp u_p / Qsalt`, m s⁻¹, and `V(u*) + ψs(u*, u*t) = Qsubl u_p / Qsalt`,
     /// s⁻¹ (≤ 0).
-    #[inline]
+    #[inline(always)]
     pub fn per_flux(&self, u_star: f32, u_star_t: f32) -> (f32, f32) {
         let p = self.suspension.axis().locate(u_star);
         let t = self.u_star_t_axis.locate(u_star_t);

@@ -22,16 +22,13 @@ pub fn saltation_capacity(u_star: f64, u_star_t: f64, rho_air: f64) -> f64 {
 /// The fetch rule (Eqs. 5.38-5.39): the flux leaving a cell whose upwind neighbour sends
 /// `q_upwind`, with capacity `q_max`, given whether the shear grows along the wind
 /// (`∂u*/∂x* ≥ 0`) and the relaxation factor `μ Δx* / f` (capped at 1 by the caller).
-#[inline]
+#[inline(always)]
 pub fn fetch_limited_flux(q_upwind: f32, q_max: f32, shear_growing: bool, relax: f32) -> f32 {
-    if shear_growing {
-        q_upwind + relax * (q_max - q_upwind)
-    } else if q_upwind < q_max {
-        // `min` by comparison: one instruction in the sweeps' dependency chain.
-        q_upwind
-    } else {
-        q_max
-    }
+    // Both branches, then a select: no branch for the sweeps to mispredict, and their
+    // loops over independent lanes vectorise. `min` by comparison: one instruction.
+    let grown = q_upwind + relax * (q_max - q_upwind);
+    let capped = if q_upwind < q_max { q_upwind } else { q_max };
+    if shear_growing { grown } else { capped }
 }
 
 #[cfg(test)]

@@ -2,12 +2,13 @@
 //! per-cell passes share: the rate tables and the step's constants.
 
 use super::sweep::{self, Sweep};
-use super::{SceneMaps, Shear, SnowState};
+use super::{SceneMaps, ShearCells, ShearMaps, SnowState};
 use crate::params::TransportParams;
 use crate::physics::density::{densification_rate, new_snow_density};
 use crate::physics::shear::{ShearSite, threshold_friction_velocity};
 use crate::physics::{FREEZING_K, GRAVITY, VON_KARMAN};
 use crate::tables::{BlowingSnowTable, ShearTable, Table1};
+use multiversion::multiversion;
 use rayon::prelude::*;
 
 /// Densities tabulated for `u*t` and densification, kg m⁻³.
@@ -81,61 +82,98 @@ pub(super) struct Context<'a> {
 
 /// Pass 1: `u*t` (5.25), `u*` (5.26-5.36) and `Qs_max` (5.37) per cell, in `f32`: the
 /// same branches as [`crate::physics::shear::surface_shear`], with the saltating `u*` from
-/// the Newton-Raphson table. Each row is then swept along x while it is in cache.
+/// the Newton-Raphson table. Each block of [`sweep::X_ROWS`] rows is then swept along x
+/// while it is in cache.
 pub(super) fn shear_pass(
     ctx: &Context,
     state: &SnowState,
     along_x: &Sweep,
-    shear: &mut [Shear],
+    shear: &mut ShearMaps,
     q_x: &mut [f32],
 ) {
-    let w = ctx.width;
+    let block = sweep::X_ROWS * ctx.width;
+    let ShearMaps {
+        speed,
+        u_star,
+        u_star_t,
+        q_max_per_speed,
+    } = shear;
+    speed
+        .par_chunks_mut(block)
+        .zip(u_star.par_chunks_mut(block))
+        .zip(u_star_t.par_chunks_mut(block))
+        .zip(q_max_per_speed.par_chunks_mut(block))
+        .zip(q_x.par_chunks_mut(block))
+        .enumerate()
+        .for_each(|(b, ((((speed, u_star), u_star_t), q_max), q_x))| {
+            let maps = [speed, u_star, u_star_t, q_max, q_x];
+            shear_block(ctx, state, along_x, b * block, maps);
+        });
+}
+
+/// [`shear_pass`] over the cells from `first` on: `maps` are their speed, `u*`, `u*t`,
+/// capacity per unit speed and saltation flux along x.
+#[multiversion(targets("x86_64+avx2"))]
+fn shear_block(
+    ctx: &Context,
+    state: &SnowState,
+    along_x: &Sweep,
+    first: usize,
+    maps: [&mut [f32]; 5],
+) {
     let site = ctx.site;
-    let z_r = site.z_r as f32;
-    let (z0_snow, z0_veg) = (site.z0_snow as f32, site.z0_veg as f32);
     let holding = site.holding_depth as f32;
     let snow_log = (VON_KARMAN / (site.z_r / site.z0_snow).ln()) as f32;
     // Qs_max = 0.68 (ρa/g) u*t (u*² − u*t²) / u* (5.37).
     let capacity = (0.68 * ctx.params.air_density / GRAVITY) as f32;
-    let kappa = VON_KARMAN as f32;
+    let [speed, u_star, u_star_t, q_max, q_x] = maps;
+    let n = speed.len();
+    let cells = first..first + n;
     let scene = ctx.scene;
-    shear
-        .par_chunks_mut(w)
-        .zip(q_x.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(r, (shear_row, q_row))| {
-            let cells = r * w..(r + 1) * w;
-            let (u, v) = (&scene.wind_u[cells.clone()], &scene.wind_v[cells.clone()]);
-            let (swe, density) = (&state.swe[cells.clone()], &state.density[cells]);
-            // The table lookups first, in a loop of their own so that the processor
-            // overlaps many cells: `u*t`, and `u*` as if the surface saltated.
-            for (s, ((&u, &v), &rho)) in shear_row.iter_mut().zip(u.iter().zip(v).zip(density)) {
-                let speed = (u * u + v * v).sqrt();
-                *s = Shear {
-                    speed,
-                    u_star: ctx
-                        .shear_table
-                        .saltating_u_star(super::at_most(speed, ctx.max_wind)),
-                    u_star_t: ctx.rates.threshold.at(rho),
-                    q_max_per_speed: 0.0,
-                };
-            }
-            for (s, (&swe, &rho)) in shear_row.iter_mut().zip(swe.iter().zip(density)) {
-                let depth = if rho > 0.0 { swe / rho } else { 0.0 };
-                let (speed, salt, u_star_t) = (s.speed, s.u_star, s.u_star_t);
-                (s.u_star, s.q_max_per_speed) = if depth <= holding {
-                    // Vegetation not yet filled (5.27-5.28, 5.26).
-                    let fs = if holding > 0.0 { depth / holding } else { 1.0 };
-                    let z0 = fs * z0_snow + (1.0 - fs) * z0_veg;
-                    (speed * kappa / (z_r / z0).ln(), 0.0)
-                } else if salt > u_star_t {
-                    // Qs_max / W; W > 0 here, since u*(W) > u*t ≥ 0.
-                    let q = capacity * u_star_t * (salt * salt - u_star_t * u_star_t);
-                    (salt, q / (salt * speed))
-                } else {
-                    (speed * snow_log, 0.0)
-                };
-            }
-            sweep::sweep_line(along_x, shear_row, u, q_row);
-        });
+    let (u, v) = (&scene.wind_u[cells.clone()], &scene.wind_v[cells.clone()]);
+    let (swe, density) = (&state.swe[cells.clone()], &state.density[cells]);
+    let (u_star, u_star_t, q_max) = (&mut u_star[..n], &mut u_star_t[..n], &mut q_max[..n]);
+    let (u, v, swe, density) = (&u[..n], &v[..n], &swe[..n], &density[..n]);
+    // The table lookups first, in a loop of their own so that the processor overlaps
+    // many cells: `u*t`, and `u*` as if the surface saltated.
+    for i in 0..n {
+        speed[i] = (u[i] * u[i] + v[i] * v[i]).sqrt();
+        u_star[i] = ctx
+            .shear_table
+            .saltating_u_star(super::at_most(speed[i], ctx.max_wind));
+        u_star_t[i] = ctx.rates.threshold.at(density[i]);
+    }
+    for i in 0..n {
+        let (rho, speed) = (density[i], speed[i]);
+        let depth = if rho > 0.0 { swe[i] / rho } else { 0.0 };
+        let (salt, u_star_t) = (u_star[i], u_star_t[i]);
+        (u_star[i], q_max[i]) = if depth <= holding {
+            (vegetation_u_star(site, depth, speed), 0.0)
+        } else if salt > u_star_t {
+            // Qs_max / W; W > 0 here, since u*(W) > u*t ≥ 0.
+            let q = capacity * u_star_t * (salt * salt - u_star_t * u_star_t);
+            (salt, q / (salt * speed))
+        } else {
+            (speed * snow_log, 0.0)
+        };
+    }
+    let cells = ShearCells {
+        speed,
+        u_star,
+        u_star_t,
+        q_max_per_speed: q_max,
+    };
+    sweep::sweep_rows(along_x, ctx.width, cells, u, q_x);
+}
+
+/// `u*` over vegetation not yet filled with snow of `depth` m, in a wind of `speed` m s⁻¹
+/// (5.26-5.28). Out of line: few cells take it, and the vectorised loop of
+/// [`shear_block`] would otherwise evaluate its logarithm for every cell.
+#[inline(never)]
+fn vegetation_u_star(site: ShearSite, depth: f32, speed: f32) -> f32 {
+    let (z_r, holding) = (site.z_r as f32, site.holding_depth as f32);
+    let (z0_snow, z0_veg) = (site.z0_snow as f32, site.z0_veg as f32);
+    let fs = if holding > 0.0 { depth / holding } else { 1.0 };
+    let z0 = fs * z0_snow + (1.0 - fs) * z0_veg;
+    speed * VON_KARMAN as f32 / (z_r / z0).ln()
 }

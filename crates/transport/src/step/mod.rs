@@ -28,6 +28,11 @@
 //! **Parallelism.** Every pass computes each cell from the previous state or from its
 //! upwind chain, and budgets are summed per row then in row order: results are
 //! bit-identical for any number of threads.
+//!
+//! **Vector units.** The per-row kernels are compiled for the x86-64 baseline and for AVX2,
+//! chosen at run time ([`multiversion`]); their loops are written branch-free over
+//! structure-of-arrays maps so that they vectorise. Neither version contracts multiplies
+//! and adds, so both give the same bits on any processor.
 
 mod sweep;
 
@@ -157,7 +162,7 @@ impl MassBudget {
 pub struct StepScratch {
     tables: Tables,
     rates: Option<cells::CellRates>,
-    shear: Vec<Shear>,
+    shear: ShearMaps,
     q_x: Vec<f32>,
     q_y: Vec<f32>,
     /// The state at the end of the step, swapped into the [`SnowState`].
@@ -171,16 +176,63 @@ pub struct StepScratch {
     pub q_subl: Vec<f32>,
 }
 
-/// Shear state of a cell in the current step.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Shear {
+/// Shear state of every cell in the current step, one map per quantity, so that each pass
+/// reads only what it uses and its loops vectorise.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ShearMaps {
     /// Wind speed `W` at `z_r`, m s⁻¹.
-    pub speed: f32,
-    pub u_star: f32,
-    pub u_star_t: f32,
+    pub speed: Vec<f32>,
+    /// Friction velocity `u*`, m s⁻¹.
+    pub u_star: Vec<f32>,
+    /// Threshold friction velocity `u*t`, m s⁻¹.
+    pub u_star_t: Vec<f32>,
     /// Saltation capacity magnitude per unit wind speed, `Qs_max / W`, kg m⁻² (0 where no
     /// saltation): the capacity along an axis is this times the wind component.
-    pub q_max_per_speed: f32,
+    pub q_max_per_speed: Vec<f32>,
+}
+
+impl ShearMaps {
+    fn resize(&mut self, n: usize) {
+        for v in [
+            &mut self.speed,
+            &mut self.u_star,
+            &mut self.u_star_t,
+            &mut self.q_max_per_speed,
+        ] {
+            resize(v, n);
+        }
+    }
+
+    /// Every map over all cells.
+    pub(crate) fn all(&self) -> ShearCells<'_> {
+        ShearCells {
+            speed: &self.speed,
+            u_star: &self.u_star,
+            u_star_t: &self.u_star_t,
+            q_max_per_speed: &self.q_max_per_speed,
+        }
+    }
+}
+
+/// The [`ShearMaps`] over a run of cells.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ShearCells<'a> {
+    pub speed: &'a [f32],
+    pub u_star: &'a [f32],
+    pub u_star_t: &'a [f32],
+    pub q_max_per_speed: &'a [f32],
+}
+
+impl<'a> ShearCells<'a> {
+    /// The cells `range` of these.
+    pub(crate) fn cells(&self, range: std::ops::Range<usize>) -> ShearCells<'a> {
+        ShearCells {
+            speed: &self.speed[range.clone()],
+            u_star: &self.u_star[range.clone()],
+            u_star_t: &self.u_star_t[range.clone()],
+            q_max_per_speed: &self.q_max_per_speed[range],
+        }
+    }
 }
 
 /// `f32::max(x, lo)` as one `maxss`: the comparison form gives `lo` for a NaN `x` too,
@@ -230,7 +282,7 @@ pub fn step(
         check_len("precipitation_ratio", p, g)?;
     }
     let n = g.len();
-    resize(&mut scratch.shear, n);
+    scratch.shear.resize(n);
     for v in [
         &mut scratch.next_swe,
         &mut scratch.next_density,
@@ -296,14 +348,14 @@ pub fn step(
     sweep::sweep_y(
         &along_y,
         g.width(),
-        &scratch.shear,
+        scratch.shear.all(),
         scene.wind_v,
         &mut scratch.q_y,
     );
     // Passes 3 and 4: suspension, sublimation, melt and the limited outflows; gather the
     // inflows, update mass and density.
     let salt = transfer::Saltation {
-        shear: &scratch.shear,
+        shear: scratch.shear.all(),
         q_x: &scratch.q_x,
         q_y: &scratch.q_y,
     };

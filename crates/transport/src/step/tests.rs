@@ -203,7 +203,7 @@ fn saltation_grows_along_the_fetch_from_a_clean_border() {
     )
     .unwrap();
     let q: Vec<f32> = (0..120).map(|c| scratch.q_salt[120 + c]).collect();
-    let q_max = scratch.shear[120].q_max_per_speed * scratch.shear[120].speed;
+    let q_max = scratch.shear.q_max_per_speed[120] * scratch.shear.speed[120];
     // First cell: (μ Δx / f) Qs_max = 0.1 Qs_max; then monotone growth towards Qs_max.
     assert!((q[0] - 0.1 * q_max).abs() < 1e-6 * q_max);
     assert!(q.windows(2).all(|p| p[1] >= p[0]));
@@ -328,6 +328,109 @@ fn results_do_not_depend_on_the_thread_count() {
     };
     assert_eq!(bits(&s1), bits(&s2));
     assert_eq!(b1, b2);
+}
+
+/// The fetch rule (Eqs. 5.38-5.39) run cell by cell along one line of cells `line`, whose
+/// wind component `comp` is positive towards the end of the line: the plain recurrence the
+/// lane sweeps must reproduce.
+fn fetch_along_line(
+    sweep: &sweep::Sweep,
+    shear: &ShearMaps,
+    comp: &[f32],
+    line: &[usize],
+) -> Vec<f32> {
+    use crate::physics::saltation::fetch_limited_flux;
+    let relax_cell = |i: usize, up: Option<(f32, f32)>| {
+        let (q_max, u_star) = (shear.q_max_per_speed[i] * comp[i].abs(), shear.u_star[i]);
+        let (q_up, u_up) = match up {
+            Some(up) => up,
+            None if sweep.saturated_inflow => (q_max, u_star),
+            None => (0.0, u_star),
+        };
+        fetch_limited_flux(q_up, q_max, u_star >= u_up, sweep.relax)
+    };
+    let mut q = vec![0.0f32; line.len()];
+    let mut up = None;
+    for (k, &i) in line.iter().enumerate() {
+        up = (comp[i] > 0.0).then(|| {
+            q[k] = relax_cell(i, up);
+            (q[k], shear.u_star[i])
+        });
+    }
+    up = None;
+    for (k, &i) in line.iter().enumerate().rev() {
+        up = (comp[i] < 0.0).then(|| {
+            let flux = relax_cell(i, up);
+            q[k] = -flux;
+            (flux, shear.u_star[i])
+        });
+    }
+    q
+}
+
+#[test]
+fn lane_sweeps_match_the_cell_by_cell_recurrence() {
+    // 150 columns: y bands of 64 and a partial one; 29 rows: a partial block of x rows.
+    let (w, h) = (150, 29);
+    let n = w * h;
+    let g = GridGeometry::square(w, h, 1.0).unwrap();
+    let (mut u, mut v) = swirl(&g, 5.0);
+    for i in (0..n).step_by(17) {
+        (u[i], v[i]) = (0.0, 0.0); // calm cells end every chain
+    }
+    let shear = ShearMaps {
+        speed: u.iter().zip(&v).map(|(u, v)| u.hypot(*v)).collect(),
+        // Shear rising and falling along both axes, some cells without saltation.
+        u_star: (0..n)
+            .map(|i| 0.2 + ((i * 31) % 13) as f32 * 0.05)
+            .collect(),
+        u_star_t: vec![0.2; n],
+        q_max_per_speed: (0..n)
+            .map(|i| {
+                if i % 11 == 0 {
+                    0.0
+                } else {
+                    1e-3 * (1 + (i * 17) % 7) as f32
+                }
+            })
+            .collect(),
+    };
+    for saturated_inflow in [false, true] {
+        let sweep = sweep::Sweep {
+            relax: 0.3,
+            saturated_inflow,
+        };
+        let block = sweep::X_ROWS * w;
+        let mut q_x = vec![f32::NAN; n];
+        for (b, q) in q_x.chunks_mut(block).enumerate() {
+            let cells = b * block..b * block + q.len();
+            let comp = &u[cells.clone()];
+            sweep::sweep_rows(&sweep, w, shear.all().cells(cells), comp, q);
+        }
+        let mut q_y = vec![f32::NAN; n];
+        sweep::sweep_y(&sweep, w, shear.all(), &v, &mut q_y);
+        let bits = |q: Vec<f32>| q.into_iter().map(f32::to_bits).collect::<Vec<_>>();
+        for r in 0..h {
+            // Along x, east positive: the row from west to east.
+            let line: Vec<usize> = (0..w).map(|c| r * w + c).collect();
+            let got = line.iter().map(|&i| q_x[i]).collect();
+            assert_eq!(
+                bits(got),
+                bits(fetch_along_line(&sweep, &shear, &u, &line)),
+                "row {r}"
+            );
+        }
+        for c in 0..w {
+            // Along y, north positive: the column from south (last row) to north.
+            let line: Vec<usize> = (0..h).rev().map(|r| r * w + c).collect();
+            let got = line.iter().map(|&i| q_y[i]).collect();
+            assert_eq!(
+                bits(got),
+                bits(fetch_along_line(&sweep, &shear, &v, &line)),
+                "column {c}"
+            );
+        }
+    }
 }
 
 #[test]

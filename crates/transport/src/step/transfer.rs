@@ -10,7 +10,8 @@
 //! every outflow reads the state at the start of the step.
 
 use super::cells::Context;
-use super::{MAX_DENSITY, Shear, SnowState, at_least, at_most};
+use super::{MAX_DENSITY, ShearCells, SnowState, at_least, at_most};
+use multiversion::multiversion;
 use rayon::prelude::*;
 
 /// Rows per rayon task.
@@ -63,7 +64,7 @@ pub(super) struct RowBudget {
 /// The saltation fluxes of the step, kg m⁻¹ s⁻¹.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Saltation<'a> {
-    pub shear: &'a [Shear],
+    pub shear: ShearCells<'a>,
     pub q_x: &'a [f32],
     pub q_y: &'a [f32],
 }
@@ -165,43 +166,37 @@ pub(super) fn transfer_pass(
 /// and sublimation rate into `blowing`; returns the row's budget of sublimation, melt and
 /// transport. Short loops: the table lookups apart, so the processor overlaps many cells,
 /// the limiter branch-free so it vectorises, the sums in column order.
+#[multiversion(targets("x86_64+avx2"))]
 fn outflow_row(
     ctx: &Context,
     state: &SnowState,
     salt: Saltation,
     r: usize,
     out: &mut Outflows,
-    [q_salt, q_susp, q_subl]: [&mut [f32]; 3],
+    blowing: [&mut [f32]; 3],
 ) -> RowBudget {
+    let [q_salt, q_susp, q_subl] = blowing;
     let w = ctx.width;
     let on = ctx.params.phenomena;
     let holding = ctx.params.vegetation_snow_depth_m as f32;
     let saltation = if on.saltation { 1.0 } else { 0.0 };
     let (step_x, step_y) = (ctx.dt * ctx.inv_dx, ctx.dt * ctx.inv_dy);
     let cells = r * w..(r + 1) * w;
-    let (shear, q_x, q_y) = (
-        &salt.shear[cells.clone()],
-        &salt.q_x[cells.clone()],
-        &salt.q_y[cells.clone()],
-    );
-    let blowing = q_salt
-        .iter_mut()
-        .zip(q_susp.iter_mut())
-        .zip(q_subl.iter_mut());
-    for (((sa, su, sb), s), (&q_x, &q_y)) in blowing
-        .map(|((a, b), c)| (a, b, c))
-        .zip(shear)
-        .zip(q_x.iter().zip(q_y))
-    {
-        let q_salt = (q_x * q_x + q_y * q_y).sqrt();
-        let (mut q_susp, mut q_subl) = (0.0f32, 0.0f32);
-        if s.q_max_per_speed > 0.0 && q_salt > 0.0 {
-            let per_up = q_salt / (2.8 * s.u_star_t); // φr h* = Qsalt / u_p (5.44-5.45)
-            let (susp, subl) = ctx.blowing_table.per_flux(s.u_star, s.u_star_t);
-            q_susp = per_up * susp;
-            q_subl = at_most(per_up * subl, 0.0);
+    let shear = salt.shear.cells(cells.clone());
+    let (q_x, q_y) = (&salt.q_x[cells.clone()], &salt.q_y[cells.clone()]);
+    let (u_star, u_star_t) = (&shear.u_star[..w], &shear.u_star_t[..w]);
+    let (q_max, q_x, q_y) = (&shear.q_max_per_speed[..w], &q_x[..w], &q_y[..w]);
+    let (q_salt, q_susp, q_subl) = (&mut q_salt[..w], &mut q_susp[..w], &mut q_subl[..w]);
+    for c in 0..w {
+        let salt = (q_x[c] * q_x[c] + q_y[c] * q_y[c]).sqrt();
+        let (mut susp, mut subl) = (0.0f32, 0.0f32);
+        if q_max[c] > 0.0 && salt > 0.0 {
+            let per_up = salt / (2.8 * u_star_t[c]); // φr h* = Qsalt / u_p (5.44-5.45)
+            let (s, v) = ctx.blowing_table.per_flux(u_star[c], u_star_t[c]);
+            susp = per_up * s;
+            subl = at_most(per_up * v, 0.0);
         }
-        (*sa, *su, *sb) = (q_salt, q_susp, q_subl);
+        (q_salt[c], q_susp[c], q_subl[c]) = (salt, susp, subl);
     }
     let (wind_u, wind_v) = (
         &ctx.scene.wind_u[cells.clone()],
@@ -220,7 +215,7 @@ fn outflow_row(
     let (sublimation, melt) = (&mut sublimation[..w], &mut melt[..w]);
     let (suspension, sublimates) = (on.suspension, on.sublimation);
     for c in 0..w {
-        let (speed, u, v) = (shear[c].speed, wind_u[c], wind_v[c]);
+        let (speed, u, v) = (shear.speed[c], wind_u[c], wind_v[c]);
         let (susp_x, susp_y) = if suspension && speed > 0.0 {
             (q_susp[c] * u / speed, q_susp[c] * v / speed)
         } else {
@@ -266,15 +261,17 @@ fn received(west: f32, east: f32, north: f32, south: f32) -> f32 {
 /// and completes its budget `b`: the mass first, branch-free over the row, then what
 /// enters or leaves across the grid border in the border cells, then the density, in a
 /// loop of its own for its table lookups and divisions.
+#[multiversion(targets("x86_64+avx2"))]
 fn update_row(
     ctx: &Context,
     state: &SnowState,
-    shear: &[Shear],
+    shear: ShearCells,
     rows: &mut Rows,
     r: usize,
-    (next_swe, next_rho): (&mut [f32], &mut [f32]),
+    next: (&mut [f32], &mut [f32]),
     b: &mut RowBudget,
 ) {
+    let (next_swe, next_rho) = next;
     let (w, h) = (ctx.width, ctx.height);
     let on = ctx.params.phenomena;
     let border_inflow = ctx.params.saturated_inflow && on.saltation;
@@ -300,7 +297,7 @@ fn update_row(
         &*none
     };
     let cells = r * w..(r + 1) * w;
-    let shear = &shear[cells.clone()];
+    let shear = shear.cells(cells.clone());
     let (wind_u, wind_v) = (&scene.wind_u[cells.clone()], &scene.wind_v[cells.clone()]);
     let (swe, density) = (&state.swe[cells.clone()], &state.density[cells.clone()]);
     let (send_x, send_y, lost) = (&row.send_x[..w], &row.send_y[..w], &row.lost[..w]);
@@ -333,10 +330,10 @@ fn update_row(
     let border_row = r == 0 || r + 1 == h;
     let border_cells = (0..w).filter(|&c| border_row || c == 0 || c + 1 == w);
     for c in border_cells {
-        let (u, v, speed) = (wind_u[c], wind_v[c], shear[c].speed);
+        let (u, v, speed) = (wind_u[c], wind_v[c], shear.speed[c]);
         let mut inflow = 0.0f32;
         if border_inflow && speed > 0.0 {
-            let cap = shear[c].q_max_per_speed * ctx.dt;
+            let cap = shear.q_max_per_speed[c] * ctx.dt;
             let edge_x = (c == 0 && u > 0.0) || (c + 1 == w && u < 0.0);
             let edge_y = (r + 1 == h && v > 0.0) || (r == 0 && v < 0.0);
             if edge_x {
@@ -373,7 +370,7 @@ fn update_row(
         let (kept, drifted, snowfall) = (kept[c], drifted[c], snowfall[c]);
         let (rho, new_mass) = (density[c], next_swe[c]);
         // The new-snow and densification wind tables share their sampling.
-        let wind = ctx.rates.new_snow.axis().locate(shear[c].speed);
+        let wind = ctx.rates.new_snow.axis().locate(shear.speed[c]);
         let mut new_rho = rho;
         if drifted > 0.0 || snowfall > 0.0 {
             let rho_fall = ctx.rates.new_snow.at_point(wind);
