@@ -20,6 +20,7 @@
 //!   saltating `u*` depends on the wind alone, the suspension integrals on `u*` alone).
 
 pub mod error;
+mod float_ops;
 pub mod outputs;
 pub mod params;
 pub mod physics;

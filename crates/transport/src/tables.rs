@@ -15,6 +15,7 @@
 //! Tables are rebuilt only when the parameters or the weather they depend on change.
 //! Linear interpolation keeps them within 0.5 % of the direct evaluation (tested).
 
+use crate::float_ops::truncate;
 use crate::params::{TransportParams, Weather};
 use crate::physics::shear::saltating_friction_velocity;
 use crate::physics::shear::saltation_height;
@@ -47,22 +48,6 @@ pub(crate) struct Axis {
 pub(crate) struct Point {
     segment: usize,
     weight: f32,
-}
-
-/// `t` rounded towards zero, for `0 ≤ t < 2³¹`; NaN gives `2³¹`. One instruction on
-/// x86-64, where `as` would add the saturation checks it does not need here.
-#[inline(always)]
-fn truncate(t: f32) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_cvttss_si32, _mm_set_ss};
-        // SAFETY: SSE is part of the x86-64 baseline, so these instructions always exist.
-        unsafe { _mm_cvttss_si32(_mm_set_ss(t)) as u32 }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        if t.is_nan() { 1 << 31 } else { t as u32 }
-    }
 }
 
 impl Axis {

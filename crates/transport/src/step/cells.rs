@@ -3,6 +3,7 @@
 
 use super::sweep::{self, Sweep};
 use super::{SceneMaps, ShearCells, ShearMaps, SnowState};
+use crate::float_ops::at_most;
 use crate::params::TransportParams;
 use crate::physics::density::{densification_rate, new_snow_density};
 use crate::physics::shear::{ShearSite, threshold_friction_velocity};
@@ -140,7 +141,7 @@ fn shear_block(
         speed[i] = (u[i] * u[i] + v[i] * v[i]).sqrt();
         u_star[i] = ctx
             .shear_table
-            .saltating_u_star(super::at_most(speed[i], ctx.max_wind));
+            .saltating_u_star(at_most(speed[i], ctx.max_wind));
         u_star_t[i] = ctx.rates.threshold.at(density[i]);
     }
     for i in 0..n {

@@ -235,19 +235,6 @@ impl<'a> ShearCells<'a> {
     }
 }
 
-/// `f32::max(x, lo)` as one `maxss`: the comparison form gives `lo` for a NaN `x` too,
-/// without the library's NaN handling (three more instructions in the hottest loops).
-#[inline(always)]
-fn at_least(x: f32, lo: f32) -> f32 {
-    if x > lo { x } else { lo }
-}
-
-/// `f32::min(x, hi)` as one `minss` (`hi` for a NaN `x`, as [`f32::min`]).
-#[inline(always)]
-fn at_most(x: f32, hi: f32) -> f32 {
-    if x < hi { x } else { hi }
-}
-
 /// Sizes a buffer; every pass overwrites all its cells, so no clearing is needed.
 fn resize<T: Copy + Default>(v: &mut Vec<T>, n: usize) {
     if v.len() != n {

@@ -10,7 +10,8 @@
 //! every outflow reads the state at the start of the step.
 
 use super::cells::Context;
-use super::{MAX_DENSITY, ShearCells, SnowState, at_least, at_most};
+use super::{MAX_DENSITY, ShearCells, SnowState};
+use crate::float_ops::{at_least, at_most};
 use multiversion::multiversion;
 use rayon::prelude::*;
 

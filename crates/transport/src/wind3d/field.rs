@@ -7,6 +7,7 @@
 //! the discrete field divergence-free to the solver tolerance, and a face between a fluid
 //! and a solid voxel carries no flow by construction.
 
+use crate::float_ops::{at_least, at_most, truncate};
 use rayon::prelude::*;
 
 /// One velocity component on its face grid.
@@ -99,8 +100,9 @@ impl Axis {
     /// Base index and weight of the cell holding coordinate `p`, clamped to the lattice.
     #[inline(always)]
     fn locate(&self, p: f32) -> (usize, f32) {
-        let g = (p - self.offset).max(0.0).min(self.max);
-        let b = (g as usize).min(self.max_base);
+        // Clamped by comparisons (NaN goes to 0), truncated in one instruction.
+        let g = at_most(at_least(p - self.offset, 0.0), self.max);
+        let b = (truncate(g) as usize).min(self.max_base);
         (b, g - b as f32)
     }
 }
