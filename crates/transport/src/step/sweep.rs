@@ -113,22 +113,33 @@ pub(super) fn sweep_rows(
     let rows = n / width;
     assert!(rows <= X_ROWS && rows * width == n, "a block of whole rows");
     let (q_max, u_star, comp) = (&shear.q_max_per_speed[..n], &shear.u_star[..n], &comp[..n]);
-    let mut up = Upwind::<X_ROWS>::none();
-    for i in 0..width {
-        for k in 0..rows {
-            let a = k * width + i;
-            let cell = (q_max[a], u_star[a], comp[a]);
-            let lane = (&mut up.q[k], &mut up.u_star[k]);
-            q[a] = sweep.chain_cell(cell, lane, comp[a] > 0.0, 1.0, 0.0);
+    // A pass meets no cell blowing its way in most blocks of a steady wind: skip it then
+    // (the eastward pass would write 0 everywhere, the westward one keep every value).
+    let (eastward, westward) = comp.iter().fold((false, false), |(e, w), &c| {
+        (e | (c > 0.0), w | (c < 0.0))
+    });
+    if eastward {
+        let mut up = Upwind::<X_ROWS>::none();
+        for i in 0..width {
+            for k in 0..rows {
+                let a = k * width + i;
+                let cell = (q_max[a], u_star[a], comp[a]);
+                let lane = (&mut up.q[k], &mut up.u_star[k]);
+                q[a] = sweep.chain_cell(cell, lane, comp[a] > 0.0, 1.0, 0.0);
+            }
         }
+    } else {
+        q.fill(0.0);
     }
-    let mut up = Upwind::<X_ROWS>::none();
-    for i in (0..width).rev() {
-        for k in 0..rows {
-            let a = k * width + i;
-            let cell = (q_max[a], u_star[a], comp[a]);
-            let lane = (&mut up.q[k], &mut up.u_star[k]);
-            q[a] = sweep.chain_cell(cell, lane, comp[a] < 0.0, -1.0, q[a]);
+    if westward {
+        let mut up = Upwind::<X_ROWS>::none();
+        for i in (0..width).rev() {
+            for k in 0..rows {
+                let a = k * width + i;
+                let cell = (q_max[a], u_star[a], comp[a]);
+                let lane = (&mut up.q[k], &mut up.u_star[k]);
+                q[a] = sweep.chain_cell(cell, lane, comp[a] < 0.0, -1.0, q[a]);
+            }
         }
     }
 }
