@@ -115,9 +115,9 @@ pub(super) fn sweep_rows(
     let (q_max, u_star, comp) = (&shear.q_max_per_speed[..n], &shear.u_star[..n], &comp[..n]);
     // A pass meets no cell blowing its way in most blocks of a steady wind: skip it then
     // (the eastward pass would write 0 everywhere, the westward one keep every value).
-    let (eastward, westward) = comp.iter().fold((false, false), |(e, w), &c| {
-        (e | (c > 0.0), w | (c < 0.0))
-    });
+    let (eastward, westward) = comp
+        .iter()
+        .fold((false, false), |(e, w), &c| (e | (c > 0.0), w | (c < 0.0)));
     if eastward {
         let mut up = Upwind::<X_ROWS>::none();
         for i in 0..width {
