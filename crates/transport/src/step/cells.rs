@@ -1,4 +1,4 @@
-//! The shear pass of [`super::step`] (pass 1, with the x sweep of each row), and what the
+//! The shear pass of [`super::step`] (pass 1, with the x sweep of each block of rows), and what the
 //! per-cell passes share: the rate tables and the step's constants.
 
 use super::sweep::{self, Sweep};

@@ -189,15 +189,15 @@ fn outflow_row(
     let (q_max, q_x, q_y) = (&shear.q_max_per_speed[..w], &q_x[..w], &q_y[..w]);
     let (q_salt, q_susp, q_subl) = (&mut q_salt[..w], &mut q_susp[..w], &mut q_subl[..w]);
     for c in 0..w {
-        let salt = (q_x[c] * q_x[c] + q_y[c] * q_y[c]).sqrt();
+        let flux = (q_x[c] * q_x[c] + q_y[c] * q_y[c]).sqrt();
         let (mut susp, mut subl) = (0.0f32, 0.0f32);
-        if q_max[c] > 0.0 && salt > 0.0 {
-            let per_up = salt / (2.8 * u_star_t[c]); // φr h* = Qsalt / u_p (5.44-5.45)
+        if q_max[c] > 0.0 && flux > 0.0 {
+            let per_up = flux / (2.8 * u_star_t[c]); // φr h* = Qsalt / u_p (5.44-5.45)
             let (s, v) = ctx.blowing_table.per_flux(u_star[c], u_star_t[c]);
             susp = per_up * s;
             subl = at_most(per_up * v, 0.0);
         }
-        (q_salt[c], q_susp[c], q_subl[c]) = (salt, susp, subl);
+        (q_salt[c], q_susp[c], q_subl[c]) = (flux, susp, subl);
     }
     let (wind_u, wind_v) = (
         &ctx.scene.wind_u[cells.clone()],
