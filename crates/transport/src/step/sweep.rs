@@ -58,7 +58,8 @@ impl<const N: usize> Upwind<N> {
 impl Sweep {
     /// One step of the recurrence: the flux (magnitude) leaving a cell of capacity per unit
     /// speed `q_max_per_speed`, friction velocity `u_star` and wind component `comp` along
-    /// the axis, fed by an upwind cell sending `q_up` at `u_star_up`.
+    /// the axis, fed by an upwind cell sending `q_up` at a friction velocity `u_up`
+    /// ([`NO_UPWIND`] where none feeds it).
     #[inline(always)]
     fn relax_cell(
         &self,
@@ -119,27 +120,37 @@ pub(super) fn sweep_rows(
         .iter()
         .fold((false, false), |(e, w), &c| (e | (c > 0.0), w | (c < 0.0)));
     if eastward {
-        let mut up = Upwind::<X_ROWS>::none();
-        for i in 0..width {
-            for k in 0..rows {
-                let a = k * width + i;
-                let cell = (q_max[a], u_star[a], comp[a]);
-                let lane = (&mut up.q[k], &mut up.u_star[k]);
-                q[a] = sweep.chain_cell(cell, lane, comp[a] > 0.0, 1.0, 0.0);
-            }
-        }
+        sweep_rows_pass::<true>(sweep, width, (q_max, u_star, comp), q);
     } else {
         q.fill(0.0);
     }
     if westward {
-        let mut up = Upwind::<X_ROWS>::none();
-        for i in (0..width).rev() {
-            for k in 0..rows {
-                let a = k * width + i;
-                let cell = (q_max[a], u_star[a], comp[a]);
-                let lane = (&mut up.q[k], &mut up.u_star[k]);
-                q[a] = sweep.chain_cell(cell, lane, comp[a] < 0.0, -1.0, q[a]);
-            }
+        sweep_rows_pass::<false>(sweep, width, (q_max, u_star, comp), q);
+    }
+}
+
+/// One direction of [`sweep_rows`]: the eastward cells from the west end (the others get
+/// 0), or the westward ones from the east end (the others keep their value).
+#[inline(always)]
+fn sweep_rows_pass<const EASTWARD: bool>(
+    sweep: &Sweep,
+    width: usize,
+    (q_max, u_star, comp): (&[f32], &[f32], &[f32]),
+    q: &mut [f32],
+) {
+    let rows = q.len() / width;
+    let mut up = Upwind::<X_ROWS>::none();
+    for step in 0..width {
+        let i = if EASTWARD { step } else { width - 1 - step };
+        for k in 0..rows {
+            let a = k * width + i;
+            let cell = (q_max[a], u_star[a], comp[a]);
+            let lane = (&mut up.q[k], &mut up.u_star[k]);
+            q[a] = if EASTWARD {
+                sweep.chain_cell(cell, lane, comp[a] > 0.0, 1.0, 0.0)
+            } else {
+                sweep.chain_cell(cell, lane, comp[a] < 0.0, -1.0, q[a])
+            };
         }
     }
 }

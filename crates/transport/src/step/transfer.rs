@@ -88,6 +88,35 @@ struct Rows {
     gain: Vec<f32>,
     kept: Vec<f32>,
     drifted: Vec<f32>,
+    /// The published results (saltation, suspension, sublimation) of a row outside the
+    /// block, whose outflows alone the block needs.
+    halo: Vec<f32>,
+}
+
+impl Rows {
+    fn new(w: usize) -> Self {
+        let row = vec![0.0f32; w];
+        Self {
+            ring: [0, 1, 2].map(|_| Outflows::new(w)),
+            none: row.clone(),
+            snowfall: row.clone(),
+            gain: row.clone(),
+            kept: row.clone(),
+            drifted: row,
+            halo: vec![0.0; 3 * w],
+        }
+    }
+
+    /// The outflows of row `k`, outside the block, into the ring.
+    fn halo_row(&mut self, ctx: &Context, state: &SnowState, salt: Saltation, k: usize) {
+        let w = ctx.width;
+        let [a, b, c] = [0, 1, 2].map(|j| j * w..(j + 1) * w);
+        let [sa, su, sb] = self
+            .halo
+            .get_disjoint_mut([a, b, c])
+            .expect("disjoint rows");
+        outflow_row(ctx, state, salt, k, &mut self.ring[k % 3], [sa, su, sb]);
+    }
 }
 
 /// Passes 3 and 4: writes the state at the end of the step into `next` (water equivalent,
@@ -108,57 +137,46 @@ pub(super) fn transfer_pass(
         .zip(blowing.q_susp.par_chunks_mut(block))
         .zip(blowing.q_subl.par_chunks_mut(block))
         .enumerate()
-        .map(|(b, ((((swe, rho), q_salt), q_susp), q_subl))| {
-            let r0 = b * BLOCK_ROWS;
-            let r1 = r0 + swe.len() / w;
-            let row = vec![0.0f32; w];
-            let mut rows = Rows {
-                ring: [0, 1, 2].map(|_| Outflows::new(w)),
-                none: row.clone(),
-                snowfall: row.clone(),
-                gain: row.clone(),
-                kept: row.clone(),
-                drifted: row,
-            };
-            // The published results of the rows on either side go to `halo`.
-            let mut halo = vec![0.0f32; 3 * w];
-            let mut halo_row = |ring: &mut [Outflows; 3], k: usize| {
-                let [a, b, c] = [0, 1, 2].map(|j| j * w..(j + 1) * w);
-                let [sa, su, sb] = halo.get_disjoint_mut([a, b, c]).expect("disjoint rows");
-                outflow_row(ctx, state, salt, k, &mut ring[k % 3], [sa, su, sb]);
-            };
-            if r0 > 0 {
-                halo_row(&mut rows.ring, r0 - 1);
-            }
-            // Cells of row `k` in the block's chunks.
-            let local = |k: usize| (k - r0) * w..(k - r0 + 1) * w;
-            let own = [
-                &mut q_salt[local(r0)],
-                &mut q_susp[local(r0)],
-                &mut q_subl[local(r0)],
-            ];
-            let mut budget = outflow_row(ctx, state, salt, r0, &mut rows.ring[r0 % 3], own);
-            let mut budgets = Vec::with_capacity(r1 - r0);
-            for r in r0..r1 {
-                let k = r + 1;
-                let mut next_budget = RowBudget::default();
-                if k < r1 {
-                    let own = [
-                        &mut q_salt[local(k)],
-                        &mut q_susp[local(k)],
-                        &mut q_subl[local(k)],
-                    ];
-                    next_budget = outflow_row(ctx, state, salt, k, &mut rows.ring[k % 3], own);
-                } else if k < h {
-                    halo_row(&mut rows.ring, k);
+        // Row buffers are reused by the blocks a rayon task runs in turn; every row of
+        // them is written before it is read.
+        .map_init(
+            || Rows::new(w),
+            |rows, (b, ((((swe, rho), q_salt), q_susp), q_subl))| {
+                let r0 = b * BLOCK_ROWS;
+                let r1 = r0 + swe.len() / w;
+                if r0 > 0 {
+                    rows.halo_row(ctx, state, salt, r0 - 1);
                 }
-                let next = (&mut swe[local(r)], &mut rho[local(r)]);
-                update_row(ctx, state, salt.shear, &mut rows, r, next, &mut budget);
-                budgets.push(budget);
-                budget = next_budget;
-            }
-            budgets
-        })
+                // Cells of row `k` in the block's chunks.
+                let local = |k: usize| (k - r0) * w..(k - r0 + 1) * w;
+                let own = [
+                    &mut q_salt[local(r0)],
+                    &mut q_susp[local(r0)],
+                    &mut q_subl[local(r0)],
+                ];
+                let mut budget = outflow_row(ctx, state, salt, r0, &mut rows.ring[r0 % 3], own);
+                let mut budgets = Vec::with_capacity(r1 - r0);
+                for r in r0..r1 {
+                    let k = r + 1;
+                    let mut next_budget = RowBudget::default();
+                    if k < r1 {
+                        let own = [
+                            &mut q_salt[local(k)],
+                            &mut q_susp[local(k)],
+                            &mut q_subl[local(k)],
+                        ];
+                        next_budget = outflow_row(ctx, state, salt, k, &mut rows.ring[k % 3], own);
+                    } else if k < h {
+                        rows.halo_row(ctx, state, salt, k);
+                    }
+                    let next = (&mut swe[local(r)], &mut rho[local(r)]);
+                    update_row(ctx, state, salt.shear, rows, r, next, &mut budget);
+                    budgets.push(budget);
+                    budget = next_budget;
+                }
+                budgets
+            },
+        )
         .collect();
     blocks.into_iter().flatten().collect()
 }
@@ -284,6 +302,7 @@ fn update_row(
         gain,
         kept,
         drifted,
+        ..
     } = rows;
     let row = &ring[r % 3];
     // The sends of the rows to the north (r − 1) and to the south (r + 1).
