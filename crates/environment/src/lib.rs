@@ -12,6 +12,7 @@
 //! | [`bounce`] | one indirect bounce | `I_ind = k_ind/π Σ A_ij I_sun cos φs cos φr / d²` (4.1) |
 //! | [`temperature`](mod@temperature) | temperature | `T = T0 + kt·A + ki·I` (4.1) |
 //! | [`wind`](mod@wind) | wind vectors, wind-effect surface, shadows | Venturi, Eq. 2, `W·∇Wz = Wsz` (4.2) |
+//! | [`insolation`] | hour-by-hour sun of each month, clear-sky irradiance | Hock 1999 Eq. 3 |
 //! | [`precompute`](mod@precompute) | all of the above in one call | |
 //!
 //! Shadows and horizons come from directional sweeps (the internal `sweep` module):
@@ -32,6 +33,7 @@
 pub mod bounce;
 pub mod error;
 mod field;
+pub mod insolation;
 pub mod params;
 pub mod precompute;
 pub mod sky;
@@ -43,6 +45,7 @@ pub mod wind;
 
 pub use bounce::indirect_bounce;
 pub use error::EnvironmentError;
+pub use insolation::{ClearSkyParams, HourSun, MonthSun, SeasonSun, season_sun};
 pub use params::{
     BounceParams, EnvironmentParams, SkyParams, SunParams, TemperatureParams, WindParams,
 };

@@ -7,6 +7,8 @@
 
 pub mod avalanches;
 pub mod checkpoint;
+pub mod climate;
+pub mod forcing;
 pub mod melt;
 pub mod phenomenon;
 pub mod powder_diffusion;
@@ -16,6 +18,7 @@ pub mod skiing;
 pub mod snowfall;
 pub mod snowtran_transport;
 pub mod stability;
+pub mod weather;
 pub mod wind_transport;
 pub mod winter;
 

@@ -1,4 +1,8 @@
-//! Melt (Cordonnier et al. 2018, Section 5.2, first equation).
+//! Melt: the season's default is the enhanced temperature-index model of [`enhanced`]
+//! (`model = "enhanced_ti"`: Hock 1999, Pellicciotti et al. 2005, with albedo decay, cold
+//! content and refreezing); `model = "cordonnier"` is the paper's degree-day law below.
+//!
+//! **Cordonnier et al. 2018, Section 5.2, first equation.**
 //!
 //! `D(t + δt_m) = D(t) − δt_m · k_melt · max(0, T − T0_melt)`: a degree-day law. The melted
 //! depth is taken layer by layer from the top: powder, then unstable, stable and compacted
@@ -14,10 +18,30 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
 
+pub mod enhanced;
+pub use enhanced::{EnhancedMeltParams, MeltForcing, MeltHour, MeltReport, SnowpackState};
+
+/// Which melt law a season uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MeltModel {
+    /// Enhanced temperature index with the hour-by-hour sun, albedo, cold content and
+    /// refreezing ([`enhanced`]). The default.
+    #[default]
+    EnhancedTi,
+    /// Cordonnier 2018 §5.2: `k_melt · max(0, T − T0_melt)` on the period's temperature map
+    /// (which carries the sun as `ki·I`).
+    Cordonnier,
+}
+
 /// Parameters of melt.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MeltParams {
+    /// The melt law (`enhanced_ti` or `cordonnier`).
+    pub model: MeltModel,
+    /// The enhanced temperature-index parameters (`[parameters.melt.enhanced]`).
+    pub enhanced: EnhancedMeltParams,
     /// Melt rate, m of snow per day per °C above `t0_melt`. Cordonnier 2018 Section 5.2 and
     /// Table 2: k_melt = 0.01 m day⁻¹ °C⁻¹.
     pub k_melt: f64,
@@ -28,6 +52,8 @@ pub struct MeltParams {
 impl Default for MeltParams {
     fn default() -> Self {
         Self {
+            model: MeltModel::default(),
+            enhanced: EnhancedMeltParams::default(),
             k_melt: 0.01,
             t0_melt: 0.0,
         }
@@ -37,6 +63,7 @@ impl Default for MeltParams {
 impl MeltParams {
     /// Checks the parameters are finite and the rate non-negative.
     pub fn validate(&self) -> Result<(), PhenomenonError> {
+        self.enhanced.validate()?;
         check_at_least("melt", "k_melt", self.k_melt, 0.0)?;
         check_finite("melt", "t0_melt", self.t0_melt)
     }

@@ -72,10 +72,16 @@ pub struct WeatherPeriod {
     pub wind_from_deg: f64,
     /// Sea-level wind speed |W|, m/s. Cordonnier 2018 Table 2: 10.
     pub wind_speed_m_s: f64,
-    /// Rain-snow limit A0precip, m.
+    /// Rain-snow limit A0precip, m (the `cordonnier` snowfall model only; the default model
+    /// takes the phase from the air temperature).
+    #[serde(default)]
     pub rain_snow_altitude_m: f64,
     /// Mean number of snowfall periods starting per week. Cordonnier 2018 §5.1: 1.
     pub snowfall_per_week: f64,
+    /// Precipitation during this period's snowfall periods at the climate's reference
+    /// altitude, mm of water per day; `None`: `[parameters.climate] precipitation_mm_per_day`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub precipitation_mm_per_day: Option<f64>,
 }
 
 /// A forced snowfall period.
@@ -105,6 +111,8 @@ pub struct UserAvalanche {
 #[serde(default, deny_unknown_fields)]
 pub struct Parameters {
     pub environment: EnvironmentParams,
+    /// The air: lapse rate, diurnal cycle, precipitation, phase, clouds, default winter.
+    pub climate: crate::climate::ClimateParams,
     pub snowfall: SnowfallParams,
     pub melt: MeltParams,
     pub stability: StabilityParams,
@@ -319,6 +327,22 @@ impl Scenario {
                 ));
             }
         }
+        if let Err((key, value, reason)) = self.parameters.climate.validate() {
+            return Err(bad(&format!("parameters.{key}"), value.to_string(), reason));
+        }
+        if let Err(e) = self.parameters.melt.validate() {
+            return Err(bad("parameters.melt", e.to_string(), "is out of range"));
+        }
+        if let Err(e) = self.parameters.snowfall.validate() {
+            return Err(bad("parameters.snowfall", e.to_string(), "is out of range"));
+        }
+        if let Err(e) = self.parameters.environment.validate() {
+            return Err(bad(
+                "parameters.environment",
+                e.to_string(),
+                "is out of range",
+            ));
+        }
         if let Err(e) = self.skiers.validate() {
             return Err(bad("skiers", e, "is out of range"));
         }
@@ -332,12 +356,22 @@ impl Scenario {
         Ok(())
     }
 
-    /// The weather timeline, or the default winter for a terrain with these valid altitudes.
-    pub fn weather_or_default(&self, altitudes: &[f32]) -> Vec<WeatherPeriod> {
-        if self.weather.is_empty() {
-            default_winter(altitudes, self.days)
-        } else {
-            self.weather.clone()
+    /// The weather timeline, or the default winter (`[parameters.climate] default_winter`:
+    /// the climatology at `latitude_deg`, or the paper-style winter fitted to these valid
+    /// altitudes).
+    pub fn weather_or_default(&self, altitudes: &[f32], latitude_deg: f64) -> Vec<WeatherPeriod> {
+        if !self.weather.is_empty() {
+            return self.weather.clone();
+        }
+        let c = &self.parameters.climate;
+        match c.default_winter {
+            crate::climate::DefaultWinter::Climatology => crate::climate::climatology_winter(
+                c,
+                latitude_deg,
+                day_of_year(&self.start_date).unwrap_or(335),
+                self.days,
+            ),
+            crate::climate::DefaultWinter::Cordonnier => default_winter(altitudes, self.days),
         }
     }
 }
@@ -376,6 +410,7 @@ pub fn default_winter(altitudes: &[f32], days: f64) -> Vec<WeatherPeriod> {
             wind_speed_m_s: speed,
             rain_snow_altitude_m: quantile(altitudes, q),
             snowfall_per_week: per_week,
+            precipitation_mm_per_day: None,
         })
         .collect()
 }

@@ -1,6 +1,10 @@
-//! Snowfall (Cordonnier et al. 2018, Section 5.1).
+//! Snowfall. The season's default (`model = "orographic"`, [`add_precipitation`]) takes the
+//! precipitation at a reference altitude, scales it by the orographic factor of
+//! [`crate::climate`], splits rain from snow by the cell's air temperature and adds the snow
+//! water at each layer's density; the paper's law (`model = "cordonnier"`, [`step`]) is below.
+//! Both share the layer split.
 //!
-//! Depth added per precipitation step (Foehn rule):
+//! **Cordonnier et al. 2018, Section 5.1.** Depth added per precipitation step (Foehn rule):
 //! `ΔD = δt_p · k_snow · max(0, A − A0_precip)`, with `A = B + D` the snow-surface altitude.
 //!
 //! The new snow is split between layers:
@@ -24,10 +28,23 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
 
+/// Which snowfall law a season uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SnowfallModel {
+    /// Precipitation with an orographic gradient and a temperature phase ([`add_precipitation`]).
+    #[default]
+    Orographic,
+    /// Cordonnier 2018 §5.1: `k_snow · max(0, A − A0_precip)`.
+    Cordonnier,
+}
+
 /// Parameters of snowfall.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SnowfallParams {
+    /// The snowfall law (`orographic` or `cordonnier`).
+    pub model: SnowfallModel,
     /// Snowfall rate per metre of altitude above `a0_precip`, m of snow per day per m
     /// (1/day). Cordonnier 2018 Table 2: k_snow = 1e-4.
     pub k_snow: f64,
@@ -53,6 +70,7 @@ pub struct SnowfallParams {
 impl Default for SnowfallParams {
     fn default() -> Self {
         Self {
+            model: SnowfallModel::default(),
             k_snow: 1e-4,
             a0_precip: 800.0,
             k_powdery: 1.0,
@@ -184,6 +202,182 @@ pub fn step(
         added: ordered_sum(&row_added) * geometry.cell_area(),
         removed: 0.0,
     })
+}
+
+/// Precipitation of a window at the reference altitude as a function of a cell's lapse
+/// offset (its air temperature minus the sea-level one), split into snow and rain by the
+/// phase of each hour: a table, so the per-cell cost does not grow with the hours.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PrecipitationTable {
+    offset_min: f32,
+    step: f32,
+    /// Snow water per offset sample, m.
+    snow_m: Vec<f32>,
+    /// Rain per offset sample, m.
+    rain_m: Vec<f32>,
+}
+
+impl PrecipitationTable {
+    /// Offsets sampled every 0.05 °C (the phase ramp is linear between samples, so the table
+    /// is exact for hours whose ramp corners fall on samples and within 0.05 °C otherwise).
+    pub const STEP_C: f32 = 0.05;
+
+    /// The table for `hours` of (sea-level air temperature °C, precipitation m of water at
+    /// the reference altitude) over lapse offsets in `[offset_min, offset_max]`.
+    pub fn new(
+        climate: &crate::climate::ClimateParams,
+        hours: &[(f32, f32)],
+        offset_min: f32,
+        offset_max: f32,
+    ) -> Self {
+        let n = (((offset_max - offset_min) / Self::STEP_C).ceil() as usize + 2).min(1 << 16);
+        let (mut snow_m, mut rain_m) = (vec![0.0f32; n], vec![0.0f32; n]);
+        for k in 0..n {
+            let offset = offset_min + k as f32 * Self::STEP_C;
+            for &(t, p) in hours {
+                let share = climate.snow_share(t + offset);
+                snow_m[k] += p * share;
+                rain_m[k] += p * (1.0 - share);
+            }
+        }
+        Self {
+            offset_min,
+            step: Self::STEP_C,
+            snow_m,
+            rain_m,
+        }
+    }
+
+    /// (snow, rain) m of water at the reference altitude for a cell of lapse offset `offset`.
+    #[inline]
+    pub fn at(&self, offset: f32) -> (f32, f32) {
+        let x = ((offset - self.offset_min) / self.step).max(0.0);
+        let k = (x as usize).min(self.snow_m.len() - 2);
+        let f = (x - k as f32).min(1.0);
+        (
+            self.snow_m[k] + f * (self.snow_m[k + 1] - self.snow_m[k]),
+            self.rain_m[k] + f * (self.rain_m[k + 1] - self.rain_m[k]),
+        )
+    }
+
+    /// Whether the window brought any precipitation.
+    pub fn is_dry(&self) -> bool {
+        self.snow_m.iter().chain(&self.rain_m).all(|&v| v <= 0.0)
+    }
+}
+
+/// What [`add_precipitation`] added.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PrecipitationReport {
+    /// Snow added, m³ of snow (at the layers' densities).
+    pub snow_m3: f64,
+    /// Water equivalent of that snow, m³.
+    pub snow_water_m3: f64,
+    /// Rain on every valid cell, m³ of water (returned per cell in `rain_out`).
+    pub rain_m3: f64,
+}
+
+/// Per-cell inputs of [`add_precipitation`].
+#[derive(Debug, Clone, Copy)]
+pub struct PrecipitationMaps<'a> {
+    /// Air temperature for the layer split, °C.
+    pub temperature: &'a [f32],
+    /// Lapse offset of each cell, °C (the phase table's argument).
+    pub lapse_offset_c: &'a [f32],
+    /// Orographic factor of each cell.
+    pub orographic: &'a [f32],
+}
+
+/// Adds a window's precipitation (the orographic model): snow water `s · f_oro` by the
+/// layer split of [`layer_shares`], each share at its layer's density; the surface age is
+/// reset where at least `reset_swe_m` fell; the rain `r · f_oro` is added to `rain_out`
+/// (m of water per cell, for the melt's liquid water).
+#[allow(clippy::too_many_arguments)]
+pub fn add_precipitation(
+    params: &SnowfallParams,
+    terrain: &mut LayeredTerrain,
+    maps: &PrecipitationMaps,
+    table: &PrecipitationTable,
+    densities_kg_m3: [f64; 4],
+    surface_age: &mut [f32],
+    reset_swe_m: f64,
+    rain_out: &mut [f32],
+    scratch: &mut SnowfallScratch,
+) -> Result<PrecipitationReport, PhenomenonError> {
+    params.validate()?;
+    let geometry = terrain.geometry().clone();
+    check_map("temperature", maps.temperature, &geometry)?;
+    check_map("lapse offset", maps.lapse_offset_c, &geometry)?;
+    check_map("orographic factor", maps.orographic, &geometry)?;
+    check_map("surface age", surface_age, &geometry)?;
+    check_map("rain", rain_out, &geometry)?;
+    if table.is_dry() {
+        return Ok(PrecipitationReport::default());
+    }
+    let mask = terrain.mask().clone();
+    let w = geometry.width();
+    fill_surface(terrain, &mut scratch.surface);
+    let surf = &scratch.surface;
+    let k = ShareCoefficients::new(params);
+    let depth_per_water = densities_kg_m3.map(|d| (1000.0 / d) as f32);
+    let reset = reset_swe_m as f32;
+    let [_, stable, unstable, powder] = &mut terrain.snow;
+    let rows: Vec<[f64; 3]> = with_validity!(mask, |valid| {
+        stable
+            .par_chunks_mut(w)
+            .zip(unstable.par_chunks_mut(w))
+            .zip(powder.par_chunks_mut(w))
+            .zip(surface_age.par_chunks_mut(w))
+            .zip(rain_out.par_chunks_mut(w))
+            .enumerate()
+            .map_init(
+                || vec![0.0f32; w],
+                |gradient, (row, ((((st, un), pw), age), rain))| {
+                    row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
+                    let mut sums = [0.0f64; 3];
+                    for col in 0..w {
+                        let i = row * w + col;
+                        if !valid.at(i) {
+                            continue;
+                        }
+                        let (s_ref, r_ref) = table.at(maps.lapse_offset_c[i]);
+                        let oro = maps.orographic[i];
+                        let (swe, r) = (s_ref * oro, r_ref * oro);
+                        rain[col] += r;
+                        sums[2] += r as f64;
+                        if swe <= 0.0 {
+                            continue;
+                        }
+                        let (xp, xu, _) = k.shares(gradient[col], maps.temperature[i]);
+                        let (wp, wu) = (swe * xp, swe * xu);
+                        let ws = (swe - wp - wu).max(0.0);
+                        let (dp, du, ds) = (
+                            wp * depth_per_water[3],
+                            wu * depth_per_water[2],
+                            ws * depth_per_water[1],
+                        );
+                        pw[col] += dp;
+                        un[col] += du;
+                        st[col] += ds;
+                        if swe >= reset {
+                            age[col] = 0.0;
+                        }
+                        sums[0] += dp as f64 + du as f64 + ds as f64;
+                        sums[1] += (wp + wu + ws) as f64;
+                    }
+                    sums
+                },
+            )
+            .collect()
+    });
+    let a = geometry.cell_area();
+    let mut r = PrecipitationReport::default();
+    for s in rows {
+        r.snow_m3 += s[0] * a;
+        r.snow_water_m3 += s[1] * a;
+        r.rain_m3 += s[2] * a;
+    }
+    Ok(r)
 }
 
 #[cfg(test)]

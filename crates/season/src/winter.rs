@@ -9,15 +9,17 @@
 
 use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, Trigger};
 use crate::checkpoint::{self, CheckpointError, bedrock_fingerprint};
-use crate::melt;
+use crate::forcing::StationForcing;
+use crate::melt::{self, MeltForcing, MeltModel, SnowpackState};
 use crate::phenomenon::PhenomenonError;
 use crate::powder_diffusion::{self, DiffusionScratch};
 use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
 use crate::scheduler::{Event, EventKind, SECONDS_PER_DAY, Scheduler};
 use crate::skiing::SkiStats;
-use crate::snowfall::{self, SnowfallScratch};
+use crate::snowfall::{self, PrecipitationMaps, SnowfallModel, SnowfallScratch};
 use crate::snowtran_transport::{self, SnowTranForcing, SnowTranScratch};
 use crate::stability::{self, StabilityScratch};
+use crate::weather::{Air, AirSource};
 use crate::wind_transport::{self, WindMaps, WindModel, WindScratch};
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::AvalancheScratch;
@@ -26,6 +28,7 @@ use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams
 use snowscape_skiers::{SkiArea, SkiScratch};
 use snowscape_terrain::{LayeredTerrain, TerrainError};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use std::time::Instant;
 use thiserror::Error;
 
@@ -87,6 +90,46 @@ pub struct SeasonBudget {
     pub wind_sublimation: f64,
     /// Avalanche snow that flowed out of the grid.
     pub avalanche_outflow: f64,
+    /// Liquid water refrozen into the pack (a source of snow volume).
+    #[serde(default)]
+    pub refreeze: f64,
+    /// Snow shed off steep slopes across the grid border.
+    #[serde(default)]
+    pub shedding_outflow: f64,
+    /// Snow the slopes shed and the cells below received (moved inside the grid; not in
+    /// the closure).
+    #[serde(default)]
+    pub shedding_moved: f64,
+    /// The liquid water of the pack, m³ of water.
+    #[serde(default)]
+    pub water: WaterBudget,
+}
+
+/// The liquid water of the snowpack, m³ of water: rain and melt in, refreezing and runoff
+/// out; `store` is what the pack holds now.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct WaterBudget {
+    /// Rain on every valid cell (on snow it joins the pack's water; on bare ground it runs off).
+    pub rain: f64,
+    /// Water equivalent of the snowfall.
+    pub snowfall_water: f64,
+    /// Melt water.
+    pub melt: f64,
+    /// Water refrozen.
+    pub refrozen: f64,
+    /// Water that left the pack and bare ground.
+    pub runoff: f64,
+    /// Water held in the pack now.
+    pub store: f64,
+    /// Rain waiting for the next melt window (counted in `rain`, not yet in `store`).
+    pub pending: f64,
+}
+
+impl WaterBudget {
+    /// `rain + melt − refrozen − runoff − store − pending`: zero when the water closes.
+    pub fn closure_error(&self) -> f64 {
+        self.rain + self.melt - self.refrozen - self.runoff - self.store - self.pending
+    }
 }
 
 impl SeasonBudget {
@@ -99,6 +142,8 @@ impl SeasonBudget {
             - self.wind_outflow
             - self.wind_sublimation
             - self.avalanche_outflow
+            - self.shedding_outflow
+            + self.refreeze
     }
 }
 
@@ -118,6 +163,21 @@ struct RunState {
     user_avalanche_index: usize,
     /// What the skiers did.
     ski: SkiStats,
+    /// End of the last melt window, days (the next window starts here).
+    #[serde(default)]
+    melt_clock_days: f64,
+}
+
+/// Where the season's latitude came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LatitudeSource {
+    /// The scenario's `latitude_deg` (or the command line's `--latitude`).
+    Scenario,
+    /// The DEM's georeferencing.
+    Georeferencing,
+    /// Neither: the sun and the climatology run at the default latitude (a warning).
+    Assumed,
 }
 
 /// A season in progress. Cloning it forks the run (the clone continues identically).
@@ -149,12 +209,30 @@ pub struct Winter {
     ski_scratch: SkiScratch,
     /// Whether snowfall or melt changed the snow since the distance map was computed.
     terminus_stale: bool,
+    /// The hourly air, sun and precipitation factors.
+    air: Air,
+    /// Surface age, cold content and liquid water per cell (checkpointed).
+    pack: SnowpackState,
+    /// Rain since the last melt window, m of water per cell (checkpointed).
+    pending_rain: Vec<f32>,
+    latitude_source: LatitudeSource,
 }
 
-fn scenario_digest(s: &Scenario, weather: &[WeatherPeriod]) -> u64 {
+fn scenario_digest(
+    s: &Scenario,
+    weather: &[WeatherPeriod],
+    forcing: Option<&StationForcing>,
+) -> u64 {
     let text = serde_json::to_string(&(s, weather)).unwrap_or_default();
-    text.bytes().fold(0x243f_6a88_85a3_08d3, |h, b| {
+    let h = text.bytes().fold(0x243f_6a88_85a3_08d3, |h, b| {
         snowscape_terrain::random::mix64(h ^ b as u64)
+    });
+    forcing.map_or(h, |f| {
+        f.records.iter().fold(h, |h, r| {
+            let v =
+                (r.air_temperature_c.to_bits() as u64) << 32 | r.precipitation_mm.to_bits() as u64;
+            snowscape_terrain::random::mix64(h ^ v)
+        })
     })
 }
 
@@ -162,6 +240,17 @@ impl Winter {
     /// Prepares a season on `terrain`: resolves the weather timeline (the default winter when
     /// the scenario has none) and latitude, and precomputes the environment for day 0.
     pub fn new(scenario: Scenario, terrain: LayeredTerrain) -> Result<Self, SeasonError> {
+        Self::with_forcing(scenario, terrain, None)
+    }
+
+    /// A season driven by a station's record (`forcing`): its hourly air temperature and
+    /// precipitation, distributed over the terrain by the lapse rate and the orographic
+    /// gradient from the station's altitude; season day 0 is the record's first hour.
+    pub fn with_forcing(
+        scenario: Scenario,
+        terrain: LayeredTerrain,
+        forcing: Option<StationForcing>,
+    ) -> Result<Self, SeasonError> {
         let valid: Vec<f32> = terrain
             .bedrock
             .iter()
@@ -169,15 +258,22 @@ impl Winter {
             .filter(|(i, _)| terrain.mask().is_valid(*i))
             .map(|(_, &z)| z)
             .collect();
-        let weather = scenario.weather_or_default(&valid);
         let mut env = scenario.parameters.environment.clone();
-        env.sun.latitude_deg = scenario
-            .latitude_deg
-            .or_else(|| terrain.geometry().latitude_deg())
-            .unwrap_or(env.sun.latitude_deg);
+        let (latitude, latitude_source) =
+            match (scenario.latitude_deg, terrain.geometry().latitude_deg()) {
+                (Some(l), _) => (l, LatitudeSource::Scenario),
+                (None, Some(l)) => (l, LatitudeSource::Georeferencing),
+                (None, None) => (env.sun.latitude_deg, LatitudeSource::Assumed),
+            };
+        env.sun.latitude_deg = latitude;
+        let weather = match &forcing {
+            Some(f) => crate::climate::station_winter(f, scenario.days),
+            None => scenario.weather_or_default(&valid, latitude),
+        };
         env.sun.start_day = day_of_year(&scenario.start_date).unwrap_or(env.sun.start_day);
         env.sun.num_days = (scenario.days.ceil() as u32).clamp(1, 365);
         let mut scheduler = Scheduler::new(scenario.seed, &scenario.events);
+        let digest = scenario_digest(&scenario, &weather, forcing.as_ref());
         let state = RunState {
             scheduler: {
                 scheduler.set_rate(
@@ -195,10 +291,11 @@ impl Winter {
             weather_index: 0,
             forced_index: 0,
             fingerprint: bedrock_fingerprint(&terrain),
-            scenario_digest: scenario_digest(&scenario, &weather),
+            scenario_digest: digest,
             avalanches: Vec::new(),
             user_avalanche_index: 0,
             ski: SkiStats::default(),
+            melt_clock_days: 0.0,
         };
         let t = Instant::now();
         let params = weather_params(&env, &weather[0]);
@@ -208,7 +305,47 @@ impl Winter {
             terrain.mask(),
             &params,
         )?;
+        let mut hourly_sun_s = 0.0;
+        let season_sun = if scenario.parameters.melt.model == MeltModel::EnhancedTi {
+            let t = Instant::now();
+            let sun = snowscape_environment::season_sun(
+                &terrain.bedrock,
+                terrain.geometry(),
+                terrain.mask(),
+                &env,
+                &environment.sky_view_factor,
+            )?;
+            hourly_sun_s = t.elapsed().as_secs_f64();
+            sun
+        } else {
+            snowscape_environment::SeasonSun::default()
+        };
+        let source = match forcing {
+            Some(f) => AirSource::Station(Arc::new(f)),
+            None if scenario.weather.is_empty()
+                && scenario.parameters.climate.default_winter
+                    == crate::climate::DefaultWinter::Climatology =>
+            {
+                AirSource::Climatology
+            }
+            None => AirSource::Periods,
+        };
+        let air = Air::new(
+            &scenario.parameters.climate,
+            source,
+            &weather,
+            latitude,
+            env.sun.start_day,
+            &terrain.bedrock,
+            terrain.mask(),
+            Arc::new(season_sun),
+        );
+        let n_cells = terrain.geometry().len();
         let mut w = Self {
+            air,
+            pack: SnowpackState::new(n_cells),
+            pending_rain: vec![0.0; n_cells],
+            latitude_source,
             scenario,
             weather,
             terrain,
@@ -231,7 +368,14 @@ impl Winter {
         };
         w.wall_seconds
             .insert("environment", t.elapsed().as_secs_f64());
+        w.wall_seconds.insert("hourly_sun", hourly_sun_s);
+        w.refresh_air_temperature();
         w.environment.store(&mut w.terrain)?;
+        if w.air.from_station() {
+            w.state
+                .scheduler
+                .set_rate(EventKind::SnowfallStart, 0.0, false);
+        }
         w.slope_deg = avalanches::bedrock_slopes_deg(&w.terrain);
         let n = w.terrain.geometry().len();
         w.avalanche_maps = AvalancheMaps {
@@ -261,6 +405,18 @@ impl Winter {
     /// Latitude the sun was computed for, degrees north.
     pub fn latitude_deg(&self) -> f64 {
         self.base_environment.sun.latitude_deg
+    }
+    /// Where the latitude came from ([`LatitudeSource::Assumed`] deserves a warning).
+    pub fn latitude_source(&self) -> LatitudeSource {
+        self.latitude_source
+    }
+    /// The snowpack's surface state (age, cold content, liquid water).
+    pub fn snowpack(&self) -> &SnowpackState {
+        &self.pack
+    }
+    /// The hourly weather of the season.
+    pub fn air(&self) -> &Air {
+        &self.air
     }
     /// Simulated time, days since the season start.
     pub fn day(&self) -> f64 {
@@ -573,8 +729,107 @@ impl Winter {
         self.environment.wind_shadow = wind.shadow;
         self.environment.wind_effect_surface = wind.effect_surface;
         self.environment.wind_stats = wind.stats;
+        self.refresh_air_temperature();
         self.environment.store(&mut self.terrain)?;
         *self.wall_seconds.entry("environment").or_default() += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Under the enhanced melt, the temperature map the phenomena read (snowfall split,
+    /// stability, avalanche α) is the daily-mean air temperature at the end of the last melt
+    /// window (the paper's map carries the sun as `ki·I`, which the new melt counts itself).
+    fn refresh_air_temperature(&mut self) {
+        if self.scenario.parameters.melt.model == MeltModel::EnhancedTi {
+            self.air.daily_temperature_map(
+                self.state.melt_clock_days,
+                self.terrain.mask(),
+                &mut self.environment.temperature,
+            );
+        }
+    }
+
+    /// The default snowfall of one Snowfall-Step: the storm's precipitation at the reference
+    /// altitude over `dt_days`, at the air temperature of this hour.
+    fn orographic_snowfall(&mut self, day: f64, dt_days: f64) -> Result<(), PhenomenonError> {
+        let p = self.air.storm_precipitation_m_per_day(day) * dt_days;
+        let table = self
+            .air
+            .precipitation_table(&[(self.air.sea_level_c(day) as f32, p as f32)]);
+        self.add_precipitation(&table)
+    }
+
+    /// Adds a precipitation table's snow to the layers and its rain to the pending rain.
+    fn add_precipitation(
+        &mut self,
+        table: &snowfall::PrecipitationTable,
+    ) -> Result<(), PhenomenonError> {
+        let p = &self.scenario.parameters;
+        let maps = PrecipitationMaps {
+            temperature: &self.environment.temperature,
+            lapse_offset_c: &self.air.lapse_offset_c,
+            orographic: &self.air.orographic,
+        };
+        let r = snowfall::add_precipitation(
+            &p.snowfall,
+            &mut self.terrain,
+            &maps,
+            table,
+            p.melt.enhanced.layer_density_kg_m3,
+            &mut self.pack.surface_age_days,
+            p.melt.enhanced.reset_swe_m,
+            &mut self.pending_rain,
+            &mut self.snowfall_scratch,
+        )?;
+        let b = &mut self.state.budget;
+        b.snowfall += r.snow_m3;
+        b.water.snowfall_water += r.snow_water_m3;
+        b.water.rain += r.rain_m3;
+        b.water.pending += r.rain_m3;
+        Ok(())
+    }
+
+    /// One window of the enhanced melt, from the last melt event to `day`.
+    fn enhanced_melt(&mut self, day: f64) -> Result<(), PhenomenonError> {
+        let t0 = self.state.melt_clock_days;
+        if let Some(table) = self.air.station_precipitation(t0, day) {
+            self.add_precipitation(&table)?;
+        }
+        let storm = self.state.scheduler.snowing();
+        let hours = self.air.melt_hours(t0, day, storm);
+        let reflected: Vec<&[f32]> = self
+            .air
+            .sun
+            .months
+            .iter()
+            .map(|m| m.reflected.as_slice())
+            .collect();
+        let svf = &self.air.sun.sky_view_factor;
+        let forcing = MeltForcing {
+            hours: &hours,
+            lapse_offset_c: &self.air.lapse_offset_c,
+            sky_view_factor: svf,
+            reflected: &reflected,
+            rain_m: &self.pending_rain,
+            window_days: (day - t0) as f32,
+        };
+        let r = melt::enhanced::step(
+            &self.scenario.parameters.melt.enhanced,
+            &mut self.terrain,
+            &mut self.pack,
+            &forcing,
+        )?;
+        self.pending_rain.fill(0.0);
+        let a = self.terrain.geometry().cell_area();
+        let b = &mut self.state.budget;
+        b.melt += r.melted_snow_m3;
+        b.refreeze += r.refrozen_snow_m3;
+        b.water.melt += r.melt_water_m3;
+        b.water.refrozen += r.refrozen_water_m3;
+        b.water.runoff += r.runoff_m3;
+        b.water.pending = 0.0;
+        b.water.store = self.pack.liquid_volume(a);
+        self.state.melt_clock_days = day;
+        self.refresh_air_temperature();
         Ok(())
     }
 
@@ -602,6 +857,22 @@ impl Winter {
         let temperature = &self.environment.temperature;
         let b = &mut self.state.budget;
         match event.kind {
+            EventKind::SnowfallStep if p.snowfall.model == SnowfallModel::Orographic => {
+                self.orographic_snowfall(day, event.dt_days).map_err(err)?;
+            }
+            EventKind::MeltAndStateStep if p.melt.model == MeltModel::EnhancedTi => {
+                self.enhanced_melt(day).map_err(err)?;
+                let p = &self.scenario.parameters;
+                let r = stability::step(
+                    &p.stability,
+                    &mut self.terrain,
+                    &self.environment.temperature,
+                    &mut self.stability_scratch,
+                    event.dt_days,
+                )
+                .map_err(err)?;
+                self.state.budget.densification += r.densification;
+            }
             EventKind::SnowfallStep => {
                 let mut params = p.snowfall.clone();
                 params.a0_precip = self.weather[self.state.weather_index].rain_snow_altitude_m;
@@ -730,7 +1001,21 @@ impl Winter {
     /// Writes a checkpoint of the whole run state to `w`.
     pub fn write_checkpoint(&self, w: &mut impl std::io::Write) -> Result<(), SeasonError> {
         let m = &self.avalanche_maps;
-        checkpoint::write(w, &self.state, &self.terrain, &[&m.scour, &m.deposit])?;
+        let [age, cold, liquid, melting] = self.pack.arrays();
+        checkpoint::write(
+            w,
+            &self.state,
+            &self.terrain,
+            &[
+                &m.scour,
+                &m.deposit,
+                age,
+                cold,
+                liquid,
+                melting,
+                &self.pending_rain,
+            ],
+        )?;
         Ok(())
     }
 
@@ -741,8 +1026,21 @@ impl Winter {
         terrain: LayeredTerrain,
         r: &mut impl std::io::Read,
     ) -> Result<Self, SeasonError> {
-        let mut w = Self::new(scenario, terrain)?;
-        let (state, mut extra): (RunState, _) = checkpoint::read(r, &mut w.terrain, 2)?;
+        Self::resume_with_forcing(scenario, terrain, None, r)
+    }
+
+    /// [`Winter::resume`] for a season driven by station forcing (the same record).
+    pub fn resume_with_forcing(
+        scenario: Scenario,
+        terrain: LayeredTerrain,
+        forcing: Option<StationForcing>,
+        r: &mut impl std::io::Read,
+    ) -> Result<Self, SeasonError> {
+        let mut w = Self::with_forcing(scenario, terrain, forcing)?;
+        let (state, mut extra): (RunState, _) = checkpoint::read(r, &mut w.terrain, 7)?;
+        w.pending_rain = extra.pop().unwrap_or_default();
+        let pack = extra.split_off(2);
+        w.pack = SnowpackState::from_arrays(pack);
         w.avalanche_maps.deposit = extra.pop().unwrap_or_default();
         w.avalanche_maps.scour = extra.pop().unwrap_or_default();
         if state.fingerprint != w.state.fingerprint
@@ -758,6 +1056,7 @@ impl Winter {
         if weather_changed {
             w.refresh_weather_maps()?;
         }
+        w.refresh_air_temperature();
         // The hazard map of the restored snow (for `avalanche_hazard`; a start recomputes it);
         // the scheduler's rate is the checkpointed one.
         avalanches::hazard(

@@ -1,0 +1,664 @@
+//! Enhanced temperature-index melt with albedo, cold content, liquid water and refreezing
+//! (beyond Cordonnier 2018: the season's default melt, `[parameters.melt] model = "enhanced_ti"`).
+//!
+//! Per cell and hour `h` of the window an event integrates (the hours since the previous melt
+//! event, so windows tile the season without gaps):
+//!
+//! - **melt energy** (Pellicciotti et al. 2005, J. Glaciol. 51(175), Eq. 4; Hock 1999,
+//!   J. Glaciol. 45(149)), in m of water:
+//!   `E = Σ_h [T_h > T_T] · (f_T · T_h + f_R · (1 − α) · I_sw,h) · Δt_h`
+//!   with `T_h` the cell's air temperature at that hour (the diurnal cycle of
+//!   [`crate::climate`]), `I_sw,h` the incoming shortwave with topographic shadows, sky view
+//!   and terrain reflection ([`snowscape_environment::insolation`]), `f_T` = 0.05 mm w.e.
+//!   h⁻¹ °C⁻¹, `f_R` = 0.0094 mm w.e. h⁻¹ W⁻¹ m², `T_T` = 1 °C (Pellicciotti 2005, Table 2,
+//!   Haut Glacier d'Arolla); plus the heat rain brings, `P_rain · c_w · T / L_f`;
+//! - **cooling** (the heat deficit of SNOW-17, Anderson 1976, NOAA Tech. Memo. NWS HYDRO-17,
+//!   §2.4, with its negative melt factor): `C = k_cc · Σ_h max(0, −T_h) · Δt_h`, m of water,
+//!   the deficit `H` capped by the cold content of the whole pack at the window's mean air
+//!   temperature, `SWE · c_i · max(0, −T̄) / L_f`.
+//!
+//! The update, in this order: `H ← min(H + C, H_max)`; liquid water refreezes against the
+//! deficit (`r = min(L, H)`, into the compacted layer, which gains `r ρ_w/ρ_C` of depth);
+//! the melt energy pays the deficit first, and what is left melts snow from the top layer down
+//! (powder, unstable, stable, compacted, each at its density); melt water and rain join the
+//! liquid water `L`, which the pack holds up to `θ_max · SWE` (Anderson 1976's liquid-water
+//! holding capacity, 5 %); the rest runs off. A cell that melts out releases its water.
+//!
+//! **Albedo** decays with the age `t` (days) of the snow surface and is reset by snowfall
+//! (U.S. Army Corps of Engineers 1956, "Snow Hydrology", as fitted in the form used by e.g.
+//! the UEB and SNOWPACK literature): `α = max(α_min, α0 · 0.94^(t^0.58))` while the pack is cold and
+//! `α = max(α_min, α0 · 0.82^(t^0.46))` once it melts (melt-season curve), `α0` = 0.85,
+//! `α_min` = 0.4.
+//!
+//! Every sum is per cell in a fixed order and rows run in parallel, so results are identical
+//! for any thread count.
+
+use crate::phenomenon::{PhenomenonError, check_at_least, check_finite};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use snowscape_terrain::LayeredTerrain;
+
+/// Latent heat of fusion of ice, J/kg.
+pub const LATENT_HEAT_FUSION: f64 = 334_000.0;
+/// Specific heat of ice, J/(kg K).
+pub const SPECIFIC_HEAT_ICE: f64 = 2102.0;
+/// Specific heat of water, J/(kg K).
+pub const SPECIFIC_HEAT_WATER: f64 = 4186.0;
+/// Density of water, kg/m³.
+pub const WATER_DENSITY: f64 = 1000.0;
+
+/// Parameters of the enhanced temperature-index melt.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EnhancedMeltParams {
+    /// Temperature factor f_T, mm w.e. per hour per °C. Pellicciotti et al. 2005, Table 2: 0.05.
+    pub f_t_mm_per_h_c: f64,
+    /// Shortwave radiation factor f_R, mm w.e. per hour per W/m² absorbed.
+    /// Pellicciotti et al. 2005, Table 2: 0.0094.
+    pub f_r_mm_per_h_w_m2: f64,
+    /// Threshold temperature T_T above which snow melts, °C. Pellicciotti et al. 2005: 1 °C.
+    pub threshold_c: f64,
+    /// Negative melt factor k_cc: heat deficit gained per hour per °C below 0, mm w.e.
+    /// Anderson 1976 (SNOW-17): NMF 0.05-0.5 mm per 6 h per °C; 0.3 mm per 6 h (0.05 mm/h/°C,
+    /// the value of f_T) chosen here, as clear nights cool the surface below the air.
+    pub cold_content_mm_per_h_c: f64,
+    /// Liquid water the pack holds, as a share of its water equivalent θ_max.
+    /// Anderson 1976 (SNOW-17 PLWHC): 0.05.
+    pub liquid_holding_capacity: f64,
+    /// Albedo of fresh snow α0. U.S. Army Corps of Engineers 1956: 0.85.
+    pub fresh_albedo: f64,
+    /// Lowest albedo of old snow α_min. Chosen here: 0.4 (old wet snow, Cuffey & Paterson 2010
+    /// Table 5.3: 0.4-0.7 for old snow).
+    pub min_albedo: f64,
+    /// Base of the accumulation-season decay per day^0.58. USACE 1956: 0.94.
+    pub cold_decay: f64,
+    /// Base of the melt-season decay per day^0.46. USACE 1956: 0.82.
+    pub melt_decay: f64,
+    /// New snow water equivalent that resets the surface age, m w.e. Chosen here: 0.001
+    /// (1 mm w.e., about 1 cm of fresh snow; a dusting renews the surface).
+    pub reset_swe_m: f64,
+    /// Density of each layer (compacted, stable, unstable, powder), kg/m³, to turn melt water
+    /// into snow depth. Compacted: Cordonnier 2018 Table 2's ρ = 500; stable: 300
+    /// (the 0.6 ratio of [`crate::stability`]); unstable 250 and powder 150: our choice
+    /// (Cuffey & Paterson 2010 Table 2.1: new snow 50-200, settled 200-300).
+    pub layer_density_kg_m3: [f64; 4],
+}
+
+impl Default for EnhancedMeltParams {
+    fn default() -> Self {
+        Self {
+            f_t_mm_per_h_c: 0.05,
+            f_r_mm_per_h_w_m2: 0.0094,
+            threshold_c: 1.0,
+            cold_content_mm_per_h_c: 0.05,
+            liquid_holding_capacity: 0.05,
+            fresh_albedo: 0.85,
+            min_albedo: 0.4,
+            cold_decay: 0.94,
+            melt_decay: 0.82,
+            reset_swe_m: 0.001,
+            layer_density_kg_m3: [500.0, 300.0, 250.0, 150.0],
+        }
+    }
+}
+
+impl EnhancedMeltParams {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<(), PhenomenonError> {
+        const P: &str = "melt.enhanced";
+        let in_range = |name: &'static str, v: f64, lo: f64, hi: f64| {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(PhenomenonError::InvalidParameter {
+                    phenomenon: P,
+                    name,
+                    value: v,
+                    reason: "out of its range (see the parameter docs)",
+                })
+            }
+        };
+        in_range("f_t_mm_per_h_c", self.f_t_mm_per_h_c, 0.0, 10.0)?;
+        in_range("f_r_mm_per_h_w_m2", self.f_r_mm_per_h_w_m2, 0.0, 1.0)?;
+        check_finite(P, "threshold_c", self.threshold_c)?;
+        in_range(
+            "cold_content_mm_per_h_c",
+            self.cold_content_mm_per_h_c,
+            0.0,
+            10.0,
+        )?;
+        in_range(
+            "liquid_holding_capacity",
+            self.liquid_holding_capacity,
+            0.0,
+            0.5,
+        )?;
+        in_range("fresh_albedo", self.fresh_albedo, 0.0, 1.0)?;
+        in_range("min_albedo", self.min_albedo, 0.0, self.fresh_albedo)?;
+        in_range("cold_decay", self.cold_decay, 0.0, 1.0)?;
+        in_range("melt_decay", self.melt_decay, 0.0, 1.0)?;
+        check_at_least(P, "reset_swe_m", self.reset_swe_m, 0.0)?;
+        for (k, d) in self.layer_density_kg_m3.iter().enumerate() {
+            in_range(
+                [
+                    "layer_density_kg_m3[0]",
+                    "layer_density_kg_m3[1]",
+                    "layer_density_kg_m3[2]",
+                    "layer_density_kg_m3[3]",
+                ][k],
+                *d,
+                10.0,
+                917.0,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Albedo of a surface `age_days` old; `melting` selects the melt-season curve.
+    #[inline]
+    pub fn albedo(&self, age_days: f32, melting: bool) -> f32 {
+        let (base, exponent) = if melting {
+            (self.melt_decay, 0.46f32)
+        } else {
+            (self.cold_decay, 0.58f32)
+        };
+        let a = self.fresh_albedo as f32 * (base as f32).powf(age_days.max(0.0).powf(exponent));
+        a.max(self.min_albedo as f32)
+    }
+}
+
+/// The per-cell state of the snowpack's surface energy, checkpointed with the run.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SnowpackState {
+    /// Days since the last snowfall renewed the surface.
+    pub surface_age_days: Vec<f32>,
+    /// Heat deficit (cold content), m of water equivalent of melt energy.
+    pub cold_content_m: Vec<f32>,
+    /// Liquid water held in the pack, m of water.
+    pub liquid_water_m: Vec<f32>,
+    /// 1 where the pack melted in the last window (selects the melt-season albedo curve).
+    pub melting: Vec<f32>,
+}
+
+impl SnowpackState {
+    /// A fresh state for `n` cells (new snow, no deficit, dry).
+    pub fn new(n: usize) -> Self {
+        Self {
+            surface_age_days: vec![0.0; n],
+            cold_content_m: vec![0.0; n],
+            liquid_water_m: vec![0.0; n],
+            melting: vec![0.0; n],
+        }
+    }
+
+    /// The four per-cell arrays, for checkpoints (age, cold content, liquid water, melting).
+    pub fn arrays(&self) -> [&[f32]; 4] {
+        [
+            &self.surface_age_days,
+            &self.cold_content_m,
+            &self.liquid_water_m,
+            &self.melting,
+        ]
+    }
+
+    /// Rebuilds a state from [`SnowpackState::arrays`].
+    pub fn from_arrays(mut a: Vec<Vec<f32>>) -> Self {
+        let melting = a.pop().unwrap_or_default();
+        let liquid_water_m = a.pop().unwrap_or_default();
+        let cold_content_m = a.pop().unwrap_or_default();
+        let surface_age_days = a.pop().unwrap_or_default();
+        Self {
+            surface_age_days,
+            cold_content_m,
+            liquid_water_m,
+            melting,
+        }
+    }
+
+    /// Total liquid water, m³.
+    pub fn liquid_volume(&self, cell_area: f64) -> f64 {
+        self.liquid_water_m.iter().map(|&l| l as f64).sum::<f64>() * cell_area
+    }
+}
+
+/// One hour (or part of one) of the window, the same for every cell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeltHour<'a> {
+    /// Fraction of the hour inside the window, (0, 1].
+    pub weight: f32,
+    /// Air temperature at sea level, °C (a cell's is this plus its lapse offset).
+    pub sea_level_c: f32,
+    /// Direct-beam factors of the hour (shadow × incidence, /255), `None` at night.
+    pub beam: Option<&'a [u8]>,
+    /// Direct normal irradiance times the cloud factor, W/m².
+    pub direct_w_m2: f32,
+    /// Diffuse horizontal irradiance times the cloud factor, W/m².
+    pub diffuse_w_m2: f32,
+    /// Reflected light per unit of the reflected share (flat direct irradiance), W/m².
+    pub reflected_w_m2: f32,
+    /// Index of the month's reflected-share map in [`MeltForcing::reflected`].
+    pub month: usize,
+}
+
+/// What a window of melt reads besides the terrain.
+#[derive(Debug, Clone, Copy)]
+pub struct MeltForcing<'a> {
+    /// The hours of the window.
+    pub hours: &'a [MeltHour<'a>],
+    /// Per cell: air temperature minus the sea-level temperature (the lapse term), °C.
+    pub lapse_offset_c: &'a [f32],
+    /// Per cell: the sky view factor.
+    pub sky_view_factor: &'a [f32],
+    /// Per month: the reflected share per cell.
+    pub reflected: &'a [&'a [f32]],
+    /// Per cell: the rain of the window, m of water (empty: none). Its heat,
+    /// `P · c_w · max(0, T̄) / L_f` at the window's mean air temperature, melts snow.
+    pub rain_m: &'a [f32],
+    /// Length of the window, days (ages the surface).
+    pub window_days: f32,
+}
+
+/// What a window of melt did, m³ (snow volume) and m³ of water.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MeltReport {
+    /// Snow volume melted, m³ of snow.
+    pub melted_snow_m3: f64,
+    /// Melt water, m³ of water.
+    pub melt_water_m3: f64,
+    /// Snow volume refrozen from liquid water (added to the compacted layer), m³ of snow.
+    pub refrozen_snow_m3: f64,
+    /// Water refrozen, m³ of water.
+    pub refrozen_water_m3: f64,
+    /// Rain that fell on snow and joined its liquid water, m³ of water (rain on bare ground
+    /// runs off at once).
+    pub rain_on_snow_m3: f64,
+    /// Water that left the pack (runoff), m³.
+    pub runoff_m3: f64,
+}
+
+/// Per-cell partial sums of one row.
+#[derive(Default, Clone, Copy)]
+struct RowSums {
+    melted_snow: f64,
+    melt_water: f64,
+    refrozen_snow: f64,
+    refrozen_water: f64,
+    rain: f64,
+    runoff: f64,
+}
+
+/// Integrates one window of melt on every valid cell (module docs).
+pub fn step(
+    params: &EnhancedMeltParams,
+    terrain: &mut LayeredTerrain,
+    pack: &mut SnowpackState,
+    forcing: &MeltForcing,
+) -> Result<MeltReport, PhenomenonError> {
+    params.validate()?;
+    let geometry = terrain.geometry().clone();
+    let n = geometry.len();
+    for (name, v) in [
+        ("lapse offset", forcing.lapse_offset_c.len()),
+        ("sky view factor", forcing.sky_view_factor.len()),
+        ("surface age", pack.surface_age_days.len()),
+        ("cold content", pack.cold_content_m.len()),
+        ("liquid water", pack.liquid_water_m.len()),
+        ("melting", pack.melting.len()),
+    ] {
+        if v != n {
+            return Err(PhenomenonError::MapLength {
+                map: name,
+                width: geometry.width(),
+                height: geometry.height(),
+                expected: n,
+                actual: v,
+            });
+        }
+    }
+    if !forcing.rain_m.is_empty() && forcing.rain_m.len() != n {
+        return Err(PhenomenonError::MapLength {
+            map: "rain",
+            width: geometry.width(),
+            height: geometry.height(),
+            expected: n,
+            actual: forcing.rain_m.len(),
+        });
+    }
+    if let Some(h) = forcing.hours.iter().find(|h| {
+        h.beam.is_some_and(|b| {
+            b.len() != n || forcing.reflected.get(h.month).is_none_or(|r| r.len() != n)
+        })
+    }) {
+        return Err(PhenomenonError::InvalidParameter {
+            phenomenon: "melt.enhanced",
+            name: "hour.month",
+            value: h.month as f64,
+            reason: "no sun maps for this month or beam map of the wrong size",
+        });
+    }
+    let w = geometry.width();
+    let mask = terrain.mask().clone();
+    let k = Coefficients::new(params, forcing);
+    let [c, s, u, p] = &mut terrain.snow;
+    let rows: Vec<RowSums> = c
+        .par_chunks_mut(w)
+        .zip(s.par_chunks_mut(w))
+        .zip(u.par_chunks_mut(w))
+        .zip(p.par_chunks_mut(w))
+        .zip(pack.surface_age_days.par_chunks_mut(w))
+        .zip(pack.cold_content_m.par_chunks_mut(w))
+        .zip(pack.liquid_water_m.par_chunks_mut(w))
+        .zip(pack.melting.par_chunks_mut(w))
+        .enumerate()
+        .map(
+            |(row, (((((((c, s), u), p), age), cold), liquid), melting))| {
+                let mut sums = RowSums::default();
+                for col in 0..c.len() {
+                    let i = row * w + col;
+                    if !mask.is_valid(i) {
+                        continue;
+                    }
+                    let mut cell = Cell {
+                        layers: [c[col], s[col], u[col], p[col]],
+                        age: age[col],
+                        cold: cold[col],
+                        liquid: liquid[col],
+                        melting: melting[col] > 0.5,
+                    };
+                    k.cell(params, forcing, i, &mut cell, &mut sums);
+                    [c[col], s[col], u[col], p[col]] = cell.layers;
+                    age[col] = cell.age;
+                    cold[col] = cell.cold;
+                    liquid[col] = cell.liquid;
+                    melting[col] = if cell.melting { 1.0 } else { 0.0 };
+                }
+                sums
+            },
+        )
+        .collect();
+    let a = geometry.cell_area();
+    let mut r = MeltReport::default();
+    for s in rows {
+        r.melted_snow_m3 += s.melted_snow * a;
+        r.melt_water_m3 += s.melt_water * a;
+        r.refrozen_snow_m3 += s.refrozen_snow * a;
+        r.refrozen_water_m3 += s.refrozen_water * a;
+        r.rain_on_snow_m3 += s.rain * a;
+        r.runoff_m3 += s.runoff * a;
+    }
+    Ok(r)
+}
+
+/// One cell's column and surface state.
+struct Cell {
+    layers: [f32; 4],
+    age: f32,
+    cold: f32,
+    liquid: f32,
+    melting: bool,
+}
+
+/// The parameters in the units the per-cell loop uses.
+struct Coefficients {
+    f_t: f32,
+    f_r: f32,
+    threshold: f32,
+    k_cc: f32,
+    holding: f32,
+    /// Water per metre of each layer's snow, m/m.
+    water_per_depth: [f32; 4],
+    /// Rain heat: m of melt per m of rain per °C.
+    rain_heat: f32,
+    /// Cold content of 1 m w.e. per °C below 0, m w.e.
+    cold_per_c: f32,
+    /// Warmest sea-level temperature of the window: a cell whose offset keeps it below the
+    /// threshold has no melt hour.
+    warmest: f32,
+}
+
+impl Coefficients {
+    fn new(p: &EnhancedMeltParams, f: &MeltForcing) -> Self {
+        let warmest = f
+            .hours
+            .iter()
+            .map(|h| h.sea_level_c)
+            .fold(f32::NEG_INFINITY, f32::max);
+        Self {
+            f_t: (p.f_t_mm_per_h_c * 1e-3) as f32,
+            f_r: (p.f_r_mm_per_h_w_m2 * 1e-3) as f32,
+            threshold: p.threshold_c as f32,
+            k_cc: (p.cold_content_mm_per_h_c * 1e-3) as f32,
+            holding: p.liquid_holding_capacity as f32,
+            water_per_depth: p.layer_density_kg_m3.map(|d| (d / WATER_DENSITY) as f32),
+            rain_heat: (SPECIFIC_HEAT_WATER / LATENT_HEAT_FUSION) as f32,
+            cold_per_c: (SPECIFIC_HEAT_ICE / LATENT_HEAT_FUSION) as f32,
+            warmest,
+        }
+    }
+
+    #[inline]
+    fn swe(&self, layers: &[f32; 4]) -> f32 {
+        layers
+            .iter()
+            .zip(&self.water_per_depth)
+            .map(|(d, w)| d * w)
+            .sum()
+    }
+
+    /// The window at one cell.
+    fn cell(
+        &self,
+        params: &EnhancedMeltParams,
+        f: &MeltForcing,
+        i: usize,
+        cell: &mut Cell,
+        sums: &mut RowSums,
+    ) {
+        let swe = self.swe(&cell.layers);
+        let rain = f.rain_m.get(i).copied().unwrap_or(0.0);
+        if swe <= 0.0 {
+            // Bare ground: rain runs off (outside the snow budget), the surface has no memory.
+            cell.cold = 0.0;
+            sums.runoff += (cell.liquid + rain) as f64;
+            cell.liquid = 0.0;
+            cell.age = 0.0;
+            cell.melting = false;
+            return;
+        }
+        let offset = f.lapse_offset_c[i];
+        let albedo = params.albedo(cell.age, cell.melting);
+        let absorbed = 1.0 - albedo;
+        let svf = f.sky_view_factor[i];
+        let (mut energy, mut cooling, mut t_sum, mut w_sum) = (0.0f32, 0.0, 0.0, 0.0);
+        let can_melt = self.warmest + offset > self.threshold;
+        for h in f.hours {
+            let t = h.sea_level_c + offset;
+            t_sum += t * h.weight;
+            w_sum += h.weight;
+            cooling += h.weight * (-t).max(0.0);
+            if can_melt && t > self.threshold {
+                let mut sw = h.diffuse_w_m2 * svf;
+                if let Some(beam) = h.beam {
+                    sw += h.direct_w_m2 * beam[i] as f32 * (1.0 / 255.0)
+                        + h.reflected_w_m2 * f.reflected[h.month][i];
+                }
+                energy += h.weight * (self.f_t * t + self.f_r * absorbed * sw);
+            }
+        }
+        // The deficit grows with the cold hours, up to the pack's cold content.
+        let t_mean = if w_sum > 0.0 { t_sum / w_sum } else { 0.0 };
+        energy += rain * self.rain_heat * t_mean.max(0.0);
+        let cap = swe * self.cold_per_c * (-t_mean).max(0.0);
+        cell.cold = cell.cold.max((cell.cold + self.k_cc * cooling).min(cap));
+        // Liquid water refreezes against the deficit, into the compacted layer.
+        let refreeze = cell.liquid.min(cell.cold);
+        if refreeze > 0.0 {
+            cell.liquid -= refreeze;
+            cell.cold -= refreeze;
+            let depth = refreeze / self.water_per_depth[0];
+            cell.layers[0] += depth;
+            sums.refrozen_snow += depth as f64;
+            sums.refrozen_water += refreeze as f64;
+        }
+        // Melt energy pays the deficit, then melts from the top down.
+        let paid = energy.min(cell.cold);
+        cell.cold -= paid;
+        let mut water = energy - paid;
+        let mut melted_water = 0.0f32;
+        for k in (0..4).rev() {
+            if water <= 0.0 {
+                break;
+            }
+            let have = cell.layers[k] * self.water_per_depth[k];
+            let take = water.min(have);
+            let depth = if take >= have {
+                cell.layers[k]
+            } else {
+                take / self.water_per_depth[k]
+            };
+            sums.melted_snow += depth as f64;
+            cell.layers[k] -= depth;
+            water -= take;
+            melted_water += take;
+        }
+        sums.melt_water += melted_water as f64;
+        sums.rain += rain as f64;
+        cell.liquid += melted_water + rain;
+        cell.melting = melted_water > 0.0;
+        let left = self.swe(&cell.layers);
+        let hold = if left > 0.0 { self.holding * left } else { 0.0 };
+        if cell.liquid > hold {
+            sums.runoff += (cell.liquid - hold) as f64;
+            cell.liquid = hold;
+        }
+        if left <= 0.0 {
+            cell.cold = 0.0;
+        }
+        cell.age += f.window_days;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use snowscape_terrain::{Grid, GridGeometry, SnowLayer};
+
+    /// Two cells of 1 m of settled snow: cell 0 a sunny south slope, cell 1 a shaded north
+    /// slope, at an altitude where the day's mean is −2 °C with a +6 °C afternoon.
+    fn day_of_sun(age_days: f32) -> (MeltReport, LayeredTerrain, SnowpackState, Vec<f32>) {
+        let mut t = LayeredTerrain::from_bedrock(Grid::filled(
+            GridGeometry::square(2, 1, 1.0).unwrap(),
+            0.0,
+        ));
+        t.layer_mut(SnowLayer::Stable).fill(1.0);
+        let mut pack = SnowpackState::new(2);
+        pack.surface_age_days.fill(age_days);
+        let south: Vec<u8> = vec![204, 0];
+        let hours: Vec<MeltHour> = (0..24)
+            .map(|h| {
+                let hour = h as f64 + 0.5;
+                let t = -2.0 + 8.0 * (std::f64::consts::TAU * (hour - 15.0) / 24.0).cos();
+                let day = (7..17).contains(&h);
+                MeltHour {
+                    weight: 1.0,
+                    sea_level_c: t as f32,
+                    beam: day.then_some(south.as_slice()),
+                    direct_w_m2: if day { 800.0 } else { 0.0 },
+                    diffuse_w_m2: if day { 60.0 } else { 0.0 },
+                    reflected_w_m2: 0.0,
+                    month: 0,
+                }
+            })
+            .collect();
+        let zero = [0.0f32; 2];
+        let reflected: [&[f32]; 1] = [&zero];
+        let forcing = MeltForcing {
+            hours: &hours,
+            lapse_offset_c: &[0.0, 0.0],
+            sky_view_factor: &[0.8, 0.8],
+            reflected: &reflected,
+            rain_m: &[],
+            window_days: 1.0,
+        };
+        let params = EnhancedMeltParams::default();
+        let before: Vec<f32> = (0..2).map(|i| t.depth_at(i)).collect();
+        let r = step(&params, &mut t, &mut pack, &forcing).unwrap();
+        (r, t, pack, before)
+    }
+
+    #[test]
+    fn a_sunny_slope_melts_on_a_freezing_day_and_a_shaded_one_does_not() {
+        let (r, t, pack, before) = day_of_sun(5.0);
+        // The sunny cell lost snow; the shaded one none (its afternoon melt energy went into
+        // the night's cold content).
+        assert!(t.depth_at(0) < before[0] - 0.01, "south {}", t.depth_at(0));
+        assert_eq!(t.depth_at(1), before[1], "north");
+        assert_eq!(pack.liquid_water_m[1], 0.0);
+        assert!(pack.cold_content_m[1] > 0.0);
+        assert!(r.melt_water_m3 > 0.005, "{r:?}");
+        // The melt water stays in the pack (5 % holding capacity of 0.3 m w.e.).
+        assert!((pack.liquid_water_m[0] as f64 - r.melt_water_m3).abs() < 1e-6);
+        assert_eq!(r.runoff_m3, 0.0);
+        assert!(t.check_invariants().is_ok());
+    }
+
+    #[test]
+    fn fresh_snow_reflects_and_melts_less() {
+        let (fresh, ..) = day_of_sun(0.0);
+        let (old, ..) = day_of_sun(30.0);
+        assert!(
+            fresh.melt_water_m3 < 0.6 * old.melt_water_m3,
+            "{fresh:?} {old:?}"
+        );
+        let p = EnhancedMeltParams::default();
+        assert!((p.albedo(0.0, false) - 0.85).abs() < 1e-6);
+        assert!(p.albedo(10.0, true) < p.albedo(10.0, false));
+        assert_eq!(p.albedo(1e4, true), 0.4);
+    }
+
+    #[test]
+    fn liquid_water_refreezes_and_water_is_conserved() {
+        let (_, mut t, mut pack, _) = day_of_sun(5.0);
+        let liquid = pack.liquid_water_m[0];
+        let compacted = t.layer(SnowLayer::Compacted)[0];
+        // A cold night: the water refreezes into the compacted layer.
+        let hours: Vec<MeltHour> = (0..12)
+            .map(|_| MeltHour {
+                weight: 1.0,
+                sea_level_c: -10.0,
+                beam: None,
+                direct_w_m2: 0.0,
+                diffuse_w_m2: 0.0,
+                reflected_w_m2: 0.0,
+                month: 0,
+            })
+            .collect();
+        let forcing = MeltForcing {
+            hours: &hours,
+            lapse_offset_c: &[0.0, 0.0],
+            sky_view_factor: &[0.8, 0.8],
+            reflected: &[],
+            rain_m: &[0.002, 0.0],
+            window_days: 0.5,
+        };
+        let r = step(&EnhancedMeltParams::default(), &mut t, &mut pack, &forcing).unwrap();
+        let frozen = r.refrozen_water_m3 as f32;
+        assert!(frozen > 0.0 && frozen <= liquid + 1e-7, "{r:?}");
+        assert!(
+            (pack.liquid_water_m[0] - (liquid - frozen + 0.002)).abs() < 1e-6,
+            "{:?}",
+            pack.liquid_water_m
+        );
+        let gained = t.layer(SnowLayer::Compacted)[0] - compacted;
+        assert!((gained - frozen / 0.5).abs() < 1e-6, "{gained}");
+        // A bad map is a typed error.
+        let bad = MeltForcing {
+            lapse_offset_c: &[0.0],
+            ..forcing
+        };
+        assert!(matches!(
+            step(&EnhancedMeltParams::default(), &mut t, &mut pack, &bad),
+            Err(PhenomenonError::MapLength { actual: 1, .. })
+        ));
+    }
+}
