@@ -99,6 +99,14 @@ pub struct DemoArgs {
     /// Frames in the time-lapse (snapshots spread evenly over the season).
     #[arg(long, default_value_t = 10)]
     pub frames: usize,
+    /// Latitude of the procedural terrain, degrees north (it has no georeferencing).
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 45.0,
+        allow_hyphen_values = true
+    )]
+    pub latitude: f64,
 }
 
 #[derive(Debug, Args)]
@@ -126,6 +134,18 @@ pub struct RunArgs {
     /// a long season into parts.
     #[arg(long, value_name = "DAY")]
     pub stop_at: Option<f64>,
+    /// Station forcing (CSV: time, air_temperature_c, precipitation_mm, wind_speed_m_s,
+    /// wind_from_deg[, shortwave_in_w_m2, relative_humidity]; or a snobal input file): the
+    /// season follows the record from its first hour, distributed over the DEM by the lapse
+    /// rate and the orographic gradient.
+    #[arg(long, value_name = "FILE.csv")]
+    pub forcing: Option<PathBuf>,
+    /// Altitude of the forcing station, m (overrides the file's `# station_altitude_m`).
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    pub station_altitude: Option<f64>,
+    /// Latitude, degrees north (overrides the scenario and the DEM's georeferencing).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub latitude: Option<f64>,
     #[command(flatten)]
     pub skiers: SkierArgs,
     #[command(flatten)]

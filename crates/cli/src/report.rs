@@ -99,6 +99,12 @@ pub struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub skiers: Option<snowscape_season::skiing::SkiStats>,
     pub mass_budget: MassBudget,
+    /// The pack's liquid water, m³ of water (season runs with the enhanced melt).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub water_budget: Option<snowscape_season::winter::WaterBudget>,
+    /// Things the user should know (e.g. an assumed latitude), also logged.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,
 }

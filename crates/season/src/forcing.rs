@@ -15,6 +15,7 @@ pub struct ForcingRecord {
 /// A series.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StationForcing {
+    pub start: ForcingTime,
     pub station_altitude_m: Option<f64>,
     pub step_hours: f64,
     pub records: Vec<ForcingRecord>,
@@ -30,4 +31,26 @@ impl StationForcing {
         let k = (hours / self.step_hours).floor().max(0.0) as usize;
         &self.records[k.min(self.records.len() - 1)]
     }
+}
+
+/// Start time of a record.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ForcingTime {
+    pub year: i32,
+    pub month: u32,
+    pub day: u32,
+    pub hour: u32,
+}
+
+/// A reading error.
+#[derive(Debug, thiserror::Error)]
+#[error("forcing {0}")]
+pub struct ForcingError(String);
+
+/// Reads a file.
+pub fn from_path(
+    path: &std::path::Path,
+    _station_altitude: Option<f64>,
+) -> Result<StationForcing, ForcingError> {
+    Err(ForcingError(path.display().to_string()))
 }

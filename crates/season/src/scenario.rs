@@ -133,8 +133,16 @@ pub struct Scenario {
     pub days: f64,
     /// First day, `MM-DD` or `YYYY-MM-DD`.
     pub start_date: String,
-    /// Latitude, degrees north; `None`: from the DEM's georeferencing, else 45.
+    /// Latitude, degrees north; `None`: from the DEM's georeferencing, else 45 (with a
+    /// warning in the log and report.json).
     pub latitude_deg: Option<f64>,
+    /// Station forcing (CSV, see [`crate::forcing`]), relative to the scenario file: the
+    /// season then follows the station's record, from its first hour.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forcing: Option<std::path::PathBuf>,
+    /// Altitude of the forcing station, m (overrides the file's `# station_altitude_m`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub station_altitude_m: Option<f64>,
     /// Take a snapshot (frame) every this many days; 0 = none.
     pub snapshot_every_days: f64,
     /// Explicit snapshot days (added to the regular ones).
@@ -164,6 +172,8 @@ impl Default for Scenario {
             days: 100.0,
             start_date: "12-01".into(),
             latitude_deg: None,
+            forcing: None,
+            station_altitude_m: None,
             snapshot_every_days: 10.0,
             snapshot_days: Vec::new(),
             checkpoint_every_days: 10.0,
@@ -234,6 +244,15 @@ impl Scenario {
                 "latitude_deg",
                 l.to_string(),
                 "must be within [-90, 90]",
+            ));
+        }
+        if let Some(z) = self.station_altitude_m
+            && !(z.is_finite() && z.abs() <= 9000.0)
+        {
+            return Err(bad(
+                "station_altitude_m",
+                z.to_string(),
+                "must be a plausible altitude (|z| <= 9000 m)",
             ));
         }
         for (key, v) in [

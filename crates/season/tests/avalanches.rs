@@ -22,6 +22,9 @@ fn quiet_scenario(days: f64) -> Scenario {
     };
     s.parameters.environment.sky.directions = 8;
     s.parameters.environment.sun.day_step = 30;
+    // A cold winter day: these tests are about dry avalanches (the climatology puts the
+    // 1000-1250 m slope near 0-4 °C on 1 December at 45° N, which makes the snow wet).
+    s.parameters.climate.temperature_offset_c = -10.0;
     s
 }
 

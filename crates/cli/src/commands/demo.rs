@@ -7,7 +7,7 @@ use crate::cli::{DemoArgs, GlobalArgs, ViewArgs};
 use crate::commands::render::preview_options;
 use crate::commands::season::{SeasonJob, run_season};
 use crate::failure::{ExitCodeExt, Failure};
-use anyhow::anyhow;
+use anyhow::{Context, anyhow};
 use serde_json::json;
 use snowscape_render::ColourMode;
 use snowscape_season::scenario::Scenario;
@@ -50,8 +50,13 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
         days: args.days,
         snapshot_every_days: args.days / args.frames.max(1) as f64,
         checkpoint_every_days: 0.0,
+        latitude_deg: Some(args.latitude),
         ..Scenario::default()
     };
+    scenario
+        .validate("the command line")
+        .context("--latitude/--days")
+        .bad_input()?;
     run_season(SeasonJob {
         command: "demo",
         source: "procedural alpine terrain".into(),
@@ -69,6 +74,7 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
         }),
         out: args.out.clone(),
         resume: None,
+        forcing: None,
         stop_at: None,
         view,
         quiet: global.quiet,

@@ -40,6 +40,8 @@ pub struct SeasonJob {
     pub resume: Option<PathBuf>,
     /// Stop at this day with a checkpoint, before the season ends.
     pub stop_at: Option<f64>,
+    /// Station forcing driving the season.
+    pub forcing: Option<snowscape_season::forcing::StationForcing>,
     pub view: PreviewOptions,
     pub quiet: bool,
 }
@@ -106,18 +108,27 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
     let terrain = LayeredTerrain::from_bedrock(job.bedrock);
     let mut winter = stages.run("environment", || -> Result<Winter, Failure> {
         match &job.resume {
-            None => Winter::new(job.scenario.clone(), terrain).job_failed(),
+            None => Winter::with_forcing(job.scenario.clone(), terrain, job.forcing.clone())
+                .job_failed(),
             Some(dir) => {
                 let path = dir.join(CHECKPOINT);
                 let bytes = std::fs::read(&path)
                     .with_context(|| format!("cannot read checkpoint {}", path.display()))
                     .bad_input()?;
-                Winter::resume(job.scenario.clone(), terrain, &mut bytes.as_slice())
-                    .with_context(|| format!("cannot resume from {}", path.display()))
-                    .bad_input()
+                Winter::resume_with_forcing(
+                    job.scenario.clone(),
+                    terrain,
+                    job.forcing.clone(),
+                    &mut bytes.as_slice(),
+                )
+                .with_context(|| format!("cannot resume from {}", path.display()))
+                .bad_input()
             }
         }
     })?;
+    for w in season_warnings(&winter) {
+        tracing::warn!("{w}");
+    }
 
     let snaps = snapshot_days(winter.scenario());
     let checkpoints = checkpoint_days(winter.scenario());
@@ -322,13 +333,17 @@ fn season_report(
         ..MassBudget::default()
     };
     budget.inputs.insert("snowfall".into(), b.snowfall);
+    budget.inputs.insert("refreeze".into(), b.refreeze);
     budget.outputs.insert("melt".into(), b.melt);
+    budget
+        .outputs
+        .insert("wind_sublimation".into(), b.wind_sublimation);
     budget
         .outputs
         .insert("densification".into(), b.densification);
     budget.outputs.insert(
         "border_outflow".into(),
-        b.diffusion_outflow + b.wind_outflow + b.avalanche_outflow,
+        b.diffusion_outflow + b.wind_outflow + b.avalanche_outflow + b.shedding_outflow,
     );
     let mut timings_json = timings_object(&timings);
     let phenomena: serde_json::Map<String, serde_json::Value> = winter
@@ -350,6 +365,7 @@ fn season_report(
             "scenario": winter.scenario(),
             "weather": winter.weather(),
             "latitude_deg": winter.latitude_deg(),
+            "latitude_source": winter.latitude_source(),
             "extra": extra_parameters,
         }),
         seed: winter.scenario().seed,
@@ -359,6 +375,20 @@ fn season_report(
         avalanches: Some(winter.avalanches().to_vec()),
         skiers: Some(winter.ski_stats().clone()),
         mass_budget: budget.close(),
+        water_budget: Some(b.water.clone()),
+        warnings: season_warnings(winter),
         outputs,
     }
+}
+
+/// What a user must be told about a season: an assumed latitude names the flag that sets it.
+pub fn season_warnings(winter: &Winter) -> Vec<String> {
+    let mut w = Vec::new();
+    if winter.latitude_source() == snowscape_season::winter::LatitudeSource::Assumed {
+        w.push(format!(
+            "the DEM's georeferencing gives no latitude: the sun and the climatology assume {:.1}° N; set it with --latitude DEG (or latitude_deg in the scenario)",
+            winter.latitude_deg()
+        ));
+    }
+    w
 }

@@ -350,8 +350,13 @@ pub fn step(
         .zip(pack.liquid_water_m.par_chunks_mut(w))
         .zip(pack.melting.par_chunks_mut(w))
         .enumerate()
-        .map(
-            |(row, (((((((c, s), u), p), age), cold), liquid), melting))| {
+        .map_init(
+            || vec![0.0f32; w],
+            |shortwave, (row, (((((((c, s), u), p), age), cold), liquid), melting))| {
+                let snowy = (0..c.len()).any(|k| c[k] + s[k] + u[k] + p[k] > 0.0);
+                if snowy {
+                    k.row_shortwave(forcing, row * w, &mut shortwave[..w]);
+                }
                 let mut sums = RowSums::default();
                 for col in 0..c.len() {
                     let i = row * w + col;
@@ -365,7 +370,7 @@ pub fn step(
                         liquid: liquid[col],
                         melting: melting[col] > 0.5,
                     };
-                    k.cell(params, forcing, i, &mut cell, &mut sums);
+                    k.cell(forcing, i, shortwave[col], &mut cell, &mut sums);
                     [c[col], s[col], u[col], p[col]] = cell.layers;
                     age[col] = cell.age;
                     cold[col] = cell.cold;
@@ -411,19 +416,86 @@ struct Coefficients {
     rain_heat: f32,
     /// Cold content of 1 m w.e. per °C below 0, m w.e.
     cold_per_c: f32,
-    /// Warmest sea-level temperature of the window: a cell whose offset keeps it below the
-    /// threshold has no melt hour.
-    warmest: f32,
+    /// Albedo by surface age in steps of [`ALBEDO_STEP_DAYS`], cold and melting curves.
+    albedo: [Vec<f32>; 2],
+    /// Cooling and melting degree-hours of the window by lapse offset.
+    degree_hours: DegreeHours,
+    /// Weighted mean sea-level temperature of the window, °C.
+    mean_sea_level: f32,
 }
+
+/// `Σ_h w_h max(0, −T_h)` and `Σ_h w_h [T_h > T_T] T_h` for `T_h = T_sl,h + offset`, tabulated
+/// every [`DegreeHours::STEP_C`] of offset: both are piecewise linear in the offset with kinks
+/// where an hour crosses 0 or `T_T`, so linear interpolation is exact between kinks and off by
+/// at most one hour-weight × step near them (the threshold jump of the melt sum is smeared
+/// over one step).
+struct DegreeHours {
+    offset_min: f32,
+    cooling: Vec<f32>,
+    warm: Vec<f32>,
+}
+
+impl DegreeHours {
+    const STEP_C: f32 = 0.02;
+
+    fn new(hours: &[MeltHour], threshold: f32, offsets: &[f32]) -> Self {
+        let (lo, hi) = offsets
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &o| {
+                (a.min(o), b.max(o))
+            });
+        let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 0.0) };
+        let n = (((hi - lo) / Self::STEP_C).ceil() as usize + 2).min(1 << 20);
+        let (mut cooling, mut warm) = (vec![0.0f32; n], vec![0.0f32; n]);
+        for k in 0..n {
+            let o = lo + k as f32 * Self::STEP_C;
+            for h in hours {
+                let t = h.sea_level_c + o;
+                cooling[k] += h.weight * (-t).max(0.0);
+                if t > threshold {
+                    warm[k] += h.weight * t;
+                }
+            }
+        }
+        Self {
+            offset_min: lo,
+            cooling,
+            warm,
+        }
+    }
+
+    #[inline]
+    fn at(&self, offset: f32) -> (f32, f32) {
+        let x = ((offset - self.offset_min) / Self::STEP_C).max(0.0);
+        let k = (x as usize).min(self.cooling.len() - 2);
+        let f = (x - k as f32).min(1.0);
+        (
+            self.cooling[k] + f * (self.cooling[k + 1] - self.cooling[k]),
+            self.warm[k] + f * (self.warm[k + 1] - self.warm[k]),
+        )
+    }
+}
+
+/// Age step of the albedo table, days.
+const ALBEDO_STEP_DAYS: f32 = 0.05;
+/// Ages beyond this use the last entry, days (both curves reach α_min well before).
+const ALBEDO_MAX_DAYS: f32 = 400.0;
 
 impl Coefficients {
     fn new(p: &EnhancedMeltParams, f: &MeltForcing) -> Self {
-        let warmest = f
-            .hours
-            .iter()
-            .map(|h| h.sea_level_c)
-            .fold(f32::NEG_INFINITY, f32::max);
+        let weight: f32 = f.hours.iter().map(|h| h.weight).sum();
+        let mean_sea_level = if weight > 0.0 {
+            f.hours
+                .iter()
+                .map(|h| h.weight * h.sea_level_c)
+                .sum::<f32>()
+                / weight
+        } else {
+            0.0
+        };
         Self {
+            degree_hours: DegreeHours::new(f.hours, p.threshold_c as f32, f.lapse_offset_c),
+            mean_sea_level,
             f_t: (p.f_t_mm_per_h_c * 1e-3) as f32,
             f_r: (p.f_r_mm_per_h_w_m2 * 1e-3) as f32,
             threshold: p.threshold_c as f32,
@@ -432,8 +504,23 @@ impl Coefficients {
             water_per_depth: p.layer_density_kg_m3.map(|d| (d / WATER_DENSITY) as f32),
             rain_heat: (SPECIFIC_HEAT_WATER / LATENT_HEAT_FUSION) as f32,
             cold_per_c: (SPECIFIC_HEAT_ICE / LATENT_HEAT_FUSION) as f32,
-            warmest,
+            albedo: [false, true].map(|melting| {
+                let n = (ALBEDO_MAX_DAYS / ALBEDO_STEP_DAYS) as usize + 1;
+                (0..n)
+                    .map(|k| p.albedo(k as f32 * ALBEDO_STEP_DAYS, melting))
+                    .collect()
+            }),
         }
+    }
+
+    /// [`EnhancedMeltParams::albedo`] from the table (linear between entries).
+    #[inline]
+    fn albedo_at(&self, age_days: f32, melting: bool) -> f32 {
+        let t = &self.albedo[usize::from(melting)];
+        let x = (age_days.max(0.0) / ALBEDO_STEP_DAYS).min((t.len() - 1) as f32);
+        let k = (x as usize).min(t.len() - 2);
+        let f = x - k as f32;
+        t[k] + f * (t[k + 1] - t[k])
     }
 
     #[inline]
@@ -445,15 +532,46 @@ impl Coefficients {
             .sum()
     }
 
-    /// The window at one cell.
-    fn cell(
-        &self,
-        params: &EnhancedMeltParams,
-        f: &MeltForcing,
-        i: usize,
-        cell: &mut Cell,
-        sums: &mut RowSums,
-    ) {
+    /// `Σ_h w_h [T_h > T_T] I_sw,h` (W h/m²) of the cells of one row starting at cell `base`,
+    /// hour by hour over the row (vectorisable), skipping hours too cold anywhere in the row.
+    fn row_shortwave(&self, f: &MeltForcing, base: usize, out: &mut [f32]) {
+        out.fill(0.0);
+        let w = out.len();
+        let off = &f.lapse_offset_c[base..base + w];
+        let svf = &f.sky_view_factor[base..base + w];
+        let warmest_offset = off.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let thr = self.threshold;
+        for h in f.hours {
+            if h.sea_level_c + warmest_offset <= thr {
+                continue;
+            }
+            let (t0, wt) = (h.sea_level_c, h.weight);
+            match h.beam {
+                Some(beam) => {
+                    let beam = &beam[base..base + w];
+                    let refl = &f.reflected[h.month][base..base + w];
+                    let direct = h.direct_w_m2 * (1.0 / 255.0);
+                    for col in 0..w {
+                        let v = wt
+                            * (h.diffuse_w_m2 * svf[col]
+                                + direct * beam[col] as f32
+                                + h.reflected_w_m2 * refl[col]);
+                        out[col] += if t0 + off[col] > thr { v } else { 0.0 };
+                    }
+                }
+                None if h.diffuse_w_m2 > 0.0 => {
+                    for col in 0..w {
+                        let v = wt * h.diffuse_w_m2 * svf[col];
+                        out[col] += if t0 + off[col] > thr { v } else { 0.0 };
+                    }
+                }
+                None => {}
+            }
+        }
+    }
+
+    /// The window at one cell, with its melting hours' shortwave `shortwave` (W h/m²).
+    fn cell(&self, f: &MeltForcing, i: usize, shortwave: f32, cell: &mut Cell, sums: &mut RowSums) {
         let swe = self.swe(&cell.layers);
         let rain = f.rain_m.get(i).copied().unwrap_or(0.0);
         if swe <= 0.0 {
@@ -466,27 +584,13 @@ impl Coefficients {
             return;
         }
         let offset = f.lapse_offset_c[i];
-        let albedo = params.albedo(cell.age, cell.melting);
+        let albedo = self.albedo_at(cell.age, cell.melting);
         let absorbed = 1.0 - albedo;
-        let svf = f.sky_view_factor[i];
-        let (mut energy, mut cooling, mut t_sum, mut w_sum) = (0.0f32, 0.0, 0.0, 0.0);
-        let can_melt = self.warmest + offset > self.threshold;
-        for h in f.hours {
-            let t = h.sea_level_c + offset;
-            t_sum += t * h.weight;
-            w_sum += h.weight;
-            cooling += h.weight * (-t).max(0.0);
-            if can_melt && t > self.threshold {
-                let mut sw = h.diffuse_w_m2 * svf;
-                if let Some(beam) = h.beam {
-                    sw += h.direct_w_m2 * beam[i] as f32 * (1.0 / 255.0)
-                        + h.reflected_w_m2 * f.reflected[h.month][i];
-                }
-                energy += h.weight * (self.f_t * t + self.f_r * absorbed * sw);
-            }
-        }
+        // Degree-hour sums from the window's tables; the shortwave only on melting hours.
+        let (cooling, warm) = self.degree_hours.at(offset);
+        let mut energy = self.f_t * warm + self.f_r * absorbed * shortwave;
         // The deficit grows with the cold hours, up to the pack's cold content.
-        let t_mean = if w_sum > 0.0 { t_sum / w_sum } else { 0.0 };
+        let t_mean = self.mean_sea_level + offset;
         energy += rain * self.rain_heat * t_mean.max(0.0);
         let cap = swe * self.cold_per_c * (-t_mean).max(0.0);
         cell.cold = cell.cold.max((cell.cold + self.k_cc * cooling).min(cap));
