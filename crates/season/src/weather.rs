@@ -14,6 +14,9 @@ use snowscape_environment::insolation::clear_sky;
 use snowscape_terrain::NodataMask;
 use std::sync::Arc;
 
+/// Longwave emission of a melting snow surface, `σ · 273.15⁴`, W/m² (emissivity 1).
+pub const MELTING_SURFACE_LONGWAVE_W_M2: f32 = 315.6;
+
 /// Where the hourly air comes from.
 #[derive(Debug, Clone)]
 pub enum AirSource {
@@ -250,7 +253,12 @@ impl Air {
                     }
                     None => (None, 0.0, 0.0, 0.0),
                 };
+                let longwave_balance_w_m2 = self
+                    .station_record(mid)
+                    .and_then(|r| r.longwave_in_w_m2)
+                    .map_or(0.0, |l| l - MELTING_SURFACE_LONGWAVE_W_M2);
                 MeltHour {
+                    longwave_balance_w_m2,
                     weight,
                     sea_level_c: self.sea_level_c(mid) as f32,
                     beam,

@@ -16,6 +16,11 @@
 //!   §2.4, with its negative melt factor): `C = k_cc · Σ_h max(0, −T_h) · Δt_h`, m of water,
 //!   the deficit `H` capped by the cold content of the whole pack at the window's mean air
 //!   temperature, `SWE · c_i · max(0, −T̄) / L_f`.
+//! - **longwave**, when station forcing records the incoming longwave `L_in`: the balance of
+//!   a melting surface `Σ_h (L_in,h − σ 273.15⁴) Δt_h / (ρ_w L_f)` joins the melt energy (the
+//!   net-radiation index of Kustas et al. 1994, Water Resour. Res. 30(5)); a negative total
+//!   cools the pack instead. Dry, clear spells then melt nothing even above 0 °C, as an energy
+//!   balance says; without the record the temperature factor stands for the longwave.
 //!
 //! The update, in this order: `H ← min(H + C, H_max)`; liquid water refreezes against the
 //! deficit (`r = min(L, H)`, into the compacted layer, which gains `r ρ_w/ρ_C` of depth);
@@ -27,7 +32,8 @@
 //! **Albedo** decays with the age `t` (days) of the snow surface and is reset by snowfall
 //! (U.S. Army Corps of Engineers 1956, "Snow Hydrology", as fitted in the form used by e.g.
 //! the UEB and SNOWPACK literature): `α = max(α_min, α0 · 0.94^(t^0.58))` while the pack is cold and
-//! `α = max(α_min, α0 · 0.82^(t^0.46))` once it melts (melt-season curve), `α0` = 0.85,
+//! `α = max(α_min, α0 · 0.82^(t^0.46))` once it is ripe (no cold content left and wet: the
+//! melt-season curve), `α0` = 0.85,
 //! `α_min` = 0.4.
 //!
 //! Every sum is per cell in a fixed order and rows run in parallel, so results are identical
@@ -176,7 +182,8 @@ pub struct SnowpackState {
     pub cold_content_m: Vec<f32>,
     /// Liquid water held in the pack, m of water.
     pub liquid_water_m: Vec<f32>,
-    /// 1 where the pack melted in the last window (selects the melt-season albedo curve).
+    /// 1 where the pack ended the last window ripe (no cold content, wet): it then ages on
+    /// the melt-season albedo curve.
     pub melting: Vec<f32>,
 }
 
@@ -238,6 +245,9 @@ pub struct MeltHour<'a> {
     pub reflected_w_m2: f32,
     /// Index of the month's reflected-share map in [`MeltForcing::reflected`].
     pub month: usize,
+    /// Longwave balance of a melting surface, `L_in − σ·273.15⁴`, W/m², when the forcing
+    /// records the incoming longwave (0 otherwise: the temperature factor stands for it).
+    pub longwave_balance_w_m2: f32,
 }
 
 /// What a window of melt reads besides the terrain.
@@ -422,6 +432,8 @@ struct Coefficients {
     degree_hours: DegreeHours,
     /// Weighted mean sea-level temperature of the window, °C.
     mean_sea_level: f32,
+    /// The window's recorded longwave balance as melt, m of water (negative: cooling).
+    longwave_m: f32,
 }
 
 /// `Σ_h w_h max(0, −T_h)` and `Σ_h w_h [T_h > T_T] T_h` for `T_h = T_sl,h + offset`, tabulated
@@ -493,9 +505,15 @@ impl Coefficients {
         } else {
             0.0
         };
+        let longwave_wh: f32 = f
+            .hours
+            .iter()
+            .map(|h| h.weight * h.longwave_balance_w_m2)
+            .sum();
         Self {
             degree_hours: DegreeHours::new(f.hours, p.threshold_c as f32, f.lapse_offset_c),
             mean_sea_level,
+            longwave_m: (longwave_wh as f64 * 3600.0 / (LATENT_HEAT_FUSION * WATER_DENSITY)) as f32,
             f_t: (p.f_t_mm_per_h_c * 1e-3) as f32,
             f_r: (p.f_r_mm_per_h_w_m2 * 1e-3) as f32,
             threshold: p.threshold_c as f32,
@@ -588,12 +606,17 @@ impl Coefficients {
         let absorbed = 1.0 - albedo;
         // Degree-hour sums from the window's tables; the shortwave only on melting hours.
         let (cooling, warm) = self.degree_hours.at(offset);
-        let mut energy = self.f_t * warm + self.f_r * absorbed * shortwave;
+        let mut energy = self.f_t * warm + self.f_r * absorbed * shortwave + self.longwave_m;
         // The deficit grows with the cold hours, up to the pack's cold content.
         let t_mean = self.mean_sea_level + offset;
         energy += rain * self.rain_heat * t_mean.max(0.0);
+        // A negative balance (a recorded longwave deficit larger than the gains) cools.
+        let deficit = (-energy).max(0.0);
+        energy = energy.max(0.0);
         let cap = swe * self.cold_per_c * (-t_mean).max(0.0);
-        cell.cold = cell.cold.max((cell.cold + self.k_cc * cooling).min(cap));
+        cell.cold = cell
+            .cold
+            .max((cell.cold + self.k_cc * cooling + deficit).min(cap));
         // Liquid water refreezes against the deficit, into the compacted layer.
         let refreeze = cell.liquid.min(cell.cold);
         if refreeze > 0.0 {
@@ -628,7 +651,6 @@ impl Coefficients {
         sums.melt_water += melted_water as f64;
         sums.rain += rain as f64;
         cell.liquid += melted_water + rain;
-        cell.melting = melted_water > 0.0;
         let left = self.swe(&cell.layers);
         let hold = if left > 0.0 { self.holding * left } else { 0.0 };
         if cell.liquid > hold {
@@ -638,6 +660,8 @@ impl Coefficients {
         if left <= 0.0 {
             cell.cold = 0.0;
         }
+        // A ripe pack (no cold content left, wet) ages on the melt-season curve.
+        cell.melting = left > 0.0 && cell.cold <= 0.0 && cell.liquid > 0.0;
         cell.age += f.window_days;
     }
 }
@@ -671,6 +695,7 @@ mod tests {
                     diffuse_w_m2: if day { 60.0 } else { 0.0 },
                     reflected_w_m2: 0.0,
                     month: 0,
+                    longwave_balance_w_m2: 0.0,
                 }
             })
             .collect();
@@ -735,6 +760,7 @@ mod tests {
                 diffuse_w_m2: 0.0,
                 reflected_w_m2: 0.0,
                 month: 0,
+                longwave_balance_w_m2: 0.0,
             })
             .collect();
         let forcing = MeltForcing {
