@@ -791,6 +791,10 @@ impl Winter {
     /// One window of the enhanced melt, from the last melt event to `day`.
     fn enhanced_melt(&mut self, day: f64) -> Result<(), PhenomenonError> {
         let t0 = self.state.melt_clock_days;
+        let min_window = self.scenario.parameters.melt.enhanced.min_window_hours / 24.0;
+        if day - t0 < min_window && day < self.scenario.days {
+            return Ok(());
+        }
         if let Some(table) = self.air.station_precipitation(t0, day) {
             self.add_precipitation(&table)?;
         }

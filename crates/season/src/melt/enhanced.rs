@@ -83,6 +83,11 @@ pub struct EnhancedMeltParams {
     /// New snow water equivalent that resets the surface age, m w.e. Chosen here: 0.001
     /// (1 mm w.e., about 1 cm of fresh snow; a dusting renews the surface).
     pub reset_swe_m: f64,
+    /// Shortest window a melt event integrates, hours: a Melt-And-State event sooner than
+    /// this after the last window leaves the melt to the next one. Default 24: whole diurnal
+    /// cycles, whose cooling and warming the window nets as the cold content would overnight
+    /// (and half the cost of the paper's twice-daily events). 0 integrates every event.
+    pub min_window_hours: f64,
     /// Density of each layer (compacted, stable, unstable, powder), kg/m³, to turn melt water
     /// into snow depth. Compacted: Cordonnier 2018 Table 2's ρ = 500; stable: 300
     /// (the 0.6 ratio of [`crate::stability`]); unstable 250 and powder 150: our choice
@@ -103,6 +108,7 @@ impl Default for EnhancedMeltParams {
             cold_decay: 0.94,
             melt_decay: 0.82,
             reset_swe_m: 0.001,
+            min_window_hours: 24.0,
             layer_density_kg_m3: [500.0, 300.0, 250.0, 150.0],
         }
     }
@@ -144,6 +150,7 @@ impl EnhancedMeltParams {
         in_range("cold_decay", self.cold_decay, 0.0, 1.0)?;
         in_range("melt_decay", self.melt_decay, 0.0, 1.0)?;
         check_at_least(P, "reset_swe_m", self.reset_swe_m, 0.0)?;
+        in_range("min_window_hours", self.min_window_hours, 0.0, 240.0)?;
         for (k, d) in self.layer_density_kg_m3.iter().enumerate() {
             in_range(
                 [
@@ -348,6 +355,7 @@ pub fn step(
     }
     let w = geometry.width();
     let mask = terrain.mask().clone();
+    let invalid = mask.invalid_cells();
     let k = Coefficients::new(params, forcing);
     let [c, s, u, p] = &mut terrain.snow;
     let rows: Vec<RowSums> = c
@@ -361,33 +369,35 @@ pub fn step(
         .zip(pack.melting.par_chunks_mut(w))
         .enumerate()
         .map_init(
-            || vec![0.0f32; w],
-            |shortwave, (row, (((((((c, s), u), p), age), cold), liquid), melting))| {
-                let snowy = (0..c.len()).any(|k| c[k] + s[k] + u[k] + p[k] > 0.0);
+            || RowScratch::new(w),
+            |scratch, (row, (((((((c, s), u), p), age), cold), liquid), melting))| {
+                let base = row * w;
+                let snowy = (0..w).any(|k| c[k] + s[k] + u[k] + p[k] > 0.0);
                 if snowy {
-                    k.row_shortwave(forcing, row * w, &mut shortwave[..w]);
+                    k.row_shortwave(forcing, base, &mut scratch.shortwave);
+                } else {
+                    scratch.shortwave.fill(0.0);
                 }
-                let mut sums = RowSums::default();
-                for col in 0..c.len() {
-                    let i = row * w + col;
-                    if !mask.is_valid(i) {
-                        continue;
-                    }
-                    let mut cell = Cell {
-                        layers: [c[col], s[col], u[col], p[col]],
-                        age: age[col],
-                        cold: cold[col],
-                        liquid: liquid[col],
-                        melting: melting[col] > 0.5,
-                    };
-                    k.cell(forcing, i, shortwave[col], &mut cell, &mut sums);
-                    [c[col], s[col], u[col], p[col]] = cell.layers;
-                    age[col] = cell.age;
-                    cold[col] = cell.cold;
-                    liquid[col] = cell.liquid;
-                    melting[col] = if cell.melting { 1.0 } else { 0.0 };
-                }
-                sums
+                let valid = invalid.map(|v| &v[base..base + w]);
+                let rain = if forcing.rain_m.is_empty() {
+                    None
+                } else {
+                    Some(&forcing.rain_m[base..base + w])
+                };
+                k.row(
+                    forcing,
+                    base,
+                    RowState {
+                        layers: [c, s, u, p],
+                        age,
+                        cold,
+                        liquid,
+                        melting,
+                    },
+                    rain,
+                    valid,
+                    scratch,
+                )
             },
         )
         .collect();
@@ -404,13 +414,179 @@ pub fn step(
     Ok(r)
 }
 
-/// One cell's column and surface state.
-struct Cell {
-    layers: [f32; 4],
-    age: f32,
-    cold: f32,
-    liquid: f32,
-    melting: bool,
+/// One row's state, in place.
+struct RowState<'a> {
+    layers: [&'a mut [f32]; 4],
+    age: &'a mut [f32],
+    cold: &'a mut [f32],
+    liquid: &'a mut [f32],
+    melting: &'a mut [f32],
+}
+
+/// Per-row buffers: the melting hours' shortwave, the table lookups, and each cell's
+/// contributions to the sums (reduced in cell order).
+struct RowScratch {
+    shortwave: Vec<f32>,
+    absorbed: Vec<f32>,
+    cooling: Vec<f32>,
+    warm: Vec<f32>,
+    rain: Vec<f32>,
+    keep: Vec<f32>,
+    /// refrozen depth, refrozen water, melted depth, melt water, rain on snow, runoff.
+    sums: [Vec<f32>; 6],
+}
+
+/// The scalars of the column updates.
+#[derive(Debug, Clone, Copy)]
+struct Scalars {
+    f_t: f32,
+    f_r: f32,
+    longwave_m: f32,
+    rain_heat: f32,
+    mean_sea_level: f32,
+    cold_per_c: f32,
+    k_cc: f32,
+    holding: f32,
+    water_per_depth: [f32; 4],
+    depth_per_water: [f32; 4],
+    window_days: f32,
+}
+
+/// The per-column inputs of one row (all of the row's length).
+struct Columns<'a> {
+    off: &'a [f32],
+    shortwave: &'a [f32],
+    absorbed: &'a [f32],
+    cooling: &'a [f32],
+    warm: &'a [f32],
+    rain: &'a [f32],
+    keep: &'a [f32],
+}
+
+/// The column updates of one row (module docs: deficit, refreezing, melt from the top
+/// down, liquid water, runoff, albedo curve), without data-dependent branches so that the
+/// cells of a row vectorise (AVX2 where the CPU has it: Rust does not fuse multiply-adds, so
+/// both builds give the same bits).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn column_updates<'s>(
+    k: &Scalars,
+    c: Columns,
+    st: RowState,
+    sums: &'s mut [Vec<f32>; 6],
+) -> &'s [Vec<f32>; 6] {
+    let w = c.off.len();
+    let [lc, ls, lu, lp] = st.layers;
+    let (lc, ls, lu, lp) = (&mut lc[..w], &mut ls[..w], &mut lu[..w], &mut lp[..w]);
+    let (age, cold_s, liquid_s, melting) = (
+        &mut st.age[..w],
+        &mut st.cold[..w],
+        &mut st.liquid[..w],
+        &mut st.melting[..w],
+    );
+    let (sw, ab, co, wa, ra, keep) = (
+        &c.shortwave[..w],
+        &c.absorbed[..w],
+        &c.cooling[..w],
+        &c.warm[..w],
+        &c.rain[..w],
+        &c.keep[..w],
+    );
+    let [s_rd, s_rw, s_md, s_mw, s_rain, s_ro] = sums;
+    let (s_rd, s_rw, s_md, s_mw, s_rain, s_ro) = (
+        &mut s_rd[..w],
+        &mut s_rw[..w],
+        &mut s_md[..w],
+        &mut s_mw[..w],
+        &mut s_rain[..w],
+        &mut s_ro[..w],
+    );
+    let (wpd, dpw) = (k.water_per_depth, k.depth_per_water);
+    for col in 0..w {
+        let ok = keep[col] > 0.5;
+        let old = [lc[col], ls[col], lu[col], lp[col]];
+        let mut layers = old;
+        let swe = layers[0] * wpd[0] + layers[1] * wpd[1] + layers[2] * wpd[2] + layers[3] * wpd[3];
+        let r = ra[col];
+        let snowy = swe > 0.0;
+        let t_mean = k.mean_sea_level + c.off[col];
+        let energy = k.f_t * wa[col]
+            + k.f_r * ab[col] * sw[col]
+            + k.longwave_m
+            + r * k.rain_heat * t_mean.max(0.0);
+        // A negative balance (a recorded longwave deficit larger than the gains) cools.
+        let deficit = (-energy).max(0.0);
+        let energy = energy.max(0.0);
+        // The deficit grows with the cold hours, up to the pack's cold content.
+        let cap = swe * k.cold_per_c * (-t_mean).max(0.0);
+        let old_cold = cold_s[col];
+        let mut cold = old_cold.max((old_cold + k.k_cc * co[col] + deficit).min(cap));
+        // Liquid water refreezes against the deficit, into the compacted layer.
+        let refreeze = liquid_s[col].min(cold);
+        let mut liquid = liquid_s[col] - refreeze;
+        cold -= refreeze;
+        let refrozen_depth = refreeze * dpw[0];
+        layers[0] += refrozen_depth;
+        // Melt energy pays the deficit, then melts from the top down.
+        let paid = energy.min(cold);
+        cold -= paid;
+        let mut water = energy - paid;
+        let (mut melted_water, mut melted_depth) = (0.0f32, 0.0f32);
+        for j in (0..4).rev() {
+            let have = layers[j] * wpd[j];
+            let take = water.min(have);
+            let depth = if take >= have {
+                layers[j]
+            } else {
+                take * dpw[j]
+            };
+            layers[j] -= depth;
+            melted_depth += depth;
+            water -= take;
+            melted_water += take;
+        }
+        liquid += melted_water + r;
+        let left =
+            layers[0] * wpd[0] + layers[1] * wpd[1] + layers[2] * wpd[2] + layers[3] * wpd[3];
+        let hold = if left > 0.0 { k.holding * left } else { 0.0 };
+        let runoff = (liquid - hold).max(0.0);
+        liquid -= runoff;
+        let cold = if left > 0.0 { cold } else { 0.0 };
+        // Bare ground has no surface memory; a ripe pack (no cold content left, wet) ages on
+        // the melt-season curve.
+        let new_age = if snowy { age[col] + k.window_days } else { 0.0 };
+        let ripe = left > 0.0 && cold <= 0.0 && liquid > 0.0;
+        let pick = |new: f32, old: f32| if ok { new } else { old };
+        lc[col] = pick(layers[0], old[0]);
+        ls[col] = pick(layers[1], old[1]);
+        lu[col] = pick(layers[2], old[2]);
+        lp[col] = pick(layers[3], old[3]);
+        cold_s[col] = pick(cold, old_cold);
+        liquid_s[col] = pick(liquid, liquid_s[col]);
+        age[col] = pick(new_age, age[col]);
+        melting[col] = pick(if ripe { 1.0 } else { 0.0 }, melting[col]);
+        let keep = keep[col];
+        s_rd[col] = keep * refrozen_depth;
+        s_rw[col] = keep * refreeze;
+        s_md[col] = keep * melted_depth;
+        s_mw[col] = keep * melted_water;
+        s_rain[col] = if snowy { keep * r } else { 0.0 };
+        s_ro[col] = keep * runoff;
+    }
+    sums
+}
+
+impl RowScratch {
+    fn new(w: usize) -> Self {
+        Self {
+            shortwave: vec![0.0; w],
+            rain: vec![0.0; w],
+            keep: vec![1.0; w],
+            absorbed: vec![0.0; w],
+            cooling: vec![0.0; w],
+            warm: vec![0.0; w],
+            sums: std::array::from_fn(|_| vec![0.0; w]),
+        }
+    }
 }
 
 /// The parameters in the units the per-cell loop uses.
@@ -422,6 +598,8 @@ struct Coefficients {
     holding: f32,
     /// Water per metre of each layer's snow, m/m.
     water_per_depth: [f32; 4],
+    /// Its inverse, m of snow per m of water.
+    depth_per_water: [f32; 4],
     /// Rain heat: m of melt per m of rain per °C.
     rain_heat: f32,
     /// Cold content of 1 m w.e. per °C below 0, m w.e.
@@ -434,6 +612,8 @@ struct Coefficients {
     mean_sea_level: f32,
     /// The window's recorded longwave balance as melt, m of water (negative: cooling).
     longwave_m: f32,
+    /// The scalars of [`column_updates`].
+    scalars: Scalars,
 }
 
 /// `Σ_h w_h max(0, −T_h)` and `Σ_h w_h [T_h > T_T] T_h` for `T_h = T_sl,h + offset`, tabulated
@@ -478,7 +658,7 @@ impl DegreeHours {
 
     #[inline]
     fn at(&self, offset: f32) -> (f32, f32) {
-        let x = ((offset - self.offset_min) / Self::STEP_C).max(0.0);
+        let x = ((offset - self.offset_min) * (1.0 / Self::STEP_C)).max(0.0);
         let k = (x as usize).min(self.cooling.len() - 2);
         let f = (x - k as f32).min(1.0);
         (
@@ -510,7 +690,23 @@ impl Coefficients {
             .iter()
             .map(|h| h.weight * h.longwave_balance_w_m2)
             .sum();
+        let longwave_m =
+            (longwave_wh as f64 * 3600.0 / (LATENT_HEAT_FUSION * WATER_DENSITY)) as f32;
+        let scalars = Scalars {
+            f_t: (p.f_t_mm_per_h_c * 1e-3) as f32,
+            f_r: (p.f_r_mm_per_h_w_m2 * 1e-3) as f32,
+            longwave_m,
+            rain_heat: (SPECIFIC_HEAT_WATER / LATENT_HEAT_FUSION) as f32,
+            mean_sea_level,
+            cold_per_c: (SPECIFIC_HEAT_ICE / LATENT_HEAT_FUSION) as f32,
+            k_cc: (p.cold_content_mm_per_h_c * 1e-3) as f32,
+            holding: p.liquid_holding_capacity as f32,
+            water_per_depth: p.layer_density_kg_m3.map(|d| (d / WATER_DENSITY) as f32),
+            depth_per_water: p.layer_density_kg_m3.map(|d| (WATER_DENSITY / d) as f32),
+            window_days: f.window_days,
+        };
         Self {
+            scalars,
             degree_hours: DegreeHours::new(f.hours, p.threshold_c as f32, f.lapse_offset_c),
             mean_sea_level,
             longwave_m: (longwave_wh as f64 * 3600.0 / (LATENT_HEAT_FUSION * WATER_DENSITY)) as f32,
@@ -520,6 +716,7 @@ impl Coefficients {
             k_cc: (p.cold_content_mm_per_h_c * 1e-3) as f32,
             holding: p.liquid_holding_capacity as f32,
             water_per_depth: p.layer_density_kg_m3.map(|d| (d / WATER_DENSITY) as f32),
+            depth_per_water: p.layer_density_kg_m3.map(|d| (WATER_DENSITY / d) as f32),
             rain_heat: (SPECIFIC_HEAT_WATER / LATENT_HEAT_FUSION) as f32,
             cold_per_c: (SPECIFIC_HEAT_ICE / LATENT_HEAT_FUSION) as f32,
             albedo: [false, true].map(|melting| {
@@ -535,13 +732,13 @@ impl Coefficients {
     #[inline]
     fn albedo_at(&self, age_days: f32, melting: bool) -> f32 {
         let t = &self.albedo[usize::from(melting)];
-        let x = (age_days.max(0.0) / ALBEDO_STEP_DAYS).min((t.len() - 1) as f32);
+        let x = (age_days.max(0.0) * (1.0 / ALBEDO_STEP_DAYS)).min((t.len() - 1) as f32);
         let k = (x as usize).min(t.len() - 2);
         let f = x - k as f32;
         t[k] + f * (t[k + 1] - t[k])
     }
 
-    #[inline]
+    #[allow(dead_code)]
     fn swe(&self, layers: &[f32; 4]) -> f32 {
         layers
             .iter()
@@ -564,23 +761,27 @@ impl Coefficients {
                 continue;
             }
             let (t0, wt) = (h.sea_level_c, h.weight);
+
             match h.beam {
                 Some(beam) => {
                     let beam = &beam[base..base + w];
                     let refl = &f.reflected[h.month][base..base + w];
-                    let direct = h.direct_w_m2 * (1.0 / 255.0);
-                    for col in 0..w {
-                        let v = wt
-                            * (h.diffuse_w_m2 * svf[col]
-                                + direct * beam[col] as f32
-                                + h.reflected_w_m2 * refl[col]);
-                        out[col] += if t0 + off[col] > thr { v } else { 0.0 };
+                    let (direct, diffuse, reflected) = (
+                        wt * h.direct_w_m2 * (1.0 / 255.0),
+                        wt * h.diffuse_w_m2,
+                        wt * h.reflected_w_m2,
+                    );
+                    for ((((o, &b), &r), &v), &z) in
+                        out.iter_mut().zip(beam).zip(refl).zip(svf).zip(off)
+                    {
+                        let sw = diffuse * v + direct * b as f32 + reflected * r;
+                        *o += if t0 + z > thr { sw } else { 0.0 };
                     }
                 }
                 None if h.diffuse_w_m2 > 0.0 => {
-                    for col in 0..w {
-                        let v = wt * h.diffuse_w_m2 * svf[col];
-                        out[col] += if t0 + off[col] > thr { v } else { 0.0 };
+                    let diffuse = wt * h.diffuse_w_m2;
+                    for ((o, &v), &z) in out.iter_mut().zip(svf).zip(off) {
+                        *o += if t0 + z > thr { diffuse * v } else { 0.0 };
                     }
                 }
                 None => {}
@@ -588,81 +789,65 @@ impl Coefficients {
         }
     }
 
-    /// The window at one cell, with its melting hours' shortwave `shortwave` (W h/m²).
-    fn cell(&self, f: &MeltForcing, i: usize, shortwave: f32, cell: &mut Cell, sums: &mut RowSums) {
-        let swe = self.swe(&cell.layers);
-        let rain = f.rain_m.get(i).copied().unwrap_or(0.0);
-        if swe <= 0.0 {
-            // Bare ground: rain runs off (outside the snow budget), the surface has no memory.
-            cell.cold = 0.0;
-            sums.runoff += (cell.liquid + rain) as f64;
-            cell.liquid = 0.0;
-            cell.age = 0.0;
-            cell.melting = false;
-            return;
+    /// The window on one row starting at cell `base` (module docs), in two passes: the
+    /// table lookups, then the column updates written without data-dependent branches, so
+    /// the cells of a row overlap in the pipeline (and vectorise) instead of waiting on one
+    /// another's long dependency chains.
+    #[allow(clippy::too_many_arguments)]
+    fn row(
+        &self,
+        f: &MeltForcing,
+        base: usize,
+        st: RowState,
+        rain: Option<&[f32]>,
+        invalid: Option<&[bool]>,
+        sc: &mut RowScratch,
+    ) -> RowSums {
+        let w = sc.shortwave.len();
+        let off = &f.lapse_offset_c[base..base + w];
+        for col in 0..w {
+            sc.absorbed[col] = 1.0 - self.albedo_at(st.age[col], st.melting[col] > 0.5);
+            let (c, h) = self.degree_hours.at(off[col]);
+            sc.cooling[col] = c;
+            sc.warm[col] = h;
         }
-        let offset = f.lapse_offset_c[i];
-        let albedo = self.albedo_at(cell.age, cell.melting);
-        let absorbed = 1.0 - albedo;
-        // Degree-hour sums from the window's tables; the shortwave only on melting hours.
-        let (cooling, warm) = self.degree_hours.at(offset);
-        let mut energy = self.f_t * warm + self.f_r * absorbed * shortwave + self.longwave_m;
-        // The deficit grows with the cold hours, up to the pack's cold content.
-        let t_mean = self.mean_sea_level + offset;
-        energy += rain * self.rain_heat * t_mean.max(0.0);
-        // A negative balance (a recorded longwave deficit larger than the gains) cools.
-        let deficit = (-energy).max(0.0);
-        energy = energy.max(0.0);
-        let cap = swe * self.cold_per_c * (-t_mean).max(0.0);
-        cell.cold = cell
-            .cold
-            .max((cell.cold + self.k_cc * cooling + deficit).min(cap));
-        // Liquid water refreezes against the deficit, into the compacted layer.
-        let refreeze = cell.liquid.min(cell.cold);
-        if refreeze > 0.0 {
-            cell.liquid -= refreeze;
-            cell.cold -= refreeze;
-            let depth = refreeze / self.water_per_depth[0];
-            cell.layers[0] += depth;
-            sums.refrozen_snow += depth as f64;
-            sums.refrozen_water += refreeze as f64;
-        }
-        // Melt energy pays the deficit, then melts from the top down.
-        let paid = energy.min(cell.cold);
-        cell.cold -= paid;
-        let mut water = energy - paid;
-        let mut melted_water = 0.0f32;
-        for k in (0..4).rev() {
-            if water <= 0.0 {
-                break;
-            }
-            let have = cell.layers[k] * self.water_per_depth[k];
-            let take = water.min(have);
-            let depth = if take >= have {
-                cell.layers[k]
+        for col in 0..w {
+            sc.keep[col] = if invalid.is_none_or(|v| !v[col]) {
+                1.0
             } else {
-                take / self.water_per_depth[k]
+                0.0
             };
-            sums.melted_snow += depth as f64;
-            cell.layers[k] -= depth;
-            water -= take;
-            melted_water += take;
         }
-        sums.melt_water += melted_water as f64;
-        sums.rain += rain as f64;
-        cell.liquid += melted_water + rain;
-        let left = self.swe(&cell.layers);
-        let hold = if left > 0.0 { self.holding * left } else { 0.0 };
-        if cell.liquid > hold {
-            sums.runoff += (cell.liquid - hold) as f64;
-            cell.liquid = hold;
+        match rain {
+            Some(r) => sc.rain.copy_from_slice(r),
+            None => sc.rain.fill(0.0),
         }
-        if left <= 0.0 {
-            cell.cold = 0.0;
+        let sums = column_updates(
+            &self.scalars,
+            Columns {
+                off,
+                shortwave: &sc.shortwave,
+                absorbed: &sc.absorbed,
+                cooling: &sc.cooling,
+                warm: &sc.warm,
+                rain: &sc.rain,
+                keep: &sc.keep,
+            },
+            st,
+            &mut sc.sums,
+        );
+        let [s_rd, s_rw, s_md, s_mw, s_rain, s_ro] = sums;
+        let total = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>();
+        let [s_rd, s_rw, s_md, s_mw, s_rain, s_ro] =
+            [s_rd, s_rw, s_md, s_mw, s_rain, s_ro].map(|v| &**v);
+        RowSums {
+            refrozen_snow: total(s_rd),
+            refrozen_water: total(s_rw),
+            melted_snow: total(s_md),
+            melt_water: total(s_mw),
+            rain: total(s_rain),
+            runoff: total(s_ro),
         }
-        // A ripe pack (no cold content left, wet) ages on the melt-season curve.
-        cell.melting = left > 0.0 && cell.cold <= 0.0 && cell.liquid > 0.0;
-        cell.age += f.window_days;
     }
 }
 
