@@ -25,6 +25,7 @@ Examples:
   snowscape transport --dem dem.tif --scenario storm.toml --out out/storm
   snowscape serve --size 512 --project proj      # the browser editor on http://127.0.0.1:8080
   snowscape bench --size 1024                     # kernel throughput and memory-bandwidth share
+  snowscape validate --run out/mal --observed lidar_depth.tif --mask forest_free.tif
 
 Exit codes: 0 success, 1 the job failed, 2 bad input (usage, file or parameter).";
 
@@ -76,6 +77,34 @@ pub enum Command {
     /// Physical snow transport (Jubert 2018): 3D wind, precipitation map, saltation,
     /// suspension, sublimation and melt over a DEM or a mesh scene.
     Transport(TransportArgs),
+    /// Compare a run's snow depth with a measured depth raster (matched by map coordinates):
+    /// correlations, errors, snow-cover agreement, terrain-only baselines, class ratios.
+    Validate(ValidateArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ValidateArgs {
+    /// Run folder written by `snowscape run` or `snowscape demo` (its depth.tif, bedrock.tif
+    /// and report.json are read).
+    #[arg(long)]
+    pub run: PathBuf,
+    /// Measured snow depth, metres: GeoTIFF or ESRI ASCII, any cell size and extent (matched
+    /// to the run's cells by map coordinates; block-averaged when finer, bilinear otherwise).
+    #[arg(long)]
+    pub observed: PathBuf,
+    /// Mask raster: compare only cells where it is nonzero (nearest cell, by map coordinates).
+    #[arg(long)]
+    pub mask: Option<PathBuf>,
+    /// Output folder (default: RUN/validation).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Depth above which a cell counts as snow-covered, metres.
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
+    pub snow_threshold: f64,
+    /// Direction the prevailing wind blows from, degrees clockwise from north, for the
+    /// lee/windward ratio (default: the run's report.json, else 270).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub wind_from: Option<f64>,
 }
 
 #[derive(Debug, Args)]

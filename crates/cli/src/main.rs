@@ -11,6 +11,7 @@ mod outputs;
 mod pairs;
 mod progress;
 mod report;
+mod validation;
 
 use clap::Parser;
 use failure::Failure;

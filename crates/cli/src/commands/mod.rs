@@ -11,6 +11,7 @@ mod run;
 mod season;
 mod serve;
 mod transport;
+mod validate;
 
 use crate::cli::{Cli, Command};
 use crate::failure::Failure;
@@ -29,5 +30,6 @@ pub fn dispatch(cli: Cli) -> Result<(), Failure> {
         Command::Serve(a) => serve::run(a, g),
         Command::Cover(a) => cover::run(a, g),
         Command::Transport(a) => transport::run_command(a, g),
+        Command::Validate(a) => validate::run(a, g),
     }
 }

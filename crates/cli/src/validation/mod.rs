@@ -1,0 +1,482 @@
+//! Validation of a run's snow depth against a measured depth raster (`snowscape validate`).
+//!
+//! [`compare`] matches the observed raster (and an optional mask) to the run's cells by map
+//! coordinates ([`matching`]), keeps the cells valid in every input, and measures on them:
+//!
+//! - the simulation: Spearman's ρ, Pearson's r, RMSE, bias (simulated − observed) and the
+//!   snow-cover agreement above a depth threshold (accuracy, hit rate, false alarm ratio,
+//!   CSI, Cohen's κ) ([`stats`]);
+//! - two baselines that know only the terrain, to say whether the simulation beats them:
+//!   (a) **altitude rank**: ρ is that of the altitude itself; for the other metrics the
+//!   altitude ranks are quantile-mapped onto the observed depths (the cell of altitude rank R
+//!   gets the observed depth of rank R, [`stats::quantile_map`]), a prediction with the
+//!   observed distribution ordered by altitude; (b) **altitude + northness**: the least-squares
+//!   plane depth ≈ c₀ + c₁·altitude + c₂·northness fitted on the compared cells themselves
+//!   (in-sample, so an optimistic baseline: it has seen the observations);
+//! - depth ratios within 200 m elevation bands, simulated and observed: north/south,
+//!   steep/moderate, lee/windward, with the cell counts per class ([`classes`]);
+//! - ρ of each depth with altitude (measured snow is far less tied to altitude than a
+//!   temperature-driven model: see DESIGN.md §7).
+//!
+//! [`figures`] draws the side-by-side maps and the density scatter; [`summary`] prints the
+//! table.
+
+pub mod classes;
+pub mod figures;
+pub mod matching;
+mod pixel_font;
+pub mod stats;
+pub mod summary;
+
+use classes::{CellTerrain, Contrast, ContrastRatio, cell_terrain, contrast_ratio};
+use matching::{CellSample, Extent, MaskSample, Sampling, sample_mask, sample_observed};
+use serde::Serialize;
+use snowscape_io::RasterError;
+use snowscape_terrain::{Crs, Grid};
+use stats::{LinearFit, Metrics, quantile_map, spearman};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a validation cannot run. Each names the flag and file or value at fault.
+#[derive(Debug, Error)]
+pub enum ValidationError {
+    #[error(
+        "--run {dir}: no {file} in the run folder (`snowscape run` and `snowscape demo` write it)"
+    )]
+    MissingRunFile { dir: PathBuf, file: &'static str },
+    #[error("{flag} {path}: no such file")]
+    MissingFile { flag: &'static str, path: PathBuf },
+    #[error("{flag}: {source}")]
+    Read {
+        flag: &'static str,
+        #[source]
+        source: RasterError,
+    },
+    #[error("--run {dir}: bedrock.tif ({bedrock}) and depth.tif ({depth}) are not the same grid")]
+    GridMismatch {
+        dir: PathBuf,
+        bedrock: String,
+        depth: String,
+    },
+    #[error(
+        "{flag} {path} is in {theirs} but the run is in {ours}: reproject it onto the run's CRS"
+    )]
+    CrsMismatch {
+        flag: &'static str,
+        path: PathBuf,
+        theirs: Crs,
+        ours: Crs,
+    },
+    #[error(
+        "{flag} {path} does not overlap the run: it covers {extent}, the run {run} covers {run_extent} (map coordinates)"
+    )]
+    NoOverlap {
+        flag: &'static str,
+        path: PathBuf,
+        extent: Box<Extent>,
+        run: PathBuf,
+        run_extent: Box<Extent>,
+    },
+    #[error("no cell to compare between the run {run} and --observed {observed}: {excluded}")]
+    NoValidCells {
+        run: PathBuf,
+        observed: PathBuf,
+        excluded: Exclusions,
+    },
+    #[error("{flag} {value}: expected {expected}")]
+    BadParameter {
+        flag: &'static str,
+        value: f64,
+        expected: &'static str,
+    },
+    #[error("--run {path}: {message}")]
+    Report { path: PathBuf, message: String },
+}
+
+/// A raster of the validation and where it came from.
+#[derive(Debug, Clone, Copy)]
+pub struct Input<'a> {
+    pub grid: &'a Grid,
+    pub path: &'a Path,
+    /// The flag that named it (`--run`, `--observed`, `--mask`).
+    pub flag: &'static str,
+}
+
+/// What to compare.
+#[derive(Debug, Clone, Copy)]
+pub struct Inputs<'a> {
+    /// The run's `depth.tif` (total snow depth, metres).
+    pub depth: Input<'a>,
+    /// The run's `bedrock.tif` (same grid): altitude, slope, aspect.
+    pub bedrock: Input<'a>,
+    pub observed: Input<'a>,
+    pub mask: Option<Input<'a>>,
+}
+
+/// The options of a validation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// Depth above which a cell is snow-covered, metres (>= 0).
+    pub snow_threshold_m: f64,
+    /// Direction the prevailing wind blows from, degrees clockwise from north.
+    pub wind_from_deg: f64,
+}
+
+/// Run cells left out of the comparison, by the first reason that applies.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Exclusions {
+    /// Nodata (or not finite) in the run's depth or bedrock.
+    pub run_nodata: usize,
+    /// Outside the observed raster.
+    pub outside_observed: usize,
+    /// Nodata in the observed raster.
+    pub observed_nodata: usize,
+    /// Outside the mask.
+    pub outside_mask: usize,
+    /// Zero or nodata in the mask.
+    pub masked_out: usize,
+}
+
+impl fmt::Display for Exclusions {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} run cells are nodata, {} lie outside the observed raster, {} are nodata there, {} lie outside the mask, {} are masked out",
+            self.run_nodata,
+            self.outside_observed,
+            self.observed_nodata,
+            self.outside_mask,
+            self.masked_out
+        )
+    }
+}
+
+/// How the rasters were matched.
+#[derive(Debug, Clone, Serialize)]
+pub struct MatchingSummary {
+    pub sampling: Sampling,
+    pub run_extent: Extent,
+    pub observed_extent: Extent,
+    /// Pixel width and height in CRS units.
+    pub run_pixel_size: [f64; 2],
+    pub observed_pixel_size: [f64; 2],
+    pub mask_extent: Option<Extent>,
+}
+
+/// A terrain-only baseline and how it scores.
+#[derive(Debug, Clone, Serialize)]
+pub struct Baseline {
+    pub prediction: &'static str,
+    /// The fitted plane (altitude + northness baseline).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fit: Option<PlaneFit>,
+    pub metrics: Metrics,
+}
+
+/// depth ≈ intercept_m + per_m_altitude·altitude + per_northness·northness.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct PlaneFit {
+    pub intercept_m: f64,
+    pub per_m_altitude: f64,
+    pub per_northness: f64,
+}
+
+/// Both baselines.
+#[derive(Debug, Clone, Serialize)]
+pub struct Baselines {
+    pub altitude_rank: Baseline,
+    pub altitude_northness: Baseline,
+}
+
+/// Spearman's ρ of a depth with altitude.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct AltitudeRho {
+    pub simulated: Option<f64>,
+    pub observed: Option<f64>,
+}
+
+/// The depth ratios between terrain classes.
+#[derive(Debug, Clone, Serialize)]
+pub struct Ratios {
+    pub band_m: f64,
+    pub wind_from_deg: f64,
+    pub north_south: ContrastRatio,
+    pub steep_moderate: ContrastRatio,
+    pub lee_windward: ContrastRatio,
+}
+
+/// Everything a validation measured (the body of `validation.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Validation {
+    pub cells_compared: usize,
+    pub excluded: Exclusions,
+    pub matching: MatchingSummary,
+    pub snow_threshold_m: f64,
+    pub observed_mean_m: f64,
+    pub simulation: Metrics,
+    pub baselines: Baselines,
+    pub spearman_with_altitude: AltitudeRho,
+    pub ratios: Ratios,
+}
+
+/// The matched maps, one value per run cell (row-major), NaN where a cell is not compared.
+pub struct Maps {
+    pub width: usize,
+    pub height: usize,
+    pub observed: Vec<f64>,
+    pub simulated: Vec<f64>,
+}
+
+fn pixel_size(g: &Grid) -> [f64; 2] {
+    let t = g.geometry().transform();
+    [t.pixel_width, t.pixel_height]
+}
+
+fn check_crs(run: &Input, other: &Input) -> Result<(), ValidationError> {
+    match (run.grid.geometry().crs(), other.grid.geometry().crs()) {
+        (Some(ours @ Crs::Epsg(a)), Some(theirs @ Crs::Epsg(b))) if a != b => {
+            Err(ValidationError::CrsMismatch {
+                flag: other.flag,
+                path: other.path.to_path_buf(),
+                theirs: theirs.clone(),
+                ours: ours.clone(),
+            })
+        }
+        (Some(ours), Some(theirs)) if ours != theirs => {
+            tracing::warn!(
+                "{} {} declares {theirs}, the run {ours}: taken as the same CRS",
+                other.flag,
+                other.path.display()
+            );
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+fn check_overlap(run: &Input, other: &Input) -> Result<(), ValidationError> {
+    let (a, b) = (
+        Extent::of(run.grid.geometry()),
+        Extent::of(other.grid.geometry()),
+    );
+    if a.overlaps(&b) {
+        Ok(())
+    } else {
+        Err(ValidationError::NoOverlap {
+            flag: other.flag,
+            path: other.path.to_path_buf(),
+            extent: Box::new(b),
+            run: run.path.to_path_buf(),
+            run_extent: Box::new(a),
+        })
+    }
+}
+
+/// Compares the run's depth with the observed depth (module docs).
+pub fn compare(
+    inputs: &Inputs,
+    settings: &Settings,
+) -> Result<(Validation, Maps), ValidationError> {
+    let Settings {
+        snow_threshold_m: threshold,
+        wind_from_deg,
+    } = *settings;
+    if !(threshold.is_finite() && threshold >= 0.0) {
+        return Err(ValidationError::BadParameter {
+            flag: "--snow-threshold",
+            value: threshold,
+            expected: "a depth in metres >= 0",
+        });
+    }
+    if !wind_from_deg.is_finite() {
+        return Err(ValidationError::BadParameter {
+            flag: "--wind-from",
+            value: wind_from_deg,
+            expected: "a direction in degrees clockwise from north",
+        });
+    }
+    let (depth, bedrock) = (inputs.depth.grid, inputs.bedrock.grid);
+    let run = depth.geometry();
+    if !run.same_cells(bedrock.geometry()) {
+        return Err(ValidationError::GridMismatch {
+            dir: inputs
+                .depth
+                .path
+                .parent()
+                .unwrap_or(Path::new("."))
+                .to_path_buf(),
+            bedrock: snowscape_io::describe(bedrock),
+            depth: snowscape_io::describe(depth),
+        });
+    }
+    for other in std::iter::once(&inputs.observed).chain(inputs.mask.as_ref()) {
+        check_crs(&inputs.depth, other)?;
+        check_overlap(&inputs.depth, other)?;
+    }
+    let (sampling, observed) = sample_observed(run, inputs.observed.grid);
+    let mask = inputs.mask.map(|m| sample_mask(run, m.grid));
+
+    let mut excluded = Exclusions::default();
+    let mut cells = Vec::new();
+    let mut obs = Vec::new();
+    let mut maps = Maps {
+        width: run.width(),
+        height: run.height(),
+        observed: vec![f64::NAN; run.len()],
+        simulated: vec![f64::NAN; run.len()],
+    };
+    for i in 0..run.len() {
+        let valid = |g: &Grid| g.mask().is_valid(i) && g.data()[i].is_finite();
+        if !valid(depth) || !valid(bedrock) {
+            excluded.run_nodata += 1;
+            continue;
+        }
+        let o = match observed[i] {
+            CellSample::Outside => {
+                excluded.outside_observed += 1;
+                continue;
+            }
+            CellSample::Nodata => {
+                excluded.observed_nodata += 1;
+                continue;
+            }
+            CellSample::Value(v) => v,
+        };
+        match mask.as_ref().map(|m| m[i]) {
+            Some(MaskSample::Outside) => excluded.outside_mask += 1,
+            Some(MaskSample::MaskedOut) => excluded.masked_out += 1,
+            Some(MaskSample::Use) | None => {
+                cells.push(i);
+                obs.push(o);
+                maps.observed[i] = o;
+                maps.simulated[i] = f64::from(depth.data()[i]);
+            }
+        }
+    }
+    if cells.is_empty() {
+        return Err(ValidationError::NoValidCells {
+            run: inputs.depth.path.to_path_buf(),
+            observed: inputs.observed.path.to_path_buf(),
+            excluded,
+        });
+    }
+    let sim: Vec<f64> = cells.iter().map(|&i| f64::from(depth.data()[i])).collect();
+    let terrain: Vec<CellTerrain> = cells.iter().map(|&i| cell_terrain(bedrock, i)).collect();
+    let altitude: Vec<f64> = terrain.iter().map(|t| t.altitude_m).collect();
+    let northness: Vec<f64> = terrain.iter().map(|t| t.northness).collect();
+
+    let fit = LinearFit::fit(&altitude, &northness, &obs);
+    let baselines = Baselines {
+        altitude_rank: Baseline {
+            prediction: "observed depths quantile-mapped onto the altitude ranks; Spearman's rho of the altitude itself",
+            fit: None,
+            metrics: Metrics::of(
+                &quantile_map(&altitude, &obs),
+                &obs,
+                Some(&altitude),
+                threshold,
+            ),
+        },
+        altitude_northness: Baseline {
+            prediction: "least-squares plane of observed depth on altitude and northness cos(aspect)*sin(slope), fitted on the compared cells",
+            fit: Some(PlaneFit {
+                intercept_m: fit.intercept,
+                per_m_altitude: fit.slope_a,
+                per_northness: fit.slope_b,
+            }),
+            metrics: Metrics::of(&fit.predict(&altitude, &northness), &obs, None, threshold),
+        },
+    };
+    let ratio = |c| contrast_ratio(c, &terrain, &sim, &obs, wind_from_deg);
+    let validation = Validation {
+        cells_compared: cells.len(),
+        excluded,
+        matching: MatchingSummary {
+            sampling,
+            run_extent: Extent::of(run),
+            observed_extent: Extent::of(inputs.observed.grid.geometry()),
+            run_pixel_size: pixel_size(depth),
+            observed_pixel_size: pixel_size(inputs.observed.grid),
+            mask_extent: inputs.mask.map(|m| Extent::of(m.grid.geometry())),
+        },
+        snow_threshold_m: threshold,
+        observed_mean_m: stats::mean(&obs),
+        simulation: Metrics::of(&sim, &obs, None, threshold),
+        baselines,
+        spearman_with_altitude: AltitudeRho {
+            simulated: spearman(&sim, &altitude),
+            observed: spearman(&obs, &altitude),
+        },
+        ratios: Ratios {
+            band_m: classes::BAND_M,
+            wind_from_deg: wind_from_deg.rem_euclid(360.0),
+            north_south: ratio(Contrast::NorthSouth),
+            steep_moderate: ratio(Contrast::SteepModerate),
+            lee_windward: ratio(Contrast::LeeWindward),
+        },
+    };
+    Ok((validation, maps))
+}
+
+/// The prevailing wind of a run from its `report.json`: the direction of the mean wind
+/// vector over the season, each weather period's direction weighted by its speed times its
+/// length in days (the last period lasts until `parameters.scenario.days`). `None` when the
+/// report has no weather timeline (or its winds cancel out).
+pub fn prevailing_wind_from(report: &serde_json::Value) -> Option<f64> {
+    let params = report.get("parameters")?;
+    let weather = params
+        .get("weather")
+        .and_then(|w| w.as_array())
+        .filter(|w| !w.is_empty())
+        .or_else(|| params.pointer("/scenario/weather")?.as_array())?;
+    let days = params.pointer("/scenario/days").and_then(|d| d.as_f64());
+    let mut periods: Vec<(f64, f64, f64)> = weather
+        .iter()
+        .filter_map(|w| {
+            Some((
+                w.get("from_day").and_then(|v| v.as_f64()).unwrap_or(0.0),
+                w.get("wind_from_deg")?.as_f64()?,
+                w.get("wind_speed_m_s")
+                    .and_then(|v| v.as_f64())
+                    .unwrap_or(1.0),
+            ))
+        })
+        .collect();
+    periods.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut east, mut north) = (0.0, 0.0);
+    for (k, &(from, dir, speed)) in periods.iter().enumerate() {
+        let until = periods.get(k + 1).map(|p| p.0).or(days);
+        let length = until.map_or(1.0, |u| (u - from).max(0.0));
+        let r = dir.to_radians();
+        east += length * speed * r.sin();
+        north += length * speed * r.cos();
+    }
+    let norm = (east * east + north * north).sqrt();
+    (norm > 1e-9).then(|| east.atan2(north).to_degrees().rem_euclid(360.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn prevailing_wind_is_the_weighted_vector_mean() {
+        // 10 days from 270 at 10 m/s, 10 days from 0 at 10 m/s: the mean points from 315.
+        let r = json!({"parameters": {"weather": [
+            {"from_day": 10.0, "wind_from_deg": 0.0, "wind_speed_m_s": 10.0},
+            {"from_day": 0.0, "wind_from_deg": 270.0, "wind_speed_m_s": 10.0},
+        ], "scenario": {"days": 20.0}}});
+        assert!((prevailing_wind_from(&r).unwrap() - 315.0).abs() < 1e-9);
+        // A longer westerly period pulls it west.
+        let r = json!({"parameters": {"weather": [
+            {"from_day": 0.0, "wind_from_deg": 270.0, "wind_speed_m_s": 10.0},
+            {"from_day": 15.0, "wind_from_deg": 0.0, "wind_speed_m_s": 10.0},
+        ], "scenario": {"days": 20.0}}});
+        let w = prevailing_wind_from(&r).unwrap();
+        assert!((w - (360.0 - 71.565_051)).abs() < 1e-3, "{w}");
+        assert_eq!(prevailing_wind_from(&json!({"parameters": {}})), None);
+        assert_eq!(prevailing_wind_from(&json!({})), None);
+    }
+}
