@@ -81,8 +81,16 @@ fn shuffled(grid: &Grid) -> Grid {
     Grid::new(grid.geometry().clone(), values, NodataMask::all_valid()).unwrap()
 }
 
-fn validate(args: &[&str]) -> (std::process::Output, Option<serde_json::Value>, PathBuf) {
-    let out = tempfile::tempdir().unwrap().keep();
+/// Runs `validate` on the demo run into a fresh output folder (removed when dropped).
+fn validate(
+    args: &[&str],
+) -> (
+    std::process::Output,
+    Option<serde_json::Value>,
+    tempfile::TempDir,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path();
     let run = demo_run().to_str().unwrap().to_string();
     let mut all = vec!["validate", "--run", &run, "--out", out.to_str().unwrap()];
     all.extend_from_slice(args);
@@ -90,7 +98,7 @@ fn validate(args: &[&str]) -> (std::process::Output, Option<serde_json::Value>, 
     let json = std::fs::read(out.join("validation.json"))
         .ok()
         .map(|b| serde_json::from_slice(&b).unwrap());
-    (o, json, out)
+    (o, json, dir)
 }
 
 fn f(v: &serde_json::Value, pointer: &str) -> f64 {
@@ -137,14 +145,15 @@ fn resampled_own_depth_agrees_and_a_shuffled_one_does_not() {
     if let (Some(s), Some(b)) = (ns["simulated"].as_f64(), ns["observed"].as_f64()) {
         assert!((s - b).abs() < 0.1 * b.abs().max(0.1), "{ns:#}");
     }
-    // The baselines are there, and the altitude one has the observed distribution.
+    // The baselines are there, and the altitude one has the observed distribution (up to
+    // the interpolation between tied altitudes).
     assert!(
-        f(&v, "/baselines/altitude_rank/metrics/bias_m").abs() < 1e-6,
+        f(&v, "/baselines/altitude_rank/metrics/bias_m").abs() < 1e-3,
         "{v:#}"
     );
     assert!(v["baselines"]["altitude_northness"]["fit"]["per_m_altitude"].is_number());
     for png in ["validation.png", "scatter.png"] {
-        let img = image::open(out.join(png)).unwrap();
+        let img = image::open(out.path().join(png)).unwrap();
         assert!(img.width() > 200 && img.height() > 200, "{png}");
     }
 
