@@ -88,6 +88,7 @@ fn help_lists_the_verbs_and_examples() {
         "render",
         "convert",
         "bench",
+        "validate",
         "Examples:",
         "Exit codes",
     ] {

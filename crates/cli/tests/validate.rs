@@ -182,6 +182,7 @@ fn resampled_own_depth_agrees_and_a_shuffled_one_does_not() {
     write_raster(&shuffled_path, &shuffled(&fine_valid), RasterFormat::Asc).unwrap();
     let (o, json, _) = validate(&["--observed", shuffled_path.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
+    println!("{}", String::from_utf8_lossy(&o.stdout));
     let v = json.unwrap();
     assert!(f(&v, "/simulation/spearman").abs() < 0.1, "{v:#}");
 
