@@ -439,16 +439,27 @@ struct RowScratch {
 /// The scalars of the column updates.
 #[derive(Debug, Clone, Copy)]
 struct Scalars {
+    /// f_T, m of water per h per °C.
     f_t: f32,
+    /// f_R, m of water per h per W/m².
     f_r: f32,
+    /// The window's recorded longwave balance as melt, m of water (negative: cooling).
     longwave_m: f32,
+    /// Rain heat: m of melt per m of rain per °C.
     rain_heat: f32,
+    /// Weighted mean sea-level temperature of the window, °C.
     mean_sea_level: f32,
+    /// Cold content of 1 m w.e. per °C below 0, m w.e.
     cold_per_c: f32,
+    /// k_cc, m of water per h per °C.
     k_cc: f32,
+    /// θ_max.
     holding: f32,
+    /// Water per metre of each layer's snow, m/m.
     water_per_depth: [f32; 4],
+    /// Its inverse, m of snow per m of water.
     depth_per_water: [f32; 4],
+    /// Length of the window, days.
     window_days: f32,
 }
 
@@ -591,27 +602,12 @@ impl RowScratch {
 
 /// The parameters in the units the per-cell loop uses.
 struct Coefficients {
-    f_t: f32,
-    f_r: f32,
+    /// Melt threshold T_T, °C.
     threshold: f32,
-    k_cc: f32,
-    holding: f32,
-    /// Water per metre of each layer's snow, m/m.
-    water_per_depth: [f32; 4],
-    /// Its inverse, m of snow per m of water.
-    depth_per_water: [f32; 4],
-    /// Rain heat: m of melt per m of rain per °C.
-    rain_heat: f32,
-    /// Cold content of 1 m w.e. per °C below 0, m w.e.
-    cold_per_c: f32,
     /// Albedo by surface age in steps of [`ALBEDO_STEP_DAYS`], cold and melting curves.
     albedo: [Vec<f32>; 2],
     /// Cooling and melting degree-hours of the window by lapse offset.
     degree_hours: DegreeHours,
-    /// Weighted mean sea-level temperature of the window, °C.
-    mean_sea_level: f32,
-    /// The window's recorded longwave balance as melt, m of water (negative: cooling).
-    longwave_m: f32,
     /// The scalars of [`column_updates`].
     scalars: Scalars,
 }
@@ -708,17 +704,7 @@ impl Coefficients {
         Self {
             scalars,
             degree_hours: DegreeHours::new(f.hours, p.threshold_c as f32, f.lapse_offset_c),
-            mean_sea_level,
-            longwave_m: (longwave_wh as f64 * 3600.0 / (LATENT_HEAT_FUSION * WATER_DENSITY)) as f32,
-            f_t: (p.f_t_mm_per_h_c * 1e-3) as f32,
-            f_r: (p.f_r_mm_per_h_w_m2 * 1e-3) as f32,
             threshold: p.threshold_c as f32,
-            k_cc: (p.cold_content_mm_per_h_c * 1e-3) as f32,
-            holding: p.liquid_holding_capacity as f32,
-            water_per_depth: p.layer_density_kg_m3.map(|d| (d / WATER_DENSITY) as f32),
-            depth_per_water: p.layer_density_kg_m3.map(|d| (WATER_DENSITY / d) as f32),
-            rain_heat: (SPECIFIC_HEAT_WATER / LATENT_HEAT_FUSION) as f32,
-            cold_per_c: (SPECIFIC_HEAT_ICE / LATENT_HEAT_FUSION) as f32,
             albedo: [false, true].map(|melting| {
                 let n = (ALBEDO_MAX_DAYS / ALBEDO_STEP_DAYS) as usize + 1;
                 (0..n)
@@ -736,15 +722,6 @@ impl Coefficients {
         let k = (x as usize).min(t.len() - 2);
         let f = x - k as f32;
         t[k] + f * (t[k + 1] - t[k])
-    }
-
-    #[allow(dead_code)]
-    fn swe(&self, layers: &[f32; 4]) -> f32 {
-        layers
-            .iter()
-            .zip(&self.water_per_depth)
-            .map(|(d, w)| d * w)
-            .sum()
     }
 
     /// `Σ_h w_h [T_h > T_T] I_sw,h` (W h/m²) of the cells of one row starting at cell `base`,
@@ -805,18 +782,17 @@ impl Coefficients {
     ) -> RowSums {
         let w = sc.shortwave.len();
         let off = &f.lapse_offset_c[base..base + w];
-        for col in 0..w {
+        for (col, &o) in off.iter().enumerate() {
             sc.absorbed[col] = 1.0 - self.albedo_at(st.age[col], st.melting[col] > 0.5);
-            let (c, h) = self.degree_hours.at(off[col]);
-            sc.cooling[col] = c;
-            sc.warm[col] = h;
+            (sc.cooling[col], sc.warm[col]) = self.degree_hours.at(o);
         }
-        for col in 0..w {
-            sc.keep[col] = if invalid.is_none_or(|v| !v[col]) {
-                1.0
-            } else {
-                0.0
-            };
+        match invalid {
+            Some(v) => {
+                for (k, &bad) in sc.keep.iter_mut().zip(&v[..w]) {
+                    *k = if bad { 0.0 } else { 1.0 };
+                }
+            }
+            None => sc.keep.fill(1.0),
         }
         match rain {
             Some(r) => sc.rain.copy_from_slice(r),
