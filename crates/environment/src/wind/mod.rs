@@ -1,5 +1,7 @@
 //! Wind (Cordonnier et al. 2018, Section 4.2): the horizontal wind field ([`vectors`]) and the
-//! wind-effect surface with its binary wind shadows ([`effect_surface`]).
+//! wind-effect surface with its binary wind shadows ([`effect_surface`]); and, beyond the
+//! paper, Winstral et al. 2002's maximum upwind slope `Sx` ([`sheltering`]), a sheltering
+//! index defined over a search distance in metres, so it means the same at any cell size.
 //!
 //! Transport wind of the wind-effect surface: the paper advects `Wz` along Eq. 2's `W`. Its
 //! contour-following part turns the wind in opposite directions on facing slopes, so cells
@@ -17,6 +19,7 @@
 //! Nodata cells get 0 everywhere.
 
 pub mod effect_surface;
+pub mod sheltering;
 pub mod vectors;
 
 use crate::field::TerrainField;
@@ -24,6 +27,7 @@ use crate::{EnvironmentError, WindParams};
 pub use effect_surface::WindSolveStats;
 use effect_surface::{SolveSettings, build_cells, solve};
 use rayon::prelude::*;
+pub use sheltering::{ShelteringParams, max_upwind_slope};
 use snowscape_terrain::{GridGeometry, NodataMask};
 use vectors::{dominant_wind, redirect, venturi};
 
