@@ -15,6 +15,7 @@ pub mod powder_diffusion;
 pub mod scenario;
 pub mod scheduler;
 pub mod skiing;
+pub mod slope_shedding;
 pub mod snowfall;
 pub mod snowtran_transport;
 pub mod stability;
