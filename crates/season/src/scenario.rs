@@ -118,6 +118,8 @@ pub struct Parameters {
     pub stability: StabilityParams,
     pub powder_diffusion: DiffusionParams,
     pub wind_transport: WindTransportParams,
+    /// Gravitational shedding off steep slopes (SnowSlide).
+    pub slope_shedding: crate::slope_shedding::SheddingParams,
     /// The physical wind transport, used when `wind_transport.model = "snowtran"`.
     pub snowtran: crate::snowtran_transport::SnowTranParams,
     pub avalanche: crate::avalanches::AvalancheParameters,
@@ -354,6 +356,13 @@ impl Scenario {
         }
         if let Err(e) = self.parameters.snowfall.validate() {
             return Err(bad("parameters.snowfall", e.to_string(), "is out of range"));
+        }
+        if let Err(e) = self.parameters.slope_shedding.validate() {
+            return Err(bad(
+                "parameters.slope_shedding",
+                e.to_string(),
+                "is out of range",
+            ));
         }
         if let Err(e) = self.parameters.environment.validate() {
             return Err(bad(

@@ -109,6 +109,9 @@ pub enum HoldingLaw {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SheddingParams {
+    /// Whether a season sheds (after each melt-and-state event). Default true; false keeps
+    /// the paper's season, where only avalanches move snow off steep faces.
+    pub enabled: bool,
     /// The holding-depth formula. Default: exponential.
     pub law: HoldingLaw,
     /// `c` of the exponential law, metres of snow (> 0). Default 145 m: OGGM Snowslide.
@@ -122,8 +125,10 @@ pub struct SheddingParams {
     /// Floor of the holding depth, metres of snow (>= 0). Default 0.05 m: OGGM Snowslide
     /// (FSM2oshd uses 0.01 m).
     pub min_holding_depth_m: f64,
-    /// Slope below which a cell does not shed its own snow, degrees, in [0, 90]. Default 30°:
-    /// FSM2oshd's `slope_min` (DHSVM's `Avalanche.c` also starts at 30°).
+    /// Slope below which a cell does not shed its own snow, degrees, in [0, 90]. Default 50°:
+    /// our choice for seasons, whose avalanches (a 28-60° release window) move the snow of
+    /// 30-50° slopes; steeper faces sluff continuously. FSM2oshd's `slope_min` is 30° (DHSVM's
+    /// `Avalanche.c` also starts at 30°), for models without avalanches.
     pub min_slope_deg: f64,
     /// Factor on the holding depth of a cell that received snow in this step, in (0, 1].
     /// Default 1 (none): our choice; FSM2oshd uses 0.09 (see the module documentation).
@@ -137,13 +142,14 @@ pub struct SheddingParams {
 impl Default for SheddingParams {
     fn default() -> Self {
         Self {
+            enabled: true,
             law: HoldingLaw::Exponential,
             exp_scale_m: 145.0,
             exp_rate_per_deg: 0.14,
             power_scale_m: 3178.4,
             power_exponent: -1.998,
             min_holding_depth_m: 0.05,
-            min_slope_deg: 30.0,
+            min_slope_deg: 60.0,
             dynamic_ratio: 1.0,
             flow_exponent: 1.1,
             deposit_layer: SnowLayer::Unstable,

@@ -197,6 +197,7 @@ pub struct Winter {
     diffusion_scratch: DiffusionScratch,
     wind_scratch: WindScratch,
     snowtran_scratch: SnowTranScratch,
+    shedding_scratch: crate::slope_shedding::SheddingScratch,
     /// Bedrock slope per cell, degrees (for the avalanche hazard).
     slope_deg: Vec<f32>,
     /// Avalanche hazard per cell, 1/day (recomputed when the snow changes).
@@ -358,6 +359,7 @@ impl Winter {
             diffusion_scratch: DiffusionScratch::default(),
             wind_scratch: WindScratch::default(),
             snowtran_scratch: SnowTranScratch::default(),
+            shedding_scratch: Default::default(),
             slope_deg: Vec::new(),
             hazard: Vec::new(),
             avalanche_maps: AvalancheMaps::default(),
@@ -974,6 +976,23 @@ impl Winter {
             // Period starts are handled by the scheduler; skier and avalanche steps run inside
             // their start events.
             _ => {}
+        }
+        if event.kind == EventKind::MeltAndStateStep
+            && self.scenario.parameters.slope_shedding.enabled
+        {
+            let r = crate::slope_shedding::step(
+                &self.scenario.parameters.slope_shedding,
+                &mut self.terrain,
+                &mut self.shedding_scratch,
+                event.dt_days,
+            )
+            .map_err(|source| SeasonError::Phenomenon {
+                phenomenon: "slope_shedding",
+                day,
+                source,
+            })?;
+            self.state.budget.shedding_outflow += r.border_outflow_m3;
+            self.state.budget.shedding_moved += r.moved_m3;
         }
         self.fade_tracks(depth_before)?;
         if matches!(

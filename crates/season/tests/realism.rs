@@ -8,7 +8,7 @@ mod support;
 use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::Winter;
 use snowscape_terrain::{Grid, LayeredTerrain};
-use support::{band_ratio, block_average, facing, shared_dem, slope_aspect};
+use support::{band_median_ratio, band_ratio, block_average, facing, shared_dem, slope_aspect};
 
 /// The default winter from 1 November to 30 April (a spring period with the sun high), no
 /// natural avalanches (they are not the phenomenon under test, and cost most of the time).
@@ -37,11 +37,30 @@ fn default_winter_on(bedrock: Grid) -> Winter {
     w
 }
 
-fn check_aspects(bedrock: Grid, label: &str) {
+/// One default winter on `bedrock`, then the behaviour within elevation bands.
+fn check_behaviour(bedrock: Grid, label: &str) {
     let classes = slope_aspect(&bedrock);
     let w = default_winter_on(bedrock.clone());
     let depth = w.terrain.total_depth();
-    let (ns, detail) = band_ratio(
+    let mut sorted: Vec<f32> = depth.clone();
+    sorted.sort_by(f32::total_cmp);
+    let q = |p: f64| sorted[((sorted.len() - 1) as f64 * p) as usize];
+    let total: f64 = depth.iter().map(|&d| d as f64).sum();
+    let deep: f64 = depth.iter().filter(|&&d| d > 5.0).map(|&d| d as f64).sum();
+    eprintln!(
+        "{label}: depth p50 {:.2} p90 {:.2} p99 {:.2} max {:.1} m; {:.1} % of the snow in cells deeper than 5 m",
+        q(0.5),
+        q(0.9),
+        q(0.99),
+        q(1.0),
+        100.0 * deep / total
+    );
+    let b = w.budget();
+    eprintln!(
+        "{label}: shed {:.0} m³ (border {:.0} m³) of {:.0} m³ of snowfall",
+        b.shedding_moved, b.shedding_outflow, b.snowfall
+    );
+    let (mean_ns, mean_detail) = band_ratio(
         &depth,
         &bedrock,
         &classes,
@@ -49,20 +68,46 @@ fn check_aspects(bedrock: Grid, label: &str) {
         |s, a| s > 15.0 && facing(a, 180.0, 45.0),
         10,
     );
-    eprintln!("{label}: north/south {ns:.3} {detail:?}");
-    assert!(
-        ns >= 1.3,
-        "{label}: north/south depth ratio {ns} < 1.3: {detail:?}"
+    eprintln!("{label}: north/south of the band means {mean_ns:.3} {mean_detail:?}");
+    let (ns, detail) = band_median_ratio(
+        &depth,
+        &bedrock,
+        &classes,
+        |s, a| s > 15.0 && facing(a, 0.0, 45.0),
+        |s, a| s > 15.0 && facing(a, 180.0, 45.0),
+        10,
     );
+    eprintln!("{label}: north/south of the band medians {ns:.3} {detail:?}");
+    assert!(
+        mean_ns >= 1.3 && ns >= 1.3,
+        "{label}: north/south depth ratio {mean_ns} (means), {ns} (medians) < 1.3: {detail:?}"
+    );
+    let (steep, detail) = band_ratio(
+        &depth,
+        &bedrock,
+        &classes,
+        |s, _| s > 60.0,
+        |s, _| (20.0..=35.0).contains(&s),
+        10,
+    );
+    let steep_cells: usize = detail.iter().map(|d| d.2).sum();
+    eprintln!("{label}: steep/moderate {steep:.3} over {steep_cells} cells > 60° {detail:?}");
+    // On coarse grids a "60°" cell is rare (DESIGN.md §7): the criterion needs enough of them.
+    if steep_cells >= 50 {
+        assert!(
+            steep <= 0.3,
+            "{label}: faces > 60° hold {steep} of the 20-35° depth: {detail:?}"
+        );
+    }
 }
 
 #[test]
-fn north_faces_hold_more_snow_than_south_faces_on_avamal() {
-    check_aspects(shared_dem("avaframe_avaMal/avaMal.asc"), "avaMal 5 m");
+fn default_winter_on_avamal_follows_sun_and_slope() {
+    check_behaviour(shared_dem("avaframe_avaMal/avaMal.asc"), "avaMal 5 m");
 }
 
 #[test]
-fn north_faces_hold_more_snow_than_south_faces_on_avamal_at_50_m() {
+fn default_winter_on_avamal_at_50_m_follows_sun_and_slope() {
     let mal = shared_dem("avaframe_avaMal/avaMal.asc");
-    check_aspects(block_average(&mal, 10), "avaMal 50 m");
+    check_behaviour(block_average(&mal, 10), "avaMal 50 m");
 }

@@ -95,28 +95,60 @@ pub fn band_ratio(
     b: impl Fn(f32, f32) -> bool,
     min_cells: usize,
 ) -> (f64, Vec<(i32, f64, usize, usize)>) {
+    band_ratio_of(depth, bedrock, classes, a, b, min_cells, false)
+}
+
+/// [`band_ratio`] with the band medians instead of the means (robust to the few metres-deep
+/// sluff and avalanche cones at the foot of faces, which dominate a band's mean).
+pub fn band_median_ratio(
+    depth: &[f32],
+    bedrock: &Grid,
+    classes: &[Option<(f32, f32)>],
+    a: impl Fn(f32, f32) -> bool,
+    b: impl Fn(f32, f32) -> bool,
+    min_cells: usize,
+) -> (f64, Vec<(i32, f64, usize, usize)>) {
+    band_ratio_of(depth, bedrock, classes, a, b, min_cells, true)
+}
+
+fn band_ratio_of(
+    depth: &[f32],
+    bedrock: &Grid,
+    classes: &[Option<(f32, f32)>],
+    a: impl Fn(f32, f32) -> bool,
+    b: impl Fn(f32, f32) -> bool,
+    min_cells: usize,
+    median: bool,
+) -> (f64, Vec<(i32, f64, usize, usize)>) {
     use std::collections::BTreeMap;
-    let mut bands: BTreeMap<i32, [(f64, usize); 2]> = BTreeMap::new();
+    let mut bands: BTreeMap<i32, [Vec<f32>; 2]> = BTreeMap::new();
     for (i, cls) in classes.iter().enumerate() {
         let Some((s, asp)) = *cls else { continue };
         let band = (bedrock.data()[i] / 200.0).floor() as i32 * 200;
-        let e = bands.entry(band).or_insert([(0.0, 0); 2]);
+        let e = bands.entry(band).or_default();
         if a(s, asp) {
-            e[0].0 += depth[i] as f64;
-            e[0].1 += 1;
+            e[0].push(depth[i]);
         }
         if b(s, asp) {
-            e[1].0 += depth[i] as f64;
-            e[1].1 += 1;
+            e[1].push(depth[i]);
         }
     }
+    let stat = |v: &mut Vec<f32>| -> f64 {
+        if median {
+            v.sort_by(f32::total_cmp);
+            v[v.len() / 2] as f64
+        } else {
+            v.iter().map(|&d| d as f64).sum::<f64>() / v.len() as f64
+        }
+    };
     let mut detail = Vec::new();
     let (mut num, mut den) = (0.0, 0.0);
-    for (band, [(sa, na), (sb, nb)]) in bands {
+    for (band, [mut va, mut vb]) in bands {
+        let (na, nb) = (va.len(), vb.len());
         if na < min_cells || nb < min_cells {
             continue;
         }
-        let (ma, mb) = (sa / na as f64, sb / nb as f64);
+        let (ma, mb) = (stat(&mut va), stat(&mut vb));
         let weight = na.min(nb) as f64;
         num += ma * weight;
         den += mb * weight;
