@@ -114,6 +114,7 @@ fn phenomena(c: &mut Criterion) {
         v: &s.v,
         shadow: &s.shadow,
         effect_surface: &s.wz,
+        sx: None,
     };
     group.bench_function("wind_transport", |b| {
         let mut t = s.terrain.clone();

@@ -42,16 +42,17 @@
 //! sluff debris that can load and release on the slope below; the avalanche module lays its
 //! denser debris down as stable snow).
 //!
-//! **Order: one sweep.** Cells are processed from the highest to the lowest *bedrock* (ties by
-//! index), in an order sorted once and cached in the scratch while the bedrock and the mask
+//! **Order: one sweep.** Cells are processed from the highest to the lowest *bedrock* (ties,
+//! on level ground, in a scrambled but fixed order: by index, every debris flow on level
+//! ground would run one way), in an order sorted once and cached in the scratch while the bedrock and the mask
 //! are unchanged (the published SnowSlide codes sort by altitude plus snow depth, CHM every
 //! step, FSM2oshd once), so a receiver below is processed after its senders and sheds its own
 //! excess in turn: the cascade runs from the crests to the valleys in one pass. A sender sees
-//! a neighbour the sweep has not reached with the surface it had at the start of the step (its
-//! receipts are in transit; judging by them would jam a long face behind its own falling
-//! snow), and one it has passed with its current surface. Snow also flows to a passed
-//! neighbour whose surface is lower (a drift beside a bare rib, the near side of a debris cone
-//! on level ground, where bedrock ties go by index); such a receiver enters a queue (highest
+//! a neighbour the sweep has not reached with the surface it is expected to keep, its surface
+//! at the start of the step less its own excess (its receipts are in transit; judging by them
+//! would jam a long face behind its own falling snow), and one it has passed with its current
+//! surface. Snow also flows to a passed neighbour whose surface is lower (a drift beside a
+//! bare rib, the near side of a debris cone on level ground); such a receiver enters a queue (highest
 //! snow surface first) that is drained before the sweep moves on, and so that nothing
 //! ping-pongs the sender never ends below it: the amount shed is limited to
 //! `min_j (A_i − A_j) / (1 + w_j)` over passed receivers (`w_j` the normalised weights); a
@@ -241,7 +242,7 @@ pub struct SheddingScratch {
     /// Bedrock and mask the cached order was built for.
     key_bedrock: Vec<u32>,
     key_mask: Option<Vec<bool>>,
-    /// Valid cells, highest bedrock first (ties by index).
+    /// Valid cells, highest bedrock first (ties in a scrambled, fixed order).
     order: Vec<u32>,
     /// Position of each cell in `order` (`u32::MAX` for nodata).
     rank: Vec<u32>,

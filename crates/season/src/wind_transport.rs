@@ -30,6 +30,13 @@
 //! once and read by exactly one receiver, so the update is conservative and bit-identical for
 //! any thread count, with no colour tiling needed.
 //!
+//! **Sheltering (beyond the paper).** With an `Sx` map in [`WindMaps::sx`] (Winstral et al.
+//! 2002's maximum upwind slope, `snowscape_environment::max_upwind_slope`) and
+//! [`WindTransportParams::sx_redistribution`] enabled, a second term scours exposed cells and
+//! drifts the snow onto sheltered cells downwind ([`sheltered`]); it works over distances in
+//! metres, so lee slopes load at 5 m and at 50 m cells alike, where the paper's curvature term
+//! fades with the cell size. Without a map (`sx: None`) the step is the paper's alone.
+//!
 //! **Stencils.** Second differences are central in the interior. At the grid border, and
 //! next to nodata, they are one-sided (`A_0 − 2A_1 + A_2`, the curvature of the nearest full
 //! stencil) when two cells exist on one side, and 0 otherwise; the cross derivative of `Wz`
@@ -42,7 +49,9 @@ use crate::phenomenon::{
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
 
+pub mod sheltered;
 mod stencils;
+pub use sheltered::SxParams;
 pub use stencils::{
     downwind_split, eroded_depth, erosion_curvature, one_sided_second_difference,
     second_difference, tamping_share, vertical_wind_change,
@@ -82,6 +91,9 @@ pub struct WindTransportParams {
     /// again at about the paper's `c = 0.7 m/s²`, a week of wind turns half the powder into a
     /// brittle shell.
     pub k_tamping: f64,
+    /// The Sx-driven scour and drift (beyond the paper; runs only when [`WindMaps::sx`] is
+    /// given).
+    pub sx_redistribution: SxParams,
 }
 
 impl Default for WindTransportParams {
@@ -92,6 +104,7 @@ impl Default for WindTransportParams {
             erode_unstable: true,
             slab_slope_deg: 30.0,
             k_tamping: 0.2,
+            sx_redistribution: SxParams::default(),
         }
     }
 }
@@ -110,7 +123,7 @@ impl WindTransportParams {
                 reason: "a slope angle must be below 90°",
             });
         }
-        Ok(())
+        self.sx_redistribution.validate()
     }
 }
 
@@ -125,6 +138,9 @@ pub struct WindMaps<'a> {
     pub shadow: &'a [f32],
     /// Altitude of the wind-effect surface `Wz`, m.
     pub effect_surface: &'a [f32],
+    /// Maximum upwind slope `Sx` for the wind's direction, degrees (Winstral et al. 2002;
+    /// `snowscape_environment::max_upwind_slope`). `None`: the paper's transport alone.
+    pub sx: Option<&'a [f32]>,
 }
 
 impl WindMaps<'_> {
@@ -132,11 +148,13 @@ impl WindMaps<'_> {
         check_map("wind_u", self.u, geometry)?;
         check_map("wind_v", self.v, geometry)?;
         check_map("wind_shadow", self.shadow, geometry)?;
-        check_map("wind_effect_surface", self.effect_surface, geometry)
+        check_map("wind_effect_surface", self.effect_surface, geometry)?;
+        sheltered::check(self, geometry)
     }
 }
 
-/// Volumes moved by one wind-transport step, m³ of snow.
+/// Volumes moved by one wind-transport step, m³ of snow. `eroded`, `deposited`,
+/// `deposited_unstable` and `border_outflow` cover both terms (the paper's and the Sx one).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct WindReport {
     /// Snow scoured from the surface (powder and unstable snow).
@@ -149,6 +167,10 @@ pub struct WindReport {
     pub border_outflow: f64,
     /// Powder turned into unstable snow by tamping.
     pub tamped: f64,
+    /// The part of `eroded` scoured by the Sx term.
+    pub sx_eroded: f64,
+    /// The part of `deposited` laid down by the Sx term.
+    pub sx_deposited: f64,
 }
 
 impl WindReport {
@@ -169,6 +191,8 @@ pub struct WindScratch {
     out_x: Vec<f32>,
     /// Depth each cell sends north (> 0) or south (< 0), m.
     out_y: Vec<f32>,
+    /// Buffers of the Sx term.
+    sx: sheltered::SxScratch,
 }
 
 /// Moves snow with the wind over `dt_days`.
@@ -200,10 +224,24 @@ pub fn step(
         slab_gradient: params.slab_slope_deg.to_radians().tan() as f32,
         erode_unstable: params.erode_unstable,
     };
-    let (pass1, pass2) = with_validity!(mask, |valid| {
+    let sx_params = &params.sx_redistribution;
+    let sx_map = wind.sx.filter(|_| sx_params.enabled);
+    let (pass1, pass2, sx) = with_validity!(mask, |valid| {
         let p1 = erosion::run(&ctx, valid, terrain, scratch);
         let p2 = deposit::run(&ctx, valid, terrain, scratch);
-        (p1, p2)
+        let sx = sx_map.map(|sx| {
+            fill_surface(terrain, &mut scratch.surface);
+            sheltered::run(
+                &ctx,
+                valid,
+                sx_params,
+                (sx, &scratch.surface),
+                terrain,
+                &mut scratch.sx,
+                dt_days,
+            )
+        });
+        (p1, p2, sx.unwrap_or_default())
     });
     let area = geometry.cell_area();
     let sum = |rows: &[f64]| rows.iter().sum::<f64>() * area;
@@ -211,11 +249,13 @@ pub fn step(
     let eroded: Vec<f64> = pass1.iter().map(|r| r[0]).collect();
     let border: Vec<f64> = pass1.iter().map(|r| r[1]).collect();
     Ok(WindReport {
-        eroded: sum(&eroded),
-        border_outflow: sum(&border),
-        deposited: col(&pass2, 0),
-        deposited_unstable: col(&pass2, 1),
+        eroded: sum(&eroded) + sx.eroded * area,
+        border_outflow: sum(&border) + sx.border * area,
+        deposited: col(&pass2, 0) + sx.deposited * area,
+        deposited_unstable: col(&pass2, 1) + sx.deposited_unstable * area,
         tamped: col(&pass2, 2),
+        sx_eroded: sx.eroded * area,
+        sx_deposited: sx.deposited * area,
     })
 }
 

@@ -945,6 +945,7 @@ impl Winter {
                     v: &e.wind_v,
                     shadow: &e.wind_shadow,
                     effect_surface: &e.wind_effect_surface,
+                    sx: None,
                 };
                 let r = wind_transport::step(
                     &p.wind_transport,

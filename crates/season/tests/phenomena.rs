@@ -94,6 +94,7 @@ fn season(s: &mut Scene, events: usize) -> Result<Vec<VolumeChange>, PhenomenonE
                     v: &s.v,
                     shadow: &s.shadow,
                     effect_surface: &s.wz,
+                    sx: None,
                 };
                 wind_transport::step(&Default::default(), t, &maps, &mut wind_scratch, 0.5)?
                     .volume_change()

@@ -137,6 +137,7 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
                     v: &v,
                     shadow: &s,
                     effect_surface: &e,
+                    sx: None,
                 };
                 wind_transport::step(
                     &WindTransportParams::default(),

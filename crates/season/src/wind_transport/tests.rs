@@ -26,6 +26,7 @@ impl Wind {
             v: &self.v,
             shadow: &self.shadow,
             effect_surface: &self.z,
+            sx: None,
         }
     }
 }
@@ -290,4 +291,163 @@ fn wrong_map_sizes_and_bad_parameters_are_errors() {
         ..Default::default()
     };
     assert!(bad.validate().is_err());
+}
+
+/// A north-south ridge (crest at column 24 of 48) under a westerly, with its Sx map.
+fn ridge_with_sx() -> (LayeredTerrain, Wind, Vec<f32>) {
+    let t = ridge();
+    let g = t.geometry().clone();
+    let sx = snowscape_environment::max_upwind_slope(
+        &t.bedrock,
+        &g,
+        t.mask(),
+        270.0,
+        &snowscape_environment::ShelteringParams::default(),
+    )
+    .unwrap();
+    let wind = Wind::uniform(&t, 10.0, 0.0);
+    (t, wind, sx)
+}
+
+#[test]
+fn sx_term_scours_the_windward_slope_and_loads_the_lee() {
+    let (mut t, wind, sx) = ridge_with_sx();
+    // Only the Sx term: no curvature erosion, no tamping.
+    let p = WindTransportParams {
+        k_erosion: 0.0,
+        k_tamping: 0.0,
+        ..Default::default()
+    };
+    let before = t.snow_volume();
+    let maps = WindMaps {
+        sx: Some(&sx),
+        ..wind.maps()
+    };
+    let mut scratch = WindScratch::default();
+    let mut out = 0.0;
+    for _ in 0..20 {
+        let r = step(&p, &mut t, &maps, &mut scratch, 0.5).unwrap();
+        assert!(r.sx_eroded > 0.0 && r.sx_eroded == r.eroded);
+        assert!((r.eroded - r.deposited - r.border_outflow).abs() < 1e-6 * before);
+        out += r.border_outflow;
+        t.check_invariants().unwrap();
+    }
+    assert!((before - out - t.snow_volume()).abs() < 1e-5 * before);
+    // Windward (west) flank exposed and scoured, lee (east) flank sheltered and loaded.
+    let windward: f32 = (16..22).map(|c| depth_at(&t, c)).sum::<f32>() / 6.0;
+    let lee: f32 = (26..32).map(|c| depth_at(&t, c)).sum::<f32>() / 6.0;
+    assert!(sx[4 * 48 + 18] < -1.0 && sx[4 * 48 + 29] > 1.0);
+    assert!(
+        windward < 0.45 && lee > 0.55,
+        "windward {windward}, lee {lee}"
+    );
+}
+
+#[test]
+fn without_an_sx_map_or_disabled_the_step_is_the_papers() {
+    let (t, wind, sx) = ridge_with_sx();
+    let p = WindTransportParams::default();
+    let mut a = t.clone();
+    let mut b = t.clone();
+    let off = WindTransportParams {
+        sx_redistribution: SxParams {
+            enabled: false,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    for _ in 0..5 {
+        step(&p, &mut a, &wind.maps(), &mut WindScratch::default(), 0.5).unwrap();
+        let with = WindMaps {
+            sx: Some(&sx),
+            ..wind.maps()
+        };
+        step(&off, &mut b, &with, &mut WindScratch::default(), 0.5).unwrap();
+    }
+    assert_eq!(a, b);
+    let short = vec![0.0f32; 3];
+    let bad = WindMaps {
+        sx: Some(&short),
+        ..wind.maps()
+    };
+    let e = step(&p, &mut a, &bad, &mut WindScratch::default(), 0.5).unwrap_err();
+    assert!(e.to_string().contains("wind_sx map has 3 values"), "{e}");
+    let bad = WindTransportParams {
+        sx_redistribution: SxParams {
+            settling_length_m: 0.0,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    assert!(bad.validate().is_err());
+}
+
+#[test]
+fn sx_term_is_the_same_on_one_and_two_threads_and_conserves_with_nodata() {
+    let geo = GridGeometry::new(41, 33, 5.0, 4.0).unwrap();
+    let n = geo.len();
+    let invalid: Vec<bool> = (0..n).map(|i| uniform(8, 9, i as u64) < 0.05).collect();
+    let bed = Grid::new(
+        geo.clone(),
+        (0..n)
+            .map(|i| {
+                let (c, r) = geo.col_row(i);
+                (500.0 + 20.0 * (c as f64 * 0.3).sin() * (r as f64 * 0.2).cos()) as f32
+            })
+            .collect(),
+        snowscape_terrain::NodataMask::from_invalid(invalid.clone()),
+    )
+    .unwrap();
+    let mut t = LayeredTerrain::from_bedrock(bed);
+    for i in (0..n).filter(|&i| !invalid[i]) {
+        t.layer_mut(SnowLayer::Powder)[i] = 0.4;
+        t.layer_mut(SnowLayer::Unstable)[i] = 0.1;
+    }
+    let sx: Vec<f32> = (0..n)
+        .map(|i| (uniform(8, 1, i as u64) * 20.0 - 10.0) as f32)
+        .collect();
+    let wind = Wind {
+        u: (0..n).map(|i| 6.0 + (i % 7) as f32).collect(),
+        v: (0..n).map(|i| -2.0 - (i % 3) as f32).collect(),
+        shadow: vec![0.0; n],
+        z: t.bedrock.clone(),
+    };
+    let p = WindTransportParams {
+        k_erosion: 0.0,
+        ..Default::default()
+    };
+    let go = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut t = t.clone();
+                let maps = WindMaps {
+                    sx: Some(&sx),
+                    ..wind.maps()
+                };
+                let mut scratch = WindScratch::default();
+                let reports: Vec<WindReport> = (0..10)
+                    .map(|_| step(&p, &mut t, &maps, &mut scratch, 0.5).unwrap())
+                    .collect();
+                (t, reports)
+            })
+    };
+    let (a, ra) = go(1);
+    let (b, rb) = go(2);
+    assert_eq!(ra, rb);
+    for k in 0..4 {
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a.snow[k]), bits(&b.snow[k]));
+    }
+    a.check_invariants().unwrap();
+    let before = t.snow_volume();
+    let out: f64 = ra.iter().map(|r| r.border_outflow).sum();
+    assert!(ra.iter().map(|r| r.sx_eroded).sum::<f64>() > 0.01 * before);
+    assert!(
+        out > 0.0,
+        "the wind blows snow off the east and south borders"
+    );
+    assert!((before - out - a.snow_volume()).abs() < 1e-5 * before);
 }
