@@ -212,6 +212,9 @@ pub struct EnvironmentParams {
     pub temperature: TemperatureParams,
     /// Wind.
     pub wind: WindParams,
+    /// Wind sheltering and exposure: the maximum upwind slope `Sx` (Winstral et al. 2002),
+    /// computed for each weather period's wind.
+    pub sheltering: crate::wind::ShelteringParams,
 }
 
 impl SunParams {
@@ -336,6 +339,7 @@ impl EnvironmentParams {
         self.sky.validate()?;
         self.bounce.validate()?;
         self.temperature.validate()?;
+        self.sheltering.validate()?;
         self.wind.validate()
     }
 }

@@ -198,6 +198,8 @@ pub struct Winter {
     wind_scratch: WindScratch,
     snowtran_scratch: SnowTranScratch,
     shedding_scratch: crate::slope_shedding::SheddingScratch,
+    /// Maximum upwind slope Sx for the current period's wind, degrees (Winstral et al. 2002).
+    sx: Vec<f32>,
     /// Bedrock slope per cell, degrees (for the avalanche hazard).
     slope_deg: Vec<f32>,
     /// Avalanche hazard per cell, 1/day (recomputed when the snow changes).
@@ -360,6 +362,7 @@ impl Winter {
             wind_scratch: WindScratch::default(),
             snowtran_scratch: SnowTranScratch::default(),
             shedding_scratch: Default::default(),
+            sx: Vec::new(),
             slope_deg: Vec::new(),
             hazard: Vec::new(),
             avalanche_maps: AvalancheMaps::default(),
@@ -371,6 +374,7 @@ impl Winter {
         w.wall_seconds
             .insert("environment", t.elapsed().as_secs_f64());
         w.wall_seconds.insert("hourly_sun", hourly_sun_s);
+        w.refresh_sheltering()?;
         w.refresh_air_temperature();
         w.environment.store(&mut w.terrain)?;
         if w.air.from_station() {
@@ -731,9 +735,35 @@ impl Winter {
         self.environment.wind_shadow = wind.shadow;
         self.environment.wind_effect_surface = wind.effect_surface;
         self.environment.wind_stats = wind.stats;
+        self.refresh_sheltering()?;
         self.refresh_air_temperature();
         self.environment.store(&mut self.terrain)?;
         *self.wall_seconds.entry("environment").or_default() += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The maximum upwind slope of the current period's wind (when the Sx redistribution is on).
+    fn refresh_sheltering(&mut self) -> Result<(), SeasonError> {
+        if !self
+            .scenario
+            .parameters
+            .wind_transport
+            .sx_redistribution
+            .enabled
+        {
+            self.sx.clear();
+            return Ok(());
+        }
+        let t = Instant::now();
+        let w = &self.weather[self.state.weather_index];
+        self.sx = snowscape_environment::max_upwind_slope(
+            &self.terrain.bedrock,
+            self.terrain.geometry(),
+            self.terrain.mask(),
+            w.wind_from_deg,
+            &self.base_environment.sheltering,
+        )?;
+        *self.wall_seconds.entry("sheltering").or_default() += t.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -945,7 +975,7 @@ impl Winter {
                     v: &e.wind_v,
                     shadow: &e.wind_shadow,
                     effect_surface: &e.wind_effect_surface,
-                    sx: None,
+                    sx: (!self.sx.is_empty()).then_some(self.sx.as_slice()),
                 };
                 let r = wind_transport::step(
                     &p.wind_transport,

@@ -82,6 +82,20 @@ fn check_behaviour(bedrock: Grid, label: &str) {
         mean_ns >= 1.3 && ns >= 1.3,
         "{label}: north/south depth ratio {mean_ns} (means), {ns} (medians) < 1.3: {detail:?}"
     );
+    // The default winter's winds blow from 270-300°: east faces are the lee.
+    let (lee, detail) = band_ratio(
+        &depth,
+        &bedrock,
+        &classes,
+        |s, a| s > 15.0 && facing(a, 90.0, 45.0),
+        |s, a| s > 15.0 && facing(a, 270.0, 45.0),
+        10,
+    );
+    eprintln!("{label}: lee (east) / windward (west) {lee:.3} {detail:?}");
+    assert!(
+        lee >= 1.15,
+        "{label}: lee/windward depth ratio {lee} < 1.15: {detail:?}"
+    );
     let (steep, detail) = band_ratio(
         &depth,
         &bedrock,
