@@ -4,6 +4,13 @@
 //! `step(params, state, scratch, dt) -> budget` over a [`LayeredTerrain`](snowscape_terrain::LayeredTerrain).
 //! Every step reports the snow volume it added, removed or moved, so a run's mass budget is
 //! tracked rather than hoped for.
+//!
+//! Beyond the paper, the default season follows sun, wind and slope on real terrain, each model
+//! selectable against the paper's by name: [`melt::enhanced`] (enhanced temperature-index
+//! melt with albedo, cold content and refreezing), [`climate`] and [`weather`] (climatology,
+//! lapse rate, diurnal cycle, orographic precipitation and phase, hour by hour),
+//! [`snowfall::add_precipitation`], [`slope_shedding`] (SnowSlide), the Sx redistribution of
+//! [`wind_transport`], and station forcing ([`forcing`]).
 
 pub mod avalanches;
 pub mod checkpoint;

@@ -6,6 +6,7 @@ mod avalanche;
 mod io;
 mod render;
 mod season;
+mod snowpack;
 mod terrain;
 mod transport;
 
@@ -13,6 +14,7 @@ pub use avalanche::avalanche_kernels;
 pub use io::io_kernels;
 pub use render::render_kernels;
 pub use season::season_kernels;
+pub use snowpack::snowpack_kernels;
 pub use terrain::{sample_terrain, terrain_kernels};
 pub use transport::transport_kernels;
 
@@ -25,6 +27,7 @@ pub fn all_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
     kernels.extend(io_kernels(&terrain)?);
     kernels.extend(render_kernels(&terrain)?);
     kernels.extend(season_kernels(&terrain)?);
+    kernels.extend(snowpack_kernels(&terrain)?);
     kernels.extend(avalanche_kernels(size)?);
     kernels.extend(transport_kernels(&terrain, size)?);
     Ok(kernels)

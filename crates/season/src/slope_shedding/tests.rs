@@ -117,7 +117,11 @@ fn cells_steeper_than_60_degrees_keep_at_most_their_holding_depth() {
         *p = 0.5 + uniform(9, 1, i as u64) as f32;
     }
     t.layer_mut(SnowLayer::Compacted).fill(0.1);
-    let p = SheddingParams::default();
+    // Every cell from 30° sheds (FSM2oshd's threshold; the season's default starts at 60°).
+    let p = SheddingParams {
+        min_slope_deg: 30.0,
+        ..SheddingParams::default()
+    };
     let before = t.snow_volume();
     let r = run(&mut t, &p);
     let slopes = surface::slopes(
