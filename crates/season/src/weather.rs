@@ -36,8 +36,6 @@ pub struct Air {
     periods: Vec<WeatherPeriod>,
     latitude_deg: f64,
     start_day_of_year: u32,
-    /// Hour of the station record at season day 0.
-    station_hour_offset: f64,
     /// Per cell: lapse rate × altitude, °C.
     pub lapse_offset_c: Arc<Vec<f32>>,
     /// Per cell: the orographic precipitation factor.
@@ -65,12 +63,9 @@ impl Air {
         sun: Arc<SeasonSun>,
     ) -> Self {
         let lapse = climate.lapse_c_per_m() as f32;
-        let (reference_altitude_m, station_hour_offset) = match &source {
-            AirSource::Station(s) => (
-                s.station_altitude_m.unwrap_or(climate.reference_altitude_m),
-                0.0,
-            ),
-            _ => (climate.reference_altitude_m, 0.0),
+        let reference_altitude_m = match &source {
+            AirSource::Station(s) => s.station_altitude_m.unwrap_or(climate.reference_altitude_m),
+            _ => climate.reference_altitude_m,
         };
         let lapse_offset_c: Vec<f32> = bedrock
             .iter()
@@ -108,7 +103,6 @@ impl Air {
             periods: periods.to_vec(),
             latitude_deg,
             start_day_of_year,
-            station_hour_offset,
             lapse_offset_c: Arc::new(lapse_offset_c),
             orographic: Arc::new(orographic),
             offset_range: (lo, hi),
@@ -135,7 +129,7 @@ impl Air {
     /// The station record covering season day `day`.
     fn station_record(&self, day: f64) -> Option<&crate::forcing::ForcingRecord> {
         match &self.source {
-            AirSource::Station(s) => Some(s.at_hour(day * 24.0 + self.station_hour_offset)),
+            AirSource::Station(s) => Some(s.at_hour(day * 24.0)),
             _ => None,
         }
     }

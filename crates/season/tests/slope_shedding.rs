@@ -3,7 +3,7 @@
 //! 20-35° slopes keep their cover.
 
 use snowscape_season::slope_shedding::{self, SheddingParams, SheddingScratch};
-use snowscape_terrain::{GridGeometry, LayeredTerrain, SnowLayer, surface};
+use snowscape_terrain::{LayeredTerrain, SnowLayer, surface};
 use std::time::Instant;
 
 fn avamal() -> LayeredTerrain {
@@ -73,37 +73,4 @@ fn avamal_rock_faces_shed_onto_gentler_ground() {
         "budget"
     );
     assert!((r.moved_m3 - r.received_m3 - r.border_outflow_m3).abs() < 1e-6 * r.moved_m3);
-}
-
-/// One shedding step on a 1024² synthetic alpine terrain (5 m cells, 1 m of snow): the cost
-/// of the first shedding of a fresh cover. `cargo test -p snowscape-season --test
-/// slope_shedding -- --ignored --nocapture`.
-#[test]
-#[ignore = "timing"]
-fn timing_1024() {
-    let n = 1024;
-    let g = GridGeometry::square(n, n, 5.0).unwrap();
-    let bed = snowscape_terrain::Grid::from_fn(g, |c, r| {
-        let (x, y) = (c as f64 * 5.0, r as f64 * 5.0);
-        (1500.0
-            + 600.0 * (x * 0.0021).sin() * (y * 0.0017).cos()
-            + 250.0 * (x * 0.007 + y * 0.004).sin()
-            + 60.0 * (x * 0.031).cos() * (y * 0.027).sin()) as f32
-    });
-    let mut t = LayeredTerrain::from_bedrock(bed);
-    t.layer_mut(SnowLayer::Powder).fill(1.0);
-    let mut scratch = SheddingScratch::default();
-    let p = SheddingParams::default();
-    for k in 0..3 {
-        let start = Instant::now();
-        let r = slope_shedding::step(&p, &mut t, &mut scratch, 1.0).unwrap();
-        eprintln!("step {k}: {:.2?} {r:?}", start.elapsed());
-    }
-    // A step after a 5 cm snowfall on the shed cover.
-    for v in t.layer_mut(SnowLayer::Powder) {
-        *v += 0.05;
-    }
-    let start = Instant::now();
-    let r = slope_shedding::step(&p, &mut t, &mut scratch, 1.0).unwrap();
-    eprintln!("after 5 cm of snow: {:.2?} {r:?}", start.elapsed());
 }
