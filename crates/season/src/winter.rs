@@ -10,13 +10,13 @@
 use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, Trigger};
 use crate::checkpoint::{self, CheckpointError, bedrock_fingerprint};
 use crate::forcing::StationForcing;
-use crate::melt::{self, MeltForcing, MeltModel, SnowpackState};
+use crate::melt::{self, MeltModel, SnowpackState};
 use crate::phenomenon::PhenomenonError;
 use crate::powder_diffusion::{self, DiffusionScratch};
 use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
 use crate::scheduler::{Event, EventKind, SECONDS_PER_DAY, Scheduler};
 use crate::skiing::SkiStats;
-use crate::snowfall::{self, PrecipitationMaps, SnowfallModel, SnowfallScratch};
+use crate::snowfall::{self, SnowfallModel, SnowfallScratch};
 use crate::snowtran_transport::{self, SnowTranForcing, SnowTranScratch};
 use crate::stability::{self, StabilityScratch};
 use crate::weather::{Air, AirSource};
@@ -69,83 +69,11 @@ pub enum SeasonError {
     CheckpointMismatch { expected: u64, found: u64 },
 }
 
-/// The snow budget of a season, m³ of snow (densification changes volume, not mass: it is
-/// listed as a sink of volume).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct SeasonBudget {
-    /// Snow on the terrain at the start.
-    pub initial_store: f64,
-    /// Added by snowfall.
-    pub snowfall: f64,
-    /// Removed by melt.
-    pub melt: f64,
-    /// Volume lost as stable snow compacts into denser compacted snow.
-    pub densification: f64,
-    /// Powder that diffused out of the grid.
-    pub diffusion_outflow: f64,
-    /// Snow blown out of the grid.
-    pub wind_outflow: f64,
-    /// Blowing snow sublimated (the physical wind transport only).
-    #[serde(default)]
-    pub wind_sublimation: f64,
-    /// Avalanche snow that flowed out of the grid.
-    pub avalanche_outflow: f64,
-    /// Liquid water refrozen into the pack (a source of snow volume).
-    #[serde(default)]
-    pub refreeze: f64,
-    /// Snow shed off steep slopes across the grid border.
-    #[serde(default)]
-    pub shedding_outflow: f64,
-    /// Snow the slopes shed and the cells below received (moved inside the grid; not in
-    /// the closure).
-    #[serde(default)]
-    pub shedding_moved: f64,
-    /// The liquid water of the pack, m³ of water.
-    #[serde(default)]
-    pub water: WaterBudget,
-}
+mod budget;
+mod skier_runs;
+mod snowpack;
 
-/// The liquid water of the snowpack, m³ of water: rain and melt in, refreezing and runoff
-/// out; `store` is what the pack holds now.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct WaterBudget {
-    /// Rain on every valid cell (on snow it joins the pack's water; on bare ground it runs off).
-    pub rain: f64,
-    /// Water equivalent of the snowfall.
-    pub snowfall_water: f64,
-    /// Melt water.
-    pub melt: f64,
-    /// Water refrozen.
-    pub refrozen: f64,
-    /// Water that left the pack and bare ground.
-    pub runoff: f64,
-    /// Water held in the pack now.
-    pub store: f64,
-    /// Rain waiting for the next melt window (counted in `rain`, not yet in `store`).
-    pub pending: f64,
-}
-
-impl WaterBudget {
-    /// `rain + melt − refrozen − runoff − store − pending`: zero when the water closes.
-    pub fn closure_error(&self) -> f64 {
-        self.rain + self.melt - self.refrozen - self.runoff - self.store - self.pending
-    }
-}
-
-impl SeasonBudget {
-    /// `initial + inputs − outputs`: what the store should hold.
-    pub fn expected_store(&self) -> f64 {
-        self.initial_store + self.snowfall
-            - self.melt
-            - self.densification
-            - self.diffusion_outflow
-            - self.wind_outflow
-            - self.wind_sublimation
-            - self.avalanche_outflow
-            - self.shedding_outflow
-            + self.refreeze
-    }
-}
+pub use budget::{SeasonBudget, WaterBudget};
 
 /// The evolving state, checkpointed as the header of a checkpoint file.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -554,115 +482,6 @@ impl Winter {
         rec
     }
 
-    /// One skier run, from its start to its terminus (temporal zoom); avalanches it triggers
-    /// start at once. See [`crate::skiing`].
-    fn run_skier(&mut self, event_day: f64) -> Result<(), SeasonError> {
-        let day = event_day;
-        let ski_err = |e: snowscape_skiers::SkiError| SeasonError::Skier {
-            day,
-            reason: e.to_string(),
-        };
-        let p = self.scenario.skiers.clone();
-        // Without skiable snow there is no terminus: no run today.
-        let no_snow =
-            |e: &snowscape_skiers::SkiError| matches!(e, snowscape_skiers::SkiError::NoTerminus(_));
-        if self.ski_area.is_none() {
-            match SkiArea::new(
-                &p.ski,
-                &self.terrain,
-                p.terminus.clone(),
-                self.scenario.seed,
-            ) {
-                Ok(a) => self.ski_area = Some(a),
-                Err(e) if no_snow(&e) => return Ok(()),
-                Err(e) => return Err(ski_err(e)),
-            }
-            self.terminus_stale = false;
-        }
-        let Some(area) = self.ski_area.as_mut() else {
-            return Ok(());
-        };
-        if self.terminus_stale {
-            match area.refresh_terminus(&p.ski, &self.terrain) {
-                Ok(()) => self.terminus_stale = false,
-                Err(e) if no_snow(&e) => return Ok(()),
-                Err(e) => return Err(ski_err(e)),
-            }
-        }
-        area.time_s = day * SECONDS_PER_DAY;
-        let k = self.state.ski.runs as usize;
-        let spawned = match p.starts.get(k % p.starts.len().max(1)) {
-            Some([x, y]) => area.spawn_at(&p.ski, &self.terrain, *x, *y).map(|_| 1),
-            None => area
-                .spawn_weighted(&p.ski, &self.terrain, 1)
-                .map(|v| v.len()),
-        };
-        // A start point on bare ground or a map without snow: no run today.
-        if !matches!(spawned, Ok(n) if n > 0) {
-            return Ok(());
-        }
-        self.state.ski.runs += 1;
-        let mut elapsed = 0.0;
-        let mut triggers = Vec::new();
-        while elapsed < p.max_run_s {
-            let Some(area) = self.ski_area.as_mut() else {
-                break;
-            };
-            let r = snowscape_skiers::step(
-                &p.ski,
-                area,
-                &mut self.terrain,
-                &mut self.ski_scratch,
-                p.step_s,
-            )
-            .map_err(ski_err)?;
-            elapsed += p.step_s;
-            self.state.ski.steps += 1;
-            self.state.ski.distance_m += r.distance_m;
-            self.state.budget.densification += r.compaction.densification_m3;
-            self.state.ski.finished += r
-                .finished
-                .iter()
-                .filter(|f| f.stop == snowscape_skiers::StopReason::Terminus)
-                .count() as u64;
-            triggers.extend(r.triggers.iter().map(|t| t.cell));
-            for cell in triggers.drain(..) {
-                match self.start_avalanche(cell, Trigger::Skier) {
-                    Ok(_) => self.state.ski.avalanches_triggered += 1,
-                    Err(SeasonError::AvalanchePosition { .. }) => {}
-                    Err(e) => return Err(e),
-                }
-            }
-            if r.active == 0 {
-                break;
-            }
-        }
-        self.state
-            .scheduler
-            .advance_clock(elapsed / SECONDS_PER_DAY);
-        self.update_avalanche_rate();
-        Ok(())
-    }
-
-    /// Fades the ski tracks under snow that `before` (total depth per cell) did not hold.
-    fn fade_tracks(&mut self, before: Option<Vec<f32>>) -> Result<(), SeasonError> {
-        let (Some(before), Some(area)) = (before, self.ski_area.as_mut()) else {
-            return Ok(());
-        };
-        let added: Vec<f32> = self
-            .terrain
-            .total_depth()
-            .iter()
-            .zip(&before)
-            .map(|(a, b)| a - b)
-            .collect();
-        area.fade_tracks(&self.scenario.skiers.ski, &added)
-            .map_err(|e| SeasonError::Skier {
-                day: self.state.scheduler.time_days(),
-                reason: e.to_string(),
-            })
-    }
-
     /// Ruptures at `cell`, runs the avalanche to rest (temporal zoom) and records it.
     fn start_avalanche(
         &mut self,
@@ -739,133 +558,6 @@ impl Winter {
         self.refresh_air_temperature();
         self.environment.store(&mut self.terrain)?;
         *self.wall_seconds.entry("environment").or_default() += t.elapsed().as_secs_f64();
-        Ok(())
-    }
-
-    /// The maximum upwind slope of the current period's wind (when the Sx redistribution is on).
-    fn refresh_sheltering(&mut self) -> Result<(), SeasonError> {
-        if !self
-            .scenario
-            .parameters
-            .wind_transport
-            .sx_redistribution
-            .enabled
-        {
-            self.sx.clear();
-            return Ok(());
-        }
-        let t = Instant::now();
-        let w = &self.weather[self.state.weather_index];
-        self.sx = snowscape_environment::max_upwind_slope(
-            &self.terrain.bedrock,
-            self.terrain.geometry(),
-            self.terrain.mask(),
-            w.wind_from_deg,
-            &self.base_environment.sheltering,
-        )?;
-        *self.wall_seconds.entry("sheltering").or_default() += t.elapsed().as_secs_f64();
-        Ok(())
-    }
-
-    /// Under the enhanced melt, the temperature map the phenomena read (snowfall split,
-    /// stability, avalanche α) is the daily-mean air temperature at the end of the last melt
-    /// window (the paper's map carries the sun as `ki·I`, which the new melt counts itself).
-    fn refresh_air_temperature(&mut self) {
-        if self.scenario.parameters.melt.model == MeltModel::EnhancedTi {
-            self.air.daily_temperature_map(
-                self.state.melt_clock_days,
-                self.terrain.mask(),
-                &mut self.environment.temperature,
-            );
-        }
-    }
-
-    /// The default snowfall of one Snowfall-Step: the storm's precipitation at the reference
-    /// altitude over `dt_days`, at the air temperature of this hour.
-    fn orographic_snowfall(&mut self, day: f64, dt_days: f64) -> Result<(), PhenomenonError> {
-        let p = self.air.storm_precipitation_m_per_day(day) * dt_days;
-        let table = self
-            .air
-            .precipitation_table(&[(self.air.sea_level_c(day) as f32, p as f32)]);
-        self.add_precipitation(&table)
-    }
-
-    /// Adds a precipitation table's snow to the layers and its rain to the pending rain.
-    fn add_precipitation(
-        &mut self,
-        table: &snowfall::PrecipitationTable,
-    ) -> Result<(), PhenomenonError> {
-        let p = &self.scenario.parameters;
-        let maps = PrecipitationMaps {
-            temperature: &self.environment.temperature,
-            lapse_offset_c: &self.air.lapse_offset_c,
-            orographic: &self.air.orographic,
-        };
-        let r = snowfall::add_precipitation(
-            &p.snowfall,
-            &mut self.terrain,
-            &maps,
-            table,
-            p.melt.enhanced.layer_density_kg_m3,
-            &mut self.pack.surface_age_days,
-            p.melt.enhanced.reset_swe_m,
-            &mut self.pending_rain,
-            &mut self.snowfall_scratch,
-        )?;
-        let b = &mut self.state.budget;
-        b.snowfall += r.snow_m3;
-        b.water.snowfall_water += r.snow_water_m3;
-        b.water.rain += r.rain_m3;
-        b.water.pending += r.rain_m3;
-        Ok(())
-    }
-
-    /// One window of the enhanced melt, from the last melt event to `day`.
-    fn enhanced_melt(&mut self, day: f64) -> Result<(), PhenomenonError> {
-        let t0 = self.state.melt_clock_days;
-        let min_window = self.scenario.parameters.melt.enhanced.min_window_hours / 24.0;
-        if day - t0 < min_window && day < self.scenario.days {
-            return Ok(());
-        }
-        if let Some(table) = self.air.station_precipitation(t0, day) {
-            self.add_precipitation(&table)?;
-        }
-        let storm = self.state.scheduler.snowing();
-        let hours = self.air.melt_hours(t0, day, storm);
-        let reflected: Vec<&[f32]> = self
-            .air
-            .sun
-            .months
-            .iter()
-            .map(|m| m.reflected.as_slice())
-            .collect();
-        let svf = &self.air.sun.sky_view_factor;
-        let forcing = MeltForcing {
-            hours: &hours,
-            lapse_offset_c: &self.air.lapse_offset_c,
-            sky_view_factor: svf,
-            reflected: &reflected,
-            rain_m: &self.pending_rain,
-            window_days: (day - t0) as f32,
-        };
-        let r = melt::enhanced::step(
-            &self.scenario.parameters.melt.enhanced,
-            &mut self.terrain,
-            &mut self.pack,
-            &forcing,
-        )?;
-        self.pending_rain.fill(0.0);
-        let a = self.terrain.geometry().cell_area();
-        let b = &mut self.state.budget;
-        b.melt += r.melted_snow_m3;
-        b.refreeze += r.refrozen_snow_m3;
-        b.water.melt += r.melt_water_m3;
-        b.water.refrozen += r.refrozen_water_m3;
-        b.water.runoff += r.runoff_m3;
-        b.water.pending = 0.0;
-        b.water.store = self.pack.liquid_volume(a);
-        self.state.melt_clock_days = day;
-        self.refresh_air_temperature();
         Ok(())
     }
 

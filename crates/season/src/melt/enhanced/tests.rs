@@ -1,0 +1,122 @@
+//! Unit tests of the enhanced temperature-index melt.
+use super::*;
+use snowscape_terrain::{Grid, GridGeometry, SnowLayer};
+
+/// Two cells of 1 m of settled snow: cell 0 a sunny south slope, cell 1 a shaded north
+/// slope, at an altitude where the day's mean is −2 °C with a +6 °C afternoon.
+fn day_of_sun(age_days: f32) -> (MeltReport, LayeredTerrain, SnowpackState, Vec<f32>) {
+    let mut t =
+        LayeredTerrain::from_bedrock(Grid::filled(GridGeometry::square(2, 1, 1.0).unwrap(), 0.0));
+    t.layer_mut(SnowLayer::Stable).fill(1.0);
+    let mut pack = SnowpackState::new(2);
+    pack.surface_age_days.fill(age_days);
+    let south: Vec<u8> = vec![204, 0];
+    let hours: Vec<MeltHour> = (0..24)
+        .map(|h| {
+            let hour = h as f64 + 0.5;
+            let t = -2.0 + 8.0 * (std::f64::consts::TAU * (hour - 15.0) / 24.0).cos();
+            let day = (7..17).contains(&h);
+            MeltHour {
+                weight: 1.0,
+                sea_level_c: t as f32,
+                beam: day.then_some(south.as_slice()),
+                direct_w_m2: if day { 800.0 } else { 0.0 },
+                diffuse_w_m2: if day { 60.0 } else { 0.0 },
+                reflected_w_m2: 0.0,
+                month: 0,
+                longwave_balance_w_m2: 0.0,
+            }
+        })
+        .collect();
+    let zero = [0.0f32; 2];
+    let reflected: [&[f32]; 1] = [&zero];
+    let forcing = MeltForcing {
+        hours: &hours,
+        lapse_offset_c: &[0.0, 0.0],
+        sky_view_factor: &[0.8, 0.8],
+        reflected: &reflected,
+        rain_m: &[],
+        window_days: 1.0,
+    };
+    let params = EnhancedMeltParams::default();
+    let before: Vec<f32> = (0..2).map(|i| t.depth_at(i)).collect();
+    let r = step(&params, &mut t, &mut pack, &forcing).unwrap();
+    (r, t, pack, before)
+}
+
+#[test]
+fn a_sunny_slope_melts_on_a_freezing_day_and_a_shaded_one_does_not() {
+    let (r, t, pack, before) = day_of_sun(5.0);
+    // The sunny cell lost snow; the shaded one none (its afternoon melt energy went into
+    // the night's cold content).
+    assert!(t.depth_at(0) < before[0] - 0.01, "south {}", t.depth_at(0));
+    assert_eq!(t.depth_at(1), before[1], "north");
+    assert_eq!(pack.liquid_water_m[1], 0.0);
+    assert!(pack.cold_content_m[1] > 0.0);
+    assert!(r.melt_water_m3 > 0.005, "{r:?}");
+    // The melt water stays in the pack (5 % holding capacity of 0.3 m w.e.).
+    assert!((pack.liquid_water_m[0] as f64 - r.melt_water_m3).abs() < 1e-6);
+    assert_eq!(r.runoff_m3, 0.0);
+    assert!(t.check_invariants().is_ok());
+}
+
+#[test]
+fn fresh_snow_reflects_and_melts_less() {
+    let (fresh, ..) = day_of_sun(0.0);
+    let (old, ..) = day_of_sun(30.0);
+    assert!(
+        fresh.melt_water_m3 < 0.6 * old.melt_water_m3,
+        "{fresh:?} {old:?}"
+    );
+    let p = EnhancedMeltParams::default();
+    assert!((p.albedo(0.0, false) - 0.85).abs() < 1e-6);
+    assert!(p.albedo(10.0, true) < p.albedo(10.0, false));
+    assert_eq!(p.albedo(1e4, true), 0.4);
+}
+
+#[test]
+fn liquid_water_refreezes_and_water_is_conserved() {
+    let (_, mut t, mut pack, _) = day_of_sun(5.0);
+    let liquid = pack.liquid_water_m[0];
+    let compacted = t.layer(SnowLayer::Compacted)[0];
+    // A cold night: the water refreezes into the compacted layer.
+    let hours: Vec<MeltHour> = (0..12)
+        .map(|_| MeltHour {
+            weight: 1.0,
+            sea_level_c: -10.0,
+            beam: None,
+            direct_w_m2: 0.0,
+            diffuse_w_m2: 0.0,
+            reflected_w_m2: 0.0,
+            month: 0,
+            longwave_balance_w_m2: 0.0,
+        })
+        .collect();
+    let forcing = MeltForcing {
+        hours: &hours,
+        lapse_offset_c: &[0.0, 0.0],
+        sky_view_factor: &[0.8, 0.8],
+        reflected: &[],
+        rain_m: &[0.002, 0.0],
+        window_days: 0.5,
+    };
+    let r = step(&EnhancedMeltParams::default(), &mut t, &mut pack, &forcing).unwrap();
+    let frozen = r.refrozen_water_m3 as f32;
+    assert!(frozen > 0.0 && frozen <= liquid + 1e-7, "{r:?}");
+    assert!(
+        (pack.liquid_water_m[0] - (liquid - frozen + 0.002)).abs() < 1e-6,
+        "{:?}",
+        pack.liquid_water_m
+    );
+    let gained = t.layer(SnowLayer::Compacted)[0] - compacted;
+    assert!((gained - frozen / 0.5).abs() < 1e-6, "{gained}");
+    // A bad map is a typed error.
+    let bad = MeltForcing {
+        lapse_offset_c: &[0.0],
+        ..forcing
+    };
+    assert!(matches!(
+        step(&EnhancedMeltParams::default(), &mut t, &mut pack, &bad),
+        Err(PhenomenonError::MapLength { actual: 1, .. })
+    ));
+}

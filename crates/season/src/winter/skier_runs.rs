@@ -1,0 +1,117 @@
+//! The season's skier runs (Cordonnier 2018 §6.2) as [`Winter`] runs them: one run from its
+//! start to its terminus inside its start event, and the tracks fading under new snow.
+
+use super::{SeasonError, Trigger, Winter};
+use crate::scheduler::SECONDS_PER_DAY;
+use snowscape_skiers::SkiArea;
+
+impl Winter {
+    /// One skier run, from its start to its terminus (temporal zoom); avalanches it triggers
+    /// start at once. See [`crate::skiing`].
+    pub(super) fn run_skier(&mut self, event_day: f64) -> Result<(), SeasonError> {
+        let day = event_day;
+        let ski_err = |e: snowscape_skiers::SkiError| SeasonError::Skier {
+            day,
+            reason: e.to_string(),
+        };
+        let p = self.scenario.skiers.clone();
+        // Without skiable snow there is no terminus: no run today.
+        let no_snow =
+            |e: &snowscape_skiers::SkiError| matches!(e, snowscape_skiers::SkiError::NoTerminus(_));
+        if self.ski_area.is_none() {
+            match SkiArea::new(
+                &p.ski,
+                &self.terrain,
+                p.terminus.clone(),
+                self.scenario.seed,
+            ) {
+                Ok(a) => self.ski_area = Some(a),
+                Err(e) if no_snow(&e) => return Ok(()),
+                Err(e) => return Err(ski_err(e)),
+            }
+            self.terminus_stale = false;
+        }
+        let Some(area) = self.ski_area.as_mut() else {
+            return Ok(());
+        };
+        if self.terminus_stale {
+            match area.refresh_terminus(&p.ski, &self.terrain) {
+                Ok(()) => self.terminus_stale = false,
+                Err(e) if no_snow(&e) => return Ok(()),
+                Err(e) => return Err(ski_err(e)),
+            }
+        }
+        area.time_s = day * SECONDS_PER_DAY;
+        let k = self.state.ski.runs as usize;
+        let spawned = match p.starts.get(k % p.starts.len().max(1)) {
+            Some([x, y]) => area.spawn_at(&p.ski, &self.terrain, *x, *y).map(|_| 1),
+            None => area
+                .spawn_weighted(&p.ski, &self.terrain, 1)
+                .map(|v| v.len()),
+        };
+        // A start point on bare ground or a map without snow: no run today.
+        if !matches!(spawned, Ok(n) if n > 0) {
+            return Ok(());
+        }
+        self.state.ski.runs += 1;
+        let mut elapsed = 0.0;
+        let mut triggers = Vec::new();
+        while elapsed < p.max_run_s {
+            let Some(area) = self.ski_area.as_mut() else {
+                break;
+            };
+            let r = snowscape_skiers::step(
+                &p.ski,
+                area,
+                &mut self.terrain,
+                &mut self.ski_scratch,
+                p.step_s,
+            )
+            .map_err(ski_err)?;
+            elapsed += p.step_s;
+            self.state.ski.steps += 1;
+            self.state.ski.distance_m += r.distance_m;
+            self.state.budget.densification += r.compaction.densification_m3;
+            self.state.ski.finished += r
+                .finished
+                .iter()
+                .filter(|f| f.stop == snowscape_skiers::StopReason::Terminus)
+                .count() as u64;
+            triggers.extend(r.triggers.iter().map(|t| t.cell));
+            for cell in triggers.drain(..) {
+                match self.start_avalanche(cell, Trigger::Skier) {
+                    Ok(_) => self.state.ski.avalanches_triggered += 1,
+                    Err(SeasonError::AvalanchePosition { .. }) => {}
+                    Err(e) => return Err(e),
+                }
+            }
+            if r.active == 0 {
+                break;
+            }
+        }
+        self.state
+            .scheduler
+            .advance_clock(elapsed / SECONDS_PER_DAY);
+        self.update_avalanche_rate();
+        Ok(())
+    }
+
+    /// Fades the ski tracks under snow that `before` (total depth per cell) did not hold.
+    pub(super) fn fade_tracks(&mut self, before: Option<Vec<f32>>) -> Result<(), SeasonError> {
+        let (Some(before), Some(area)) = (before, self.ski_area.as_mut()) else {
+            return Ok(());
+        };
+        let added: Vec<f32> = self
+            .terrain
+            .total_depth()
+            .iter()
+            .zip(&before)
+            .map(|(a, b)| a - b)
+            .collect();
+        area.fade_tracks(&self.scenario.skiers.ski, &added)
+            .map_err(|e| SeasonError::Skier {
+                day: self.state.scheduler.time_days(),
+                reason: e.to_string(),
+            })
+    }
+}

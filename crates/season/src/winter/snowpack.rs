@@ -1,0 +1,142 @@
+//! The season's snowpack beyond the paper, as [`Winter`] runs it: the hourly air
+//! ([`crate::weather`]), the orographic snowfall, the enhanced melt windows and the Sx
+//! sheltering of each weather period.
+
+use super::{SeasonError, Winter};
+use crate::melt::{self, MeltForcing, MeltModel};
+use crate::phenomenon::PhenomenonError;
+use crate::snowfall::{self, PrecipitationMaps};
+use std::time::Instant;
+
+impl Winter {
+    /// The maximum upwind slope of the current period's wind (when the Sx redistribution is on).
+    pub(super) fn refresh_sheltering(&mut self) -> Result<(), SeasonError> {
+        if !self
+            .scenario
+            .parameters
+            .wind_transport
+            .sx_redistribution
+            .enabled
+        {
+            self.sx.clear();
+            return Ok(());
+        }
+        let t = Instant::now();
+        let w = &self.weather[self.state.weather_index];
+        self.sx = snowscape_environment::max_upwind_slope(
+            &self.terrain.bedrock,
+            self.terrain.geometry(),
+            self.terrain.mask(),
+            w.wind_from_deg,
+            &self.base_environment.sheltering,
+        )?;
+        *self.wall_seconds.entry("sheltering").or_default() += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Under the enhanced melt, the temperature map the phenomena read (snowfall split,
+    /// stability, avalanche α) is the daily-mean air temperature at the end of the last melt
+    /// window (the paper's map carries the sun as `ki·I`, which the new melt counts itself).
+    pub(super) fn refresh_air_temperature(&mut self) {
+        if self.scenario.parameters.melt.model == MeltModel::EnhancedTi {
+            self.air.daily_temperature_map(
+                self.state.melt_clock_days,
+                self.terrain.mask(),
+                &mut self.environment.temperature,
+            );
+        }
+    }
+
+    /// The default snowfall of one Snowfall-Step: the storm's precipitation at the reference
+    /// altitude over `dt_days`, at the air temperature of this hour.
+    pub(super) fn orographic_snowfall(
+        &mut self,
+        day: f64,
+        dt_days: f64,
+    ) -> Result<(), PhenomenonError> {
+        let p = self.air.storm_precipitation_m_per_day(day) * dt_days;
+        let table = self
+            .air
+            .precipitation_table(&[(self.air.sea_level_c(day) as f32, p as f32)]);
+        self.add_precipitation(&table)
+    }
+
+    /// Adds a precipitation table's snow to the layers and its rain to the pending rain.
+    pub(super) fn add_precipitation(
+        &mut self,
+        table: &snowfall::PrecipitationTable,
+    ) -> Result<(), PhenomenonError> {
+        let p = &self.scenario.parameters;
+        let maps = PrecipitationMaps {
+            temperature: &self.environment.temperature,
+            lapse_offset_c: &self.air.lapse_offset_c,
+            orographic: &self.air.orographic,
+        };
+        let r = snowfall::add_precipitation(
+            &p.snowfall,
+            &mut self.terrain,
+            &maps,
+            table,
+            p.melt.enhanced.layer_density_kg_m3,
+            &mut self.pack.surface_age_days,
+            p.melt.enhanced.reset_swe_m,
+            &mut self.pending_rain,
+            &mut self.snowfall_scratch,
+        )?;
+        let b = &mut self.state.budget;
+        b.snowfall += r.snow_m3;
+        b.water.snowfall_water += r.snow_water_m3;
+        b.water.rain += r.rain_m3;
+        b.water.pending += r.rain_m3;
+        Ok(())
+    }
+
+    /// One window of the enhanced melt, from the last melt event to `day`.
+    pub(super) fn enhanced_melt(&mut self, day: f64) -> Result<(), PhenomenonError> {
+        let t0 = self.state.melt_clock_days;
+        let min_window = self.scenario.parameters.melt.enhanced.min_window_hours / 24.0;
+        if day - t0 < min_window && day < self.scenario.days {
+            return Ok(());
+        }
+        if let Some(table) = self.air.station_precipitation(t0, day) {
+            self.add_precipitation(&table)?;
+        }
+        let storm = self.state.scheduler.snowing();
+        let hours = self.air.melt_hours(t0, day, storm);
+        let reflected: Vec<&[f32]> = self
+            .air
+            .sun
+            .months
+            .iter()
+            .map(|m| m.reflected.as_slice())
+            .collect();
+        let svf = &self.air.sun.sky_view_factor;
+        let forcing = MeltForcing {
+            hours: &hours,
+            lapse_offset_c: &self.air.lapse_offset_c,
+            sky_view_factor: svf,
+            reflected: &reflected,
+            rain_m: &self.pending_rain,
+            window_days: (day - t0) as f32,
+        };
+        let r = melt::enhanced::step(
+            &self.scenario.parameters.melt.enhanced,
+            &mut self.terrain,
+            &mut self.pack,
+            &forcing,
+        )?;
+        self.pending_rain.fill(0.0);
+        let a = self.terrain.geometry().cell_area();
+        let b = &mut self.state.budget;
+        b.melt += r.melted_snow_m3;
+        b.refreeze += r.refrozen_snow_m3;
+        b.water.melt += r.melt_water_m3;
+        b.water.refrozen += r.refrozen_water_m3;
+        b.water.runoff += r.runoff_m3;
+        b.water.pending = 0.0;
+        b.water.store = self.pack.liquid_volume(a);
+        self.state.melt_clock_days = day;
+        self.refresh_air_temperature();
+        Ok(())
+    }
+}
