@@ -247,6 +247,10 @@ pub fn hazard(
     out.clear();
     out.resize(n, 0.0);
     let natural = if params.natural { 1.0 } else { 0.0 };
+    if !params.natural && (skiers.is_none() || params.skier_gain == 0.0) {
+        // Nothing releases: every λ is 0.
+        return 0.0;
+    }
     let unstable = terrain.layer(SnowLayer::Unstable);
     let per_cell = params.rate_per_km2_per_day * g.cell_area() / 1e6;
     let mut total = 0.0;

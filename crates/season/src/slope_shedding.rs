@@ -26,7 +26,7 @@
 //! not shed, whatever the rock beneath it does). A cell that received snow during the step
 //! takes the descent of its snow surface to its neighbours' (as seen by the sweep, below), and
 //! keeps the depth `d` that equals its holding depth on the slope its surface has when it
-//! keeps `d` (a fixed point, found by bisection): debris spreads into a cone at the foot of a
+//! keeps `d` (a fixed point, found by regula falsi to 0.1 mm): debris spreads into a cone at the foot of a
 //! face instead of standing as a one-cell tower on flat ground, which holds 145 m (OGGM
 //! Snowslide evaluates every cell on the snow surface), and a hollow filling with debris stops
 //! shedding when its surface levels out.
@@ -42,12 +42,15 @@
 //! sluff debris that can load and release on the slope below; the avalanche module lays its
 //! denser debris down as stable snow).
 //!
-//! **Order: one sweep.** Cells are processed from the highest to the lowest *bedrock* (ties,
-//! on level ground, in a scrambled but fixed order: by index, every debris flow on level
-//! ground would run one way), in an order sorted once and cached in the scratch while the bedrock and the mask
+//! **Order: one sweep.** Every cell is processed after each of its neighbours whose *bedrock*
+//! lies above it (ties, on level ground, broken by a scrambled but fixed order: by index,
+//! every debris flow on level ground would run one way), in an order built once by a
+//! depth-first climb from each cell and cached in the scratch while the bedrock and the mask
 //! are unchanged (the published SnowSlide codes sort by altitude plus snow depth, CHM every
-//! step, FSM2oshd once), so a receiver below is processed after its senders and sheds its own
-//! excess in turn: the cascade runs from the crests to the valleys in one pass. A sender sees
+//! step, FSM2oshd once; any order that puts senders before receivers gives the same cascade,
+//! and one that stays local in the grid keeps the sweep in cache), so a receiver below is
+//! processed after its senders and sheds its own excess in turn: the cascade runs from the
+//! crests to the valleys in one pass. A sender sees
 //! a neighbour the sweep has not reached with the surface it is expected to keep, its surface
 //! at the start of the step less its own excess (its receipts are in transit; judging by them
 //! would jam a long face behind its own falling snow), and one it has passed with its current
@@ -78,10 +81,12 @@
 //! rest, so the shares add up to the depth removed): the volume is conserved but for the
 //! border outflow.
 //!
-//! **Cost and determinism.** A row-parallel pass computes the slopes and finds the cells over
-//! their holding depth (a pure function of each cell); the sweep is sequential in a fixed
-//! order and costs one flag test per cell that neither sheds nor receives. The step is
-//! bit-identical for any thread count.
+//! **Cost and determinism.** A row-parallel pass finds the cells over their holding depth (a
+//! pure function of each cell; a bound from the cached bedrock descent passes over the cells
+//! that cannot be steep enough); a step without any returns at once. The sweep is sequential
+//! in the fixed order and visits only the cells that shed or receive (a bitset of pending
+//! positions); holding depths come from a table in `tan / (1 + tan)` and a receiving cell's
+//! fixed point from regula falsi. The step is bit-identical for any thread count.
 //!
 //! **Time.** Shedding is a release to rest, not a rate: `dt_days` is validated and otherwise
 //! unused; call the step after each change of the snow cover (snowfall, wind).
@@ -197,15 +202,26 @@ impl SheddingParams {
 
     /// Holding depth `D_hold`, metres of snow, on a slope of `slope_deg` degrees.
     pub fn holding_depth(&self, slope_deg: f64) -> f64 {
-        let d = match self.law {
+        self.law_depth(slope_deg.max(self.law_min_slope_deg()))
+            .max(self.min_holding_depth_m)
+    }
+
+    /// The slope below which the law holds its value, degrees (10° for the power law).
+    fn law_min_slope_deg(&self) -> f64 {
+        match self.law {
+            HoldingLaw::Exponential => 0.0,
+            HoldingLaw::PowerLaw => 10.0,
+        }
+    }
+
+    /// The law's formula alone (no floor, no lower slope), m.
+    fn law_depth(&self, slope_deg: f64) -> f64 {
+        match self.law {
             HoldingLaw::Exponential => {
                 self.exp_scale_m * (-self.exp_rate_per_deg * slope_deg).exp()
             }
-            HoldingLaw::PowerLaw => {
-                self.power_scale_m * slope_deg.max(10.0).powf(self.power_exponent)
-            }
-        };
-        d.max(self.min_holding_depth_m)
+            HoldingLaw::PowerLaw => self.power_scale_m * slope_deg.powf(self.power_exponent),
+        }
     }
 }
 
@@ -242,23 +258,28 @@ pub struct SheddingScratch {
     /// Bedrock and mask the cached order was built for.
     key_bedrock: Vec<u32>,
     key_mask: Option<Vec<bool>>,
-    /// Valid cells, highest bedrock first (ties in a scrambled, fixed order).
+    /// Valid cells, each after the neighbours above it (`upslope_first_order`).
     order: Vec<u32>,
     /// Position of each cell in `order` (`u32::MAX` for nodata).
     rank: Vec<u32>,
+    /// Steepest descent of the bedrock alone to the valid neighbours (tan; infinite for cells
+    /// on the border or beside nodata): with the compacted snow on a cell, a bound on the
+    /// slope of its bed that spares the cells far from `min_slope_deg` a full evaluation.
+    bedrock_descent: Vec<f32>,
     /// Bedrock plus compacted snow.
     bed: Vec<f32>,
     /// Snow surface at the start of the step, less the excess each cell is to shed: what a
     /// cell the sweep has not reached is expected to keep.
     surface0: Vec<f32>,
-    /// Excess of each cell over its holding depth at the start of the step.
-    expected: Vec<f32>,
     /// Snow surface during the sweep.
     surface: Vec<f32>,
     /// Slope of a cell that has not received snow (tan; see the module documentation).
     tan_slope: Vec<f32>,
     flags: Vec<u8>,
     queue: BinaryHeap<u64>,
+    /// One bit per rank: the cells the sweep has still to visit (over their holding depth,
+    /// or received snow ahead of the sweep).
+    pending: Vec<u64>,
 }
 
 /// Over its holding depth and steep enough to shed its own snow.
@@ -295,31 +316,98 @@ impl SheddingScratch {
         if same {
             return;
         }
-        let valid = |i: usize| mask.is_none_or(|m| !m[i]);
-        // Ascending keys are descending altitudes; ties (level ground) in a scrambled but fixed
-        // order (by index they would send every debris flow on level ground one way).
-        let mut packed: Vec<(u64, u32)> = terrain
-            .bedrock
-            .par_iter()
-            .enumerate()
-            .filter(|&(i, _)| valid(i))
-            .map(|(i, &b)| {
-                let scramble = snowscape_terrain::random::mix64(i as u64) as u32;
-                (
-                    (u64::from(!monotone(b)) << 32) | u64::from(scramble),
-                    i as u32,
-                )
-            })
-            .collect();
-        packed.par_sort_unstable();
-        self.order = packed.par_iter().map(|&(_, i)| i).collect();
+        let geometry = terrain.geometry();
+        self.order = with_validity!(terrain.mask(), |valid| upslope_first_order(
+            &terrain.bedrock,
+            geometry,
+            valid
+        ));
         self.rank = vec![u32::MAX; terrain.bedrock.len()];
         for (p, &i) in self.order.iter().enumerate() {
             self.rank[i as usize] = p as u32;
         }
         self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
         self.key_mask = mask.map(<[bool]>::to_vec);
+        let nb = neighbours(geometry);
+        let bedrock = &terrain.bedrock;
+        self.bedrock_descent.resize(bedrock.len(), 0.0);
+        with_validity!(terrain.mask(), |valid| {
+            self.bedrock_descent
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(i, d)| {
+                    let mut best = 0.0f32;
+                    for_each_around(geometry, valid, &nb, i, |n, a| match a {
+                        Around::Cell(j) => best = best.max((bedrock[i] - bedrock[j]) * n.inv_l),
+                        Around::Ghost(_) => best = f32::INFINITY,
+                    });
+                    *d = best;
+                });
+        });
     }
+}
+
+/// The sweep's order: every valid cell after each of its valid neighbours that lies above it,
+/// a neighbour being above when its bedrock is higher, or on level ground when its scrambled
+/// index is lower (by index, every debris flow on level ground would run one way). A
+/// depth-first search climbs from each cell in index order to the cells above it and lists a
+/// cell once all of them are listed: a topological order of the neighbours' "above" relation
+/// that stays local in the grid, so that the sweep finds the cells it visits one after the
+/// other in the same cache lines (a global sort by altitude jumps across the grid and spent
+/// most of its time waiting on memory).
+fn upslope_first_order<V: Validity>(
+    bedrock: &[f32],
+    geometry: &GridGeometry,
+    valid: &V,
+) -> Vec<u32> {
+    let n = bedrock.len();
+    // Ascending keys are descending altitudes; ties in a scrambled but fixed order, then by
+    // index (a total order).
+    let key = |i: usize| {
+        let scramble = snowscape_terrain::random::mix64(i as u64) as u32;
+        (
+            (u64::from(!monotone(bedrock[i])) << 32) | u64::from(scramble),
+            i,
+        )
+    };
+    let nb = neighbours(geometry);
+    let mut listed = vec![false; n];
+    let mut order = Vec::with_capacity(n);
+    // The search path: a cell and the next of its neighbours to look at.
+    let mut path: Vec<(u32, u8)> = Vec::new();
+    for start in 0..n {
+        if listed[start] || !valid.at(start) {
+            continue;
+        }
+        path.push((start as u32, 0));
+        while let Some(top) = path.last_mut() {
+            let i = top.0 as usize;
+            let mut above = None;
+            let mut k = 0u8;
+            for_each_around(geometry, valid, &nb, i, |_, a| {
+                if above.is_none()
+                    && let Around::Cell(j) = a
+                {
+                    if k >= top.1 && !listed[j] && key(j) < key(i) {
+                        above = Some((j, k));
+                    }
+                    k += 1;
+                }
+            });
+            match above {
+                Some((j, k)) => {
+                    top.1 = k + 1;
+                    path.push((j as u32, 0));
+                }
+                None => {
+                    listed[i] = true;
+                    order.push(i as u32);
+                    path.pop();
+                }
+            }
+        }
+    }
+    order
 }
 
 /// Sheds the snow above the holding depth of every steep cell, down the slopes, in one sweep.
@@ -343,7 +431,14 @@ pub fn step(
         });
     }
     scratch.refresh_order(terrain);
-    let w = geometry.width();
+    let tan_min = params.min_slope_deg.to_radians().tan() as f32;
+    let holding = HoldingTable::new(params);
+    let active = with_validity!(mask, |valid| over_holding_depth(
+        params, &holding, terrain, scratch, &geometry, valid, tan_min
+    ));
+    if active.is_empty() {
+        return Ok(SheddingReport::default());
+    }
     scratch.bed.resize(n, 0.0);
     scratch
         .bed
@@ -353,63 +448,78 @@ pub fn step(
     fill_surface(terrain, &mut scratch.surface0);
     scratch.surface.clone_from(&scratch.surface0);
     scratch.tan_slope.resize(n, 0.0);
+    scratch.flags.clear();
     scratch.flags.resize(n, 0);
-    scratch.expected.resize(n, 0.0);
-    let nb = neighbours(&geometry);
-    let tan_min = params.min_slope_deg.to_radians().tan() as f32;
-    {
-        let (bed, surface) = (&scratch.bed, &scratch.surface0);
-        let snow = &terrain.snow;
-        with_validity!(mask, |valid| {
-            scratch
-                .tan_slope
-                .par_chunks_mut(w)
-                .zip(scratch.flags.par_chunks_mut(w))
-                .zip(scratch.expected.par_chunks_mut(w))
-                .enumerate()
-                .for_each(|(row, ((ts, fl), ex))| {
-                    for (col, ((t, f), e)) in ts
-                        .iter_mut()
-                        .zip(fl.iter_mut())
-                        .zip(ex.iter_mut())
-                        .enumerate()
-                    {
-                        let i = row * w + col;
-                        (*t, *f, *e) = (0.0, 0, 0.0);
-                        if !valid.at(i) {
-                            continue;
-                        }
-                        let on_bed = steepest_descent(bed, bed, bed, &geometry, valid, &nb, i);
-                        if on_bed < tan_min {
-                            *t = on_bed;
-                            continue;
-                        }
-                        let on_snow =
-                            steepest_descent(surface, surface, bed, &geometry, valid, &nb, i);
-                        *t = on_bed.min(on_snow);
-                        if *t < tan_min {
-                            continue;
-                        }
-                        let depth = snow[0][i] + snow[1][i] + snow[2][i] + snow[3][i];
-                        let excess = depth - hold_of(params, *t, false);
-                        if excess > MIN_SHED_M {
-                            *f = ACTIVE;
-                            *e = excess;
-                        }
-                    }
-                });
-        });
-    }
+    scratch.pending.clear();
+    scratch.pending.resize(n.div_ceil(64), 0);
     // What the neighbours above expect a cell to keep: its surface less its own excess.
-    scratch
-        .surface0
-        .par_iter_mut()
-        .zip(scratch.expected.par_iter())
-        .for_each(|(a, e)| *a -= e);
+    for &(i, tan, excess) in &active {
+        let i = i as usize;
+        scratch.flags[i] = ACTIVE;
+        scratch.tan_slope[i] = tan;
+        scratch.surface0[i] -= excess;
+        let p = scratch.rank[i] as usize;
+        scratch.pending[p / 64] |= 1 << (p % 64);
+    }
     let report = with_validity!(mask, |valid| sweep(
-        params, terrain, scratch, &geometry, valid, tan_min
+        params, &holding, terrain, scratch, &geometry, valid, tan_min
     ));
     Ok(report)
+}
+
+/// The cells over their holding depth and steep enough to shed their own snow, in index
+/// order, each with its slope (tan) and its excess (m): a pure function of each cell,
+/// row-parallel. A cell's bed slope is at most its bedrock descent plus its compacted snow over
+/// the shortest neighbour distance (the neighbours' compacted snow only lowers it), so cells
+/// far from `min_slope_deg` by that bound, and cells holding no more than the floor of the
+/// holding depth, are passed over without evaluating their slopes.
+fn over_holding_depth<V: Validity>(
+    params: &SheddingParams,
+    holding: &HoldingTable,
+    terrain: &LayeredTerrain,
+    scratch: &SheddingScratch,
+    geometry: &GridGeometry,
+    valid: &V,
+    tan_min: f32,
+) -> Vec<(u32, f32, f32)> {
+    let nb = &neighbours(geometry);
+    let w = geometry.width();
+    let snow = &terrain.snow;
+    let bedrock = &terrain.bedrock;
+    let bound = &scratch.bedrock_descent;
+    let floor = params.min_holding_depth_m as f32;
+    let inv_l_max = nb.iter().fold(0.0f32, |m, n| m.max(n.inv_l));
+    // One centimetre of height: more than the f32 round-off of a bed sum at 8 km.
+    let margin = 0.01 * inv_l_max;
+    let bed = |j: usize| bedrock[j] + snow[0][j];
+    let surface = |j: usize| bedrock[j] + (snow[0][j] + snow[1][j] + snow[2][j] + snow[3][j]);
+    (0..geometry.height())
+        .into_par_iter()
+        .flat_map_iter(|row| {
+            (row * w..(row + 1) * w).filter_map(move |i| {
+                if !valid.at(i) {
+                    return None;
+                }
+                let depth = snow[0][i] + snow[1][i] + snow[2][i] + snow[3][i];
+                if depth - floor <= MIN_SHED_M
+                    || bound[i] + snow[0][i] * inv_l_max + margin < tan_min
+                {
+                    return None;
+                }
+                let on_bed = steepest_descent(bed(i), bed, bed, geometry, valid, nb, i);
+                if on_bed < tan_min {
+                    return None;
+                }
+                let on_snow = steepest_descent(surface(i), surface, bed, geometry, valid, nb, i);
+                let t = on_bed.min(on_snow);
+                if t < tan_min {
+                    return None;
+                }
+                let excess = depth - holding.hold(t, false);
+                (excess > MIN_SHED_M).then_some((i as u32, t, excess))
+            })
+        })
+        .collect()
 }
 
 /// A neighbour: offsets and `1 / distance`.
@@ -417,15 +527,19 @@ pub fn step(
 struct Neighbour {
     dc: isize,
     dr: isize,
+    /// `dr · width + dc`: the index offset.
+    di: isize,
     inv_l: f32,
 }
 
 /// The 8 neighbours.
 fn neighbours(geometry: &GridGeometry) -> [Neighbour; 8] {
     let (dx, dy) = (geometry.cell_size_x(), geometry.cell_size_y());
+    let w = geometry.width() as isize;
     let n = |dc, dr, l: f64| Neighbour {
         dc,
         dr,
+        di: dr * w + dc,
         inv_l: (1.0 / l) as f32,
     };
     let d = dx.hypot(dy);
@@ -450,58 +564,67 @@ enum Around {
     Ghost(usize),
 }
 
-/// The neighbour of cell `i` in direction `n`: a valid cell; the border, past the grid or into
-/// nodata (with the valid opposite cell the bed is continued from; east, west, north and south
-/// only: a diagonal continuation through a cell at the foot of a slope would extend the slope
-/// past its foot); or nothing (a diagonal past the border or into nodata, a border with no
-/// valid opposite cell).
+/// Calls `f` with each of the 8 neighbours `nb` of cell `i` and what lies there: a valid
+/// cell; or the border, past the grid or into nodata (with the valid opposite cell the bed is
+/// continued from; east, west, north and south only: a diagonal continuation through a cell at
+/// the foot of a slope would extend the slope past its foot). Directions with nothing (a
+/// diagonal past the border or into nodata, a border with no valid opposite cell) are skipped.
 #[inline(always)]
-fn neighbour_of<V: Validity>(
+fn for_each_around<V: Validity>(
     geometry: &GridGeometry,
     valid: &V,
-    n: &Neighbour,
+    nb: &[Neighbour; 8],
     i: usize,
-) -> Option<Around> {
+    mut f: impl FnMut(&Neighbour, Around),
+) {
     let (w, h) = (geometry.width(), geometry.height());
     let (col, row) = (i % w, i / w);
-    let inside = |c: usize, r: usize, dc: isize, dr: isize| {
-        let (c, r) = (c.wrapping_add_signed(dc), r.wrapping_add_signed(dr));
+    let inside = |dc: isize, dr: isize| {
+        let (c, r) = (col.wrapping_add_signed(dc), row.wrapping_add_signed(dr));
         (c < w && r < h).then(|| r * w + c)
     };
-    match inside(col, row, n.dc, n.dr) {
-        Some(j) if valid.at(j) => Some(Around::Cell(j)),
-        // Past the grid border or into nodata (the outline of a clipped DEM is its border).
-        _ if n.dc == 0 || n.dr == 0 => inside(col, row, -n.dc, -n.dr)
-            .filter(|&o| valid.at(o))
-            .map(Around::Ghost),
-        _ => None,
+    let interior = col > 0 && row > 0 && col + 1 < w && row + 1 < h;
+    for n in nb {
+        let j = if interior {
+            Some(i.wrapping_add_signed(n.di))
+        } else {
+            inside(n.dc, n.dr)
+        };
+        match j {
+            Some(j) if valid.at(j) => f(n, Around::Cell(j)),
+            // Past the grid border or into nodata (the outline of a clipped DEM is its border).
+            _ if n.dc == 0 || n.dr == 0 => {
+                if let Some(o) = inside(-n.dc, -n.dr).filter(|&o| valid.at(o)) {
+                    f(n, Around::Ghost(o));
+                }
+            }
+            _ => {}
+        }
     }
 }
 
-/// Steepest downhill slope (tan) from cell `i`, at height `z_from[i]`, to a valid neighbour
-/// `j` at height `z_to[j]`: the slope its snow would slide down (0 in a pit or on level
-/// ground). Past the border the bed `bed` is continued linearly, so the drop to a missing
-/// neighbour is the bed's rise to the opposite one.
+/// Steepest downhill slope (tan) from cell `i`, at height `z_i`, to a valid neighbour `j` at
+/// height `z_to(j)`: the slope its snow would slide down (0 in a pit or on level ground). Past
+/// the border the bed `bed` is continued linearly, so the drop to a missing neighbour is the
+/// bed's rise to the opposite one.
 #[inline]
-#[allow(clippy::too_many_arguments)]
 fn steepest_descent<V: Validity>(
-    z_from: &[f32],
-    z_to: &[f32],
-    bed: &[f32],
+    z_i: f32,
+    z_to: impl Fn(usize) -> f32,
+    bed: impl Fn(usize) -> f32,
     geometry: &GridGeometry,
     valid: &V,
     nb: &[Neighbour; 8],
     i: usize,
 ) -> f32 {
     let mut best = 0.0f32;
-    for n in nb {
-        let drop = match neighbour_of(geometry, valid, n, i) {
-            Some(Around::Cell(j)) => z_from[i] - z_to[j],
-            Some(Around::Ghost(o)) => bed[o] - bed[i],
-            None => continue,
+    for_each_around(geometry, valid, nb, i, |n, a| {
+        let drop = match a {
+            Around::Cell(j) => z_i - z_to(j),
+            Around::Ghost(o) => bed(o) - bed(i),
         };
         best = best.max(drop * n.inv_l);
-    }
+    });
     best
 }
 
@@ -516,21 +639,79 @@ fn monotone(v: f32) -> u32 {
     }
 }
 
-/// Holding depth of a cell of slope `tan_slope`, metres (reduced if it received snow).
-#[inline]
-fn hold_of(params: &SheddingParams, tan_slope: f32, received: bool) -> f32 {
-    let h = params.holding_depth(f64::from(tan_slope).atan().to_degrees());
-    let h = if received {
-        (h * params.dynamic_ratio).max(params.min_holding_depth_m)
-    } else {
-        h
-    };
-    h as f32
+/// Most iterations of the root finding in [`Cascade::retained`].
+const RETAINED_ITERATIONS: usize = 40;
+
+/// Depth within which [`Cascade::retained`] settles, m: a tenth of a millimetre.
+const RETAINED_TOLERANCE_M: f32 = 1e-4;
+
+/// Segments of the [`HoldingTable`].
+const TABLE_SEGMENTS: usize = 4096;
+
+/// The holding depth as a function of the tangent of the slope, tabulated at
+/// [`TABLE_SEGMENTS`] + 1 points evenly spaced in `u = tan / (1 + tan)` (0 on level ground, 1
+/// on a vertical face) and interpolated linearly: the sweep evaluates it many times per cell
+/// (root finding), and `atan` and `exp` per evaluation cost more than the rest of the sweep. The
+/// table is within 1e-5 relative of [`SheddingParams::holding_depth`] (tested).
+struct HoldingTable {
+    /// The law without its floor at the table's points, m (the floor is applied after the
+    /// interpolation, which would otherwise round its corner).
+    depth: Vec<f32>,
+    /// Tangent of the law's lowest slope (below it the law holds its value there).
+    min_tan: f32,
+    /// `dynamic_ratio` and the floor `d_min` (m) of a cell that received snow.
+    dynamic_ratio: f32,
+    floor: f32,
 }
 
-/// The sequential sweep, highest bedrock first, with the queue of passed receivers.
+impl HoldingTable {
+    fn new(params: &SheddingParams) -> Self {
+        let depth = (0..=TABLE_SEGMENTS)
+            .map(|k| {
+                let u = k as f64 / TABLE_SEGMENTS as f64;
+                let degrees = if k == TABLE_SEGMENTS {
+                    90.0
+                } else {
+                    (u / (1.0 - u)).atan().to_degrees()
+                };
+                // Below the law's lowest slope the lookup never reads the table (the power
+                // law is infinite at 0°); the formula itself keeps the segment that straddles
+                // that slope smooth.
+                params.law_depth(degrees).min(f64::from(f32::MAX)) as f32
+            })
+            .collect();
+        Self {
+            depth,
+            min_tan: params.law_min_slope_deg().to_radians().tan() as f32,
+            dynamic_ratio: params.dynamic_ratio as f32,
+            floor: params.min_holding_depth_m as f32,
+        }
+    }
+
+    /// Holding depth of a cell of slope `tan_slope` (>= 0), metres (reduced by the dynamic
+    /// ratio, down to the floor, if it received snow).
+    #[inline]
+    fn hold(&self, tan_slope: f32, received: bool) -> f32 {
+        // NaN and negative slopes are level ground (or the law's lowest slope), an infinite
+        // one a vertical face.
+        let u = 1.0 - 1.0 / (1.0 + tan_slope.max(self.min_tan));
+        let x = u.clamp(0.0, 1.0) * TABLE_SEGMENTS as f32;
+        let k = (x as usize).min(TABLE_SEGMENTS - 1);
+        let f = x - k as f32;
+        let (a, b) = (self.depth[k], self.depth[k + 1]);
+        let h = a + f * (b - a);
+        if received && self.dynamic_ratio != 1.0 {
+            (h.max(self.floor) * self.dynamic_ratio).max(self.floor)
+        } else {
+            h.max(self.floor)
+        }
+    }
+}
+
+/// The sequential sweep in the cached order, with the queue of passed receivers.
 fn sweep<V: Validity>(
     params: &SheddingParams,
+    holding: &HoldingTable,
     terrain: &mut LayeredTerrain,
     scratch: &mut SheddingScratch,
     geometry: &GridGeometry,
@@ -546,12 +727,13 @@ fn sweep<V: Validity>(
         tan_slope,
         flags,
         queue,
+        pending,
         ..
     } = scratch;
     queue.clear();
     let budget = 16 * order.len() + 1024;
     let mut c = Cascade {
-        params,
+        holding,
         geometry,
         valid,
         nb: neighbours(geometry),
@@ -564,6 +746,7 @@ fn sweep<V: Validity>(
         flags,
         rank,
         queue,
+        pending,
         sweep: 0,
         deposit: params.deposit_layer.index(),
         power: params.flow_exponent as f32,
@@ -573,12 +756,21 @@ fn sweep<V: Validity>(
         cells_shed: 0,
     };
     let (mut revisits, mut unsettled) = (0usize, 0usize);
-    for (p, &i) in order.iter().enumerate() {
-        c.sweep = p as u32;
-        let i = i as usize;
-        if c.flags[i] & (ACTIVE | RECEIVED) != 0 {
-            c.shed(i);
+    // The pending ranks in increasing order; a cell only ever becomes pending ahead of the
+    // sweep, so one pass over the words finds them all.
+    let mut word = 0;
+    loop {
+        while word < c.pending.len() && c.pending[word] == 0 {
+            word += 1;
         }
+        let Some(bits) = c.pending.get_mut(word) else {
+            break;
+        };
+        let bit = bits.trailing_zeros() as usize;
+        *bits &= *bits - 1;
+        let p = word * 64 + bit;
+        c.sweep = p as u32;
+        c.shed(order[p] as usize);
         while let Some(entry) = c.queue.pop() {
             let j = !(entry as u32) as usize;
             // Current while the cell is queued with this surface; older entries of a cell that
@@ -614,7 +806,7 @@ fn queue_key(surface: f32, j: usize) -> u64 {
 
 /// State of the sweep.
 struct Cascade<'a, V> {
-    params: &'a SheddingParams,
+    holding: &'a HoldingTable,
     geometry: &'a GridGeometry,
     valid: &'a V,
     nb: [Neighbour; 8],
@@ -627,6 +819,7 @@ struct Cascade<'a, V> {
     flags: &'a mut [u8],
     rank: &'a [u32],
     queue: &'a mut BinaryHeap<u64>,
+    pending: &'a mut [u64],
     /// Rank of the sweep's cell.
     sweep: u32,
     deposit: usize,
@@ -655,27 +848,25 @@ impl<V: Validity> Cascade<'_, V> {
     /// (dynamic) holding depth on the slope its surface would then have, the descent from
     /// `base + d` (`base` the bedrock under the column) to its neighbours' surfaces as seen
     /// ([`Self::seen`]), or past the border the bed's. `d − D_hold(d)` increases with `d`;
-    /// bisection.
+    /// Illinois regula falsi (Dowell & Jarratt 1971) keeps a bracket of the root and stops
+    /// within 0.1 mm (of depth, or of the root's residual), returning the held end.
     fn retained(&self, i: usize, base: f32, depth: f32) -> f32 {
         let mut fixed = 0.0f32;
         let mut rises = [(0.0f32, 0.0f32); 8];
         let mut m = 0;
-        for n in &self.nb {
-            match neighbour_of(self.geometry, self.valid, n, i) {
-                Some(Around::Cell(j)) => {
-                    rises[m] = (base - self.seen(j), n.inv_l);
-                    m += 1;
-                }
-                Some(Around::Ghost(o)) => fixed = fixed.max((self.bed[o] - self.bed[i]) * n.inv_l),
-                None => {}
+        for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| match a {
+            Around::Cell(j) => {
+                rises[m] = (base - self.seen(j), n.inv_l);
+                m += 1;
             }
-        }
+            Around::Ghost(o) => fixed = fixed.max((self.bed[o] - self.bed[i]) * n.inv_l),
+        });
         let rises = &rises[..m];
         let hold = |d: f32| {
             let slope = rises
                 .iter()
                 .fold(fixed, |s, &(c, inv_l)| s.max((c + d) * inv_l));
-            hold_of(self.params, slope, true)
+            self.holding.hold(slope, true)
         };
         let at_depth = hold(depth);
         if depth <= at_depth {
@@ -685,13 +876,32 @@ impl<V: Validity> Cascade<'_, V> {
         if at_zero == at_depth {
             return at_depth;
         }
+        // Illinois regula falsi on g(d) = d − D_hold(d), negative at 0 and positive at
+        // `depth`; the bracket `[lo, hi]` always holds the root, `lo` is held.
         let (mut lo, mut hi) = (0.0f32, depth);
-        for _ in 0..24 {
-            let mid = 0.5 * (lo + hi);
-            if mid > hold(mid) {
-                hi = mid;
+        let (mut g_lo, mut g_hi) = (-at_zero, depth - at_depth);
+        let mut side = 0i8;
+        for _ in 0..RETAINED_ITERATIONS {
+            if hi - lo <= RETAINED_TOLERANCE_M || g_lo >= 0.0 {
+                break;
+            }
+            let x = (hi - g_hi * (hi - lo) / (g_hi - g_lo)).clamp(lo, hi);
+            let g = x - hold(x);
+            if g > 0.0 {
+                (hi, g_hi) = (x, g);
+                if side == 1 {
+                    g_lo *= 0.5;
+                }
+                side = 1;
             } else {
-                lo = mid;
+                (lo, g_lo) = (x, g);
+                if side == -1 {
+                    g_hi *= 0.5;
+                }
+                side = -1;
+                if g > -RETAINED_TOLERANCE_M {
+                    break;
+                }
             }
         }
         lo
@@ -708,7 +918,7 @@ impl<V: Validity> Cascade<'_, V> {
             if self.tan_slope[i] < self.tan_min {
                 return;
             }
-            hold_of(self.params, self.tan_slope[i], false)
+            self.holding.hold(self.tan_slope[i], false)
         };
         let mut left = depth - keep;
         for _ in 0..ROUNDS {
@@ -734,22 +944,26 @@ impl<V: Validity> Cascade<'_, V> {
         let mut targets = [(Around::Ghost(0), 0.0f32, f32::INFINITY); 8];
         let mut count = 0;
         let mut total = 0.0f32;
+        // Each neighbour with the surface the sender sees there, whether it limits the amount
+        // (a receiver the sweep has passed) and `1 / distance`.
+        let mut seen_around = [(Around::Ghost(0), 0.0f32, false, 0.0f32); 8];
+        let mut m = 0;
+        for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| {
+            seen_around[m] = match a {
+                Around::Cell(j) if self.rank[j] > self.sweep => {
+                    (a, self.surface0[j], false, n.inv_l)
+                }
+                Around::Cell(j) => (a, self.surface[j], true, n.inv_l),
+                Around::Ghost(o) => (a, a_i - (self.bed[o] - self.bed[i]), false, n.inv_l),
+            };
+            m += 1;
+        });
         for after in [a_i - excess, a_i] {
-            for n in &self.nb {
-                let (target, seen, limit_of) = match neighbour_of(self.geometry, self.valid, n, i) {
-                    Some(Around::Cell(j)) if self.rank[j] > self.sweep => {
-                        (Around::Cell(j), self.surface0[j], false)
-                    }
-                    Some(Around::Cell(j)) => (Around::Cell(j), self.surface[j], true),
-                    Some(Around::Ghost(o)) => {
-                        (Around::Ghost(o), a_i - (self.bed[o] - self.bed[i]), false)
-                    }
-                    None => continue,
-                };
+            for &(target, seen, limit_of, inv_l) in &seen_around[..m] {
                 // A neighbour within a millimetre is level (and would cut the round to nothing).
                 let drop = after - seen;
                 if drop > LEVEL_M {
-                    let t = drop * n.inv_l;
+                    let t = drop * inv_l;
                     let wt = if self.power == 1.0 {
                         t
                     } else {
@@ -805,9 +1019,13 @@ impl<V: Validity> Cascade<'_, V> {
                     self.snow[self.deposit][j] += share;
                     self.surface[j] += share;
                     self.received += f64::from(share);
-                    self.flags[j] |= RECEIVED;
                     // A receiver the sweep has passed is queued with its new surface (an older
                     // entry goes stale); the sweep reaches the others.
+                    if self.rank[j] > self.sweep && self.flags[j] & (ACTIVE | RECEIVED) == 0 {
+                        let p = self.rank[j] as usize;
+                        self.pending[p / 64] |= 1 << (p % 64);
+                    }
+                    self.flags[j] |= RECEIVED;
                     if self.rank[j] <= self.sweep {
                         self.flags[j] |= QUEUED;
                         self.queue.push(queue_key(self.surface[j], j));

@@ -703,6 +703,7 @@ impl Winter {
         if event.kind == EventKind::MeltAndStateStep
             && self.scenario.parameters.slope_shedding.enabled
         {
+            let shed_t = Instant::now();
             let r = crate::slope_shedding::step(
                 &self.scenario.parameters.slope_shedding,
                 &mut self.terrain,
@@ -716,6 +717,9 @@ impl Winter {
             })?;
             self.state.budget.shedding_outflow += r.border_outflow_m3;
             self.state.budget.shedding_moved += r.moved_m3;
+            let shed_s = shed_t.elapsed().as_secs_f64();
+            *self.wall_seconds.entry("slope_shedding").or_default() += shed_s;
+            *self.wall_seconds.entry(name).or_default() -= shed_s;
         }
         self.fade_tracks(depth_before)?;
         if matches!(

@@ -13,7 +13,7 @@ mod transport;
 pub use avalanche::avalanche_kernels;
 pub use io::io_kernels;
 pub use render::render_kernels;
-pub use season::season_kernels;
+pub use season::{SEASON_DAYS, season_kernels};
 pub use snowpack::snowpack_kernels;
 pub use terrain::{sample_terrain, terrain_kernels};
 pub use transport::transport_kernels;

@@ -348,3 +348,97 @@ fn extreme_roughness_still_conserves_snow() {
     assert!((before - r.border_outflow_m3 - t.snow_volume()).abs() < 1e-6 * before);
     assert!((r.moved_m3 - r.received_m3 - r.border_outflow_m3).abs() < 1e-6 * r.moved_m3);
 }
+
+#[test]
+fn the_holding_table_follows_both_laws_within_1e_5() {
+    for law in [HoldingLaw::Exponential, HoldingLaw::PowerLaw] {
+        let p = SheddingParams {
+            law,
+            dynamic_ratio: 0.3,
+            ..SheddingParams::default()
+        };
+        let table = HoldingTable::new(&p);
+        for k in 0..=9000 {
+            let deg = k as f64 * 0.01;
+            let tan = deg.to_radians().tan() as f32;
+            let exact = p.holding_depth(deg);
+            let got = f64::from(table.hold(tan, false));
+            assert!(
+                (got - exact).abs() <= 1e-5 * exact,
+                "{law:?} {deg}°: {got} vs {exact}"
+            );
+            let dynamic = (exact * 0.3).max(p.min_holding_depth_m);
+            let got = f64::from(table.hold(tan, true));
+            assert!(
+                (got - dynamic).abs() <= 1e-5 * dynamic,
+                "{law:?} {deg}° received"
+            );
+        }
+        assert_eq!(
+            table.hold(f32::INFINITY, false),
+            p.holding_depth(90.0) as f32
+        );
+        assert_eq!(table.hold(f32::NAN, false), table.hold(0.0, false));
+    }
+}
+
+#[test]
+fn the_slope_bound_passes_over_no_cell_that_sheds() {
+    // Rough terrain with compacted snow of every depth and a ragged nodata outline: the cells
+    // the bound lets through must be exactly those a full evaluation of every cell finds.
+    let geo = GridGeometry::new(61, 47, 2.0, 3.0).unwrap();
+    let n = geo.len();
+    let invalid: Vec<bool> = (0..n).map(|i| uniform(8, 9, i as u64) < 0.05).collect();
+    let bed = Grid::new(
+        geo.clone(),
+        (0..n)
+            .map(|i| {
+                let (c, r) = geo.col_row(i);
+                (2500.0
+                    + 30.0 * ((c as f64 * 0.5).sin() * (r as f64 * 0.4).cos())
+                    + 6.0 * uniform(8, 0, i as u64)) as f32
+            })
+            .collect(),
+        NodataMask::from_invalid(invalid.clone()),
+    )
+    .unwrap();
+    let mut t = LayeredTerrain::from_bedrock(bed);
+    for i in (0..n).filter(|&i| !invalid[i]) {
+        for (k, layer) in SnowLayer::ALL.into_iter().enumerate() {
+            t.layer_mut(layer)[i] = (uniform(8, 1 + k as u64, i as u64) * 1.5) as f32;
+        }
+    }
+    for min_slope_deg in [30.0, 50.0, 60.0, 75.0] {
+        let p = SheddingParams {
+            min_slope_deg,
+            ..SheddingParams::default()
+        };
+        let holding = HoldingTable::new(&p);
+        let mut scratch = SheddingScratch::default();
+        scratch.refresh_order(&t);
+        let tan_min = min_slope_deg.to_radians().tan() as f32;
+        let found = with_validity!(t.mask(), |valid| over_holding_depth(
+            &p, &holding, &t, &scratch, &geo, valid, tan_min
+        ));
+        // Every cell, no bound.
+        let nb = neighbours(&geo);
+        let bed: Vec<f32> = (0..n).map(|i| t.bedrock[i] + t.snow[0][i]).collect();
+        let surf = t.surface();
+        let mut all = Vec::new();
+        with_validity!(t.mask(), |valid| {
+            for i in (0..n).filter(|&i| valid.at(i)) {
+                let b = |j: usize| bed[j];
+                let on_bed = steepest_descent(bed[i], b, b, &geo, valid, &nb, i);
+                let on_snow = steepest_descent(surf[i], |j| surf[j], b, &geo, valid, &nb, i);
+                let tan = on_bed.min(on_snow);
+                let depth = t.depth_at(i);
+                let excess = depth - holding.hold(tan, false);
+                if tan >= tan_min && excess > MIN_SHED_M {
+                    all.push((i as u32, tan, excess));
+                }
+            }
+        });
+        assert!(!all.is_empty(), "{min_slope_deg}°");
+        assert_eq!(found, all, "{min_slope_deg}°");
+    }
+}

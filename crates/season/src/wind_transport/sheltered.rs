@@ -182,6 +182,7 @@ pub(super) fn run<V: Validity>(
     let hop = fx * dx * ex.abs() + (1.0 - fx) * dy * ey.abs();
     let rate_open = hop / params.settling_length_m;
     let rate_shelter = hop * params.k_deposit;
+    let keep_open = (1.0 - (-rate_open).exp()) as f32;
     let scour_dt = (params.k_exposed * dt_days) as f32;
     let inv_ref = (1.0 / params.reference_speed_m_s) as f32;
     let expo = params.speed_exponent as f32;
@@ -212,7 +213,9 @@ pub(super) fn run<V: Validity>(
                     continue;
                 }
                 let s = sx[i];
-                let speed = wind.u[i].hypot(wind.v[i]) * inv_ref;
+                // Wind speeds are far from overflow: the plain norm, not the slower `hypot`.
+                let (u, v) = (wind.u[i], wind.v[i]);
+                let speed = (u * u + v * v).sqrt() * inv_ref;
                 let factor = if expo == 3.0 {
                     speed * speed * speed
                 } else {
@@ -222,8 +225,12 @@ pub(super) fn run<V: Validity>(
                 let exposure = (exposed - s).max(0.0);
                 let e = (scour_dt * exposure * factor).min(available).max(0.0);
                 sc[col] = if wind.shadow[i] > 0.5 { 0.0 } else { e };
-                let shelter = f64::from((s - sheltered).max(0.0));
-                kp[col] = (1.0 - (-(rate_open + rate_shelter * shelter)).exp()) as f32;
+                let shelter = f64::from(s - sheltered);
+                kp[col] = if shelter > 0.0 {
+                    (1.0 - (-(rate_open + rate_shelter * shelter)).exp()) as f32
+                } else {
+                    keep_open
+                };
                 sl[col] = gr[col] > ctx.slab_gradient;
             }
         });
