@@ -24,6 +24,9 @@ bin=target/release/snowscape
 "$bin" --quiet bench --size 256 --repeats 2 --out "$scratch/bench.json"
 "$bin" --quiet demo --size 128 --days 5 --frames 3 --out "$scratch/demo"
 test -s "$scratch/demo/report.json"
+# The season's phase timings and the shedding timing at a reduced size (so the example never rots).
+target/release/examples/season_phases 128 > /dev/null
+target/release/examples/season_phases 128 shed > /dev/null
 bash scripts/browser-tests.sh 2>&1 | tee -a "$log"
 passed=$(grep -Eo '^test result: ok\. [0-9]+ passed' "$log" | awk '{s += $4} END {print s + 0}')
 failed=$(grep -Eo '[0-9]+ failed' "$log" | awk '{s += $1} END {print s + 0}')
