@@ -93,7 +93,7 @@
 
 use crate::VolumeChange;
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, check_finite, fill_surface, with_validity,
+    PhenomenonError, Validity, check_at_least, check_dt, check_finite, with_validity,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -439,17 +439,37 @@ pub fn step(
     if active.is_empty() {
         return Ok(SheddingReport::default());
     }
-    scratch.bed.resize(n, 0.0);
+    // The bed, the surface at the start and the surface of the sweep, in one pass (the same
+    // sums as `LayeredTerrain::surface`), with the flags cleared.
+    let w = geometry.width();
+    for v in [
+        &mut scratch.bed,
+        &mut scratch.surface0,
+        &mut scratch.surface,
+    ] {
+        v.resize(n, 0.0);
+    }
+    scratch.flags.resize(n, 0);
+    let [c, st, u, pw] = &terrain.snow;
     scratch
         .bed
-        .par_iter_mut()
-        .zip(terrain.bedrock.par_iter().zip(terrain.snow[0].par_iter()))
-        .for_each(|(a, (b, c))| *a = b + c);
-    fill_surface(terrain, &mut scratch.surface0);
-    scratch.surface.clone_from(&scratch.surface0);
+        .par_chunks_mut(w)
+        .zip(scratch.surface0.par_chunks_mut(w))
+        .zip(scratch.surface.par_chunks_mut(w))
+        .zip(scratch.flags.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(row, (((bed, s0), s), fl))| {
+            let o = row * w;
+            for k in 0..bed.len() {
+                let i = o + k;
+                let b = terrain.bedrock[i];
+                bed[k] = b + c[i];
+                s0[k] = b + (c[i] + st[i] + u[i] + pw[i]);
+                s[k] = s0[k];
+                fl[k] = 0;
+            }
+        });
     scratch.tan_slope.resize(n, 0.0);
-    scratch.flags.clear();
-    scratch.flags.resize(n, 0);
     scratch.pending.clear();
     scratch.pending.resize(n.div_ceil(64), 0);
     // What the neighbours above expect a cell to keep: its surface less its own excess.
