@@ -14,7 +14,17 @@ use snowscape_season::scenario::Scenario;
 use snowscape_season::snowfall::SnowfallModel;
 use snowscape_season::winter::Winter;
 use snowscape_terrain::LayeredTerrain;
+use std::io::Write;
 use std::time::Instant;
+
+/// A line on stdout; a closed pipe (`| head`) ends the output quietly instead of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        if writeln!(std::io::stdout(), $($arg)*).is_err() {
+            std::process::exit(0);
+        }
+    };
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -43,14 +53,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t = Instant::now();
     winter.run_until(SEASON_DAYS)?;
     let season = t.elapsed().as_secs_f64();
-    println!(
+    say!(
         "{size}² {}: setup {setup:.2} s, season {season:.2} s",
         if paper { "paper" } else { "defaults" }
     );
     let mut phases: Vec<_> = winter.wall_seconds.iter().collect();
     phases.sort_by(|a, b| b.1.total_cmp(a.1));
     for (name, s) in phases {
-        println!("  {name:<20} {s:8.3} s");
+        say!("  {name:<20} {s:8.3} s");
     }
     // A fingerprint of the final snow cover (to check that an optimisation changed no bits).
     let mut hash = 0xcbf2_9ce4_8422_2325u64;
@@ -59,9 +69,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             hash = (hash ^ u64::from(v.to_bits())).wrapping_mul(0x0100_0000_01b3);
         }
     }
-    println!("  snow cover fingerprint {hash:016x}");
+    say!("  snow cover fingerprint {hash:016x}");
     for (kind, n) in winter.event_counts() {
-        println!("  events {kind:?}: {n}");
+        say!("  events {kind:?}: {n}");
     }
     Ok(())
 }
@@ -74,7 +84,7 @@ fn time_shedding(terrain: snowscape_terrain::Grid) -> Result<(), Box<dyn std::er
     let (p, mut scratch) = (SheddingParams::default(), SheddingScratch::default());
     let clock = Instant::now();
     let first = step(&p, &mut t, &mut scratch, 0.5)?;
-    println!(
+    say!(
         "first step {:.3} s: {first:?}",
         clock.elapsed().as_secs_f64()
     );
@@ -86,7 +96,7 @@ fn time_shedding(terrain: snowscape_terrain::Grid) -> Result<(), Box<dyn std::er
             .for_each(|d| *d += 0.02);
         last = step(&p, &mut t, &mut scratch, 0.5)?;
     }
-    println!(
+    say!(
         "after 2 cm: {:.3} s per step: {last:?}",
         clock.elapsed().as_secs_f64() / 10.0
     );
