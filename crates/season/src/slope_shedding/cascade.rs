@@ -1,0 +1,362 @@
+//! The sequential sweep of slope shedding (see the parent module's documentation: order,
+//! routing, the no-overtaking limit and the queue of passed receivers).
+
+use super::*;
+
+/// Most iterations of the root finding in [`Cascade::retained`].
+const RETAINED_ITERATIONS: usize = 40;
+
+/// Depth within which [`Cascade::retained`] settles, m: a tenth of a millimetre.
+const RETAINED_TOLERANCE_M: f32 = 1e-4;
+
+/// The sequential sweep in the cached order, with the queue of passed receivers.
+pub(super) fn sweep<V: Validity>(
+    params: &SheddingParams,
+    holding: &HoldingTable,
+    terrain: &mut LayeredTerrain,
+    scratch: &mut SheddingScratch,
+    geometry: &GridGeometry,
+    valid: &V,
+    tan_min: f32,
+) -> SheddingReport {
+    let SheddingScratch {
+        order,
+        rank,
+        bed,
+        surface0,
+        surface,
+        tan_slope,
+        flags,
+        queue,
+        pending,
+        ..
+    } = scratch;
+    queue.clear();
+    let budget = 16 * order.len() + 1024;
+    let mut c = Cascade {
+        holding,
+        geometry,
+        valid,
+        nb: neighbours(geometry),
+        snow: &mut terrain.snow,
+        bed,
+        surface0,
+        surface,
+        tan_slope,
+        tan_min,
+        flags,
+        rank,
+        queue,
+        pending,
+        sweep: 0,
+        deposit: params.deposit_layer.index(),
+        power: params.flow_exponent as f32,
+        moved: 0.0,
+        received: 0.0,
+        border: 0.0,
+        cells_shed: 0,
+    };
+    let (mut revisits, mut unsettled) = (0usize, 0usize);
+    // The pending ranks in increasing order; a cell only ever becomes pending ahead of the
+    // sweep, so one pass over the words finds them all.
+    let mut word = 0;
+    loop {
+        while word < c.pending.len() && c.pending[word] == 0 {
+            word += 1;
+        }
+        let Some(bits) = c.pending.get_mut(word) else {
+            break;
+        };
+        let bit = bits.trailing_zeros() as usize;
+        *bits &= *bits - 1;
+        let p = word * 64 + bit;
+        c.sweep = p as u32;
+        c.shed(order[p] as usize);
+        while let Some(entry) = c.queue.pop() {
+            let j = !(entry as u32) as usize;
+            // Current while the cell is queued with this surface; older entries of a cell that
+            // received snow again since are skipped.
+            if c.flags[j] & QUEUED == 0 || entry != queue_key(c.surface[j], j) {
+                continue;
+            }
+            c.flags[j] &= !QUEUED;
+            if revisits >= budget {
+                unsettled += 1;
+                continue;
+            }
+            revisits += 1;
+            c.shed(j);
+        }
+    }
+    let area = geometry.cell_area();
+    SheddingReport {
+        moved_m3: c.moved * area,
+        received_m3: c.received * area,
+        border_outflow_m3: c.border * area,
+        cells_shed: c.cells_shed,
+        revisits,
+        unsettled_cells: unsettled,
+    }
+}
+
+/// Queue key of cell `j`: the highest snow surface first, ties by the lower index.
+#[inline]
+fn queue_key(surface: f32, j: usize) -> u64 {
+    (u64::from(monotone(surface)) << 32) | u64::from(!(j as u32))
+}
+
+/// State of the sweep.
+struct Cascade<'a, V> {
+    holding: &'a HoldingTable,
+    geometry: &'a GridGeometry,
+    valid: &'a V,
+    nb: [Neighbour; 8],
+    snow: &'a mut [Vec<f32>; 4],
+    bed: &'a [f32],
+    surface0: &'a [f32],
+    surface: &'a mut [f32],
+    tan_slope: &'a [f32],
+    tan_min: f32,
+    flags: &'a mut [u8],
+    rank: &'a [u32],
+    queue: &'a mut BinaryHeap<u64>,
+    pending: &'a mut [u64],
+    /// Rank of the sweep's cell.
+    sweep: u32,
+    deposit: usize,
+    power: f32,
+    /// Depths (m) summed over cells.
+    moved: f64,
+    received: f64,
+    border: f64,
+    cells_shed: usize,
+}
+
+impl<V: Validity> Cascade<'_, V> {
+    /// Surface of neighbour `j` as seen by a sender: the current one once the sweep has passed
+    /// it (its snow rests), before that the one it is expected to keep (its surface at the
+    /// start of the step less its own excess; its receipts are in transit).
+    #[inline]
+    fn seen(&self, j: usize) -> f32 {
+        if self.rank[j] > self.sweep {
+            self.surface0[j]
+        } else {
+            self.surface[j]
+        }
+    }
+
+    /// Depth a cell that received snow keeps, m: the `d` in `[0, depth]` that equals its
+    /// (dynamic) holding depth on the slope its surface would then have, the descent from
+    /// `base + d` (`base` the bedrock under the column) to its neighbours' surfaces as seen
+    /// ([`Self::seen`]), or past the border the bed's. `d − D_hold(d)` increases with `d`;
+    /// Illinois regula falsi (Dowell & Jarratt 1971) keeps a bracket of the root and stops
+    /// within 0.1 mm (of depth, or of the root's residual), returning the held end.
+    fn retained(&self, i: usize, base: f32, depth: f32) -> f32 {
+        let mut fixed = 0.0f32;
+        let mut rises = [(0.0f32, 0.0f32); 8];
+        let mut m = 0;
+        for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| match a {
+            Around::Cell(j) => {
+                rises[m] = (base - self.seen(j), n.inv_l);
+                m += 1;
+            }
+            Around::Ghost(o) => fixed = fixed.max((self.bed[o] - self.bed[i]) * n.inv_l),
+        });
+        let rises = &rises[..m];
+        let hold = |d: f32| {
+            let slope = rises
+                .iter()
+                .fold(fixed, |s, &(c, inv_l)| s.max((c + d) * inv_l));
+            self.holding.hold(slope, true)
+        };
+        let at_depth = hold(depth);
+        if depth <= at_depth {
+            return depth;
+        }
+        let at_zero = hold(0.0);
+        if at_zero == at_depth {
+            return at_depth;
+        }
+        // Illinois regula falsi on g(d) = d − D_hold(d), negative at 0 and positive at
+        // `depth`; the bracket `[lo, hi]` always holds the root, `lo` is held.
+        let (mut lo, mut hi) = (0.0f32, depth);
+        let (mut g_lo, mut g_hi) = (-at_zero, depth - at_depth);
+        let mut side = 0i8;
+        for _ in 0..RETAINED_ITERATIONS {
+            if hi - lo <= RETAINED_TOLERANCE_M || g_lo >= 0.0 {
+                break;
+            }
+            let x = (hi - g_hi * (hi - lo) / (g_hi - g_lo)).clamp(lo, hi);
+            let g = x - hold(x);
+            if g > 0.0 {
+                (hi, g_hi) = (x, g);
+                if side == 1 {
+                    g_lo *= 0.5;
+                }
+                side = 1;
+            } else {
+                (lo, g_lo) = (x, g);
+                if side == -1 {
+                    g_hi *= 0.5;
+                }
+                side = -1;
+                if g > -RETAINED_TOLERANCE_M {
+                    break;
+                }
+            }
+        }
+        lo
+    }
+
+    /// Sheds cell `i`'s excess, if any. A round cut short by a receiver it would overtake is
+    /// followed by another without it, at most [`ROUNDS`] in all.
+    fn shed(&mut self, i: usize) {
+        let s = &self.snow;
+        let depth = s[0][i] + s[1][i] + s[2][i] + s[3][i];
+        let keep = if self.flags[i] & RECEIVED != 0 {
+            self.retained(i, self.surface[i] - depth, depth)
+        } else {
+            if self.tan_slope[i] < self.tan_min {
+                return;
+            }
+            self.holding.hold(self.tan_slope[i], false)
+        };
+        let mut left = depth - keep;
+        for _ in 0..ROUNDS {
+            if left <= MIN_SHED_M {
+                return;
+            }
+            let (removed, limited) = self.shed_round(i, left);
+            left -= removed;
+            if removed <= 0.0 || !limited {
+                return;
+            }
+        }
+    }
+
+    /// One round: sends up to `excess` to the lower neighbours; returns the depth removed and
+    /// whether the no-overtaking limit cut it.
+    fn shed_round(&mut self, i: usize, excess: f32) -> (f32, bool) {
+        let a_i = self.surface[i];
+        // The directions: drops from the surface the sender will have once its excess is
+        // gone, so that snow in transit over a slope runs down it rather than spilling
+        // sideways onto the neighbours that already shed; from its current surface if none is
+        // lower than that (a pile on level ground).
+        let mut targets = [(Around::Ghost(0), 0.0f32, f32::INFINITY); 8];
+        let mut count = 0;
+        let mut total = 0.0f32;
+        // Each neighbour with the surface the sender sees there, whether it limits the amount
+        // (a receiver the sweep has passed) and `1 / distance`.
+        let mut seen_around = [(Around::Ghost(0), 0.0f32, false, 0.0f32); 8];
+        let mut m = 0;
+        for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| {
+            seen_around[m] = match a {
+                Around::Cell(j) if self.rank[j] > self.sweep => {
+                    (a, self.surface0[j], false, n.inv_l)
+                }
+                Around::Cell(j) => (a, self.surface[j], true, n.inv_l),
+                Around::Ghost(o) => (a, a_i - (self.bed[o] - self.bed[i]), false, n.inv_l),
+            };
+            m += 1;
+        });
+        for after in [a_i - excess, a_i] {
+            for &(target, seen, limit_of, inv_l) in &seen_around[..m] {
+                // A neighbour within a millimetre is level (and would cut the round to nothing).
+                let drop = after - seen;
+                if drop > LEVEL_M {
+                    let t = drop * inv_l;
+                    let wt = if self.power == 1.0 {
+                        t
+                    } else {
+                        t.powf(self.power)
+                    };
+                    if wt > 0.0 {
+                        let limit = if limit_of { a_i - seen } else { f32::INFINITY };
+                        targets[count] = (target, wt, limit);
+                        count += 1;
+                        total += wt;
+                    }
+                }
+            }
+            if count > 0 {
+                break;
+            }
+        }
+        if count == 0 || total.is_nan() || total <= 0.0 {
+            return (0.0, false);
+        }
+        // Never leave the sender below a receiver the sweep has passed (one it has not
+        // reached will pass the snow on when it does).
+        let mut amount = excess;
+        for &(_, wt, limit) in &targets[..count] {
+            amount = amount.min(limit / (1.0 + wt / total));
+        }
+        let limited = amount < excess;
+        if amount <= MIN_SHED_M {
+            return (0.0, false);
+        }
+        let removed = take(self.snow, i, amount);
+        self.surface[i] -= removed;
+        self.moved += f64::from(removed);
+        if self.flags[i] & SHED == 0 {
+            self.flags[i] |= SHED;
+            self.cells_shed += 1;
+        }
+        // Shares in neighbour order, the last one taking the rest, so they sum to `removed`.
+        let mut left = removed;
+        for (k, &(target, wt, _)) in targets[..count].iter().enumerate() {
+            let share = if k + 1 == count {
+                left
+            } else {
+                (removed * (wt / total)).min(left)
+            };
+            left -= share;
+            if share <= 0.0 {
+                continue;
+            }
+            match target {
+                Around::Ghost(_) => self.border += f64::from(share),
+                Around::Cell(j) => {
+                    self.snow[self.deposit][j] += share;
+                    self.surface[j] += share;
+                    self.received += f64::from(share);
+                    // A receiver the sweep has passed is queued with its new surface (an older
+                    // entry goes stale); the sweep reaches the others.
+                    if self.rank[j] > self.sweep && self.flags[j] & (ACTIVE | RECEIVED) == 0 {
+                        let p = self.rank[j] as usize;
+                        self.pending[p / 64] |= 1 << (p % 64);
+                    }
+                    self.flags[j] |= RECEIVED;
+                    if self.rank[j] <= self.sweep {
+                        self.flags[j] |= QUEUED;
+                        self.queue.push(queue_key(self.surface[j], j));
+                    }
+                }
+            }
+        }
+        (removed, limited)
+    }
+}
+
+/// Removes `amount` m from the top of cell `i` (powder, unstable, stable, compacted); returns
+/// the depth removed.
+fn take(snow: &mut [Vec<f32>; 4], i: usize, amount: f32) -> f32 {
+    let mut left = amount;
+    let mut removed = 0.0;
+    for layer in [
+        SnowLayer::Powder,
+        SnowLayer::Unstable,
+        SnowLayer::Stable,
+        SnowLayer::Compacted,
+    ] {
+        let v = &mut snow[layer.index()][i];
+        let t = left.min(*v);
+        *v -= t;
+        removed += t;
+        left -= t;
+        if left <= 0.0 {
+            break;
+        }
+    }
+    removed
+}
