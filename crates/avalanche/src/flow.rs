@@ -71,9 +71,12 @@
 //! cells, and per-row sums are added in row order (within a row, cell by cell), so results are
 //! bit-identical for any thread count and with or without the four-lane kernels.
 
+mod footprint;
 mod lanes;
 mod settle;
 mod tiles;
+
+pub use footprint::BedSource;
 
 use lanes::{Lanes, ld};
 use rayon::prelude::*;
@@ -228,6 +231,9 @@ pub enum AvalancheError {
         /// Terrain height.
         terrain_height: usize,
     },
+    /// A state that reads its bed from the terrain was stepped without one.
+    #[error("this avalanche state reads its bed from the terrain: step it with `step_on`")]
+    BedSourceMissing,
     /// The sub-step limit was reached before the step was done.
     #[error("avalanche step stopped after {done} sub-steps with {remaining} s of {dt} s left")]
     TooManySubsteps {
@@ -282,6 +288,11 @@ impl ActiveBox {
     }
 }
 
+/// Cells of the active set (grown by 3) from which a sub-step runs its passes on all worker
+/// threads (measured on the 2-core development machine: a sub-step costs ~0.2 µs per cell,
+/// a fork and join of both passes ~20-50 µs).
+const PARALLEL_MIN_CELLS: usize = 8192;
+
 /// Rows per block of the pipe pass.
 const BLOCK: usize = 16;
 
@@ -330,6 +341,8 @@ pub struct AvalancheState {
     near_wall: Vec<bool>,
     /// Pipe lengths, widths and directions of the grid.
     pg: PipeGeometry,
+    /// The tiles this run touched; whether the bed is read lazily.
+    pub(crate) footprint: footprint::Footprint,
 }
 
 impl AvalancheState {
@@ -397,6 +410,7 @@ impl AvalancheState {
             maxima: (0.0, 0.0),
             near_wall,
             pg: PipeGeometry::new(geometry, ph),
+            footprint: footprint::Footprint::new(pw.div_ceil(TILE) * ph.div_ceil(TILE), false),
         })
     }
 
@@ -494,6 +508,13 @@ impl AvalancheState {
             return Ok(());
         }
         self.h[k] += dh;
+        self.mark_content(k);
+        Ok(())
+    }
+
+    /// Adds padded cell `k`, which received snow, to the active set (its tile touched) and
+    /// to the CFL maxima.
+    pub(crate) fn mark_content(&mut self, k: usize) {
         self.maxima.1 = self.maxima.1.max(self.wave_speed(k));
         let (r, c) = (k / self.pw, k % self.pw);
         self.tiles.add(r, c, c);
@@ -513,7 +534,7 @@ impl AvalancheState {
                 c1: b.c1.max(cell.c1),
             },
         });
-        Ok(())
+        self.touch_tile((r / TILE) * self.tiles.ntx() + c / TILE);
     }
 
     /// Flowing volume on the grid, m³ (rows summed in order).
@@ -650,6 +671,9 @@ impl AvalancheState {
         }
         self.maxima = (umax, wave.max(umax));
         self.active = self.tiles.bbox().map(|b| b.grown(self.pw, self.ph));
+        for o in 0..self.tiles.occupied().len() {
+            self.touch_tile(self.tiles.occupied()[o] as usize);
+        }
     }
 }
 
@@ -726,6 +750,18 @@ pub fn step(
     scratch: &mut AvalancheScratch,
     dt: f64,
 ) -> Result<AvalancheReport, AvalancheError> {
+    step_on(params, state, scratch, dt, None)
+}
+
+/// [`step`] on a state that reads its bed from `bed` where the flow goes (a season's
+/// persistent state; `None` for a state that holds its whole bed).
+pub fn step_on(
+    params: &AvalancheParams,
+    state: &mut AvalancheState,
+    scratch: &mut AvalancheScratch,
+    dt: f64,
+    bed: Option<&dyn BedSource>,
+) -> Result<AvalancheReport, AvalancheError> {
     params.validate()?;
     if !(dt.is_finite() && dt >= 0.0) {
         return Err(AvalancheError::InvalidTimeStep(dt));
@@ -768,6 +804,7 @@ pub fn step(
         if dt - elapsed - sub < 1e-9 * dt {
             sub = dt - elapsed;
         }
+        state.touch_around_content(bed)?;
         let s = substep(params, &pg, state, scratch, sub);
         report.moved_volume += s.moved;
         report.border_outflow += s.outflow;
@@ -784,7 +821,18 @@ pub fn step(
         elapsed += sub;
     }
     if report.substeps == 0 {
-        report.flowing_cells = state.h.iter().filter(|&&v| v > 0.0).count();
+        report.flowing_cells = state
+            .content_cells()
+            .map(|(r0, r1, c0, c1)| {
+                (r0..=r1)
+                    .map(|r| {
+                        (c0..=c1)
+                            .filter(|&c| state.thickness_at(c, r) > 0.0)
+                            .count()
+                    })
+                    .sum::<usize>()
+            })
+            .sum();
     }
     Ok(report)
 }
@@ -941,6 +989,22 @@ fn rows_of<const N: usize>(arrays: [&mut [f64]; N], len: usize) -> Vec<[&mut [f6
         .collect()
 }
 
+/// A block of the pipe pass: its index, its new pipes and raw volumes (4 directions each), its
+/// outflow factors.
+type BlockItem<'a, 'b> = (
+    usize,
+    (
+        (&'a mut [&'b mut [f64]; 4], &'a mut [&'b mut [f64]; 4]),
+        &'a mut [&'b mut [f64]; 1],
+    ),
+);
+
+/// A row of the thickness pass: its index, thickness, pipes (4 directions) and tile ranges.
+type RowItem<'a> = (
+    usize,
+    ((&'a mut [f64], [&'a mut [f64]; 4]), &'a mut [[u32; 2]]),
+);
+
 /// One sub-step over the active set.
 ///
 /// Regions (`C` = the cells with snow or a moving owned pipe, `C+m` grown by `m` cells): new
@@ -969,6 +1033,9 @@ fn substep(
         seg2,
     } = scratch;
     let (seg3, seg2) = (&*seg3, &*seg2);
+    // A small flow runs on the calling thread: below this many cells the fork and join of
+    // the two passes cost more than the second core saves.
+    let parallel = seg3.cells >= PARALLEL_MIN_CELLS;
     let (r0, nr) = (seg3.r0, seg3.rows());
     let rows = r0 * pw..(r0 + nr) * pw;
     let empty: &[f64] = &[];
@@ -1007,90 +1074,99 @@ fn substep(
         let frows = (r0 + 1).min(ph) * pw..(end + 1).min(ph) * pw;
         let mut fac = rows_of([&mut factor[frows]], BLOCK * pw);
         fac.resize_with(nb, || [&mut []]);
-        np.par_iter_mut()
-            .zip(fl.par_iter_mut())
-            .zip(fac.par_iter_mut())
-            .enumerate()
-            .for_each(|(bi, ((np, fl), [fac]))| {
-                let b0 = r0 + bi * BLOCK;
-                let b1 = b0 + np[0].len() / pw;
-                // Pipes of row `b1` too, but in the last block.
-                let halo = b1 < end;
-                let v0 = b0.saturating_sub(1);
-                let v1 = (b1 + 1 + halo as usize).min(ph - 1);
-                let len = (v1 - v0 + 1) * pw;
-                BLOCK_ROWS.with_borrow_mut(|bb| {
-                    let BlockRows {
-                        vel,
-                        np: np_h,
-                        fl: fl_h,
-                    } = bb;
-                    for a in vel.iter_mut() {
-                        if a.len() < len {
-                            a.resize(len, 0.0);
-                        }
+        let block = |(bi, ((np, fl), [fac])): BlockItem| {
+            let b0 = r0 + bi * BLOCK;
+            let b1 = b0 + np[0].len() / pw;
+            // Pipes of row `b1` too, but in the last block.
+            let halo = b1 < end;
+            let v0 = b0.saturating_sub(1);
+            let v1 = (b1 + 1 + halo as usize).min(ph - 1);
+            let len = (v1 - v0 + 1) * pw;
+            BLOCK_ROWS.with_borrow_mut(|bb| {
+                let BlockRows {
+                    vel,
+                    np: np_h,
+                    fl: fl_h,
+                } = bb;
+                for a in vel.iter_mut() {
+                    if a.len() < len {
+                        a.resize(len, 0.0);
                     }
-                    for a in np_h.iter_mut().chain(fl_h.iter_mut()) {
-                        if a.len() < 2 * pw {
-                            a.resize(2 * pw, 0.0);
-                        }
+                }
+                for a in np_h.iter_mut().chain(fl_h.iter_mut()) {
+                    if a.len() < 2 * pw {
+                        a.resize(2 * pw, 0.0);
                     }
-                    let vel_of = |x: usize, vel: &mut [Vec<f64>; 6]| {
-                        let lr = (x - v0) * pw;
-                        let mut row = vel.each_mut().map(|a| &mut a[lr..lr + pw]);
-                        vel_row(simd, &k, pg, &inp1, seg3.row(x), x, &mut row);
+                }
+                let vel_of = |x: usize, vel: &mut [Vec<f64>; 6]| {
+                    let lr = (x - v0) * pw;
+                    let mut row = vel.each_mut().map(|a| &mut a[lr..lr + pw]);
+                    vel_row(simd, &k, pg, &inp1, seg3.row(x), x, &mut row);
+                };
+                for x in v0..=(b0 + 1).min(v1) {
+                    vel_of(x, vel);
+                }
+                for r in b0..b1 + halo as usize {
+                    if r + 2 <= v1 {
+                        vel_of(r + 2, vel);
+                    }
+                    let inp = Inputs {
+                        pipes,
+                        vel: vel.each_ref().map(|a| &a[..len]),
+                        vbase: v0 * pw,
+                        ..none
                     };
-                    for x in v0..=(b0 + 1).min(v1) {
-                        vel_of(x, vel);
-                    }
-                    for r in b0..b1 + halo as usize {
-                        if r + 2 <= v1 {
-                            vel_of(r + 2, vel);
+                    let segs = seg3.row(r);
+                    if r < b1 {
+                        let lr = (r - b0) * pw..(r - b0 + 1) * pw;
+                        let mut np_r = np.each_mut().map(|a| &mut a[lr.clone()]);
+                        let mut fl_r = fl.each_mut().map(|a| &mut a[lr.clone()]);
+                        pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
+                    } else {
+                        // The next block's first row, after a copy of this block's last
+                        // row of volumes (the factors read both).
+                        let last = (b1 - 1 - b0) * pw..(b1 - b0) * pw;
+                        for (h, f) in fl_h.iter_mut().zip(fl.iter()) {
+                            h[..pw].copy_from_slice(&f[last.clone()]);
                         }
-                        let inp = Inputs {
-                            pipes,
-                            vel: vel.each_ref().map(|a| &a[..len]),
-                            vbase: v0 * pw,
-                            ..none
-                        };
-                        let segs = seg3.row(r);
-                        if r < b1 {
-                            let lr = (r - b0) * pw..(r - b0 + 1) * pw;
-                            let mut np_r = np.each_mut().map(|a| &mut a[lr.clone()]);
-                            let mut fl_r = fl.each_mut().map(|a| &mut a[lr.clone()]);
-                            pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
-                        } else {
-                            // The next block's first row, after a copy of this block's last
-                            // row of volumes (the factors read both).
-                            let last = (b1 - 1 - b0) * pw..(b1 - b0) * pw;
-                            for (h, f) in fl_h.iter_mut().zip(fl.iter()) {
-                                h[..pw].copy_from_slice(&f[last.clone()]);
+                        let mut np_r = np_h.each_mut().map(|a| &mut a[..pw]);
+                        let mut fl_r = fl_h.each_mut().map(|a| &mut a[pw..2 * pw]);
+                        pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
+                    }
+                    // The factors of the row (the block's first row: the block above).
+                    if r > b0 {
+                        let inp = if r < b1 {
+                            Inputs {
+                                flux: fl.each_ref().map(|a| &**a),
+                                fbase: b0 * pw,
+                                ..none
                             }
-                            let mut np_r = np_h.each_mut().map(|a| &mut a[..pw]);
-                            let mut fl_r = fl_h.each_mut().map(|a| &mut a[pw..2 * pw]);
-                            pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
-                        }
-                        // The factors of the row (the block's first row: the block above).
-                        if r > b0 {
-                            let inp = if r < b1 {
-                                Inputs {
-                                    flux: fl.each_ref().map(|a| &**a),
-                                    fbase: b0 * pw,
-                                    ..none
-                                }
-                            } else {
-                                Inputs {
-                                    flux: fl_h.each_ref().map(|a| &a[..2 * pw]),
-                                    fbase: (r - 1) * pw,
-                                    ..none
-                                }
-                            };
-                            let lr = (r - b0 - 1) * pw..(r - b0) * pw;
-                            factor_row(simd, &k, &inp, segs, r, &mut fac[lr]);
-                        }
+                        } else {
+                            Inputs {
+                                flux: fl_h.each_ref().map(|a| &a[..2 * pw]),
+                                fbase: (r - 1) * pw,
+                                ..none
+                            }
+                        };
+                        let lr = (r - b0 - 1) * pw..(r - b0) * pw;
+                        factor_row(simd, &k, &inp, segs, r, &mut fac[lr]);
                     }
-                });
+                }
             });
+        };
+        if parallel {
+            np.par_iter_mut()
+                .zip(fl.par_iter_mut())
+                .zip(fac.par_iter_mut())
+                .enumerate()
+                .for_each(block);
+        } else {
+            np.iter_mut()
+                .zip(fl.iter_mut())
+                .zip(fac.iter_mut())
+                .enumerate()
+                .for_each(block);
+        }
     }
 
     // Pass 2: thickness update (seg2), pipes scaled by the upwind cell's factor (seg3), the
@@ -1112,26 +1188,39 @@ fn substep(
         };
         let (h, pipes) = (&mut state.h, &mut state.pipes);
         let prows = rows_of(pipes.each_mut().map(|v| &mut v[rows.clone()]), pw);
-        h[rows.clone()]
-            .par_chunks_mut(pw)
-            .zip(prows)
-            .zip(row_tiles[r0 * ntx..(r0 + nr) * ntx].par_chunks_mut(ntx))
-            .enumerate()
-            .map(|(ri, ((hrow, mut prow), trow))| {
-                let r = r0 + ri;
-                update_row(
-                    simd,
-                    &k,
-                    &inp,
-                    seg2.row(r),
-                    seg3.row(r),
-                    r,
-                    hrow,
-                    &mut prow,
-                    trow,
-                )
-            })
-            .collect()
+        let row = |(ri, ((hrow, mut prow), trow)): RowItem| {
+            let r = r0 + ri;
+            update_row(
+                simd,
+                &k,
+                &inp,
+                seg2.row(r),
+                seg3.row(r),
+                r,
+                hrow,
+                &mut prow,
+                trow,
+            )
+        };
+        let (hr, tr) = (
+            &mut h[rows.clone()],
+            &mut row_tiles[r0 * ntx..(r0 + nr) * ntx],
+        );
+        if parallel {
+            hr.par_chunks_mut(pw)
+                .zip(prows)
+                .zip(tr.par_chunks_mut(ntx))
+                .enumerate()
+                .map(row)
+                .collect()
+        } else {
+            hr.chunks_mut(pw)
+                .zip(prows)
+                .zip(tr.chunks_mut(ntx))
+                .enumerate()
+                .map(row)
+                .collect()
+        }
     };
 
     let mut out = SubReport {

@@ -16,16 +16,18 @@
 pub mod convert;
 pub mod flow;
 pub mod release_area;
+pub mod rest;
 pub mod run;
 pub mod validation;
 
-pub use convert::{deposit, release};
+pub use convert::{deposit, release, release_cells};
 pub use flow::{
-    AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, Border,
-    cfl_dt, step,
+    AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, BedSource,
+    Border, cfl_dt, step, step_on,
 };
 pub use release_area::{
-    MapExtent, RasterRelease, ReleaseAreaError, ReleaseMask, Rupture, RuptureParams,
-    release_at_point, release_from_raster, release_from_shapefile,
+    MapExtent, RasterRelease, ReleaseAreaError, ReleaseMask, Rupture, RuptureCells, RuptureParams,
+    release_at_point, release_from_raster, release_from_shapefile, rupture_at_point,
 };
-pub use run::{AvalancheRun, RunOptions, RunSummary, StopReason};
+pub use rest::{AvalancheWorkspace, RestOutcome};
+pub use run::{AvalancheRun, RunBuffers, RunOptions, RunSummary, StopReason};

@@ -532,30 +532,17 @@ impl ReleaseMask {
                 });
             }
             let k = state.pad(i % w, i / w);
-            let mut taken = 0.0f64;
-            for layer in [
-                SnowLayer::Powder,
-                SnowLayer::Unstable,
-                SnowLayer::Stable,
-                SnowLayer::Compacted,
-            ] {
-                let have = terrain.layer(layer)[i] as f64;
-                let take = have.min(want - taken).max(0.0);
-                if take <= 0.0 {
-                    continue;
-                }
-                let left = (have - take).max(0.0) as f32;
-                terrain.layer_mut(layer)[i] = left;
-                let took = have - left as f64;
-                taken += took;
-                if matches!(layer, SnowLayer::Stable | SnowLayer::Compacted) {
-                    state.bed[k] -= took;
-                }
+            state.touch_around_cell(k, Some(&*terrain))?;
+            let taken = crate::convert::take_from_top(terrain, i, |_, have, so_far| {
+                have.min(want - so_far).max(0.0)
+            });
+            state.bed[k] -= taken.from_bed;
+            state.h[k] += taken.total;
+            volume += taken.total * area;
+            if state.h[k] > 0.0 {
+                state.mark_content(k);
             }
-            state.h[k] += taken;
-            volume += taken * area;
         }
-        state.refresh_active();
         Ok(volume)
     }
 }
@@ -1207,6 +1194,43 @@ pub fn release_at_point(
     y: f64,
     params: &RuptureParams,
 ) -> Result<Rupture, ReleaseAreaError> {
+    let r = rupture_at_point(terrain, x, y, params)?;
+    Ok(Rupture {
+        mask: ReleaseMask::from_cells(terrain.geometry(), terrain.mask(), r.flags, None)?,
+        cell: r.cell,
+        unstable_m: r.unstable_m,
+        reach_m: r.reach_m,
+        zone_cells: r.zone_cells,
+        downslope_cells: r.downslope_cells,
+    })
+}
+
+/// The cells of a rupture at a point (see [`release_at_point`]), without a grid-sized mask.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RuptureCells {
+    /// The released cells, row-major indices in ascending order (all valid).
+    pub cells: Vec<usize>,
+    /// One flag per grid cell: released or not.
+    pub flags: Vec<bool>,
+    /// The rupture cell (col, row).
+    pub cell: (usize, usize),
+    /// Unstable thickness at the rupture cell, m.
+    pub unstable_m: f64,
+    /// Reach of the fracture, m.
+    pub reach_m: f64,
+    /// Cells of the rupture zone (within the reach).
+    pub zone_cells: usize,
+    /// Cells added by the downslope reach (outside the rupture zone).
+    pub downslope_cells: usize,
+}
+
+/// [`release_at_point`] as a list of cells: its cost follows the rupture, not the grid.
+pub fn rupture_at_point(
+    terrain: &LayeredTerrain,
+    x: f64,
+    y: f64,
+    params: &RuptureParams,
+) -> Result<RuptureCells, ReleaseAreaError> {
     params.validate()?;
     let g = terrain.geometry();
     let mask = terrain.mask();
@@ -1270,14 +1294,15 @@ pub fn release_at_point(
     let zone_cells = zone.len();
 
     // 4. Downslope reach: fall lines from every rupture-zone cell.
-    let surface: Vec<f64> = terrain.surface().iter().map(|&v| v as f64).collect();
+    // The snow surface of a cell (the sums of `LayeredTerrain::surface`).
+    let surface = |i: usize| (terrain.bedrock[i] + terrain.depth_at(i)) as f64;
     let tan_min = params.min_slope_deg.to_radians().tan();
     // Per-cell gradient (x east, y south), central differences, one-sided next to nodata.
     let grad = |c: usize, r: usize| -> [f64; 2] {
         let i = r * w + c;
         let at = |dc: isize, dr: isize| match g.neighbour(c, r, dc, dr) {
-            Some(j) if mask.is_valid(j) => (surface[j], 1.0),
-            _ => (surface[i], 0.0),
+            Some(j) if mask.is_valid(j) => (surface(j), 1.0),
+            _ => (surface(i), 0.0),
         };
         let ((zw, ww), (ze, we)) = (at(-1, 0), at(1, 0));
         let ((zn, wn), (zs, ws)) = (at(0, -1), at(0, 1));
@@ -1319,7 +1344,10 @@ pub fn release_at_point(
     let step_len = 0.5 * dx.min(dy);
     let max_steps = 4 * (w + h) * ((dx.max(dy) / dx.min(dy)).ceil() as usize);
     let mut downslope_cells = 0;
-    for &start in &zone {
+    // (The fall lines start from the rupture zone, its first `zone_cells` entries; the cells
+    // they add are appended.)
+    for z in 0..zone_cells {
+        let start = zone[z];
         let (sc, sr) = (start % w, start / w);
         let (mut x, mut y) = g.local_metres(sc, sr);
         let mut last = start;
@@ -1339,7 +1367,7 @@ pub fn release_at_point(
             if i == last {
                 continue;
             }
-            if !has_unstable(i) || surface[i] > surface[last] {
+            if !has_unstable(i) || surface(i) > surface(last) {
                 break;
             }
             let [cgx, cgy] = grad(c, r);
@@ -1348,14 +1376,16 @@ pub fn release_at_point(
             }
             if !cells[i] {
                 cells[i] = true;
+                zone.push(i);
                 downslope_cells += 1;
             }
             last = i;
         }
     }
-    let mask_out = ReleaseMask::from_cells(g, mask, cells, None)?;
-    Ok(Rupture {
-        mask: mask_out,
+    zone.sort_unstable();
+    Ok(RuptureCells {
+        cells: zone,
+        flags: cells,
         cell: (col, row),
         unstable_m: u0,
         reach_m: reach,

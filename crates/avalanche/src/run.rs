@@ -20,7 +20,8 @@
 //! point (the practitioners' "alpha angle").
 
 use crate::flow::{
-    AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, step,
+    AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, BedSource,
+    step_on,
 };
 use serde::{Deserialize, Serialize};
 
@@ -174,34 +175,71 @@ pub struct AvalancheRun {
     release_top: Option<(usize, usize)>,
 }
 
+/// The work buffers of a run, handed from one run to the next ([`AvalancheRun::with_buffers`],
+/// [`AvalancheRun::into_parts`]): a season runs hundreds of avalanches on one grid.
+#[derive(Debug, Clone, Default)]
+pub struct RunBuffers {
+    /// The flow's work buffers.
+    pub scratch: AvalancheScratch,
+    /// Peak fields, all zero between runs (grid-sized; empty until first used).
+    peak_thickness: Vec<f64>,
+    peak_speed: Vec<f64>,
+}
+
 impl AvalancheRun {
     /// Starts a run from released snow (the state's flowing thickness).
     pub fn new(state: AvalancheState) -> Self {
         Self::with_scratch(state, AvalancheScratch::default())
     }
 
-    /// [`AvalancheRun::new`] reusing the work buffers of an earlier run (a season runs many
-    /// avalanches on one grid; [`AvalancheRun::take_scratch`] hands them back).
+    /// [`AvalancheRun::new`] reusing the flow's work buffers of an earlier run
+    /// ([`AvalancheRun::take_scratch`] hands them back).
     pub fn with_scratch(state: AvalancheState, scratch: AvalancheScratch) -> Self {
+        Self::with_buffers(
+            state,
+            RunBuffers {
+                scratch,
+                ..RunBuffers::default()
+            },
+        )
+    }
+
+    /// [`AvalancheRun::new`] reusing every buffer of an earlier run: apart from them, the cost
+    /// of starting, recording and summing up a run follows the tiles the flow touches, not
+    /// the grid.
+    pub fn with_buffers(state: AvalancheState, buffers: RunBuffers) -> Self {
         let n = state.geometry.width() * state.geometry.height();
+        let RunBuffers {
+            scratch,
+            mut peak_thickness,
+            mut peak_speed,
+        } = buffers;
+        for p in [&mut peak_thickness, &mut peak_speed] {
+            if p.len() != n {
+                *p = vec![0.0; n];
+            }
+        }
         let released_volume = state.flowing_volume();
         let start_centre = mass_centre(&state);
-        let mut top: Option<(usize, usize, f64)> = None;
+        // The highest snow-covered cell (the first in row-major order among equals).
         let w = state.geometry.width();
-        for r in 0..state.geometry.height() {
-            for c in 0..w {
-                if state.thickness_at(c, r) > 0.0 {
-                    let z = state.bed_at(c, r);
-                    if top.is_none_or(|t| z > t.2) {
-                        top = Some((c, r, z));
+        let mut top: Option<(usize, f64)> = None;
+        for (r0, r1, c0, c1) in state.content_cells() {
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    if state.thickness_at(c, r) > 0.0 {
+                        let (i, z) = (r * w + c, state.bed_at(c, r));
+                        if top.is_none_or(|t| z > t.1 || (z == t.1 && i < t.0)) {
+                            top = Some((i, z));
+                        }
                     }
                 }
             }
         }
         let mut run = Self {
             scratch,
-            peak_thickness: vec![0.0; n],
-            peak_speed: vec![0.0; n],
+            peak_thickness,
+            peak_speed,
             released_volume,
             border_outflow: 0.0,
             time: 0.0,
@@ -211,7 +249,7 @@ impl AvalancheRun {
             moving: true,
             stop: None,
             start_centre,
-            release_top: top.map(|t| (t.0, t.1)),
+            release_top: top.map(|t| (t.0 % w, t.0 / w)),
             state,
         };
         run.record();
@@ -225,6 +263,30 @@ impl AvalancheRun {
     /// reallocates them).
     pub fn take_scratch(&mut self) -> AvalancheScratch {
         std::mem::take(&mut self.scratch)
+    }
+
+    /// The state and every buffer, for the next run: the peak fields are zeroed over the
+    /// touched tiles (the only cells they can be non-zero in).
+    pub fn into_parts(mut self) -> (AvalancheState, RunBuffers) {
+        let w = self.state.geometry.width();
+        for (r0, r1, c0, c1) in self.state.touched_cells() {
+            for r in r0..=r1 {
+                self.peak_thickness[r * w + c0..=r * w + c1].fill(0.0);
+                self.peak_speed[r * w + c0..=r * w + c1].fill(0.0);
+            }
+        }
+        let buffers = RunBuffers {
+            scratch: self.scratch,
+            peak_thickness: self.peak_thickness,
+            peak_speed: self.peak_speed,
+        };
+        (self.state, buffers)
+    }
+
+    /// The grid cells the run touched, inclusive boxes `(r0, r1, c0, c1)` of rows and
+    /// columns: every cell with a non-zero peak or any snow of the avalanche lies in one.
+    pub fn touched_cells(&self) -> impl Iterator<Item = (usize, usize, usize, usize)> + '_ {
+        self.state.touched_cells()
     }
 
     /// Simulated time since the release, s.
@@ -264,6 +326,17 @@ impl AvalancheRun {
         params: &AvalancheParams,
         options: &RunOptions,
     ) -> Result<AvalancheReport, AvalancheError> {
+        self.advance_on(params, options, None)
+    }
+
+    /// [`AvalancheRun::advance`] for a state that reads its bed from `bed` where the flow
+    /// goes.
+    pub fn advance_on(
+        &mut self,
+        params: &AvalancheParams,
+        options: &RunOptions,
+        bed: Option<&dyn BedSource>,
+    ) -> Result<AvalancheReport, AvalancheError> {
         options.validate()?;
         if self.stop.is_some() {
             return Ok(AvalancheReport::default());
@@ -271,7 +344,7 @@ impl AvalancheRun {
         let dt = options
             .record_interval_s
             .min(options.duration_s - self.time);
-        let report = step(params, &mut self.state, &mut self.scratch, dt)?;
+        let report = step_on(params, &mut self.state, &mut self.scratch, dt, bed)?;
         self.time += dt;
         self.substeps += report.substeps;
         self.border_outflow += report.border_outflow;
@@ -299,11 +372,22 @@ impl AvalancheRun {
         &mut self,
         params: &AvalancheParams,
         options: &RunOptions,
+        on_record: impl FnMut(&AvalancheRun) -> Result<(), E>,
+    ) -> Result<RunSummary, E> {
+        self.run_on(params, options, None, on_record)
+    }
+
+    /// [`AvalancheRun::run`] for a state that reads its bed from `bed` where the flow goes.
+    pub fn run_on<E: From<AvalancheError>>(
+        &mut self,
+        params: &AvalancheParams,
+        options: &RunOptions,
+        bed: Option<&dyn BedSource>,
         mut on_record: impl FnMut(&AvalancheRun) -> Result<(), E>,
     ) -> Result<RunSummary, E> {
         options.validate()?;
         while self.stop.is_none() {
-            self.advance(params, options)?;
+            self.advance_on(params, options, bed)?;
             on_record(self)?;
         }
         Ok(self.summary(options))
@@ -364,17 +448,28 @@ impl AvalancheRun {
         let mut runout = top;
         let mut runout_cell = top_cell;
         let mut footprint_cells = 0usize;
-        let mut best = -1.0;
-        for (i, &p) in self.peak_thickness.iter().enumerate() {
-            if p > options.footprint_threshold_m {
-                footprint_cells += 1;
-                if let Some(t) = top {
-                    let q = point(i % w, i / w);
-                    let d = (q[0] - t[0]).hypot(q[1] - t[1]);
-                    if d > best {
-                        best = d;
-                        runout = Some(q);
-                        runout_cell = Some((i % w, i / w));
+        let (mut best, mut best_i) = (-1.0, usize::MAX);
+        let (mut max_speed, mut max_thickness) = (0.0f64, 0.0f64);
+        // Over the touched tiles (the peaks are 0 elsewhere); the farthest cell, the first in
+        // row-major order among equals.
+        for (r0, r1, c0, c1) in self.state.touched_cells() {
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    let i = r * w + c;
+                    let p = self.peak_thickness[i];
+                    max_thickness = max_thickness.max(p);
+                    max_speed = max_speed.max(self.peak_speed[i]);
+                    if p > options.footprint_threshold_m {
+                        footprint_cells += 1;
+                        if let Some(t) = top {
+                            let q = point(c, r);
+                            let d = (q[0] - t[0]).hypot(q[1] - t[1]);
+                            if d > best || (d == best && i < best_i) {
+                                (best, best_i) = (d, i);
+                                runout = Some(q);
+                                runout_cell = Some((c, r));
+                            }
+                        }
                     }
                 }
             }
@@ -408,8 +503,8 @@ impl AvalancheRun {
             simulated_s: self.time,
             substeps: self.substeps,
             stop: self.stop,
-            max_speed_m_s: self.peak_speed.iter().fold(0.0, |m, &v| m.max(v)),
-            max_thickness_m: self.peak_thickness.iter().fold(0.0, |m, &v| m.max(v)),
+            max_speed_m_s: max_speed,
+            max_thickness_m: max_thickness,
             footprint_area_m2: footprint_cells as f64 * g.cell_area(),
             runout_length_m: runout_length,
             runout_drop_m: runout_drop,
@@ -423,21 +518,23 @@ impl AvalancheRun {
     }
 }
 
-/// Volume-weighted centre of the avalanche's snow (flowing and settled): local metres east and south of the grid's
-/// north-west corner and the bed altitude under it, m.
+/// Volume-weighted centre of the avalanche's snow (flowing and settled): local metres east
+/// and south of the grid's north-west corner and the bed altitude under it, m. Sums over the
+/// touched tiles (all of the avalanche's snow lies in them), tile by tile.
 fn mass_centre(state: &AvalancheState) -> [f64; 3] {
     let g = &state.geometry;
     let (mut sx, mut sy, mut sz, mut sv) = (0.0, 0.0, 0.0, 0.0);
-    let snow = state.snow_thickness();
-    for r in 0..g.height() {
-        for c in 0..g.width() {
-            let h = snow[r * g.width() + c];
-            if h > 0.0 {
-                let (x, y) = g.local_metres(c, r);
-                sx += h * x;
-                sy += h * y;
-                sz += h * state.bed_at(c, r);
-                sv += h;
+    for (r0, r1, c0, c1) in state.touched_cells() {
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                let h = state.snow_at(c, r);
+                if h > 0.0 {
+                    let (x, y) = g.local_metres(c, r);
+                    sx += h * x;
+                    sy += h * y;
+                    sz += h * state.bed_at(c, r);
+                    sv += h;
+                }
             }
         }
     }

@@ -33,7 +33,10 @@ fn main() -> ExitCode {
             return ExitCode::from(1);
         }
     }
-    match commands::dispatch(args) {
+    // The whole command runs on a worker of the pool: its parallel loops then fork and join
+    // inside the pool instead of each one handing its work over from the main thread and
+    // sleeping until it is done (thousands of times per avalanche).
+    match rayon::scope(|_| commands::dispatch(args)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure { code, error }) => {
             eprintln!("error: {error}");

@@ -30,12 +30,10 @@
 //! later avalanches; the stability phenomenon compacts it further), volume for volume, so the
 //! season's snow budget only loses what flowed off the grid.
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::release_area::{ReleaseAreaError, RuptureParams};
-use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheScratch, AvalancheState, RunOptions,
-    deposit, release,
-};
+use snowscape_avalanche::{AvalancheError, AvalancheParams, AvalancheWorkspace, RunOptions};
 use snowscape_terrain::{LayeredTerrain, SnowLayer, surface};
 use thiserror::Error;
 
@@ -232,9 +230,10 @@ impl AvalancheParameters {
     }
 }
 
-/// Per-cell avalanche hazard `λ_i` (1/day, row-major) into `out`, and its sum. `slope_deg` is
-/// the bedrock slope per cell (cached by the season: snow changes the slope of release areas
-/// little); `skiers` the recent-skier map, when skiers run.
+/// Per-cell avalanche hazard `λ_i` (1/day, row-major) into `out`, and its sum (rows summed
+/// in order, each row cell by cell: [`HazardMap`]'s total). `slope_deg` is the bedrock slope
+/// per cell (cached by the season: snow changes the slope of release areas little); `skiers`
+/// the recent-skier map, when skiers run.
 pub fn hazard(
     params: &AvalancheParameters,
     terrain: &LayeredTerrain,
@@ -242,36 +241,173 @@ pub fn hazard(
     skiers: Option<&[f32]>,
     out: &mut Vec<f64>,
 ) -> f64 {
-    let g = terrain.geometry();
-    let n = g.len();
-    out.clear();
-    out.resize(n, 0.0);
-    let natural = if params.natural { 1.0 } else { 0.0 };
-    if !params.natural && (skiers.is_none() || params.skier_gain == 0.0) {
-        // Nothing releases: every λ is 0.
+    let mut map = HazardMap {
+        lambda: std::mem::take(out),
+        row_sums: Vec::new(),
+        total: 0.0,
+    };
+    let total = map.compute(params, terrain, slope_deg, skiers);
+    *out = map.lambda;
+    total
+}
+
+/// The hazard `λ_i` of one cell, 1/day.
+#[inline]
+fn cell_hazard(
+    params: &AvalancheParameters,
+    terrain: &LayeredTerrain,
+    slope_deg: &[f32],
+    skiers: Option<&[f32]>,
+    i: usize,
+) -> f64 {
+    let u = terrain.layer(SnowLayer::Unstable)[i] as f64;
+    if u < params.min_unstable_m || !terrain.mask().is_valid(i) {
         return 0.0;
     }
-    let unstable = terrain.layer(SnowLayer::Unstable);
-    let per_cell = params.rate_per_km2_per_day * g.cell_area() / 1e6;
-    let mut total = 0.0;
-    for i in 0..n {
-        let u = unstable[i] as f64;
-        if u < params.min_unstable_m || !terrain.mask().is_valid(i) {
-            continue;
-        }
-        let s = params.slope_window(slope_deg[i] as f64);
-        if s == 0.0 {
-            continue;
-        }
-        let k = skiers.map_or(0.0, |m| m[i] as f64);
-        let lambda = per_cell
-            * (u / params.reference_unstable_m).min(1.0)
-            * s
-            * (natural + params.skier_gain * k);
-        out[i] = lambda;
-        total += lambda;
+    let s = params.slope_window(slope_deg[i] as f64);
+    if s == 0.0 {
+        return 0.0;
     }
-    total
+    let natural = if params.natural { 1.0 } else { 0.0 };
+    let k = skiers.map_or(0.0, |m| m[i] as f64);
+    let per_cell = params.rate_per_km2_per_day * terrain.geometry().cell_area() / 1e6;
+    per_cell * (u / params.reference_unstable_m).min(1.0) * s * (natural + params.skier_gain * k)
+}
+
+/// The hazard map of a season: `λ_i` per cell, its sum per row and in all. A full
+/// [`HazardMap::compute`] after melt or snowfall; after an avalanche only its released cells
+/// change (the only cells whose unstable snow it moved: debris is stable snow), and
+/// [`HazardMap::update_cells`] recomputes them and their rows' sums, with the same bits as a
+/// full computation. A start cell is drawn by walking the row sums, then one row.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HazardMap {
+    /// `λ_i`, 1/day, row-major.
+    pub lambda: Vec<f64>,
+    /// Sum of each row, cell by cell in index order.
+    row_sums: Vec<f64>,
+    /// Sum of the row sums in row order (the Avalanche-Start rate), 1/day.
+    total: f64,
+}
+
+impl HazardMap {
+    /// The Avalanche-Start rate `Σ λ_i`, 1/day.
+    pub fn total(&self) -> f64 {
+        self.total
+    }
+
+    /// Recomputes every cell (rows in parallel; the sums do not depend on the thread count).
+    pub fn compute(
+        &mut self,
+        params: &AvalancheParameters,
+        terrain: &LayeredTerrain,
+        slope_deg: &[f32],
+        skiers: Option<&[f32]>,
+    ) -> f64 {
+        let g = terrain.geometry();
+        let (w, h) = (g.width(), g.height());
+        self.lambda.clear();
+        self.lambda.resize(w * h, 0.0);
+        self.row_sums.clear();
+        self.row_sums.resize(h, 0.0);
+        if !params.natural && (skiers.is_none() || params.skier_gain == 0.0) {
+            // Nothing releases: every λ is 0.
+            self.total = 0.0;
+            return 0.0;
+        }
+        let unstable = terrain.layer(SnowLayer::Unstable);
+        let invalid = terrain.mask().invalid_cells();
+        self.lambda
+            .par_chunks_mut(w)
+            .zip(self.row_sums.par_iter_mut())
+            .enumerate()
+            .for_each(|(r, (row, sum))| {
+                *sum = 0.0;
+                let o = r * w;
+                for (c, l) in row.iter_mut().enumerate() {
+                    let i = o + c;
+                    // Most cells hold too little unstable snow: a look at it alone.
+                    *l = if (unstable[i] as f64) < params.min_unstable_m
+                        || invalid.is_some_and(|m| m[i])
+                    {
+                        0.0
+                    } else {
+                        cell_hazard(params, terrain, slope_deg, skiers, i)
+                    };
+                    *sum += *l;
+                }
+            });
+        self.total = self.row_sums.iter().sum();
+        self.total
+    }
+
+    /// Recomputes the cells `cells` (row-major, ascending) and the sums of their rows.
+    pub fn update_cells(
+        &mut self,
+        params: &AvalancheParameters,
+        terrain: &LayeredTerrain,
+        slope_deg: &[f32],
+        skiers: Option<&[f32]>,
+        cells: &[usize],
+    ) -> f64 {
+        let w = terrain.geometry().width();
+        if self.lambda.len() != terrain.geometry().len() {
+            return self.compute(params, terrain, slope_deg, skiers);
+        }
+        if !params.natural && (skiers.is_none() || params.skier_gain == 0.0) {
+            return 0.0;
+        }
+        let mut last_row = usize::MAX;
+        for &i in cells {
+            self.lambda[i] = cell_hazard(params, terrain, slope_deg, skiers, i);
+            let r = i / w;
+            if r != last_row {
+                if last_row != usize::MAX {
+                    self.sum_row(last_row, w);
+                }
+                last_row = r;
+            }
+        }
+        if last_row != usize::MAX {
+            self.sum_row(last_row, w);
+        }
+        self.total = self.row_sums.iter().sum();
+        self.total
+    }
+
+    fn sum_row(&mut self, r: usize, w: usize) {
+        let mut sum = 0.0;
+        for &l in &self.lambda[r * w..(r + 1) * w] {
+            sum += l;
+        }
+        self.row_sums[r] = sum;
+    }
+
+    /// The cell whose cumulative hazard first exceeds `u · Σλ` (`u` uniform in [0, 1)): the
+    /// row by its row sums, then the cell in it; `None` when nothing can release.
+    pub fn pick(&self, u: f64) -> Option<usize> {
+        if self.total <= 0.0 {
+            return None;
+        }
+        let w = self.lambda.len() / self.row_sums.len().max(1);
+        let target = u * self.total;
+        let mut acc = 0.0;
+        let mut last_row = None;
+        for (r, &s) in self.row_sums.iter().enumerate() {
+            if s <= 0.0 {
+                continue;
+            }
+            last_row = Some(r);
+            if acc + s > target {
+                let row = &self.lambda[r * w..(r + 1) * w];
+                return pick_cell(row, s, (target - acc) / s).map(|c| r * w + c);
+            }
+            acc += s;
+        }
+        // Round-off left the target beyond the last row: its last cell that can release.
+        let r = last_row?;
+        let row = &self.lambda[r * w..(r + 1) * w];
+        row.iter().rposition(|&l| l > 0.0).map(|c| r * w + c)
+    }
 }
 
 /// Bedrock slope of every cell, degrees.
@@ -348,14 +484,6 @@ pub struct AvalancheRecord {
     pub alpha: f64,
 }
 
-/// What one avalanche did to the terrain.
-#[derive(Debug, Clone)]
-pub struct AvalancheOutcome {
-    pub record: AvalancheRecord,
-    /// Peak flow thickness per cell (m), for footprints and previews.
-    pub peak_thickness: Vec<f64>,
-}
-
 /// Snow thickness the avalanches of a season took away (scour) and laid down (deposit), per
 /// cell, m.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -364,81 +492,77 @@ pub struct AvalancheMaps {
     pub deposit: Vec<f32>,
 }
 
-/// Releases `cells`, runs the avalanche to rest and deposits it as stable snow. With
-/// `alpha_from_temperature`, α comes from the mean `temperature` (°C per cell) of the
-/// released cells.
+/// Releases `cells` (row-major, ascending), runs the avalanche to rest and deposits it as
+/// stable snow ([`AvalancheWorkspace::run_to_rest`]: the cost follows the avalanche's
+/// footprint). With `alpha_from_temperature`, α comes from the mean `temperature` (°C per
+/// cell) of the released cells.
 #[allow(clippy::too_many_arguments)]
 pub fn run_avalanche(
     params: &AvalancheParameters,
     terrain: &mut LayeredTerrain,
     temperature: &[f32],
-    cells: &[bool],
+    cells: &[usize],
     day: f64,
     trigger: Trigger,
     cell: usize,
     maps: &mut AvalancheMaps,
-    scratch: &mut AvalancheScratch,
-) -> Result<AvalancheOutcome, AvalancheError> {
+    workspace: &mut AvalancheWorkspace,
+) -> Result<AvalancheRecord, AvalancheError> {
     let n = terrain.geometry().len();
     for m in [&mut maps.scour, &mut maps.deposit] {
         if m.len() != n {
             *m = vec![0.0; n];
         }
     }
-    let mut state = AvalancheState::from_terrain(terrain)?;
-    release(terrain, &mut state, cells, None)?;
-    for (i, (s, h)) in maps.scour.iter_mut().zip(state.thickness()).enumerate() {
-        if cells[i] {
-            *s += h as f32;
-        }
-    }
     let mut flow = params.flow.clone();
     let mut release_t = None;
     if params.alpha_from_temperature {
-        let (sum, n) = cells
+        let valid: Vec<usize> = cells
             .iter()
-            .zip(temperature)
-            .filter(|(on, _)| **on)
-            .fold((0.0, 0usize), |(s, n), (_, &t)| (s + t as f64, n + 1));
-        if n > 0 {
-            let t = sum / n as f64;
+            .copied()
+            .filter(|&i| terrain.mask().is_valid(i))
+            .collect();
+        if !valid.is_empty() {
+            let sum = valid.iter().fold(0.0, |s, &i| s + temperature[i] as f64);
+            let t = sum / valid.len() as f64;
             flow.alpha = params.alpha_at(t);
             release_t = Some(t);
         }
     }
-    let mut run = AvalancheRun::with_scratch(state, std::mem::take(scratch));
-    let mut steps = 0u64;
-    let summary = run.run::<AvalancheError>(&flow, &params.run, |_| {
-        steps += 1;
-        Ok(())
-    });
-    *scratch = run.take_scratch();
-    let summary = summary?;
-    for (d, h) in maps.deposit.iter_mut().zip(run.state.snow_thickness()) {
-        *d += h as f32;
+    let outcome = workspace.run_to_rest::<AvalancheError>(
+        terrain,
+        cells,
+        None,
+        &flow,
+        &params.run,
+        SnowLayer::Stable,
+        |_| Ok(()),
+    )?;
+    for &(i, h) in &outcome.released {
+        maps.scour[i as usize] += h;
     }
-    let deposited = deposit(terrain, &mut run.state, SnowLayer::Stable, false)?;
+    for &(i, h) in &outcome.deposited {
+        maps.deposit[i as usize] += h;
+    }
+    let summary = &outcome.summary;
     let g = terrain.geometry();
     let (c, r) = g.col_row(cell);
     let (x, y) = g.cell_centre(c, r);
-    Ok(AvalancheOutcome {
-        record: AvalancheRecord {
-            day,
-            trigger,
-            cell: [c, r],
-            map_xy: [x, y],
-            released_m3: summary.released_volume_m3,
-            deposited_m3: deposited,
-            outflow_m3: summary.border_outflow_m3,
-            runout_length_m: summary.runout_length_m,
-            travel_angle_deg: summary.travel_angle_deg,
-            footprint_area_m2: summary.footprint_area_m2,
-            max_speed_m_s: summary.max_speed_m_s,
-            simulated_s: summary.simulated_s,
-            steps,
-            release_temperature_c: release_t,
-            alpha: flow.alpha,
-        },
-        peak_thickness: run.peak_thickness().to_vec(),
+    Ok(AvalancheRecord {
+        day,
+        trigger,
+        cell: [c, r],
+        map_xy: [x, y],
+        released_m3: summary.released_volume_m3,
+        deposited_m3: outcome.deposited_m3,
+        outflow_m3: summary.border_outflow_m3,
+        runout_length_m: summary.runout_length_m,
+        travel_angle_deg: summary.travel_angle_deg,
+        footprint_area_m2: summary.footprint_area_m2,
+        max_speed_m_s: summary.max_speed_m_s,
+        simulated_s: summary.simulated_s,
+        steps: outcome.records,
+        release_temperature_c: release_t,
+        alpha: flow.alpha,
     })
 }

@@ -22,8 +22,8 @@ use crate::stability::{self, StabilityScratch};
 use crate::weather::{Air, AirSource};
 use crate::wind_transport::{self, WindMaps, WindModel, WindScratch};
 use serde::{Deserialize, Serialize};
-use snowscape_avalanche::AvalancheScratch;
-use snowscape_avalanche::release_area::release_at_point;
+use snowscape_avalanche::AvalancheWorkspace;
+use snowscape_avalanche::release_area::rupture_at_point;
 use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams, precompute};
 use snowscape_skiers::{SkiArea, SkiScratch};
 use snowscape_terrain::{LayeredTerrain, TerrainError};
@@ -131,10 +131,13 @@ pub struct Winter {
     /// Bedrock slope per cell, degrees (for the avalanche hazard).
     slope_deg: Vec<f32>,
     /// Avalanche hazard per cell, 1/day (recomputed when the snow changes).
-    hazard: Vec<f64>,
+    hazard: avalanches::HazardMap,
+    /// The hazard map may be out of date: an event that can change unstable snow ran since
+    /// it was computed (an avalanche start recomputes it).
+    hazard_stale: bool,
     /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
     avalanche_maps: AvalancheMaps,
-    avalanche_scratch: AvalancheScratch,
+    avalanche_workspace: AvalancheWorkspace,
     /// The ski area, made at the first skier (not checkpointed: see [`crate::skiing`]).
     ski_area: Option<SkiArea>,
     ski_scratch: SkiScratch,
@@ -292,9 +295,10 @@ impl Winter {
             shedding_scratch: Default::default(),
             sx: Vec::new(),
             slope_deg: Vec::new(),
-            hazard: Vec::new(),
+            hazard: Default::default(),
+            hazard_stale: true,
             avalanche_maps: AvalancheMaps::default(),
-            avalanche_scratch: AvalancheScratch::default(),
+            avalanche_workspace: AvalancheWorkspace::default(),
             ski_area: None,
             ski_scratch: SkiScratch::default(),
             terminus_stale: false,
@@ -382,7 +386,7 @@ impl Winter {
     }
     /// The current avalanche hazard per cell, 1/day (Σ is the Avalanche-Start rate).
     pub fn avalanche_hazard(&self) -> &[f64] {
-        &self.hazard
+        &self.hazard.lambda
     }
     /// Whether the season is over.
     pub fn finished(&self) -> bool {
@@ -450,13 +454,13 @@ impl Winter {
             .ski_area
             .as_ref()
             .map(|a| a.recent_skiers(&self.scenario.skiers.ski));
-        let total = avalanches::hazard(
+        let total = self.hazard.compute(
             &self.scenario.parameters.avalanche,
             &self.terrain,
             &self.slope_deg,
             skiers.as_deref(),
-            &mut self.hazard,
         );
+        self.hazard_stale = false;
         self.state
             .scheduler
             .set_rate(EventKind::AvalancheStart, total, total > 0.0);
@@ -493,8 +497,8 @@ impl Winter {
         let (col, row) = self.terrain.geometry().col_row(cell);
         let err = |source| SeasonError::Avalanche { day, source };
         let (x, y) = self.terrain.geometry().cell_centre(col, row);
-        let cells = match release_at_point(&self.terrain, x, y, &params.rupture) {
-            Ok(r) => r.mask.cells,
+        let cells = match rupture_at_point(&self.terrain, x, y, &params.rupture) {
+            Ok(r) => r.cells,
             Err(e) => {
                 return Err(SeasonError::AvalanchePosition {
                     x,
@@ -503,7 +507,7 @@ impl Winter {
                 });
             }
         };
-        let outcome = avalanches::run_avalanche(
+        let rec = avalanches::run_avalanche(
             params,
             &mut self.terrain,
             &self.environment.temperature,
@@ -512,10 +516,9 @@ impl Winter {
             trigger,
             cell,
             &mut self.avalanche_maps,
-            &mut self.avalanche_scratch,
+            &mut self.avalanche_workspace,
         )
         .map_err(err)?;
-        let rec = outcome.record;
         self.state.budget.avalanche_outflow += rec.outflow_m3;
         self.state
             .scheduler
@@ -526,7 +529,21 @@ impl Winter {
             .entry(EventKind::AvalancheStep)
             .or_default() += rec.steps;
         self.state.avalanches.push(rec.clone());
-        self.update_avalanche_rate();
+        // Only the released cells' unstable snow changed (the debris is stable snow).
+        let skiers = self
+            .ski_area
+            .as_ref()
+            .map(|a| a.recent_skiers(&self.scenario.skiers.ski));
+        let total = self.hazard.update_cells(
+            &self.scenario.parameters.avalanche,
+            &self.terrain,
+            &self.slope_deg,
+            skiers.as_deref(),
+            &cells,
+        );
+        self.state
+            .scheduler
+            .set_rate(EventKind::AvalancheStart, total, total > 0.0);
         Ok(rec)
     }
 
@@ -685,10 +702,11 @@ impl Winter {
                     STREAM_AVALANCHE_CELL,
                     event.index,
                 );
-                // A fresh hazard map: the snow may have moved since the rate was set.
-                self.update_avalanche_rate();
-                let total: f64 = self.hazard.iter().sum();
-                if let Some(cell) = avalanches::pick_cell(&self.hazard, total, u) {
+                // A fresh hazard map if the snow may have moved since it was computed.
+                if self.hazard_stale {
+                    self.update_avalanche_rate();
+                }
+                if let Some(cell) = self.hazard.pick(u) {
                     match self.start_avalanche(cell, Trigger::Natural) {
                         Ok(_) | Err(SeasonError::AvalanchePosition { .. }) => {}
                         Err(e) => return Err(e),
@@ -733,6 +751,15 @@ impl Winter {
             EventKind::MeltAndStateStep | EventKind::SnowfallStep
         ) {
             self.update_avalanche_rate();
+        } else if !matches!(
+            event.kind,
+            // Powder diffusion moves powder only (tested); an avalanche updates the map
+            // itself; a snowfall start changes no snow.
+            EventKind::PowderDiffusionStep | EventKind::AvalancheStart | EventKind::SnowfallStart
+        ) {
+            // Wind erodes unstable snow where the powder is gone; skiers change the
+            // recent-skier map.
+            self.hazard_stale = true;
         }
         *self.state.event_counts.entry(event.kind).or_default() += 1;
         if cfg!(debug_assertions) || event.index.is_multiple_of(64) {
@@ -809,13 +836,13 @@ impl Winter {
         w.refresh_air_temperature();
         // The hazard map of the restored snow (for `avalanche_hazard`; a start recomputes it);
         // the scheduler's rate is the checkpointed one.
-        avalanches::hazard(
+        w.hazard.compute(
             &w.scenario.parameters.avalanche,
             &w.terrain,
             &w.slope_deg,
             None,
-            &mut w.hazard,
         );
+        w.hazard_stale = true;
         Ok(w)
     }
 }

@@ -1,7 +1,7 @@
 //! Avalanches inside the season: the hazard map, user and natural triggers, deposits, the
 //! budget, and (on the real avaMal terrain) steep slopes cleared with debris at their foot.
 
-use snowscape_season::avalanches::{AvalancheParameters, Trigger, hazard, pick_cell};
+use snowscape_season::avalanches::{AvalancheParameters, HazardMap, Trigger, hazard, pick_cell};
 use snowscape_season::scenario::{Scenario, UserAvalanche};
 use snowscape_season::winter::Winter;
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, SnowLayer};
@@ -70,6 +70,48 @@ fn slope_window_and_hazard_follow_the_design() {
         assert!(h[i] > 0.0);
     }
     assert_eq!(pick_cell(&h, 0.0, 0.5), None);
+}
+
+#[test]
+fn the_hazard_map_updated_over_released_cells_keeps_the_bits_of_a_full_computation() {
+    let p = AvalancheParameters::default();
+    let mut t = slope_onto_flat();
+    let n = t.geometry().len();
+    for i in 0..n {
+        t.layer_mut(SnowLayer::Unstable)[i] =
+            (0.6 * snowscape_terrain::random::uniform(4, 0, i as u64)) as f32;
+    }
+    let slopes = snowscape_season::avalanches::bedrock_slopes_deg(&t);
+    let skiers: Vec<f32> = (0..n)
+        .map(|i| snowscape_terrain::random::uniform(4, 1, i as u64) as f32)
+        .collect();
+    let mut kept = HazardMap::default();
+    kept.compute(&p, &t, &slopes, Some(&skiers));
+    for round in 0..5u64 {
+        // An avalanche takes the unstable snow of some cells (ascending).
+        let cells: Vec<usize> = (0..n)
+            .filter(|&i| snowscape_terrain::random::uniform(4, 2 + round, i as u64) < 0.02)
+            .collect();
+        for &i in &cells {
+            t.layer_mut(SnowLayer::Unstable)[i] = 0.0;
+        }
+        let total = kept.update_cells(&p, &t, &slopes, Some(&skiers), &cells);
+        let mut fresh = HazardMap::default();
+        let full = fresh.compute(&p, &t, &slopes, Some(&skiers));
+        assert_eq!(total.to_bits(), full.to_bits(), "round {round}");
+        assert_eq!(kept, fresh, "round {round}");
+        // Draws follow the hazard and agree with the cell-by-cell draw to a neighbour.
+        for k in 0..40 {
+            let u = k as f64 / 40.0;
+            let i = kept.pick(u).unwrap();
+            assert!(kept.lambda[i] > 0.0);
+            let j = pick_cell(&kept.lambda, full, u).unwrap();
+            let between: f64 = kept.lambda[i.min(j)..i.max(j)].iter().sum();
+            assert!(between <= 1e-9 * full, "draw {u}: cell {i} vs {j}");
+        }
+    }
+    assert_eq!(kept.pick(0.5).map(|i| kept.lambda[i] > 0.0), Some(true));
+    assert_eq!(HazardMap::default().pick(0.5), None);
 }
 
 #[test]

@@ -88,9 +88,26 @@ impl AvalancheState {
         out
     }
 
-    /// Volume of the avalanche on the grid, flowing plus settled, m³.
+    /// Snow of the avalanche at a grid cell, flowing plus settled, m.
+    pub fn snow_at(&self, col: usize, row: usize) -> f64 {
+        let k = self.pad(col, row);
+        self.h[k] + self.settled[k]
+    }
+
+    /// Volume of the avalanche on the grid, flowing plus settled, m³ (the settled films lie
+    /// in the touched tiles; summed tile by tile).
     pub fn total_volume(&self) -> f64 {
-        let settled: f64 = self.settled.iter().sum();
+        let settled: f64 = self
+            .touched_cells()
+            .map(|(r0, r1, c0, c1)| {
+                (r0..=r1)
+                    .map(|r| {
+                        let k = self.pad(c0, r);
+                        self.settled[k..=k + c1 - c0].iter().sum::<f64>()
+                    })
+                    .sum::<f64>()
+            })
+            .sum();
         self.flowing_volume() + settled * self.geometry.cell_area()
     }
 

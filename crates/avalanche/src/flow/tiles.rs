@@ -50,6 +50,11 @@ impl TileSet {
         }
     }
 
+    /// The occupied tiles, sorted (row-major tile order).
+    pub(crate) fn occupied(&self) -> &[u32] {
+        &self.occupied
+    }
+
     /// Tiles across one row of the grid.
     pub(crate) fn ntx(&self) -> usize {
         self.ntx

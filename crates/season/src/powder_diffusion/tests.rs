@@ -243,3 +243,36 @@ fn zero_time_step_and_bad_parameters() {
     let parsed: DiffusionParams = serde_json::from_str(r#"{"border": "closed"}"#).unwrap();
     assert_eq!(parsed.border, DiffusionBorder::Closed);
 }
+
+/// The season keeps its avalanche hazard map through powder diffusion steps (it reads only
+/// unstable snow): diffusion must leave every layer but the powder untouched, to the bit.
+#[test]
+fn diffusion_moves_powder_only() {
+    let geo = GridGeometry::new(19, 13, 2.0, 3.0).unwrap();
+    let mut t = terrain(geo.clone(), |c, r| {
+        (snowscape_terrain::random::uniform(8, 0, (r * 19 + c) as u64) * 9.0) as f32
+    });
+    for layer in [
+        SnowLayer::Compacted,
+        SnowLayer::Stable,
+        SnowLayer::Unstable,
+        SnowLayer::Powder,
+    ] {
+        for i in 0..geo.len() {
+            t.layer_mut(layer)[i] =
+                (snowscape_terrain::random::uniform(8, 1 + layer.index() as u64, i as u64)) as f32;
+        }
+    }
+    let before = t.snow.clone();
+    let mut scratch = DiffusionScratch::default();
+    let mut moved = 0.0;
+    for _ in 0..10 {
+        moved += step(&DiffusionParams::default(), &mut t, &mut scratch, 0.5)
+            .unwrap()
+            .moved;
+    }
+    assert!(moved > 0.0);
+    for layer in [SnowLayer::Compacted, SnowLayer::Stable, SnowLayer::Unstable] {
+        assert_eq!(t.layer(layer), &before[layer.index()][..], "{layer:?}");
+    }
+}

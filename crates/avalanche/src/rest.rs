@@ -1,0 +1,164 @@
+//! One avalanche on a layered terrain from release to rest, the one path the season, the
+//! editor and the command line share: release → run → deposit, with what it did.
+//!
+//! [`AvalancheWorkspace::run_to_rest`] takes snow from the released cells (all unstable snow
+//! and powder, or a thickness from the top of the pack down: [`crate::convert`]), runs the
+//! flow until it stops ([`crate::run`]: at rest, the energy criterion, or the duration) and
+//! lays every bit of it down into one layer (or leaves it across an open border). The
+//! returned [`RestOutcome`] holds the run's figures, the volumes of its budget
+//! (`released = deposited + border outflow` to round-off) and the thickness taken and laid
+//! down per cell, as sparse lists.
+//!
+//! **Cost.** The workspace keeps one flow state and its buffers through all the avalanches
+//! of a terrain. The state reads the bed from the terrain only over the tiles the flow
+//! touches, and is returned to rest over those tiles only ([`crate::flow`], *footprint*), so
+//! an avalanche costs its footprint, not the grid: a season's avalanches no longer allocate,
+//! zero or scan the whole grid.
+//!
+//! **Nothing lost.** If the run fails (too many sub-steps) or `on_record` stops it (an error
+//! from it: cancellation), the snow in flight is laid down where it is before the error is
+//! returned, so the terrain keeps its volume.
+
+use crate::convert::{deposit, release_cells};
+use crate::flow::{AvalancheError, AvalancheParams, AvalancheState};
+use crate::run::{AvalancheRun, RunBuffers, RunOptions, RunSummary};
+use snowscape_terrain::{LayeredTerrain, SnowLayer};
+
+/// What one avalanche did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RestOutcome {
+    /// The run's figures (runout, angles, footprint, speeds, stop reason...).
+    pub summary: RunSummary,
+    /// Volume released from the terrain, m³.
+    pub released_m3: f64,
+    /// Volume laid down on the terrain, m³.
+    pub deposited_m3: f64,
+    /// Thickness taken from each released cell, (row-major index, m), ascending indices.
+    pub released: Vec<(u32, f32)>,
+    /// Thickness laid down per cell, (row-major index, m), cells with a deposit only, in the
+    /// order of the touched tiles.
+    pub deposited: Vec<(u32, f32)>,
+    /// Records taken (calls of `on_record`).
+    pub records: u64,
+}
+
+/// A flow state and its buffers kept from one avalanche to the next on one terrain.
+#[derive(Debug, Default)]
+pub struct AvalancheWorkspace {
+    parts: Option<(AvalancheState, RunBuffers)>,
+    /// Grid size and nodata flags the state was built for.
+    key: Option<(usize, usize, Option<Vec<bool>>)>,
+}
+
+/// A clone is an empty workspace: the kept state is a work buffer (between runs it holds no
+/// snow and a stale bed), and rebuilding it on the next run gives the same bits. Cloning a
+/// season (the editor's snapshots) thus copies no flow state.
+impl Clone for AvalancheWorkspace {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl AvalancheWorkspace {
+    /// An empty workspace (the state is built on the first run).
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Releases `cells` (row-major indices; nodata cells are skipped) of `terrain`: with
+    /// `thickness` `None` all unstable snow and powder, else up to that many metres from the
+    /// top of the pack down; runs the flow `flow` to rest under `options`, calling
+    /// `on_record` after every record interval; lays the snow down into `deposit_layer`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_to_rest<E: From<AvalancheError>>(
+        &mut self,
+        terrain: &mut LayeredTerrain,
+        cells: &[usize],
+        thickness: Option<f64>,
+        flow: &AvalancheParams,
+        options: &RunOptions,
+        deposit_layer: SnowLayer,
+        mut on_record: impl FnMut(&AvalancheRun) -> Result<(), E>,
+    ) -> Result<RestOutcome, E> {
+        flow.validate()?;
+        options.validate()?;
+        let (mut state, buffers) = self.take_parts(terrain)?;
+        let released_m3 = match release_cells(terrain, &mut state, cells, thickness) {
+            Ok(v) => v,
+            Err(e) => {
+                // Nothing moved yet but what was released: lay it back down.
+                deposit(terrain, &mut state, deposit_layer, false)?;
+                self.parts = Some((state, buffers));
+                return Err(e.into());
+            }
+        };
+        let released: Vec<(u32, f32)> = cells
+            .iter()
+            .filter(|&&i| terrain.mask().is_valid(i))
+            .map(|&i| {
+                let g = terrain.geometry();
+                (
+                    i as u32,
+                    state.thickness_at(i % g.width(), i / g.width()) as f32,
+                )
+            })
+            .collect();
+        let mut run = AvalancheRun::with_buffers(state, buffers);
+        let mut records = 0u64;
+        let result = run.run_on::<E>(flow, options, Some(&*terrain), |r| {
+            records += 1;
+            on_record(r)
+        });
+        let w = terrain.geometry().width();
+        let mut deposited = Vec::new();
+        for (r0, r1, c0, c1) in run.touched_cells() {
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    let h = run.state.snow_at(c, r);
+                    if h > 0.0 {
+                        deposited.push(((r * w + c) as u32, h as f32));
+                    }
+                }
+            }
+        }
+        let deposited_m3 = deposit(terrain, &mut run.state, deposit_layer, false)?;
+        self.parts = Some(run.into_parts());
+        Ok(RestOutcome {
+            summary: result?,
+            released_m3,
+            deposited_m3,
+            released,
+            deposited,
+            records,
+        })
+    }
+
+    /// The kept state, returned to rest with a stale bed, or a new one if the grid or its
+    /// nodata cells changed.
+    fn take_parts(
+        &mut self,
+        terrain: &LayeredTerrain,
+    ) -> Result<(AvalancheState, RunBuffers), AvalancheError> {
+        let g = terrain.geometry();
+        let same = self.key.as_ref().is_some_and(|(w, h, m)| {
+            *w == g.width() && *h == g.height() && m.as_deref() == terrain.mask().invalid_cells()
+        });
+        match self.parts.take() {
+            Some((mut state, buffers)) if same => {
+                state.reset_touched();
+                Ok((state, buffers))
+            }
+            _ => {
+                self.key = Some((
+                    g.width(),
+                    g.height(),
+                    terrain.mask().invalid_cells().map(<[bool]>::to_vec),
+                ));
+                Ok((
+                    AvalancheState::on_terrain_lazily(terrain)?,
+                    RunBuffers::default(),
+                ))
+            }
+        }
+    }
+}
