@@ -59,6 +59,9 @@ pub enum RenderError {
         format: &'static str,
         source: image::ImageError,
     },
+    /// The GIF encoder failed.
+    #[error("GIF encoding failed: {0}")]
+    GifEncode(#[from] gif::EncodingError),
     /// A NaN or infinite altitude or snow depth in a valid cell (glTF export).
     #[error("non-finite {what} {value} at cell (col {col}, row {row})")]
     NonFinite {
