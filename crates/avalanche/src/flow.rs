@@ -266,6 +266,9 @@ pub struct AvalancheReport {
     pub dt_min: f64,
     /// Largest sub-step, s.
     pub dt_max: f64,
+    /// Simulated time the sub-steps covered, s (the step's `dt`, or less when the flow came
+    /// to rest; with [`step_at_least`] up to its `max_dt`).
+    pub simulated_s: f64,
 }
 
 /// An inclusive box of padded cells.
@@ -762,6 +765,37 @@ pub fn step_on(
     dt: f64,
     bed: Option<&dyn BedSource>,
 ) -> Result<AvalancheReport, AvalancheError> {
+    advance_flow(params, state, scratch, dt, dt, bed)
+}
+
+/// Advances the flowing snow by whole CFL sub-steps until at least `dt` seconds have passed
+/// (the last sub-step is not shortened to end at `dt`), but never past `max_dt`; the time
+/// advanced is the report's `simulated_s`. A run that samples records from the sub-steps
+/// instead of cutting sub-steps at each record takes the fewest sub-steps the CFL condition
+/// allows.
+pub fn step_at_least(
+    params: &AvalancheParams,
+    state: &mut AvalancheState,
+    scratch: &mut AvalancheScratch,
+    dt: f64,
+    max_dt: f64,
+    bed: Option<&dyn BedSource>,
+) -> Result<AvalancheReport, AvalancheError> {
+    if !(max_dt.is_finite() && max_dt >= dt) {
+        return Err(AvalancheError::InvalidTimeStep(max_dt));
+    }
+    advance_flow(params, state, scratch, dt, max_dt, bed)
+}
+
+/// Sub-steps until `dt` has passed, the last one ending at most at `max_dt`.
+fn advance_flow(
+    params: &AvalancheParams,
+    state: &mut AvalancheState,
+    scratch: &mut AvalancheScratch,
+    dt: f64,
+    max_dt: f64,
+    bed: Option<&dyn BedSource>,
+) -> Result<AvalancheReport, AvalancheError> {
     params.validate()?;
     if !(dt.is_finite() && dt >= 0.0) {
         return Err(AvalancheError::InvalidTimeStep(dt));
@@ -799,10 +833,10 @@ pub fn step_on(
         }
         let mut sub = (params.courant * dmin / speed)
             .min(params.courant * (dmin / G).sqrt())
-            .min(dt - elapsed);
+            .min(max_dt - elapsed);
         // Avoid a sliver of a last sub-step.
-        if dt - elapsed - sub < 1e-9 * dt {
-            sub = dt - elapsed;
+        if max_dt - elapsed - sub < 1e-9 * max_dt {
+            sub = max_dt - elapsed;
         }
         state.touch_around_content(bed)?;
         let s = substep(params, &pg, state, scratch, sub);
@@ -820,6 +854,7 @@ pub fn step_on(
         report.substeps += 1;
         elapsed += sub;
     }
+    report.simulated_s = elapsed;
     if report.substeps == 0 {
         report.flowing_cells = state
             .content_cells()

@@ -23,11 +23,11 @@ pub mod validation;
 pub use convert::{deposit, release, release_cells};
 pub use flow::{
     AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, BedSource,
-    Border, cfl_dt, step, step_on,
+    Border, cfl_dt, step, step_at_least, step_on,
 };
 pub use release_area::{
     MapExtent, RasterRelease, ReleaseAreaError, ReleaseMask, Rupture, RuptureCells, RuptureParams,
     release_at_point, release_from_raster, release_from_shapefile, rupture_at_point,
 };
 pub use rest::{AvalancheWorkspace, RestOutcome};
-pub use run::{AvalancheRun, RunBuffers, RunOptions, RunSummary, StopReason};
+pub use run::{AvalancheRun, RecordTiming, RunBuffers, RunOptions, RunSummary, StopReason};

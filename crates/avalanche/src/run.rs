@@ -21,7 +21,7 @@
 
 use crate::flow::{
     AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, BedSource,
-    step_on,
+    step_at_least, step_on,
 };
 use serde::{Deserialize, Serialize};
 
@@ -45,6 +45,22 @@ pub struct RunOptions {
     /// interval, m (see `AvalancheState::settle_films`). Default 0.005 (chosen here: half the
     /// footprint threshold); 0 keeps every film flowing.
     pub settle_thickness_m: f64,
+    /// How records and flow sub-steps meet. Default: records at sub-steps.
+    pub records: RecordTiming,
+}
+
+/// How records and flow sub-steps meet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RecordTiming {
+    /// Sub-steps as long as the CFL condition allows; a record follows the first sub-step
+    /// that ends at least `record_interval_s` after the last record (records are at least
+    /// that far apart, and farther where the CFL step is longer: slow flows on coarse cells).
+    #[default]
+    AtSubsteps,
+    /// Sub-steps cut to end exactly every `record_interval_s` (the paper's fixed 0.1 s
+    /// avalanche step; more sub-steps where the CFL step is longer than the interval).
+    Exact,
 }
 
 impl Default for RunOptions {
@@ -55,6 +71,7 @@ impl Default for RunOptions {
             stop_energy_fraction: 0.01,
             footprint_threshold_m: 0.01,
             settle_thickness_m: 0.005,
+            records: RecordTiming::AtSubsteps,
         }
     }
 }
@@ -341,11 +358,15 @@ impl AvalancheRun {
         if self.stop.is_some() {
             return Ok(AvalancheReport::default());
         }
-        let dt = options
-            .record_interval_s
-            .min(options.duration_s - self.time);
-        let report = step_on(params, &mut self.state, &mut self.scratch, dt, bed)?;
-        self.time += dt;
+        let remaining = options.duration_s - self.time;
+        let dt = options.record_interval_s.min(remaining);
+        let (state, scratch) = (&mut self.state, &mut self.scratch);
+        let report = match options.records {
+            RecordTiming::Exact => step_on(params, state, scratch, dt, bed)?,
+            RecordTiming::AtSubsteps => step_at_least(params, state, scratch, dt, remaining, bed)?,
+        };
+        // (A flow that came to rest within the interval ends it.)
+        self.time += report.simulated_s.max(dt);
         self.substeps += report.substeps;
         self.border_outflow += report.border_outflow;
         self.state.settle_films(options.settle_thickness_m);

@@ -3,8 +3,8 @@
 //! loses no snow when a run is stopped.
 
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, AvalancheWorkspace, RunOptions,
-    deposit, release,
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, AvalancheWorkspace, Border,
+    RunOptions, deposit, release,
 };
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer, random};
 
@@ -128,12 +128,17 @@ fn a_stopped_run_lays_its_snow_down_and_loses_none() {
     let cells = release_cells(&t, 0);
     let mut ws = AvalancheWorkspace::new();
     let mut records = 0;
+    // (Walls around the grid: no snow leaves it.)
+    let closed = AvalancheParams {
+        border: Border::Closed,
+        ..AvalancheParams::default()
+    };
     let err = ws
         .run_to_rest::<Wrapped>(
             &mut t,
             &cells,
             None,
-            &AvalancheParams::default(),
+            &closed,
             &RunOptions::default(),
             SnowLayer::Stable,
             |_| {

@@ -1,7 +1,8 @@
 //! The run driver: stop criteria, peak fields and runout figures.
 
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, RunOptions, StopReason,
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, RecordTiming, RunOptions,
+    StopReason,
 };
 use snowscape_terrain::{GridGeometry, NodataMask};
 
@@ -38,10 +39,18 @@ fn runs_to_rest_with_consistent_peaks_and_figures() {
     let params = AvalancheParams::default();
     let opts = RunOptions::default();
     let mut records = 0;
+    let mut last_time = 0.0;
     let summary = run
         .run::<AvalancheError>(&params, &opts, |r| {
             records += 1;
             assert!(r.kinetic_energy().is_finite());
+            // Records at whole sub-steps, at least a record interval apart.
+            assert!(
+                r.time() - last_time >= 0.1 - 1e-12,
+                "{} after {last_time}",
+                r.time()
+            );
+            last_time = r.time();
             Ok(())
         })
         .unwrap();
@@ -50,7 +59,29 @@ fn runs_to_rest_with_consistent_peaks_and_figures() {
         summary.stop,
         Some(StopReason::AtRest | StopReason::EnergyCriterion)
     ));
-    assert_eq!(records as f64, (summary.simulated_s / 0.1).round());
+    assert!(records as f64 <= (summary.simulated_s / 0.1).round());
+    // Records cut at exact intervals: one per 0.1 s, the same physics within the CFL error.
+    let exact = RunOptions {
+        records: RecordTiming::Exact,
+        ..RunOptions::default()
+    };
+    let mut fixed = slope_runout();
+    let mut fixed_records = 0;
+    let s2 = fixed
+        .run::<AvalancheError>(&params, &exact, |_| {
+            fixed_records += 1;
+            Ok(())
+        })
+        .unwrap();
+    assert_eq!(fixed_records as f64, (s2.simulated_s / 0.1).round());
+    assert!(
+        s2.substeps >= summary.substeps,
+        "{} vs {}",
+        s2.substeps,
+        summary.substeps
+    );
+    assert!((s2.travel_angle_deg - summary.travel_angle_deg).abs() < 0.2);
+    assert!((s2.runout_length_m - summary.runout_length_m).abs() < 0.05 * s2.runout_length_m);
     assert!(summary.volume_closure_rel < 1e-9);
     assert_eq!(summary.released_volume_m3, 10.0 * 10.0 * 4.0 * 2.0);
     // Peaks bound the final thickness; the release lies in the footprint.

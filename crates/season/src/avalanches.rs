@@ -476,7 +476,7 @@ pub struct AvalancheRecord {
     pub max_speed_m_s: f64,
     /// Simulated duration, s.
     pub simulated_s: f64,
-    /// Flow steps (0.1 s records) taken.
+    /// Flow records taken (at least `run.record_interval_s`, 0.1 s, apart).
     pub steps: u64,
     /// Mean snow temperature of the released cells, °C (when α follows it).
     pub release_temperature_c: Option<f64>,
