@@ -36,6 +36,12 @@ pub enum KernelError {
     /// A physical-transport stage failed.
     #[error(transparent)]
     Transport(Box<snowscape_transport::TransportError>),
+    /// A release area could not be read.
+    #[error(transparent)]
+    ReleaseArea(#[from] snowscape_avalanche::ReleaseAreaError),
+    /// Real data a benchmark needs is missing (the shared data folder beside the checkout).
+    #[error("{0} is missing: this benchmark needs the shared data folder beside the checkout")]
+    MissingData(String),
     /// A file-system operation (temporary directory) failed.
     #[error("{what}: {source}")]
     Io {

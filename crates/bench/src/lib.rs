@@ -41,6 +41,8 @@ pub struct BenchConfig {
     pub repeats: usize,
     /// Rayon threads; `None` uses the global pool (one thread per logical CPU). Default `None`.
     pub threads: Option<usize>,
+    /// Only the kernels whose name starts with this (e.g. `avalanche/`); `None` runs all.
+    pub only: Option<String>,
 }
 
 impl Default for BenchConfig {
@@ -49,6 +51,7 @@ impl Default for BenchConfig {
             size: 1024,
             repeats: 5,
             threads: None,
+            only: None,
         }
     }
 }
@@ -119,7 +122,7 @@ pub fn run(config: &BenchConfig, mut on_progress: impl FnMut(&str)) -> BenchRepo
         what: "setting up the kernels",
         source: std::io::Error::other("not run"),
     });
-    in_pool(&mut || kernels = registry::all_kernels(size));
+    in_pool(&mut || kernels = registry::kernels_matching(size, config.only.as_deref()));
     let kernels = match kernels {
         Ok(k) => k,
         Err(e) => {
@@ -161,11 +164,26 @@ mod tests {
     use super::*;
 
     #[test]
+    fn only_sets_up_and_runs_the_kernels_named() {
+        let config = BenchConfig {
+            size: 32,
+            repeats: 1,
+            threads: Some(1),
+            only: Some("avalanche/slope".into()),
+        };
+        let report = run(&config, |_| {});
+        assert!(report.failures.is_empty(), "{:?}", report.failures);
+        let names: Vec<&str> = report.kernels.iter().map(|k| k.name.as_str()).collect();
+        assert_eq!(names, ["avalanche/slope_run_to_rest"]);
+    }
+
+    #[test]
     fn a_small_run_measures_every_kernel_and_serialises() {
         let config = BenchConfig {
             size: 64,
             repeats: 1,
             threads: Some(2),
+            only: None,
         };
         let mut lines = Vec::new();
         let report = run(&config, |l| lines.push(l.to_string()));
@@ -182,6 +200,9 @@ mod tests {
             "transport/step",
             "transport/wind_iteration",
             "transport/flakes",
+            "avalanche/substep",
+            "avalanche/slope_run_to_rest",
+            "avalanche/avakot_run_to_rest",
         ] {
             assert!(
                 names.contains(&expected),
@@ -212,7 +233,12 @@ mod tests {
             .collect();
         assert_eq!(
             unmodelled,
-            ["season/100_days_with_avalanches", "transport/flakes"]
+            [
+                "season/100_days_with_avalanches",
+                "avalanche/slope_run_to_rest",
+                "avalanche/avakot_run_to_rest",
+                "transport/flakes"
+            ]
         );
         assert_eq!(report.machine.threads, 2);
         assert_eq!(report.size, 64);
@@ -234,6 +260,7 @@ mod tests {
                 size: 0,
                 repeats: 0,
                 threads: Some(1),
+                only: None,
             },
             |_| {},
         );

@@ -324,6 +324,9 @@ pub struct BenchArgs {
     /// Where to write the JSON report.
     #[arg(long, default_value = "bench.json")]
     pub out: PathBuf,
+    /// Only the kernels whose name starts with this, e.g. `avalanche/` or `season/100_days`.
+    #[arg(long, value_name = "PREFIX")]
+    pub only: Option<String>,
 }
 
 impl Default for ViewArgs {

@@ -1,5 +1,16 @@
 //! Kernels of `snowscape-avalanche` (Cordonnier 2018 §6.1).
 //!
+//! Whole avalanches, as users run them (each call releases, runs to rest and deposits through
+//! [`AvalancheWorkspace::run_to_rest`], the path of the season, on a terrain restored before
+//! each call; cells = the footprint, peak thickness > 1 cm, of a probe run; no bandwidth
+//! model, the cost follows the flow):
+//! - `avalanche/slope_run_to_rest`: a 1 m release 60 m long across the whole width of a 35°
+//!   slope of 5 m cells running out onto flat ground (`size` × `0.3 size` cells; 1000 × 300 at
+//!   the size).
+//! - `avalanche/avakot_run_to_rest`: the real avaKot DEM (AvaFrame, 5 m) with its release
+//!   polygons `REL/relKot.shp` and their thickness, from `../shared/data` (the benchmark
+//!   fails when the data is missing).
+//!
 //! `avalanche/substep`: one CFL sub-step of a release of `size/5` square cells (200x200 at
 //! 1024², the footprint) sliding down a 35° plane of 2 m cells, two seconds after the
 //! release. The state keeps flowing from call to call (a real avalanche's successive
@@ -8,8 +19,11 @@
 //! pipe velocities, 4 volumes and an outflow factor (f64), each pass once.
 
 use crate::kernel::{Kernel, KernelError};
-use snowscape_avalanche::{AvalancheParams, AvalancheScratch, AvalancheState, cfl_dt, step};
-use snowscape_terrain::{GridGeometry, NodataMask};
+use snowscape_avalanche::{
+    AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, AvalancheWorkspace,
+    RunOptions, cfl_dt, release_from_shapefile, step,
+};
+use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 
 /// The avalanche flow kernels on a `size`² grid.
 pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
@@ -37,14 +51,97 @@ pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
     let mut scratch = AvalancheScratch::default();
     let warm = step(&params, &mut state, &mut scratch, 2.0)?;
     let cells = warm.active_cells;
-    Ok(vec![Kernel::new(
-        "avalanche/substep",
-        cells,
-        560.0,
-        move || {
-            let dt = cfl_dt(&params, &state);
-            step(&params, &mut state, &mut scratch, dt)?;
-            Ok(())
-        },
-    )])
+    let mut kernels = vec![Kernel::new("avalanche/substep", cells, 560.0, move || {
+        let dt = cfl_dt(&params, &state);
+        step(&params, &mut state, &mut scratch, dt)?;
+        Ok(())
+    })];
+    kernels.push(run_to_rest_kernel(
+        "avalanche/slope_run_to_rest",
+        slope_onto_flat(size)?,
+    )?);
+    kernels.push(run_to_rest_kernel(
+        "avalanche/avakot_run_to_rest",
+        avakot()?,
+    )?);
+    Ok(kernels)
+}
+
+/// A terrain with unstable snow where it releases, and the released cells.
+struct Release {
+    terrain: LayeredTerrain,
+    cells: Vec<usize>,
+}
+
+/// A kernel that runs the release to rest from the same terrain at every call.
+fn run_to_rest_kernel(name: &str, release: Release) -> Result<Kernel, KernelError> {
+    let params = AvalancheParams::default();
+    let options = RunOptions::default();
+    let mut workspace = AvalancheWorkspace::new();
+    let mut probe = release.terrain.clone();
+    let out = workspace.run_to_rest::<AvalancheError>(
+        &mut probe,
+        &release.cells,
+        None,
+        &params,
+        &options,
+        SnowLayer::Stable,
+        |_| Ok(()),
+    )?;
+    let footprint =
+        (out.summary.footprint_area_m2 / release.terrain.geometry().cell_area()).round();
+    let mut terrain = release.terrain.clone();
+    Ok(Kernel::new(name, footprint as usize, 0.0, move || {
+        for (k, layer) in terrain.snow.iter_mut().enumerate() {
+            layer.copy_from_slice(&release.terrain.snow[k]);
+        }
+        workspace.run_to_rest::<AvalancheError>(
+            &mut terrain,
+            &release.cells,
+            None,
+            &params,
+            &options,
+            SnowLayer::Stable,
+            |_| Ok(()),
+        )?;
+        Ok(())
+    }))
+}
+
+/// `size` × `0.3 size` cells of 5 m: a 35° slope over the first 40 % of the rows onto flat
+/// ground, with 1 m of unstable snow over 12 rows (60 m) below its top.
+fn slope_onto_flat(size: usize) -> Result<Release, KernelError> {
+    let (w, h) = ((size * 3 / 10).max(8), size.max(16));
+    let g = GridGeometry::square(w, h, 5.0)?;
+    let tan = 35f32.to_radians().tan();
+    let foot = (h * 4 / 10) as f32;
+    let bed = Grid::from_fn(g, |_, r| 1000.0 + tan * 5.0 * (foot - r as f32).max(0.0));
+    let mut terrain = LayeredTerrain::from_bedrock(bed);
+    let rows = 2..(2 + 12).min(h);
+    let cells: Vec<usize> = (rows.start * w..rows.end * w).collect();
+    for &i in &cells {
+        terrain.layer_mut(SnowLayer::Unstable)[i] = 1.0;
+    }
+    Ok(Release { terrain, cells })
+}
+
+/// avaKot from the shared data, its release polygons as unstable snow of their thickness.
+fn avakot() -> Result<Release, KernelError> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/dem/avaframe_avaKot");
+    let (dem_path, rel_path) = (dir.join("avaKot.asc"), dir.join("REL/relKot.shp"));
+    for p in [&dem_path, &rel_path] {
+        if !p.exists() {
+            return Err(KernelError::MissingData(p.display().to_string()));
+        }
+    }
+    let dem = snowscape_io::read_dem(&dem_path, &snowscape_io::ReadOptions::default())?;
+    let area = release_from_shapefile(&rel_path, dem.geometry(), dem.mask())?;
+    let thickness = area.thickness_field(1.0)?;
+    let mut terrain = LayeredTerrain::from_bedrock(dem);
+    let cells: Vec<usize> = (0..area.cells.len()).filter(|&i| area.cells[i]).collect();
+    for &i in &cells {
+        terrain.layer_mut(SnowLayer::Unstable)[i] = thickness[i] as f32;
+    }
+    Ok(Release { terrain, cells })
 }

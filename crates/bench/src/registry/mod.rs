@@ -22,13 +22,41 @@ use crate::kernel::{Kernel, KernelError};
 
 /// Every kernel, at `size`² cells, in report order.
 pub fn all_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
+    kernels_matching(size, None)
+}
+
+/// The kernels whose name starts with `only` (all with `None`), at `size`² cells, in report
+/// order; only the crates that can hold such a kernel are set up.
+pub fn kernels_matching(size: usize, only: Option<&str>) -> Result<Vec<Kernel>, KernelError> {
+    // A group holds kernels named `group/...`.
+    let wanted = |group: &str| {
+        only.is_none_or(|p| {
+            p.starts_with(&format!("{group}/")) || format!("{group}/").starts_with(p)
+        })
+    };
     let terrain = sample_terrain(size)?;
-    let mut kernels = terrain_kernels(&terrain, size)?;
-    kernels.extend(io_kernels(&terrain)?);
-    kernels.extend(render_kernels(&terrain)?);
-    kernels.extend(season_kernels(&terrain)?);
-    kernels.extend(snowpack_kernels(&terrain)?);
-    kernels.extend(avalanche_kernels(size)?);
-    kernels.extend(transport_kernels(&terrain, size)?);
+    let mut kernels = Vec::new();
+    if wanted("terrain") {
+        kernels.extend(terrain_kernels(&terrain, size)?);
+    }
+    if wanted("io") {
+        kernels.extend(io_kernels(&terrain)?);
+    }
+    if wanted("render") {
+        kernels.extend(render_kernels(&terrain)?);
+    }
+    if wanted("season") {
+        kernels.extend(season_kernels(&terrain)?);
+    }
+    if wanted("snowpack") {
+        kernels.extend(snowpack_kernels(&terrain)?);
+    }
+    if wanted("avalanche") {
+        kernels.extend(avalanche_kernels(size)?);
+    }
+    if wanted("transport") {
+        kernels.extend(transport_kernels(&terrain, size)?);
+    }
+    kernels.retain(|k| only.is_none_or(|p| k.name.starts_with(p)));
     Ok(kernels)
 }

@@ -21,6 +21,7 @@ pub fn run(args: &BenchArgs, global: &GlobalArgs) -> Result<(), Failure> {
         size: args.size,
         repeats: args.repeats,
         threads: global.threads,
+        only: args.only.clone(),
     };
     let quiet = global.quiet;
     let report = run_bench(&config, |msg| {
