@@ -61,7 +61,7 @@ pub fn encode_gif(frames: &[RgbaImage], frame_delay_ms: u32) -> Result<Vec<u8>, 
         }
     }
     let palette = GifPalette::train(frames);
-    let indexed: Vec<Vec<u8>> = frames.par_iter().map(|f| palette.index(f)).collect();
+    let indexed = palette.index_frames(frames);
     let mut out = Vec::new();
     {
         let mut encoder = gif::Encoder::new(&mut out, width as u16, height as u16, &palette.rgb)?;
@@ -83,13 +83,15 @@ const PALETTE_SAMPLE_PIXELS: usize = 1 << 20;
 /// Bits per channel of the colour-to-entry table.
 const TABLE_BITS: u32 = 6;
 
-/// A GIF palette for a set of frames and its colour-to-entry table.
+/// A GIF palette for a set of frames, and how a colour finds its entry.
 struct GifPalette {
     /// 256 entries, `[r, g, b, ...]`.
     rgb: Vec<u8>,
-    /// Entry of each colour quantised to [`TABLE_BITS`] per channel (red, green, blue).
-    table: Vec<u8>,
+    nq: color_quant::NeuQuant,
 }
+
+/// Marks a colour whose entry is not looked up yet.
+const UNSET: u16 = u16::MAX;
 
 impl GifPalette {
     fn train(frames: &[RgbaImage]) -> Self {
@@ -106,38 +108,42 @@ impl GifPalette {
             }
         }
         let nq = color_quant::NeuQuant::new(GIF_QUANTISER_SPEED, 256, &sample);
-        let levels = 1usize << TABLE_BITS;
-        let centre = |v: usize| ((v << (8 - TABLE_BITS)) + (1 << (7 - TABLE_BITS))) as u8;
-        let table = (0..levels * levels * levels)
-            .into_par_iter()
-            .map(|c| {
-                let (r, g, b) = (
-                    c >> (2 * TABLE_BITS),
-                    (c >> TABLE_BITS) % levels,
-                    c % levels,
-                );
-                nq.index_of(&[centre(r), centre(g), centre(b), 255]) as u8
-            })
-            .collect();
         let mut rgb = nq.color_map_rgb();
         rgb.resize(3 * 256, 0);
-        Self { rgb, table }
+        Self { rgb, nq }
     }
 
-    /// The frame's pixels as palette entries.
-    fn index(&self, frame: &RgbaImage) -> Vec<u8> {
+    /// Every frame's pixels as palette entries. Each colour, quantised to [`TABLE_BITS`] per
+    /// channel, is looked up once per worker (at the centre of its bin) and then read from a
+    /// table: frames hold few distinct colours.
+    fn index_frames(&self, frames: &[RgbaImage]) -> Vec<Vec<u8>> {
+        let levels = 1usize << TABLE_BITS;
         let shift = 8 - TABLE_BITS;
-        frame
-            .as_raw()
-            .chunks_exact(4)
-            .map(|p| {
-                let (r, g, b) = (
-                    (p[0] >> shift) as usize,
-                    (p[1] >> shift) as usize,
-                    (p[2] >> shift) as usize,
-                );
-                self.table[(r << (2 * TABLE_BITS)) | (g << TABLE_BITS) | b]
-            })
+        let centre = |v: usize| ((v << shift) + (1 << (shift - 1))) as u8;
+        frames
+            .par_iter()
+            .map_init(
+                || vec![UNSET; levels * levels * levels],
+                |table, frame| {
+                    frame
+                        .as_raw()
+                        .chunks_exact(4)
+                        .map(|p| {
+                            let (r, g, b) = (
+                                (p[0] >> shift) as usize,
+                                (p[1] >> shift) as usize,
+                                (p[2] >> shift) as usize,
+                            );
+                            let slot = &mut table[(r << (2 * TABLE_BITS)) | (g << TABLE_BITS) | b];
+                            if *slot == UNSET {
+                                *slot = self.nq.index_of(&[centre(r), centre(g), centre(b), 255])
+                                    as u16;
+                            }
+                            *slot as u8
+                        })
+                        .collect()
+                },
+            )
             .collect()
     }
 }
