@@ -166,7 +166,7 @@ fn named_map<'a>(terrain: &'a LayeredTerrain, name: &str) -> Result<&'a [f32], R
 }
 
 /// Minimum and maximum of the finite values of valid cells.
-fn finite_range(values: &[f32], planes: &Planes) -> Option<(f32, f32)> {
+pub(crate) fn finite_range(values: &[f32], planes: &Planes) -> Option<(f32, f32)> {
     let w = planes.geometry.width();
     values
         .par_chunks(w)
@@ -186,7 +186,7 @@ fn finite_range(values: &[f32], planes: &Planes) -> Option<(f32, f32)> {
 
 /// Normalises `v` into [0, 1] over `range` (0.5 for a constant range).
 #[inline]
-fn normalise(v: f32, (lo, hi): (f32, f32)) -> f32 {
+pub(crate) fn normalise(v: f32, (lo, hi): (f32, f32)) -> f32 {
     if hi > lo { (v - lo) / (hi - lo) } else { 0.5 }
 }
 
@@ -320,7 +320,7 @@ impl Scene<'_, '_> {
 /// Unit upward normals (x east, y north, z up) of one row of the surface. Central differences
 /// as in `snowscape_terrain::surface::gradient` (which handles rows next to nodata); rows of an
 /// all-valid grid take a fast path with the same result.
-fn row_normals(z: &[f32], planes: &Planes, row: usize, out: &mut Vec<[f32; 3]>) {
+pub(crate) fn row_normals(z: &[f32], planes: &Planes, row: usize, out: &mut Vec<[f32; 3]>) {
     let g = &planes.geometry;
     let (w, h) = (g.width(), g.height());
     out.clear();
@@ -355,7 +355,7 @@ fn row_normals(z: &[f32], planes: &Planes, row: usize, out: &mut Vec<[f32; 3]>) 
 
 /// Albedo times light, per channel.
 #[inline]
-fn lit(albedo: Rgb, light: Rgb) -> Rgb {
+pub(crate) fn lit(albedo: Rgb, light: Rgb) -> Rgb {
     [
         albedo[0] * light[0],
         albedo[1] * light[1],

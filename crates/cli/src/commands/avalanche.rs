@@ -19,7 +19,7 @@ use snowscape_avalanche::{
 };
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
-use snowscape_render::{ColourMode, PreviewOptions, encode_gif, render_preview};
+use snowscape_render::{ColourMode, ReliefFrames, encode_gif};
 use snowscape_terrain::{Grid, LayeredTerrain, SnowLayer};
 use std::time::Instant;
 
@@ -156,17 +156,14 @@ fn write_map(out: &mut Written, name: &str, dem: &Grid, values: Vec<f32>) -> any
 }
 
 /// Renders the flowing snow (orange-red, as unstable snow) over the shaded terrain.
-fn render_frame(
-    dem: &Grid,
-    run: &AvalancheRun,
-    view: &PreviewOptions,
-) -> anyhow::Result<image::RgbaImage> {
-    let mut t = LayeredTerrain::from_bedrock(dem.clone());
-    let h = run.state.snow_thickness();
-    for (v, &hv) in t.layer_mut(SnowLayer::Unstable).iter_mut().zip(&h) {
-        *v = hv as f32;
-    }
-    Ok(render_preview(&t, view)?)
+/// A frame of the run: its snow (flowing and settled) on the relief shaded once.
+fn render_frame(frames: &ReliefFrames, run: &AvalancheRun) -> anyhow::Result<image::RgbaImage> {
+    let snow_box = run
+        .touched_cells()
+        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1), a.2.min(b.2), a.3.max(b.3)));
+    Ok(frames.frame(SnowLayer::Unstable, snow_box, |c, r| {
+        run.state.snow_at(c, r) as f32
+    })?)
 }
 
 pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
@@ -191,6 +188,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     std::fs::create_dir_all(args.out.join("frames"))
         .with_context(|| format!("cannot create {}/frames", args.out.display()))
         .job_failed()?;
+    let relief = ReliefFrames::new(&dem, &view).job_failed()?;
     let t0 = Instant::now();
     let mut av = AvalancheRun::new(state);
     let bar = ProgressBar::new((options.duration_s * 10.0).ceil() as u64);
@@ -219,7 +217,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
             if r.time() + 1e-9 >= next_frame || r.stop_reason().is_some() {
                 let tf = Instant::now();
                 let name = format!("frames/frame_{:04}.png", frames.len());
-                match render_frame(&dem, r, &view)
+                match render_frame(&relief, r)
                     .and_then(|img| write_png(&args.out.join(&name), &img).map(|_| img))
                 {
                     Ok(img) => {
