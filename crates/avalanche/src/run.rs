@@ -4,7 +4,10 @@
 //! [`AvalancheRun`] advances an [`AvalancheState`] by record intervals (the paper's temporal
 //! zoom: Section 3.1 steps an avalanche every ~0.1 s of simulated time) and, after each, updates
 //! per cell the **peak flow thickness** and **peak speed** (only over the active box, so the
-//! cost follows the footprint). The run stops when
+//! cost follows the footprint). By default ([`RecordTiming::AtSubsteps`]) the flow takes the
+//! longest sub-steps its CFL condition allows and a record follows the first sub-step ending at
+//! least an interval after the last record; [`RecordTiming::Exact`] cuts the sub-steps at every
+//! interval instead. The run stops when
 //! - the snow is at rest (no moving pipe), or
 //! - its kinetic energy `E = Σ ½·h·|v|²·dx·dy` (per unit density, m⁵/s²) has fallen below
 //!   `stop_energy_fraction` of its peak (AvaFrame com1DFA's `stopCrit`, default 1 %: the tail of a

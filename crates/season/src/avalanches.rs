@@ -23,8 +23,10 @@
 //!
 //! **Temporal zoom.** The avalanche then runs to rest inside its start event (§3.1, Fig. 4: "an
 //! entire avalanche may take place between two lower frequency events"): the season clock
-//! advances by the avalanche's simulated time in 0.1 s steps, during which no other event
-//! happens.
+//! advances by the avalanche's simulated time (records at least 0.1 s apart, at the flow's CFL
+//! sub-steps), during which no other event happens. Each avalanche goes through
+//! [`AvalancheWorkspace::run_to_rest`] on the season's kept flow state: its cost follows its
+//! footprint, and the hazard map ([`HazardMap`]) is updated over its released cells only.
 //!
 //! **Deposit.** Debris is dense, sintered snow: it becomes *stable* snow (part of the bed of
 //! later avalanches; the stability phenomenon compacts it further), volume for volume, so the
