@@ -642,34 +642,42 @@ impl AvalancheState {
     /// pipe speed (a dry cell's `|u|` is the speed of a pipe, and the cell at either end of the
     /// fastest pipe reaches it), so dry cells cost one look at their pipes.
     pub(crate) fn refresh_active(&mut self) {
+        self.refresh_active_over(&[(0, self.ph - 1, 0, self.pw - 1)]);
+    }
+
+    /// [`AvalancheState::refresh_active`] over the padded boxes `(r0, r1, c0, c1)` only (all
+    /// snow and motion must lie in them), each scanned row by row.
+    pub(crate) fn refresh_active_over(&mut self, boxes: &[(usize, usize, usize, usize)]) {
         self.tiles.clear();
         let (mut umax, mut wave) = (0.0f64, 0.0f64);
-        for r in 0..self.ph {
-            let mut run: Option<(usize, usize)> = None;
-            for c in 0..self.pw {
-                let k = r * self.pw + c;
-                let mut moving = false;
-                for p in &self.pipes {
-                    umax = umax.max(p[k].abs());
-                    moving |= p[k] != 0.0;
+        for &(r0, r1, c0, c1) in boxes {
+            for r in r0..=r1 {
+                let mut run: Option<(usize, usize)> = None;
+                for c in c0..=c1 {
+                    let k = r * self.pw + c;
+                    let mut moving = false;
+                    for p in &self.pipes {
+                        umax = umax.max(p[k].abs());
+                        moving |= p[k] != 0.0;
+                    }
+                    let wet = self.h[k] > 0.0;
+                    if wet {
+                        wave = wave.max(self.wave_speed(k));
+                    }
+                    if wet || moving {
+                        run = match run {
+                            Some((a, _)) if a / TILE == c / TILE => Some((a, c)),
+                            Some((a, b)) => {
+                                self.tiles.add(r, a, b);
+                                Some((c, c))
+                            }
+                            None => Some((c, c)),
+                        };
+                    }
                 }
-                let wet = self.h[k] > 0.0;
-                if wet {
-                    wave = wave.max(self.wave_speed(k));
+                if let Some((a, b)) = run {
+                    self.tiles.add(r, a, b);
                 }
-                if wet || moving {
-                    run = match run {
-                        Some((a, _)) if a / TILE == c / TILE => Some((a, c)),
-                        Some((a, b)) => {
-                            self.tiles.add(r, a, b);
-                            Some((c, c))
-                        }
-                        None => Some((c, c)),
-                    };
-                }
-            }
-            if let Some((a, b)) = run {
-                self.tiles.add(r, a, b);
             }
         }
         self.maxima = (umax, wave.max(umax));

@@ -183,16 +183,7 @@ mod tests {
         }
         // One palette of 256 colours for 7680 distinct ones spread over the colour cube (a
         // hard case: per-frame palettes do better here, at 40 % of an avalanche command).
-        let (mut sum, mut worst, mut n) = (0i64, 0i32, 0i64);
-        for (f, d) in frames.iter().zip(&decoded) {
-            for (a, b) in f.pixels().zip(d.buffer().pixels()) {
-                for ch in 0..3 {
-                    let e = (a[ch] as i32 - b[ch] as i32).abs();
-                    (sum, worst, n) = (sum + e as i64, worst.max(e), n + 1);
-                }
-            }
-        }
-        let mean = sum as f64 / n as f64;
+        let (mean, worst) = gif_error(&frames);
         eprintln!("GIF colour error: mean {mean:.2}, worst {worst} levels");
         assert!(mean < 16.0 && worst <= 64, "mean {mean}, worst {worst}");
     }

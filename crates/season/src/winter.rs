@@ -448,12 +448,16 @@ impl Winter {
         Ok(())
     }
 
+    /// The recent-skier map the hazard reads, when skiers run.
+    fn recent_skier_map(&self) -> Option<Vec<f32>> {
+        self.ski_area
+            .as_ref()
+            .map(|a| a.recent_skiers(&self.scenario.skiers.ski))
+    }
+
     /// Recomputes the avalanche hazard and the Avalanche-Start rate.
     fn update_avalanche_rate(&mut self) {
-        let skiers = self
-            .ski_area
-            .as_ref()
-            .map(|a| a.recent_skiers(&self.scenario.skiers.ski));
+        let skiers = self.recent_skier_map();
         let total = self.hazard.compute(
             &self.scenario.parameters.avalanche,
             &self.terrain,
@@ -530,10 +534,7 @@ impl Winter {
             .or_default() += rec.steps;
         self.state.avalanches.push(rec.clone());
         // Only the released cells' unstable snow changed (the debris is stable snow).
-        let skiers = self
-            .ski_area
-            .as_ref()
-            .map(|a| a.recent_skiers(&self.scenario.skiers.ski));
+        let skiers = self.recent_skier_map();
         let total = self.hazard.update_cells(
             &self.scenario.parameters.avalanche,
             &self.terrain,

@@ -234,33 +234,7 @@ impl AvalancheState {
     /// [`AvalancheState::refresh_active`] over the touched tiles only (all snow and motion
     /// lie in them).
     pub(crate) fn refresh_active_touched(&mut self) {
-        self.tiles.clear();
-        let (mut umax, mut wave) = (0.0f64, 0.0f64);
-        for o in 0..self.footprint.touched.len() {
-            let (r0, r1, c0, c1) = self.touched_box(o);
-            for r in r0..=r1 {
-                let mut run: Option<(usize, usize)> = None;
-                for c in c0..=c1 {
-                    let k = r * self.pw + c;
-                    let mut moving = false;
-                    for p in &self.pipes {
-                        umax = umax.max(p[k].abs());
-                        moving |= p[k] != 0.0;
-                    }
-                    let wet = self.h[k] > 0.0;
-                    if wet {
-                        wave = wave.max(self.wave_speed(k));
-                    }
-                    if wet || moving {
-                        run = Some((run.map_or(c, |r| r.0), c));
-                    }
-                }
-                if let Some((a, b)) = run {
-                    self.tiles.add(r, a, b);
-                }
-            }
-        }
-        self.maxima = (umax, wave.max(umax));
-        self.active = self.tiles.bbox().map(|b| b.grown(self.pw, self.ph));
+        let boxes: Vec<_> = self.touched_boxes().collect();
+        self.refresh_active_over(&boxes);
     }
 }

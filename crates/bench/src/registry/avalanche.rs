@@ -75,19 +75,21 @@ struct Release {
 
 /// A kernel that runs the release to rest from the same terrain at every call.
 fn run_to_rest_kernel(name: &str, release: Release) -> Result<Kernel, KernelError> {
-    let params = AvalancheParams::default();
-    let options = RunOptions::default();
+    let (params, options) = (AvalancheParams::default(), RunOptions::default());
+    let run = move |ws: &mut AvalancheWorkspace, t: &mut LayeredTerrain, cells: &[usize]| {
+        ws.run_to_rest::<AvalancheError>(
+            t,
+            cells,
+            None,
+            &params,
+            &options,
+            SnowLayer::Stable,
+            |_| Ok(()),
+        )
+    };
     let mut workspace = AvalancheWorkspace::new();
     let mut probe = release.terrain.clone();
-    let out = workspace.run_to_rest::<AvalancheError>(
-        &mut probe,
-        &release.cells,
-        None,
-        &params,
-        &options,
-        SnowLayer::Stable,
-        |_| Ok(()),
-    )?;
+    let out = run(&mut workspace, &mut probe, &release.cells)?;
     let footprint =
         (out.summary.footprint_area_m2 / release.terrain.geometry().cell_area()).round();
     let mut terrain = release.terrain.clone();
@@ -95,15 +97,7 @@ fn run_to_rest_kernel(name: &str, release: Release) -> Result<Kernel, KernelErro
         for (k, layer) in terrain.snow.iter_mut().enumerate() {
             layer.copy_from_slice(&release.terrain.snow[k]);
         }
-        workspace.run_to_rest::<AvalancheError>(
-            &mut terrain,
-            &release.cells,
-            None,
-            &params,
-            &options,
-            SnowLayer::Stable,
-            |_| Ok(()),
-        )?;
+        run(&mut workspace, &mut terrain, &release.cells)?;
         Ok(())
     }))
 }
