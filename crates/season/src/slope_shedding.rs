@@ -85,8 +85,11 @@
 //! pure function of each cell; a bound from the cached bedrock descent passes over the cells
 //! that cannot be steep enough); a step without any returns at once. The sweep is sequential
 //! in the fixed order and visits only the cells that shed or receive (a bitset of pending
-//! positions); holding depths come from a table in `tan / (1 + tan)` and a receiving cell's
-//! fixed point from regula falsi. The step is bit-identical for any thread count.
+//! positions), setting up a cell's surfaces the first time it looks at it, so that a step
+//! costs what its cascade touches rather than the grid; holding depths come from a table in
+//! `tan / (1 + tan)` (cached in the scratch) and a receiving cell's fixed point from regula
+//! falsi over the steepest rise at each of the three neighbour distances. The step is
+//! bit-identical for any thread count.
 //!
 //! **Time.** Shedding is a release to rest, not a rate: `dt_days` is validated and otherwise
 //! unused; call the step after each change of the snow cover (snowfall, wind).
@@ -131,9 +134,9 @@ pub struct SheddingParams {
     /// Floor of the holding depth, metres of snow (>= 0). Default 0.05 m: OGGM Snowslide
     /// (FSM2oshd uses 0.01 m).
     pub min_holding_depth_m: f64,
-    /// Slope below which a cell does not shed its own snow, degrees, in [0, 90]. Default 50°:
+    /// Slope below which a cell does not shed its own snow, degrees, in [0, 90]. Default 60°:
     /// our choice for seasons, whose avalanches (a 28-60° release window) move the snow of
-    /// 30-50° slopes; steeper faces sluff continuously. FSM2oshd's `slope_min` is 30° (DHSVM's
+    /// 30-60° slopes; steeper faces sluff continuously. FSM2oshd's `slope_min` is 30° (DHSVM's
     /// `Avalanche.c` also starts at 30°), for models without avalanches.
     pub min_slope_deg: f64,
     /// Factor on the holding depth of a cell that received snow in this step, in (0, 1].
@@ -276,6 +279,12 @@ pub struct SheddingScratch {
     /// Slope of a cell that has not received snow (tan; see the module documentation).
     tan_slope: Vec<f32>,
     flags: Vec<u8>,
+    /// The step in which each cell's `bed`, `surface0`, `surface` and `flags` were set up
+    /// (equal to `generation`: in this one).
+    stamp: Vec<u32>,
+    generation: u32,
+    /// The holding table and the parameters it was built for.
+    holding: Option<(SheddingParams, HoldingTable)>,
     queue: BinaryHeap<u64>,
     /// One bit per rank: the cells the sweep has still to visit (over their holding depth,
     /// or received snow ahead of the sweep).
@@ -303,6 +312,22 @@ const LEVEL_M: f32 = 1e-3;
 const ROUNDS: usize = 9;
 
 impl SheddingScratch {
+    /// Sets up cell `i`'s bed, surfaces and flags from the snow it has, the first time the
+    /// step looks at it (the same sums as `LayeredTerrain::surface`).
+    #[inline]
+    fn touch(&mut self, bedrock: &[f32], snow: &[Vec<f32>; 4], i: usize) {
+        if self.stamp[i] == self.generation {
+            return;
+        }
+        self.stamp[i] = self.generation;
+        let [c, st, u, pw] = snow;
+        let b = bedrock[i];
+        self.bed[i] = b + c[i];
+        self.surface0[i] = b + (c[i] + st[i] + u[i] + pw[i]);
+        self.surface[i] = self.surface0[i];
+        self.flags[i] = 0;
+    }
+
     /// Rebuilds the bedrock order if the bedrock or the mask changed.
     fn refresh_order(&mut self, terrain: &LayeredTerrain) {
         let mask = terrain.mask().invalid_cells();
@@ -432,49 +457,44 @@ pub fn step(
     }
     scratch.refresh_order(terrain);
     let tan_min = params.min_slope_deg.to_radians().tan() as f32;
-    let holding = HoldingTable::new(params);
+    if scratch.holding.as_ref().is_none_or(|(p, _)| p != params) {
+        scratch.holding = Some((params.clone(), HoldingTable::new(params)));
+    }
+    let holding = match scratch.holding.take() {
+        Some((_, table)) => table,
+        None => HoldingTable::new(params),
+    };
     let active = with_validity!(mask, |valid| over_holding_depth(
         params, &holding, terrain, scratch, &geometry, valid, tan_min
     ));
     if active.is_empty() {
+        scratch.holding = Some((params.clone(), holding));
         return Ok(SheddingReport::default());
     }
-    // The bed, the surface at the start and the surface of the sweep, in one pass (the same
-    // sums as `LayeredTerrain::surface`), with the flags cleared.
-    let w = geometry.width();
+    // The bed, the surface at the start and the surface of the sweep are set up lazily, the
+    // first time the sweep looks at a cell in this step (a cell it has not looked at still has
+    // the snow it had at the start): a step costs what its cascade touches, not the grid.
     for v in [
         &mut scratch.bed,
         &mut scratch.surface0,
         &mut scratch.surface,
+        &mut scratch.tan_slope,
     ] {
         v.resize(n, 0.0);
     }
     scratch.flags.resize(n, 0);
-    let [c, st, u, pw] = &terrain.snow;
-    scratch
-        .bed
-        .par_chunks_mut(w)
-        .zip(scratch.surface0.par_chunks_mut(w))
-        .zip(scratch.surface.par_chunks_mut(w))
-        .zip(scratch.flags.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(row, (((bed, s0), s), fl))| {
-            let o = row * w;
-            for k in 0..bed.len() {
-                let i = o + k;
-                let b = terrain.bedrock[i];
-                bed[k] = b + c[i];
-                s0[k] = b + (c[i] + st[i] + u[i] + pw[i]);
-                s[k] = s0[k];
-                fl[k] = 0;
-            }
-        });
-    scratch.tan_slope.resize(n, 0.0);
+    scratch.stamp.resize(n, 0);
+    scratch.generation = scratch.generation.wrapping_add(1);
+    if scratch.generation == 0 {
+        scratch.stamp.fill(0);
+        scratch.generation = 1;
+    }
     scratch.pending.clear();
     scratch.pending.resize(n.div_ceil(64), 0);
     // What the neighbours above expect a cell to keep: its surface less its own excess.
     for &(i, tan, excess) in &active {
         let i = i as usize;
+        scratch.touch(&terrain.bedrock, &terrain.snow, i);
         scratch.flags[i] = ACTIVE;
         scratch.tan_slope[i] = tan;
         scratch.surface0[i] -= excess;
@@ -484,6 +504,7 @@ pub fn step(
     let report = with_validity!(mask, |valid| cascade::sweep(
         params, &holding, terrain, scratch, &geometry, valid, tan_min
     ));
+    scratch.holding = Some((params.clone(), holding));
     Ok(report)
 }
 
@@ -520,10 +541,12 @@ fn over_holding_depth<V: Validity>(
                 if !valid.at(i) {
                     return None;
                 }
+                // The slope bound first: it reads two arrays and rules out most cells.
+                if bound[i] + snow[0][i] * inv_l_max + margin < tan_min {
+                    return None;
+                }
                 let depth = snow[0][i] + snow[1][i] + snow[2][i] + snow[3][i];
-                if depth - floor <= MIN_SHED_M
-                    || bound[i] + snow[0][i] * inv_l_max + margin < tan_min
-                {
+                if depth - floor <= MIN_SHED_M {
                     return None;
                 }
                 let on_bed = steepest_descent(bed(i), bed, bed, geometry, valid, nb, i);
@@ -667,6 +690,7 @@ const TABLE_SEGMENTS: usize = 4096;
 /// on a vertical face) and interpolated linearly: the sweep evaluates it many times per cell
 /// (root finding), and `atan` and `exp` per evaluation cost more than the rest of the sweep. The
 /// table is within 1e-5 relative of [`SheddingParams::holding_depth`] (tested).
+#[derive(Debug, Clone)]
 struct HoldingTable {
     /// The law without its floor at the table's points, m (the floor is applied after the
     /// interpolation, which would otherwise round its corner).

@@ -27,6 +27,8 @@ pub(super) fn sweep<V: Validity>(
         surface,
         tan_slope,
         flags,
+        stamp,
+        generation,
         queue,
         pending,
         ..
@@ -38,7 +40,10 @@ pub(super) fn sweep<V: Validity>(
         geometry,
         valid,
         nb: neighbours(geometry),
+        bedrock: &terrain.bedrock,
         snow: &mut terrain.snow,
+        stamp,
+        generation: *generation,
         bed,
         surface0,
         surface,
@@ -111,9 +116,13 @@ struct Cascade<'a, V> {
     geometry: &'a GridGeometry,
     valid: &'a V,
     nb: [Neighbour; 8],
+    bedrock: &'a [f32],
     snow: &'a mut [Vec<f32>; 4],
-    bed: &'a [f32],
-    surface0: &'a [f32],
+    /// See [`SheddingScratch::touch`].
+    stamp: &'a mut [u32],
+    generation: u32,
+    bed: &'a mut [f32],
+    surface0: &'a mut [f32],
     surface: &'a mut [f32],
     tan_slope: &'a [f32],
     tan_min: f32,
@@ -133,6 +142,38 @@ struct Cascade<'a, V> {
 }
 
 impl<V: Validity> Cascade<'_, V> {
+    /// Sets up cell `j` the first time the step looks at it (as [`SheddingScratch::touch`]).
+    #[inline]
+    fn touch(&mut self, j: usize) {
+        if self.stamp[j] == self.generation {
+            return;
+        }
+        self.stamp[j] = self.generation;
+        let s = &self.snow;
+        let b = self.bedrock[j];
+        self.bed[j] = b + s[0][j];
+        self.surface0[j] = b + (s[0][j] + s[1][j] + s[2][j] + s[3][j]);
+        self.surface[j] = self.surface0[j];
+        self.flags[j] = 0;
+    }
+
+    /// Sets up cell `i` and its valid neighbours: everything a visit of `i` reads.
+    #[inline]
+    fn touch_around(&mut self, i: usize) {
+        self.touch(i);
+        let mut cells = [0usize; 8];
+        let mut m = 0;
+        for_each_around(self.geometry, self.valid, &self.nb, i, |_, a| {
+            if let Around::Cell(j) = a {
+                cells[m] = j;
+                m += 1;
+            }
+        });
+        for &j in &cells[..m] {
+            self.touch(j);
+        }
+    }
+
     /// Surface of neighbour `j` as seen by a sender: the current one once the sweep has passed
     /// it (its snow rests), before that the one it is expected to keep (its surface at the
     /// start of the step less its own excess; its receipts are in transit).
@@ -153,16 +194,19 @@ impl<V: Validity> Cascade<'_, V> {
     /// within 0.1 mm (of depth, or of the root's residual), returning the held end.
     fn retained(&self, i: usize, base: f32, depth: f32) -> f32 {
         let mut fixed = 0.0f32;
-        let mut rises = [(0.0f32, 0.0f32); 8];
-        let mut m = 0;
+        // The highest rise `base − seen` over the neighbours at each distance (east-west,
+        // north-south, diagonal) and that distance's `1 / L`: for a given `1 / L`, `(c + d) / L`
+        // grows with `c` (in f32 too, rounding being monotone), so the steepest descent is the
+        // largest of three terms instead of eight, with the same bits.
+        let mut rises = [(f32::NEG_INFINITY, 1.0f32); 3];
         for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| match a {
             Around::Cell(j) => {
-                rises[m] = (base - self.seen(j), n.inv_l);
-                m += 1;
+                let g = &mut rises[distance_group(n)];
+                g.0 = g.0.max(base - self.seen(j));
+                g.1 = n.inv_l;
             }
             Around::Ghost(o) => fixed = fixed.max((self.bed[o] - self.bed[i]) * n.inv_l),
         });
-        let rises = &rises[..m];
         let hold = |d: f32| {
             let slope = rises
                 .iter()
@@ -211,6 +255,7 @@ impl<V: Validity> Cascade<'_, V> {
     /// Sheds cell `i`'s excess, if any. A round cut short by a receiver it would overtake is
     /// followed by another without it, at most [`ROUNDS`] in all.
     fn shed(&mut self, i: usize) {
+        self.touch_around(i);
         let s = &self.snow;
         let depth = s[0][i] + s[1][i] + s[2][i] + s[3][i];
         let keep = if self.flags[i] & RECEIVED != 0 {
@@ -335,6 +380,16 @@ impl<V: Validity> Cascade<'_, V> {
             }
         }
         (removed, limited)
+    }
+}
+
+/// Which of the three neighbour distances `n` lies at: 0 east-west, 1 north-south, 2 diagonal.
+#[inline]
+fn distance_group(n: &Neighbour) -> usize {
+    match (n.dc, n.dr) {
+        (_, 0) => 0,
+        (0, _) => 1,
+        _ => 2,
     }
 }
 

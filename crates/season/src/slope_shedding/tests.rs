@@ -287,6 +287,21 @@ fn a_reused_scratch_gives_the_same_result() {
     assert_eq!(other, other_fresh);
     step(&p, &mut fresh, &mut SheddingScratch::default(), 1.0).unwrap();
     assert_eq!(t, fresh);
+    // Other parameters through the same scratch (its holding table is rebuilt), and a second
+    // step on the snow the first left (its surfaces are set up afresh).
+    let q = SheddingParams {
+        exp_rate_per_deg: 0.15,
+        min_slope_deg: 40.0,
+        ..p.clone()
+    };
+    let mut again = t.clone();
+    again.layer_mut(SnowLayer::Powder).iter_mut().for_each(|v| *v += 0.3);
+    let mut again_fresh = again.clone();
+    let before = again.clone();
+    step(&q, &mut again, &mut scratch, 1.0).unwrap();
+    step(&q, &mut again_fresh, &mut SheddingScratch::default(), 1.0).unwrap();
+    assert_eq!(again, again_fresh);
+    assert_ne!(again, before, "the second step moved nothing");
 }
 
 #[test]
