@@ -86,11 +86,20 @@ fn scene(side: usize) -> Scene {
     }
 }
 
+/// Kernel radius, metres: `SNOWSCAPE_FESTENBERG_RADIUS` (default 1 m, 10 columns; 7 m is the
+/// issue's 70-column kernel).
+fn radius() -> f64 {
+    std::env::var("SNOWSCAPE_FESTENBERG_RADIUS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1.0)
+}
+
 fn params(side: usize) -> CoverParams {
     let m = side as f64 * 0.1;
     CoverParams {
         depth_m: Some(0.3),
-        radius_m: Some(1.0),
+        radius_m: Some(radius()),
         bridge_m: Some(0.5),
         resolution_m: Some(0.1),
         extent_m: Some([0.5, 0.5, 0.5 + m, 0.5 + m]),

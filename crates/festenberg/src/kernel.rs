@@ -29,10 +29,17 @@
 //! Cost and determinism: the kernel is local, so members are found through a spatial grid of
 //! square buckets of columns (`bucket_columns` on a side) and only the buckets that meet the
 //! cylinder's square are visited: O(sites × kernel columns), never O(sites²) (the paper's
-//! O(n²) of Fig. 15 was an implementation accident). Weights and terms are summed as 64-bit
-//! fixed-point integers (weights in units of 2^-32, `λ / h0` in units of 2^-24), so the sums are
-//! exact and do not depend on the order of the members: results are bit-identical for every
-//! bucket size and every thread count.
+//! O(n²) of Fig. 15 was an implementation accident). Each row of the disk is one run of
+//! columns (`KernelTable::spans`). The columns of at most two sites, whose member choice is a
+//! couple of comparisons, are read from contiguous per-column arrays (bases and flags) and
+//! summed eight at a time with AVX2 where the CPU has it, a scalar loop elsewhere; the columns
+//! of three sites or more go member by member through [`SiteField::member`]
+//! ([`evaluate_reference`] takes that path for every column). Weights and terms are summed as
+//! 64-bit fixed-point integers (weights in units of 2^-32, `λ / h0` in units of 2^-24, exact
+//! 32 × 32 → 64-bit products), so the sums are exact and do not depend on the order of the
+//! members or on the path: results are bit-identical for every bucket size, every thread
+//! count and with or without AVX2 (tested against [`evaluate_reference`] and lane against
+//! scalar).
 
 use crate::sites::SiteField;
 use rayon::prelude::*;
@@ -53,6 +60,13 @@ pub struct KernelTable {
     distance: Vec<f32>,
     /// Weight times the unit vector towards the column (x east, y north), in 2^-24 units.
     towards: Vec<[i64; 2]>,
+    /// Quantised weights as i32 when every one fits (always but for a kernel of a few
+    /// columns), for the dense path's 32 × 32 → 64-bit products; 0 outside the cylinder,
+    /// [`PAD`] zeros at the end.
+    weight32: Option<Vec<i32>>,
+    /// For each table row, the offsets `dx` in `lo..=hi` of the columns inside the cylinder
+    /// (a disk's row is one run of columns).
+    spans: Vec<(i32, i32)>,
     /// Columns inside the cylinder.
     pub columns: usize,
 }
@@ -99,12 +113,27 @@ impl KernelTable {
                 }
             }
         }
+        let spans = (0..side)
+            .map(|row| {
+                let cells = &weight[row * side..(row + 1) * side];
+                let lo = cells.iter().position(|&w| w >= 0).unwrap_or(side);
+                let hi = cells.iter().rposition(|&w| w >= 0).unwrap_or(0);
+                (lo as i32 - reach, hi as i32 - reach)
+            })
+            .collect();
+        let weight32 = weight.iter().all(|&w| w < i64::from(i32::MAX)).then(|| {
+            let mut w32: Vec<i32> = weight.iter().map(|&w| w.max(0) as i32).collect();
+            w32.extend([0; PAD]);
+            w32
+        });
         Self {
             reach,
             side,
             weight,
             distance,
             towards,
+            weight32,
+            spans,
             columns,
         }
     }
@@ -143,12 +172,35 @@ pub fn clipped(dz: f32, h0: f32) -> f32 {
 /// Evaluates the kernel of radius `radius_m` at every site of `field`, visiting the columns
 /// bucket by bucket (`bucket_columns` >= 1 on a side; results do not depend on it).
 pub fn evaluate(field: &SiteField, radius_m: f64, bucket_columns: usize) -> KernelField {
-    let table = KernelTable::new(radius_m, field.cell_size);
+    evaluate_with(
+        field,
+        KernelTable::new(radius_m, field.cell_size),
+        radius_m,
+        bucket_columns,
+    )
+}
+
+/// [`evaluate`] member by member through [`SiteField::member`], without the fast path for
+/// the columns of one site or none: the direct reading of the paper the fast path is tested
+/// against (the same bits, slower).
+pub fn evaluate_reference(field: &SiteField, radius_m: f64) -> KernelField {
+    let mut table = KernelTable::new(radius_m, field.cell_size);
+    table.weight32 = None;
+    evaluate_with(field, table, radius_m, 1)
+}
+
+fn evaluate_with(
+    field: &SiteField,
+    table: KernelTable,
+    radius_m: f64,
+    bucket_columns: usize,
+) -> KernelField {
+    let dense = DenseColumns::new(field);
     let n = field.len();
     let per_site: Vec<(f32, f32, [f32; 2], f32, f32, u64)> = (0..n)
         .into_par_iter()
         .with_min_len(256)
-        .map(|i| site_kernel(field, &table, radius_m, bucket_columns.max(1), i))
+        .map(|i| site_kernel(field, &dense, &table, radius_m, bucket_columns.max(1), i))
         .collect();
     let mut out = KernelField {
         height: Vec::with_capacity(n),
@@ -167,6 +219,92 @@ pub fn evaluate(field: &SiteField, radius_m: f64, bucket_columns: usize) -> Kern
         out.members_visited += m;
     }
     out
+}
+
+/// Lanes past the end of the fast path's arrays, so that a run's last group of eight can be
+/// read whole (its extra lanes are masked off).
+const PAD: usize = 8;
+
+/// A column of the fast path (bit 0: at most two sites), with a member (bit 1: a site), whose
+/// lower (or only) site is visible (bit 2); of two sites (bit 3), whose upper one is visible
+/// (bit 4), and whose lower and upper sites have room for 2 h0 (bits 5 and 6).
+const DENSE: i32 = 1;
+const MEMBER: i32 = 2;
+const SEEN: i32 = 4;
+const TWO: i32 = 8;
+const SEEN_UPPER: i32 = 16;
+const ROOMY_LOWER: i32 = 32;
+const ROOMY_UPPER: i32 = 64;
+
+/// The columns as the fast path reads them, contiguous by column: the base surfaces and flags
+/// of the columns of at most two sites, from which [`SiteField::member`]'s choice is a few
+/// comparisons (the nearer base, then the upper site if the lower has no room for a roomy
+/// site); the columns of three or more sites take the general path.
+struct DenseColumns {
+    /// Base surface `s(p')` of a column's lower (or only) site; `-∞` for an empty column (a
+    /// drop: `λ = -h0` and a boundary); 0 for a column of three sites or more. [`PAD`] more
+    /// at the end.
+    base: Vec<f32>,
+    /// Base surface of a two-site column's upper site (0 otherwise). [`PAD`] more at the end.
+    upper: Vec<f32>,
+    /// [`DENSE`], [`MEMBER`], [`SEEN`], [`TWO`], [`SEEN_UPPER`], [`ROOMY_LOWER`],
+    /// [`ROOMY_UPPER`]; 0 for a column of three sites or more. [`PAD`] more at the end.
+    flags: Vec<i32>,
+    /// For each map row, for each column `x`, the first column at or after `x` with three
+    /// sites or more (`width` if none): `width + 1` entries a row.
+    next_multi: Vec<u32>,
+}
+
+impl DenseColumns {
+    fn new(field: &SiteField) -> Self {
+        let (w, h) = (field.width, field.height);
+        let mut base = vec![0.0f32; w * h + PAD];
+        let mut upper = vec![0.0f32; w * h + PAD];
+        let mut flags = vec![0i32; w * h + PAD];
+        let mut next_multi = vec![w as u32; h * (w + 1)];
+        for row in 0..h {
+            for col in (0..w).rev() {
+                let c = row * w + col;
+                let sites = field.column_sites(c);
+                let at = row * (w + 1) + col;
+                next_multi[at] = next_multi[at + 1];
+                match sites.len() {
+                    0 => {
+                        base[c] = f32::NEG_INFINITY;
+                        flags[c] = DENSE;
+                    }
+                    1 => {
+                        base[c] = field.base(sites.start);
+                        flags[c] = if field.visible(sites.start) {
+                            DENSE | MEMBER | SEEN
+                        } else {
+                            DENSE | MEMBER
+                        };
+                    }
+                    2 => {
+                        let (lo, hi) = (sites.start, sites.start + 1);
+                        base[c] = field.base(lo);
+                        upper[c] = field.base(hi);
+                        let bit = |on: bool, b: i32| if on { b } else { 0 };
+                        flags[c] = DENSE
+                            | MEMBER
+                            | TWO
+                            | bit(field.visible(lo), SEEN)
+                            | bit(field.visible(hi), SEEN_UPPER)
+                            | bit(field.roomy(lo), ROOMY_LOWER)
+                            | bit(field.roomy(hi), ROOMY_UPPER);
+                    }
+                    _ => next_multi[at] = col as u32,
+                }
+            }
+        }
+        Self {
+            base,
+            upper,
+            flags,
+            next_multi,
+        }
+    }
 }
 
 /// Sums of one site's kernel.
@@ -189,6 +327,7 @@ struct Sums {
 
 fn site_kernel(
     field: &SiteField,
+    dense: &DenseColumns,
     table: &KernelTable,
     radius_m: f64,
     bucket: usize,
@@ -209,30 +348,60 @@ fn site_kernel(
         edge: f32::INFINITY,
         ..Default::default()
     };
+    let general = |sums: &mut Sums, t: usize, column: usize| {
+        member_term(
+            field,
+            table,
+            sums,
+            t,
+            table.weight[t],
+            column,
+            s,
+            h0,
+            inv_h0,
+            roomy,
+        );
+    };
     for by in y0 / b..=y1 / b {
         let (ya, yb) = ((by * b).max(y0), (by * b + b - 1).min(y1));
         for bx in x0 / b..=x1 / b {
             let (xa, xb) = ((bx * b).max(x0), (bx * b + b - 1).min(x1));
             for y in ya..=yb {
-                let row = ((y - cy + reach) as usize) * table.side;
-                for x in xa..=xb {
-                    let t = row + (x - cx + reach) as usize;
-                    let wq = table.weight[t];
-                    if wq < 0 {
-                        continue;
+                // The disk's run of columns in this row, within the bucket.
+                let trow = (y - cy + reach) as usize;
+                let (lo, hi) = table.spans[trow];
+                let (sa, sb) = (xa.max(cx + i64::from(lo)), xb.min(cx + i64::from(hi)));
+                if sa > sb {
+                    continue;
+                }
+                let t0 = trow * table.side + (sa - cx + reach) as usize;
+                let c0 = (y * w + sa) as usize;
+                let len = (sb - sa + 1) as usize;
+                let Some(weight32) = &table.weight32 else {
+                    for k in 0..len {
+                        general(&mut sums, t0 + k, c0 + k);
                     }
-                    member_term(
-                        field,
-                        table,
-                        &mut sums,
-                        t,
-                        wq,
-                        (y * w + x) as usize,
-                        s,
-                        h0,
-                        inv_h0,
-                        roomy,
-                    );
+                    continue;
+                };
+                // The row's columns of at most two sites take the fast path (the others'
+                // lanes masked off), then the columns of three or more the general one.
+                let run = DenseRun {
+                    base: &dense.base[c0..],
+                    upper: &dense.upper[c0..],
+                    flags: &dense.flags[c0..],
+                    roomy,
+                    weight: &weight32[t0..],
+                    len,
+                    table,
+                    t0,
+                };
+                dense_run(&mut sums, &run, s, h0, inv_h0);
+                let next = &dense.next_multi[y as usize * (w as usize + 1)..];
+                let mut x = next[sa as usize] as usize;
+                while x <= sb as usize {
+                    let k = x - sa as usize;
+                    general(&mut sums, t0 + k, c0 + k);
+                    x = next[x + 1] as usize;
                 }
             }
         }
@@ -261,6 +430,193 @@ fn site_kernel(
     (height, r, dir, v, dh, sums.visited)
 }
 
+/// A run of `len` contiguous columns of a disk row: their bases and flags and the table's
+/// weights for them (`t0` the table index of the first); each slice holds at least
+/// `len + PAD` values.
+struct DenseRun<'a> {
+    base: &'a [f32],
+    upper: &'a [f32],
+    flags: &'a [i32],
+    /// Whether the kernel's site has room for 2 h0.
+    roomy: bool,
+    weight: &'a [i32],
+    len: usize,
+    table: &'a KernelTable,
+    t0: usize,
+}
+
+/// The terms of a [`DenseRun`]'s columns of at most two sites (the others are left to the
+/// general path): the integers of [`member_term`], eight
+/// columns at a time with AVX2 where the CPU has it (the same IEEE operations as the scalar
+/// code, and exact integer sums, so the same bits either way).
+fn dense_run(sums: &mut Sums, run: &DenseRun, s: f32, h0: f32, inv_h0: f32) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 is present.
+        unsafe { dense_lanes_avx2(sums, run, s, h0, inv_h0) };
+        return;
+    }
+    dense_scalar(sums, run, s, h0, inv_h0);
+}
+
+/// [`dense_run`] one column at a time.
+fn dense_scalar(sums: &mut Sums, run: &DenseRun, s: f32, h0: f32, inv_h0: f32) {
+    for k in 0..run.len {
+        let f = run.flags[k];
+        if f & DENSE == 0 {
+            continue;
+        }
+        let mut dz = run.base[k] - s;
+        let mut seen = f & SEEN != 0;
+        if f & TWO != 0 {
+            // `SiteField::member`: the nearer base (ties to the lower site); a roomy site
+            // moves up from a lower site without room to an upper one with it.
+            let dz_upper = run.upper[k] - s;
+            let up = dz_upper.abs() < dz.abs()
+                || (run.roomy && f & ROOMY_LOWER == 0 && f & ROOMY_UPPER != 0);
+            if up {
+                dz = dz_upper;
+                seen = f & SEEN_UPPER != 0;
+            }
+        }
+        let w = i64::from(run.weight[k]);
+        sums.weight += w;
+        sums.visited += 1;
+        sums.lambda += w * i64::from(lambda_units(dz, inv_h0));
+        if f & MEMBER != 0 {
+            sums.member_weight += w;
+        }
+        if seen {
+            sums.visible += w;
+        }
+        if dz < -h0 {
+            boundary_term(sums, run.table, run.t0 + k);
+        }
+    }
+}
+
+/// [`dense_run`] with AVX2: groups of eight columns, the last one's extra lanes masked off.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn dense_lanes_avx2(sums: &mut Sums, run: &DenseRun, s: f32, h0: f32, inv_h0: f32) {
+    use std::arch::x86_64::*;
+    let n = run.len;
+    assert!(
+        run.base.len() >= n + PAD
+            && run.upper.len() >= n + PAD
+            && run.flags.len() >= n + PAD
+            && run.weight.len() >= n + PAD
+    );
+    let (vs, vdrop, vinv) = (
+        _mm256_set1_ps(s),
+        _mm256_set1_ps(-h0),
+        _mm256_set1_ps(inv_h0),
+    );
+    let (vlo, vhi, vunit) = (
+        _mm256_set1_ps(-1.0),
+        _mm256_set1_ps(1.0),
+        _mm256_set1_ps(LAMBDA_ONE),
+    );
+    let bit = |b: i32| _mm256_set1_epi32(b);
+    let (dense_bit, member_bit, seen_bit) = (bit(DENSE), bit(MEMBER), bit(SEEN));
+    let (two_bit, seen_upper_bit) = (bit(TWO), bit(SEEN_UPPER));
+    let (roomy_lower_bit, roomy_upper_bit) = (bit(ROOMY_LOWER), bit(ROOMY_UPPER));
+    let roomy = if run.roomy { bit(-1) } else { bit(0) };
+    let magnitude = _mm256_castsi256_ps(bit(i32::MAX));
+    let has = |f: __m256i, b: __m256i| _mm256_cmpeq_epi32(_mm256_and_si256(f, b), b);
+    let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    let low = _mm256_set1_epi64x(0xffff_ffff);
+    let widen = |v: __m256i| _mm256_add_epi64(_mm256_and_si256(v, low), _mm256_srli_epi64::<32>(v));
+    let zero = _mm256_setzero_si256();
+    let (mut even, mut odd) = (zero, zero);
+    let (mut member, mut visible, mut weight) = (zero, zero, zero);
+    let mut visited = 0u32;
+    let mut k = 0;
+    while k < n {
+        // The lanes still in the run.
+        let live = _mm256_cmpgt_epi32(_mm256_set1_epi32((n - k) as i32), lane);
+        // SAFETY: k < n and every slice holds n + PAD >= k + 8 values.
+        let (b, b_upper, w, f) = unsafe {
+            (
+                _mm256_loadu_ps(run.base.as_ptr().add(k)),
+                _mm256_loadu_ps(run.upper.as_ptr().add(k)),
+                _mm256_loadu_si256(run.weight.as_ptr().add(k).cast()),
+                _mm256_loadu_si256(run.flags.as_ptr().add(k).cast()),
+            )
+        };
+        let live = _mm256_and_si256(live, has(f, dense_bit));
+        visited += _mm256_movemask_ps(_mm256_castsi256_ps(live)).count_ones();
+        let w = _mm256_and_si256(w, live);
+        weight = _mm256_add_epi64(weight, widen(w));
+        let dz_lower = _mm256_sub_ps(b, vs);
+        let dz_upper = _mm256_sub_ps(b_upper, vs);
+        // The member of a two-site column, as in the scalar loop.
+        let nearer = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(
+            _mm256_and_ps(dz_upper, magnitude),
+            _mm256_and_ps(dz_lower, magnitude),
+        ));
+        let moves = _mm256_and_si256(
+            _mm256_and_si256(roomy, has(f, roomy_upper_bit)),
+            _mm256_andnot_si256(has(f, roomy_lower_bit), bit(-1)),
+        );
+        let up = _mm256_and_si256(has(f, two_bit), _mm256_or_si256(nearer, moves));
+        let dz = _mm256_blendv_ps(dz_lower, dz_upper, _mm256_castsi256_ps(up));
+        let seen = _mm256_blendv_epi8(has(f, seen_bit), has(f, seen_upper_bit), up);
+        // `max` returns its second operand for a NaN, as `f32::max(x, -1)` returns -1 (and
+        // an empty column's -∞ gives -1).
+        let x = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(dz, vinv), vlo), vhi);
+        let q = _mm256_cvttps_epi32(_mm256_mul_ps(x, vunit));
+        // Signed 32 × 32 → 64-bit products of the even lanes, then of the odd ones.
+        even = _mm256_add_epi64(even, _mm256_mul_epi32(w, q));
+        odd = _mm256_add_epi64(
+            odd,
+            _mm256_mul_epi32(_mm256_srli_epi64::<32>(w), _mm256_srli_epi64::<32>(q)),
+        );
+        // Weights (>= 0) of members and of visible members, widened to 64 bits.
+        member = _mm256_add_epi64(member, widen(_mm256_and_si256(w, has(f, member_bit))));
+        visible = _mm256_add_epi64(visible, widen(_mm256_and_si256(w, seen)));
+        let drops = _mm256_movemask_ps(_mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(dz, vdrop),
+            _mm256_castsi256_ps(live),
+        ));
+        if drops != 0 {
+            for j in 0..8 {
+                if drops & (1 << j) != 0 {
+                    boundary_term(sums, run.table, run.t0 + k + j);
+                }
+            }
+        }
+        k += 8;
+    }
+    let total = |v: __m256i| {
+        let mut lanes = [0i64; 4];
+        // SAFETY: `lanes` holds four i64.
+        unsafe { _mm256_storeu_si256(lanes.as_mut_ptr().cast(), v) };
+        lanes.iter().sum::<i64>()
+    };
+    sums.lambda += total(even) + total(odd);
+    sums.member_weight += total(member);
+    sums.visible += total(visible);
+    sums.weight += total(weight);
+    sums.visited += u64::from(visited);
+}
+
+/// A boundary member at table column `t`: the nearest edge and the direction towards it.
+#[inline]
+fn boundary_term(sums: &mut Sums, table: &KernelTable, t: usize) {
+    sums.edge = sums.edge.min(table.distance[t]);
+    sums.towards[0] += table.towards[t][0];
+    sums.towards[1] += table.towards[t][1];
+}
+
+/// `λ / h0` of a height difference `dz`, clipped to [-1, 1] (Eq. 6) and truncated to units of
+/// 2^-24 (one instruction, the same on every machine); a NaN counts as -1 (`max` drops it).
+#[inline(always)]
+#[allow(clippy::manual_clamp)] // `clamp` keeps a NaN, which the lanes' `max` drops.
+fn lambda_units(dz: f32, inv_h0: f32) -> i32 {
+    ((dz * inv_h0).max(-1.0).min(1.0) * LAMBDA_ONE) as i32
+}
+
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn member_term(
@@ -283,9 +639,7 @@ fn member_term(
             true
         }
         Some((m, dz)) => {
-            // Truncated to 2^-24 h0: one instruction, the same on every machine.
-            let q = ((dz * inv_h0).clamp(-1.0, 1.0) * LAMBDA_ONE) as i64;
-            sums.lambda += wq * q;
+            sums.lambda += wq * i64::from(lambda_units(dz, inv_h0));
             sums.member_weight += wq;
             if field.visible(m) {
                 sums.visible += wq;
@@ -294,8 +648,97 @@ fn member_term(
         }
     };
     if boundary {
-        sums.edge = sums.edge.min(table.distance[t]);
-        sums.towards[0] += table.towards[t][0];
-        sums.towards[1] += table.towards[t][1];
+        boundary_term(sums, table, t);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sums_of(f: impl FnOnce(&mut Sums)) -> (i64, i64, i64, i64, [i64; 2], u32, u64) {
+        let mut s = Sums {
+            edge: f32::INFINITY,
+            ..Default::default()
+        };
+        f(&mut s);
+        (
+            s.weight,
+            s.member_weight,
+            s.lambda,
+            s.visible,
+            s.towards,
+            s.edge.to_bits(),
+            s.visited,
+        )
+    }
+
+    /// The AVX2 lanes give the scalar loop's integers on runs of every length, with empty,
+    /// covered, visible, two-site and several-site columns, drops and NaN.
+    #[test]
+    fn the_lanes_match_the_scalar_loop() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("no AVX2 on this CPU: the scalar loop is the only path");
+            return;
+        }
+        let table = KernelTable::new(3.0, 0.1);
+        let weight32 = table.weight32.clone().unwrap();
+        let n = 200;
+        let mut base = Vec::new();
+        let mut upper = Vec::new();
+        let mut flags = Vec::new();
+        for k in 0..n + PAD {
+            let r = scramble(k as u64);
+            let (b, f) = match r % 9 {
+                0 => (f32::NEG_INFINITY, DENSE),
+                1 => (0.0, 0),
+                2 => ((r % 1000) as f32 * 1e-3, DENSE | MEMBER),
+                3 => (f32::NAN, DENSE | MEMBER | SEEN),
+                4 | 5 => (
+                    (r % 1000) as f32 * 1e-3 - 0.5,
+                    DENSE
+                        | MEMBER
+                        | TWO
+                        | ((r >> 20) as i32 & (SEEN | SEEN_UPPER | ROOMY_LOWER | ROOMY_UPPER)),
+                ),
+                _ => ((r % 2000) as f32 * 1e-3 - 1.0, DENSE | MEMBER | SEEN),
+            };
+            base.push(b);
+            upper.push(b + ((r >> 40) % 800) as f32 * 1e-3);
+            flags.push(f);
+        }
+        for (len, roomy) in [0, 1, 7, 8, 9, 16, 61, 200]
+            .into_iter()
+            .flat_map(|l| [(l, false), (l, true)])
+        {
+            for t0 in [0, 13, table.side * 5 + 2] {
+                let run = DenseRun {
+                    base: &base,
+                    upper: &upper,
+                    flags: &flags,
+                    roomy,
+                    weight: &weight32[t0..],
+                    len,
+                    table: &table,
+                    t0,
+                };
+                let (s, h0) = (0.1f32, 0.3f32);
+                let scalar = sums_of(|x| dense_scalar(x, &run, s, h0, 1.0 / h0));
+                // SAFETY: AVX2 is present (checked above).
+                let lanes = sums_of(|x| unsafe { dense_lanes_avx2(x, &run, s, h0, 1.0 / h0) });
+                assert_eq!(
+                    lanes, scalar,
+                    "run of {len} from table column {t0}, roomy {roomy}"
+                );
+            }
+        }
+    }
+
+    /// A fixed scramble of `k` (SplitMix64's finaliser).
+    fn scramble(k: u64) -> u64 {
+        let mut z = k.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
     }
 }

@@ -6,7 +6,7 @@
 
 mod common;
 use common::{cube, quad, scene};
-use snowscape_festenberg::kernel::evaluate;
+use snowscape_festenberg::kernel::{evaluate, evaluate_reference};
 use snowscape_festenberg::{CoverParams, cover, prepare_sites};
 use snowscape_mesh::Scene;
 
@@ -165,6 +165,39 @@ fn kernel_results_do_not_depend_on_the_bucket_size() {
     for bucket in [2, 3, 7, 16, 1000] {
         let k = evaluate(&field, r.radius_m, bucket);
         assert_eq!(k, reference, "bucket of {bucket} columns");
+    }
+}
+
+/// The fast path (columns of one site or none, eight at a time) gives the bits of the
+/// member-by-member reading, on a scene with empty columns around it, drops, a box and a table
+/// (columns of two sites), for a kernel of a few columns and larger ones.
+#[test]
+fn the_fast_path_gives_the_member_by_member_bits() {
+    let s = scene(vec![
+        quad("floor", [0.0, 0.0, 5.0, 4.0], 0.0),
+        cube("box", [1.0, 1.0, 0.0], [2.0, 2.5, 0.6]),
+        cube("table", [3.0, 0.5, 0.5], [4.5, 3.5, 0.6]),
+        cube("shelf", [0.5, 3.0, 0.2], [1.5, 3.5, 0.25]),
+    ]);
+    for radius in [0.06, 0.35, 1.2] {
+        let p = CoverParams {
+            depth_m: Some(0.15),
+            radius_m: Some(radius),
+            resolution_m: Some(0.05),
+            bridge_m: Some(0.3),
+            ..Default::default()
+        };
+        let (r, _, field) = prepare_sites(&s, &p, true).unwrap();
+        let reference = evaluate_reference(&field, r.radius_m);
+        assert!(reference.height.iter().any(|&h| h > 0.0));
+        assert!(reference.edge.iter().any(|&e| e < 1.0), "no edge within R");
+        for bucket in [1, 16, 1000] {
+            assert_eq!(
+                evaluate(&field, r.radius_m, bucket),
+                reference,
+                "radius {radius} m, bucket of {bucket} columns"
+            );
+        }
     }
 }
 

@@ -295,7 +295,10 @@ fn a_reused_scratch_gives_the_same_result() {
         ..p.clone()
     };
     let mut again = t.clone();
-    again.layer_mut(SnowLayer::Powder).iter_mut().for_each(|v| *v += 0.3);
+    again
+        .layer_mut(SnowLayer::Powder)
+        .iter_mut()
+        .for_each(|v| *v += 0.3);
     let mut again_fresh = again.clone();
     let before = again.clone();
     step(&q, &mut again, &mut scratch, 1.0).unwrap();
