@@ -60,6 +60,11 @@ pub struct KernelTable {
     distance: Vec<f32>,
     /// Weight times the unit vector towards the column (x east, y north), in 2^-24 units.
     towards: Vec<[i64; 2]>,
+    /// The same, east and north apart, and the distances, for the lanes; [`PAD`] more at the
+    /// end.
+    towards_x: Vec<i64>,
+    towards_y: Vec<i64>,
+    distance_padded: Vec<f32>,
     /// Quantised weights as i32 when every one fits (always but for a kernel of a few
     /// columns), for the dense path's 32 × 32 → 64-bit products; 0 outside the cylinder,
     /// [`PAD`] zeros at the end.
@@ -126,9 +131,19 @@ impl KernelTable {
             w32.extend([0; PAD]);
             w32
         });
+        let pad = |v: Vec<i64>| {
+            let mut v = v;
+            v.extend([0; PAD]);
+            v
+        };
+        let mut distance_padded = distance.clone();
+        distance_padded.extend([0.0; PAD]);
         Self {
             reach,
             side,
+            towards_x: pad(towards.iter().map(|t| t[0]).collect()),
+            towards_y: pad(towards.iter().map(|t| t[1]).collect()),
+            distance_padded,
             weight,
             distance,
             towards,
@@ -344,6 +359,7 @@ fn site_kernel(
     let inv_h0 = 1.0 / h0;
     let roomy = field.roomy(i);
     let b = bucket as i64;
+    let mut lanes = LaneSums::default();
     let mut sums = Sums {
         edge: f32::INFINITY,
         ..Default::default()
@@ -395,7 +411,7 @@ fn site_kernel(
                     table,
                     t0,
                 };
-                dense_run(&mut sums, &run, s, h0, inv_h0);
+                dense_run(&mut sums, &mut lanes, &run, s, h0, inv_h0);
                 let next = &dense.next_multi[y as usize * (w as usize + 1)..];
                 let mut x = next[sa as usize] as usize;
                 while x <= sb as usize {
@@ -406,6 +422,7 @@ fn site_kernel(
             }
         }
     }
+    lanes.add_to(&mut sums);
     let dh = (sums.lambda as f64 / (sums.weight as f64 * LAMBDA_ONE as f64)) as f32 * h0;
     let v = if sums.member_weight > 0 {
         (sums.visible as f64 / sums.member_weight as f64) as f32
@@ -449,14 +466,61 @@ struct DenseRun<'a> {
 /// general path): the integers of [`member_term`], eight
 /// columns at a time with AVX2 where the CPU has it (the same IEEE operations as the scalar
 /// code, and exact integer sums, so the same bits either way).
-fn dense_run(sums: &mut Sums, run: &DenseRun, s: f32, h0: f32, inv_h0: f32) {
+fn dense_run(sums: &mut Sums, lanes: &mut LaneSums, run: &DenseRun, s: f32, h0: f32, inv_h0: f32) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 is present.
-        unsafe { dense_lanes_avx2(sums, run, s, h0, inv_h0) };
+        unsafe { dense_lanes_avx2(lanes, run, s, h0, inv_h0) };
         return;
     }
+    let _ = lanes;
     dense_scalar(sums, run, s, h0, inv_h0);
+}
+
+/// The lanes' sums over a site's runs, kept apart until the site is done (a reduction per row
+/// would cost as much as the row).
+#[derive(Clone, Copy)]
+struct LaneSums {
+    lambda_even: [i64; 4],
+    lambda_odd: [i64; 4],
+    member: [i64; 4],
+    visible: [i64; 4],
+    weight: [i64; 4],
+    towards_x: [i64; 4],
+    towards_y: [i64; 4],
+    edge: [f32; 8],
+    visited: u64,
+}
+
+impl Default for LaneSums {
+    fn default() -> Self {
+        Self {
+            lambda_even: [0; 4],
+            lambda_odd: [0; 4],
+            member: [0; 4],
+            visible: [0; 4],
+            weight: [0; 4],
+            towards_x: [0; 4],
+            towards_y: [0; 4],
+            edge: [f32::INFINITY; 8],
+            visited: 0,
+        }
+    }
+}
+
+impl LaneSums {
+    /// Adds the lanes into the site's sums (exact integers; the nearest edge by `min`).
+    fn add_to(&self, sums: &mut Sums) {
+        let total = |v: &[i64; 4]| v.iter().sum::<i64>();
+        sums.lambda += total(&self.lambda_even) + total(&self.lambda_odd);
+        sums.member_weight += total(&self.member);
+        sums.visible += total(&self.visible);
+        sums.weight += total(&self.weight);
+        sums.visited += self.visited;
+        sums.towards[0] += total(&self.towards_x);
+        sums.towards[1] += total(&self.towards_y);
+        sums.edge = self.edge.iter().fold(sums.edge, |e, &d| e.min(d));
+    }
 }
 
 /// [`dense_run`] one column at a time.
@@ -498,7 +562,7 @@ fn dense_scalar(sums: &mut Sums, run: &DenseRun, s: f32, h0: f32, inv_h0: f32) {
 /// [`dense_run`] with AVX2: groups of eight columns, the last one's extra lanes masked off.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn dense_lanes_avx2(sums: &mut Sums, run: &DenseRun, s: f32, h0: f32, inv_h0: f32) {
+unsafe fn dense_lanes_avx2(acc: &mut LaneSums, run: &DenseRun, s: f32, h0: f32, inv_h0: f32) {
     use std::arch::x86_64::*;
     let n = run.len;
     assert!(
@@ -527,9 +591,28 @@ unsafe fn dense_lanes_avx2(sums: &mut Sums, run: &DenseRun, s: f32, h0: f32, inv
     let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     let low = _mm256_set1_epi64x(0xffff_ffff);
     let widen = |v: __m256i| _mm256_add_epi64(_mm256_and_si256(v, low), _mm256_srli_epi64::<32>(v));
-    let zero = _mm256_setzero_si256();
-    let (mut even, mut odd) = (zero, zero);
-    let (mut member, mut visible, mut weight) = (zero, zero, zero);
+    let table = run.table;
+    assert!(
+        table.towards_x.len() >= run.t0 + n + PAD
+            && table.towards_y.len() >= run.t0 + n + PAD
+            && table.distance_padded.len() >= run.t0 + n + PAD
+    );
+    let (tx_ptr, ty_ptr, d_ptr) = (
+        table.towards_x.as_ptr().wrapping_add(run.t0),
+        table.towards_y.as_ptr().wrapping_add(run.t0),
+        table.distance_padded.as_ptr().wrapping_add(run.t0),
+    );
+    let infinity = _mm256_set1_ps(f32::INFINITY);
+    let load = |v: &[i64; 4]| {
+        // SAFETY: `v` holds four i64.
+        unsafe { _mm256_loadu_si256(v.as_ptr().cast()) }
+    };
+    // SAFETY: `acc.edge` holds eight f32.
+    let mut edge = unsafe { _mm256_loadu_ps(acc.edge.as_ptr()) };
+    let (mut towards_x, mut towards_y) = (load(&acc.towards_x), load(&acc.towards_y));
+    let (mut even, mut odd) = (load(&acc.lambda_even), load(&acc.lambda_odd));
+    let (mut member, mut visible) = (load(&acc.member), load(&acc.visible));
+    let mut weight = load(&acc.weight);
     let mut visited = 0u32;
     let mut k = 0;
     while k < n {
@@ -575,30 +658,54 @@ unsafe fn dense_lanes_avx2(sums: &mut Sums, run: &DenseRun, s: f32, h0: f32, inv
         // Weights (>= 0) of members and of visible members, widened to 64 bits.
         member = _mm256_add_epi64(member, widen(_mm256_and_si256(w, has(f, member_bit))));
         visible = _mm256_add_epi64(visible, widen(_mm256_and_si256(w, seen)));
-        let drops = _mm256_movemask_ps(_mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_LT_OQ>(dz, vdrop),
-            _mm256_castsi256_ps(live),
-        ));
-        if drops != 0 {
-            for j in 0..8 {
-                if drops & (1 << j) != 0 {
-                    boundary_term(sums, run.table, run.t0 + k + j);
-                }
-            }
+        // Boundary members (drops by more than h0, empty columns): the nearest one's
+        // distance and the weighted directions, with the 64-bit sums as two halves.
+        let drops = _mm256_and_si256(
+            _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(dz, vdrop)),
+            live,
+        );
+        if _mm256_testz_si256(drops, drops) == 0 {
+            // SAFETY: t0 + k + 8 <= t0 + n + PAD, within the padded tables (asserted).
+            let (d, x0, x1, y0, y1) = unsafe {
+                (
+                    _mm256_loadu_ps(d_ptr.add(k)),
+                    _mm256_loadu_si256(tx_ptr.add(k).cast()),
+                    _mm256_loadu_si256(tx_ptr.add(k + 4).cast()),
+                    _mm256_loadu_si256(ty_ptr.add(k).cast()),
+                    _mm256_loadu_si256(ty_ptr.add(k + 4).cast()),
+                )
+            };
+            edge = _mm256_min_ps(
+                edge,
+                _mm256_blendv_ps(infinity, d, _mm256_castsi256_ps(drops)),
+            );
+            let m0 = _mm256_cvtepi32_epi64(_mm256_castsi256_si128(drops));
+            let m1 = _mm256_cvtepi32_epi64(_mm256_extracti128_si256::<1>(drops));
+            towards_x = _mm256_add_epi64(
+                towards_x,
+                _mm256_add_epi64(_mm256_and_si256(x0, m0), _mm256_and_si256(x1, m1)),
+            );
+            towards_y = _mm256_add_epi64(
+                towards_y,
+                _mm256_add_epi64(_mm256_and_si256(y0, m0), _mm256_and_si256(y1, m1)),
+            );
         }
         k += 8;
     }
-    let total = |v: __m256i| {
-        let mut lanes = [0i64; 4];
-        // SAFETY: `lanes` holds four i64.
-        unsafe { _mm256_storeu_si256(lanes.as_mut_ptr().cast(), v) };
-        lanes.iter().sum::<i64>()
+    let store = |v: __m256i, to: &mut [i64; 4]| {
+        // SAFETY: `to` holds four i64.
+        unsafe { _mm256_storeu_si256(to.as_mut_ptr().cast(), v) }
     };
-    sums.lambda += total(even) + total(odd);
-    sums.member_weight += total(member);
-    sums.visible += total(visible);
-    sums.weight += total(weight);
-    sums.visited += u64::from(visited);
+    store(even, &mut acc.lambda_even);
+    store(odd, &mut acc.lambda_odd);
+    store(member, &mut acc.member);
+    store(visible, &mut acc.visible);
+    store(weight, &mut acc.weight);
+    store(towards_x, &mut acc.towards_x);
+    store(towards_y, &mut acc.towards_y);
+    // SAFETY: `acc.edge` holds eight f32.
+    unsafe { _mm256_storeu_ps(acc.edge.as_mut_ptr(), edge) };
+    acc.visited += u64::from(visited);
 }
 
 /// A boundary member at table column `t`: the nearest edge and the direction towards it.
@@ -725,7 +832,12 @@ mod tests {
                 let (s, h0) = (0.1f32, 0.3f32);
                 let scalar = sums_of(|x| dense_scalar(x, &run, s, h0, 1.0 / h0));
                 // SAFETY: AVX2 is present (checked above).
-                let lanes = sums_of(|x| unsafe { dense_lanes_avx2(x, &run, s, h0, 1.0 / h0) });
+                let lanes = sums_of(|x| {
+                    let mut acc = LaneSums::default();
+                    // SAFETY: AVX2 is present (checked above).
+                    unsafe { dense_lanes_avx2(&mut acc, &run, s, h0, 1.0 / h0) };
+                    acc.add_to(x);
+                });
                 assert_eq!(
                     lanes, scalar,
                     "run of {len} from table column {t0}, roomy {roomy}"
