@@ -168,6 +168,14 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
             winter.run_until(next).job_failed()?;
             bar.set_position((winter.day() * 10.0) as u64);
             if interrupted.load(Ordering::SeqCst) {
+                // A chunk that reached a snapshot day writes its frame before the checkpoint:
+                // a resume reads every frame up to the checkpoint's day.
+                if winter.day() >= m
+                    && let Some(k) = snaps.iter().position(|&d| d == m)
+                {
+                    let img = render_preview(&winter.terrain, &frame_view).job_failed()?;
+                    write_png(&job.out.join(frame_name(k)), &img).job_failed()?;
+                }
                 write_checkpoint(&job.out, &winter).job_failed()?;
                 bar.abandon();
                 return Err(Failure {
