@@ -268,9 +268,11 @@ struct DenseColumns {
     /// For each map row, for each column `x`, the first column at or after `x` with three
     /// sites or more (`width` if none): `width + 1` entries a row.
     next_multi: Vec<u32>,
-    /// For each map row, the number of columns before each column that are neither empty nor
-    /// one visible site (`width + 1` entries a row): a run without any is plain.
-    complex_before: Vec<u32>,
+    /// For each map row, for each column `x`, the first column at or after `x` that is
+    /// neither empty nor one visible site (`width` if none), and one more than the last such
+    /// column at or before `x` (0 if none): the stretches of a row around them are plain.
+    next_complex: Vec<u32>,
+    complex_upto: Vec<u32>,
 }
 
 impl DenseColumns {
@@ -316,14 +318,23 @@ impl DenseColumns {
                 }
             }
         }
-        let mut complex_before = Vec::with_capacity(h * (w + 1));
-        for row in flags[..w * h].chunks(w) {
-            let mut count = 0;
-            complex_before.push(0);
-            for &f in row {
-                let plain = f == DENSE || f == DENSE | MEMBER | SEEN;
-                count += u32::from(!plain);
-                complex_before.push(count);
+        let (mut next_complex, mut complex_upto) = (vec![w as u32; h * w], vec![0u32; h * w]);
+        let plain = |f: i32| f == DENSE || f == DENSE | MEMBER | SEEN;
+        for row in 0..h {
+            let (f, o) = (&flags[row * w..(row + 1) * w], row * w);
+            let mut next = w as u32;
+            for x in (0..w).rev() {
+                if !plain(f[x]) {
+                    next = x as u32;
+                }
+                next_complex[o + x] = next;
+            }
+            let mut upto = 0;
+            for x in 0..w {
+                if !plain(f[x]) {
+                    upto = x as u32 + 1;
+                }
+                complex_upto[o + x] = upto;
             }
         }
         Self {
@@ -331,7 +342,8 @@ impl DenseColumns {
             upper,
             flags,
             next_multi,
-            complex_before,
+            next_complex,
+            complex_upto,
         }
     }
 }
@@ -415,19 +427,35 @@ fn site_kernel(
                 };
                 // The row's columns of at most two sites take the fast path (the others'
                 // lanes masked off), then the columns of three or more the general one.
-                let complex = &dense.complex_before[y as usize * (w as usize + 1)..];
-                let run = DenseRun {
-                    base: &dense.base[c0..],
-                    upper: &dense.upper[c0..],
-                    flags: &dense.flags[c0..],
-                    roomy,
-                    plain: complex[sb as usize + 1] == complex[sa as usize],
-                    weight: &weight32[t0..],
-                    len,
-                    table,
-                    t0,
+                // Plain stretches (empty and one-visible-site columns only) at either end of
+                // the row, the stretch between its first and last other columns in full.
+                let o = y as usize * w as usize;
+                let (first, after_last) = (
+                    dense.next_complex[o + sa as usize] as usize,
+                    dense.complex_upto[o + sb as usize] as usize,
+                );
+                let parts = if first > sb as usize {
+                    [(0, len, true), (len, len, false), (len, len, true)]
+                } else {
+                    let (k0, k1) = (first - sa as usize, after_last - sa as usize);
+                    [(0, k0, true), (k0, k1, false), (k1, len, true)]
                 };
-                dense_run(&mut sums, &mut lanes, &run, s, h0, inv_h0);
+                for (k0, k1, plain) in parts {
+                    if k1 > k0 {
+                        let run = DenseRun {
+                            base: &dense.base[c0 + k0..],
+                            upper: &dense.upper[c0 + k0..],
+                            flags: &dense.flags[c0 + k0..],
+                            roomy,
+                            plain,
+                            weight: &weight32[t0 + k0..],
+                            len: k1 - k0,
+                            table,
+                            t0: t0 + k0,
+                        };
+                        dense_run(&mut sums, &mut lanes, &run, s, h0, inv_h0);
+                    }
+                }
                 let next = &dense.next_multi[y as usize * (w as usize + 1)..];
                 let mut x = next[sa as usize] as usize;
                 while x <= sb as usize {
