@@ -1,0 +1,177 @@
+//! The flow's parameters, its errors and the report of a step.
+
+use super::*;
+
+/// What happens at the edge of the grid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Border {
+    /// Snow leaves the grid (counted in [`AvalancheReport::border_outflow`]).
+    #[default]
+    Open,
+    /// The border is a wall.
+    Closed,
+}
+
+/// Parameters of the avalanche flow (Cordonnier et al. 2018, Table 2 via DESIGN.md §4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AvalancheParams {
+    /// Snow density ρ, kg/m³. Default 500 (Table 2). It cancels out of every acceleration
+    /// (`ΔP/ρ = g·ΔA`) and is kept for reports and mass conversions.
+    pub density: f64,
+    /// Rest angle θc of the snow, degrees: Coulomb friction `g·tanθc`. Default 30 (Table 2).
+    pub rest_angle_deg: f64,
+    /// Viscous coefficient kv of the term `−kv·h·u`, 1/(m·s). Default 5e-4 (Table 2, which
+    /// gives no unit; DESIGN.md §4 writes /s²).
+    pub k_viscous: f64,
+    /// Dry/wet mix α ∈ [0, 1]: weight of the Coulomb term, `1 − α` weighs the viscous term.
+    /// The paper makes it proportional to snow temperature; here it is an input. Default 1
+    /// (chosen here: dry granular snow, the case the rest-angle validation checks).
+    pub alpha: f64,
+    /// Courant number C of the automatic sub-step, in (0, 1]. Default 0.4 (chosen here: the
+    /// explicit pipe update is stable below ~0.5 on the 8-neighbour stencil).
+    pub courant: f64,
+    /// Include momentum advection `(v·∇)u`. Default true (DESIGN.md §4: needed for Ritter's
+    /// front); false gives the paper's hydrostatic pipe model with a depth cross-section.
+    pub momentum_advection: bool,
+    /// Grid border condition. Default open.
+    pub border: Border,
+    /// Upper bound on the number of sub-steps in one call to [`step`]. Default 1 000 000.
+    pub max_substeps: usize,
+}
+
+impl Default for AvalancheParams {
+    fn default() -> Self {
+        Self {
+            density: 500.0,
+            rest_angle_deg: 30.0,
+            k_viscous: 5e-4,
+            alpha: 1.0,
+            courant: 0.4,
+            momentum_advection: true,
+            border: Border::Open,
+            max_substeps: 1_000_000,
+        }
+    }
+}
+
+impl AvalancheParams {
+    /// Checks every field, naming the offending one.
+    pub fn validate(&self) -> Result<(), AvalancheError> {
+        let bad = |name: &'static str, value: f64, expected: &'static str| {
+            Err(AvalancheError::InvalidParameter {
+                name,
+                value,
+                expected,
+            })
+        };
+        if !(self.density.is_finite() && self.density > 0.0) {
+            return bad("density", self.density, "finite and > 0");
+        }
+        if !(self.rest_angle_deg.is_finite() && (0.0..90.0).contains(&self.rest_angle_deg)) {
+            return bad("rest_angle_deg", self.rest_angle_deg, "in [0, 90)");
+        }
+        if !(self.k_viscous.is_finite() && self.k_viscous >= 0.0) {
+            return bad("k_viscous", self.k_viscous, "finite and >= 0");
+        }
+        if !(0.0..=1.0).contains(&self.alpha) {
+            return bad("alpha", self.alpha, "in [0, 1]");
+        }
+        if !(self.courant > 0.0 && self.courant <= 1.0) {
+            return bad("courant", self.courant, "in (0, 1]");
+        }
+        if self.max_substeps == 0 {
+            return bad("max_substeps", 0.0, ">= 1");
+        }
+        Ok(())
+    }
+}
+
+/// Errors of the avalanche module, carrying the offending values.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum AvalancheError {
+    /// A parameter is out of range.
+    #[error("avalanche parameter {name} = {value} must be {expected}")]
+    InvalidParameter {
+        /// Field name.
+        name: &'static str,
+        /// Offending value.
+        value: f64,
+        /// The valid range.
+        expected: &'static str,
+    },
+    /// The time step is negative or not finite.
+    #[error("avalanche time step {0} s must be finite and >= 0")]
+    InvalidTimeStep(f64),
+    /// A per-cell input has the wrong length.
+    #[error("{what} has {got} values, the grid has {expected} cells")]
+    LengthMismatch {
+        /// What was passed.
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// The number of grid cells.
+        expected: usize,
+    },
+    /// A value that must be finite and non-negative is not.
+    #[error("{what} at cell {index} is {value}, must be finite and >= 0")]
+    BadValue {
+        /// What was passed.
+        what: &'static str,
+        /// Cell index (row-major, unpadded).
+        index: usize,
+        /// Offending value.
+        value: f64,
+    },
+    /// The terrain does not have the state's geometry.
+    #[error("terrain is {terrain_width}x{terrain_height}, the avalanche state {width}x{height}")]
+    GeometryMismatch {
+        /// State width.
+        width: usize,
+        /// State height.
+        height: usize,
+        /// Terrain width.
+        terrain_width: usize,
+        /// Terrain height.
+        terrain_height: usize,
+    },
+    /// A state that reads its bed from the terrain was stepped without one.
+    #[error("this avalanche state reads its bed from the terrain: step it with `step_on`")]
+    BedSourceMissing,
+    /// The sub-step limit was reached before the step was done.
+    #[error("avalanche step stopped after {done} sub-steps with {remaining} s of {dt} s left")]
+    TooManySubsteps {
+        /// Sub-steps done.
+        done: usize,
+        /// Time left, s.
+        remaining: f64,
+        /// Requested step, s.
+        dt: f64,
+    },
+}
+
+/// What one call to [`step`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct AvalancheReport {
+    /// Volume that crossed pipes, summed over pipes and sub-steps, m³.
+    pub moved_volume: f64,
+    /// Volume that left the grid across its border, m³.
+    pub border_outflow: f64,
+    /// Largest pipe speed at the end of any sub-step, m/s.
+    pub max_speed: f64,
+    /// Cells visited in the last sub-step (the active set: tile boxes grown by 3 cells, ghost
+    /// ring included).
+    pub active_cells: usize,
+    /// Grid cells holding flowing snow after the step.
+    pub flowing_cells: usize,
+    /// Number of sub-steps.
+    pub substeps: usize,
+    /// Smallest sub-step, s (0 when no sub-step ran).
+    pub dt_min: f64,
+    /// Largest sub-step, s.
+    pub dt_max: f64,
+    /// Simulated time the sub-steps covered, s (the step's `dt`, or less when the flow came
+    /// to rest; with [`step_at_least`] up to its `max_dt`).
+    pub simulated_s: f64,
+}

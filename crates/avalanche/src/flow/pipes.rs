@@ -1,0 +1,360 @@
+//! Pass 1 (velocities) and pass 2 (pipe momentum and fluxes) on one row, for any lane width.
+
+use super::*;
+
+/// Velocities of pass 1 on one row.
+#[inline(always)]
+pub(super) fn vel_row_lanes<V: Lanes>(
+    k: &Consts,
+    pg: &PipeGeometry,
+    inp: &Inputs,
+    segs: &[[u32; 2]],
+    r: usize,
+    out: &mut [&mut [f64]; 6],
+) {
+    let pw = k.pw;
+    let (lo, hi) = if r >= 1 && r + 2 <= k.ph {
+        (1, pw - 2)
+    } else {
+        (1, 0)
+    };
+    let wall = &inp.near_wall[r * pw..(r + 1) * pw];
+    for (c, visit) in walk(segs, lo, hi, Some(wall), V::N) {
+        let kk = r * pw + c;
+        match visit {
+            Visit::Chunk => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { cell_flow_lanes::<V>(k, inp, kk, out, c) }
+            }
+            Visit::One => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { cell_flow_lanes::<f64>(k, inp, kk, out, c) }
+            }
+            Visit::Border => {
+                let v = cell_flow_border(k, pg, inp, c, r);
+                for (o, x) in out.iter_mut().zip(v) {
+                    o[c] = x;
+                }
+            }
+        }
+    }
+}
+
+/// Velocities of pass 1 on `V::N` cells away from the ghost ring and from nodata cells (their 3x3
+/// neighbourhoods hold none).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn cell_flow_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    out: &mut [&mut [f64]; 6],
+    c: usize,
+) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let pw = k.pw;
+        let p = &inp.pipes;
+        let half = V::splat(0.5);
+        let p0 = half * (ld::<V>(p[0], kk) + ld::<V>(p[0], kk - 1));
+        let p1 = half * (ld::<V>(p[1], kk) + ld::<V>(p[1], kk - pw));
+        let p2 = half * (ld::<V>(p[2], kk) + ld::<V>(p[2], kk - pw - 1));
+        let p3 = half * (ld::<V>(p[3], kk) + ld::<V>(p[3], kk - pw + 1));
+        let vx_d = (p2 - p3) / V::splat(k.den_x);
+        let vy_d = (p2 + p3) / V::splat(k.den_y);
+        let vx = half * (p0 + vx_d);
+        let vy = half * (p1 + vy_d);
+        let a = |i: usize| ld::<V>(inp.bed, i) + ld::<V>(inp.h, i);
+        let gx = (a(kk + 1) - a(kk - 1)) / V::splat(k.two_dx);
+        let gy = (a(kk + pw) - a(kk - pw)) / V::splat(k.two_dy);
+        let hk = ld::<V>(inp.h, kk);
+        vx.store(out[VX], c);
+        vy.store(out[VY], c);
+        (hk * vx).store(out[QX], c);
+        (hk * vy).store(out[QY], c);
+        gx.store(out[GX], c);
+        gy.store(out[GY], c);
+    }
+}
+
+/// Velocities of pass 1 at any cell (ghost ring and nodata included).
+pub(super) fn cell_flow_border(
+    k: &Consts,
+    pg: &PipeGeometry,
+    inp: &Inputs,
+    c: usize,
+    r: usize,
+) -> [f64; 6] {
+    let kk = r * k.pw + c;
+    let mut p = [0.0; 4];
+    for (d, pd) in p.iter_mut().enumerate() {
+        let own = inp.pipes[d][kk];
+        *pd = match k.back(c, r, d) {
+            Some(kb) => 0.5 * (own + inp.pipes[d][kb]),
+            None => own,
+        };
+    }
+    let vx_d = (p[2] - p[3]) / k.den_x;
+    let vy_d = (p[2] + p[3]) / k.den_y;
+    let (vx, vy) = (0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d));
+    let [gx, gy] =
+        surface_gradient(pg, inp.h, inp.bed, inp.nodata, k.pw, kk).unwrap_or([f64::NAN, f64::NAN]);
+    let hk = inp.h[kk];
+    [vx, vy, hk * vx, hk * vy, gx, gy]
+}
+
+/// Pipes of pass 1 on one row.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn pipes_row_lanes<V: Lanes>(
+    params: &AvalancheParams,
+    k: &Consts,
+    pg: &PipeGeometry,
+    inp: &Inputs,
+    segs: &[[u32; 2]],
+    r: usize,
+    np: &mut [&mut [f64]; 4],
+    fl: &mut [&mut [f64]; 4],
+) {
+    let pw = k.pw;
+    let (lo, hi) = if r >= 1 && r + 3 <= k.ph && pw >= 5 {
+        (2, pw - 3)
+    } else {
+        (1, 0)
+    };
+    let wall = &inp.near_wall[r * pw..(r + 1) * pw];
+    for (c, visit) in walk(segs, lo, hi, Some(wall), V::N) {
+        let kk = r * pw + c;
+        match visit {
+            Visit::Chunk => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { owner_lanes::<V>(k, inp, kk, np, fl, c) }
+            }
+            Visit::One => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { owner_lanes::<f64>(k, inp, kk, np, fl, c) }
+            }
+            Visit::Border => {
+                let wall_k = k.is_wall(inp.nodata, kk, c, r);
+                for d in 0..4 {
+                    let (dc, dr) = DIRS[d];
+                    let (u, f) = match k.neighbour(c, r, d) {
+                        Some(j)
+                            if !wall_k
+                                && !k.is_wall(
+                                    inp.nodata,
+                                    j,
+                                    (c as isize + dc) as usize,
+                                    r + dr as usize,
+                                ) =>
+                        {
+                            pipe_update(params, k, pg, inp, kk, j, d, c, r)
+                        }
+                        _ => (0.0, 0.0),
+                    };
+                    np[d][c] = u;
+                    fl[d][c] = f;
+                }
+            }
+        }
+    }
+}
+
+/// Pipes of pass 1 on `V::N` owners whose pipes and advection stencils stay inside the grid (away
+/// from the ghost ring) and whose 3x3 neighbourhoods hold no nodata cell: no pipe is a wall and
+/// surface gradients are defined at both ends of every pipe.
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn owner_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    np: &mut [&mut [f64]; 4],
+    fl: &mut [&mut [f64]; 4],
+    c: usize,
+) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let dry = V::splat(DRY);
+        let zero = V::splat(0.0);
+        let hk = ld::<V>(inp.h, kk);
+        let dry_k = hk.le(dry);
+        if V::all(dry_k)
+            && k.off
+                .iter()
+                .all(|&o| V::all(ld::<V>(inp.h, kk + o).le(dry)))
+        {
+            for d in 0..4 {
+                zero.store(np[d], c);
+                zero.store(fl[d], c);
+            }
+            return;
+        }
+        for d in 0..4 {
+            let (u, f) = pipe_lanes::<V>(k, inp, d, kk, hk, dry_k);
+            u.store(np[d], c);
+            f.store(fl[d], c);
+        }
+    }
+}
+
+/// New velocity and raw volume of the pipes `d` of `V::N` owners (the operations of
+/// [`pipe_update`] lane by lane; lanes with two dry ends or held by static friction give 0,
+/// and when every lane does, the rest is skipped).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn pipe_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    d: usize,
+    kk: usize,
+    hk: V,
+    dry_k: V::M,
+) -> (V, V) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let zero = V::splat(0.0);
+        let j = kk + k.off[d];
+        let hj = ld::<V>(inp.h, j);
+        let dead = V::and(dry_k, hj.le(V::splat(DRY)));
+        if V::all(dead) {
+            return (zero, zero);
+        }
+        let half = V::splat(0.5);
+        let lv = |a: usize, i: usize| ld::<V>(inp.vel[a], i - inp.vbase);
+        let dtg = V::splat(k.dtg);
+        let t0 = half * (lv(VX, kk) + lv(VX, j)) - dtg * (half * (lv(GX, kk) + lv(GX, j)));
+        let t1 = half * (lv(VY, kk) + lv(VY, j)) - dtg * (half * (lv(GY, kk) + lv(GY, j)));
+        let tnorm = (t0 * t0 + t1 * t1).sqrt();
+        let yield_dt = V::splat(k.yield_dt);
+        let dead = if k.coulomb {
+            V::or(dead, tnorm.le(yield_dt))
+        } else {
+            dead
+        };
+        if V::all(dead) {
+            return (zero, zero);
+        }
+        let u0 = ld::<V>(inp.pipes[d], kk);
+        let ak = ld::<V>(inp.bed, kk) + hk;
+        let aj = ld::<V>(inp.bed, j) + hj;
+        let a = V::splat(-G) * (aj - ak) / V::splat(k.len[d]);
+        let mut u = u0 + V::splat(k.dt) * a;
+        if k.adv {
+            u = u + advection_lanes::<V>(k, inp, d, kk, j, hk, hj, u0);
+        }
+        // `e·trial` (the exact zero components of the axis pipes only change the sign of a zero,
+        // which `abs` drops).
+        let num = match d {
+            0 => t0,
+            1 => t1,
+            _ => V::splat(k.e[d][0]) * t0 + V::splat(k.e[d][1]) * t1,
+        };
+        let proj = V::select(tnorm.gt(zero), (num / tnorm).abs(), V::splat(1.0));
+        let fric = yield_dt * proj;
+        u = V::select(u.abs().le(fric), zero, u - fric * u.signum());
+        if k.visc != 0.0 {
+            // (With no viscosity the division is by exactly 1.)
+            u = u / (V::splat(1.0) + V::splat(k.visc) * (hk + hj));
+        }
+        let hup = V::select(u.gt(zero), hk, hj);
+        let dead = V::or(dead, hup.le(V::splat(DRY)));
+        let f = V::splat(k.width[d]) * hup * u * V::splat(k.dt);
+        (V::select(dead, zero, u), V::select(dead, zero, f))
+    }
+}
+
+/// [`advection`] for the owners of [`owner_lanes`] (every lattice neighbour exists).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+unsafe fn advection_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    d: usize,
+    kk: usize,
+    j: usize,
+    hk: V,
+    hj: V,
+    u0: V,
+) -> V {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let zero = V::splat(0.0);
+        let half = V::splat(0.5);
+        let hbar = half * (hk + hj);
+        let dead = hbar.le(V::splat(DRY));
+        if V::all(dead) {
+            return zero;
+        }
+        let (qx, qy) = (inp.vel[QX], inp.vel[QY]);
+        let pw = k.pw;
+        let jk = j - kk;
+        // (Velocity arrays start at padded index `vbase`.)
+        let (kv, jv) = (kk - inp.vbase, j - inp.vbase);
+        let qp0 = half * (ld::<V>(qx, kv) + ld::<V>(qx, jv));
+        let qp1 = half * (ld::<V>(qy, kv) + ld::<V>(qy, jv));
+        let dt = V::splat(k.dt);
+        let rx = dt / (V::splat(k.dx) * hbar);
+        let ry = if k.square {
+            rx
+        } else {
+            dt / (V::splat(k.dy) * hbar)
+        };
+        let pd = inp.pipes[d];
+        // Lattice neighbours (west, east, north, south): owner, discharge component, rate and
+        // the sign making the face's inflow positive.
+        // (`1·q` is `q` and `−1·q` is `−q`, bit for bit.)
+        let nbs = [
+            (kk - 1, kv - 1, qx, qp0, rx, false),
+            (kk + 1, kv + 1, qx, qp0, rx, true),
+            (kk - pw, kv - pw, qy, qp1, ry, false),
+            (kk + pw, kv + pw, qy, qp1, ry, true),
+        ];
+        let mut lam = [zero; 4];
+        let mut un = [zero; 4];
+        let mut total = zero;
+        for (m, &(kn, knv, q, qp, rate, minus)) in nbs.iter().enumerate() {
+            let qn = half * (ld::<V>(q, knv) + ld::<V>(q, knv + jk));
+            let face = half * (qp + qn);
+            let inflow = if minus { -face } else { face };
+            lam[m] = V::select(inflow.gt(zero), rate * inflow, zero);
+            // (A face without inflow has `λ = 0`: its term below is a zero whatever `u_f`, and
+            // zeros leave the sums unchanged.)
+            un[m] = ld::<V>(pd, kn);
+            total = total + lam[m];
+        }
+        let one = V::splat(1.0);
+        let big = total.gt(one);
+        let scale = if V::any(big) {
+            V::select(big, one / total, one)
+        } else {
+            one
+        };
+        let mut du = zero;
+        for m in 0..4 {
+            du = du + scale * lam[m] * (un[m] - u0);
+        }
+        V::select(dead, zero, du)
+    }
+}

@@ -1,0 +1,247 @@
+//! One sub-step of the flow over the active set: the four passes, then the active set's
+//! upkeep.
+
+use super::*;
+
+/// One sub-step over the active set.
+///
+/// Regions (`C` = the cells with snow or a moving owned pipe, `C+m` grown by `m` cells): new
+/// snow and moving pipes lie in `C+1`, and a pipe with a wet end has its owner in `C+1`, so
+/// pipes are updated on `C+2` (read: velocities on `C+3`), thickness on `C+1`. The active set
+/// visits `seg3 ⊇ C+3` for velocities and pipes (pipes with two dry ends come out 0 without
+/// reading velocities) and `seg2 ⊇ C+2` for thickness (reading fluxes on `seg3`).
+pub(super) fn substep(
+    params: &AvalancheParams,
+    pg: &PipeGeometry,
+    state: &mut AvalancheState,
+    scratch: &mut AvalancheScratch,
+    dt: f64,
+) -> SubReport {
+    let (pw, ph) = (state.pw, state.ph);
+    let k = Consts::new(params, pg, pw, ph, dt);
+    let simd = lanes::simd_available();
+    scratch.seg3.build(&state.tiles, 3, pw, ph);
+    scratch.seg2.build(&state.tiles, 2, pw, ph);
+    let AvalancheScratch {
+        new_pipes,
+        flux,
+        factor,
+        row_tiles,
+        seg3,
+        seg2,
+    } = scratch;
+    let (seg3, seg2) = (&*seg3, &*seg2);
+    // A small flow runs on the calling thread: below this many cells the fork and join of
+    // the two passes cost more than the second core saves.
+    let parallel = seg3.cells >= PARALLEL_MIN_CELLS;
+    let (r0, nr) = (seg3.r0, seg3.rows());
+    let rows = r0 * pw..(r0 + nr) * pw;
+    let empty: &[f64] = &[];
+    let none = Inputs {
+        h: &state.h,
+        bed: &state.bed,
+        nodata: &state.nodata,
+        near_wall: &state.near_wall,
+        pipes: [empty; 4],
+        vel: [empty; 6],
+        vbase: 0,
+        new_pipes: [empty; 4],
+        flux: [empty; 4],
+        fbase: 0,
+        factor: empty,
+    };
+
+    // Pass 1: new pipe velocities, raw volumes and outflow factors, by blocks of rows. Row by
+    // row, a block computes the cell velocities, discharges and surface gradients its pipes
+    // read (its rows, one row above and two below) into rows of its own, its pipes, and the
+    // outflow factors of the row above (those of its first row need the block above). Then
+    // it computes the pipes of the next block's first row (into rows of its own) for the
+    // factors of its last row. (The factors of the first row of the active set are never
+    // used: no snow lies within 3 rows of it.)
+    {
+        let pipes = state.pipes.each_ref().map(|p| p.as_slice());
+        let inp1 = Inputs { pipes, ..none };
+        let end = r0 + nr;
+        let nb = nr.div_ceil(BLOCK);
+        let mut np = rows_of(
+            new_pipes.each_mut().map(|v| &mut v[rows.clone()]),
+            BLOCK * pw,
+        );
+        let mut fl = rows_of(flux.each_mut().map(|v| &mut v[rows.clone()]), BLOCK * pw);
+        // Block `b` holds the factors of its rows shifted down by one.
+        let frows = (r0 + 1).min(ph) * pw..(end + 1).min(ph) * pw;
+        let mut fac = rows_of([&mut factor[frows]], BLOCK * pw);
+        fac.resize_with(nb, || [&mut []]);
+        let block = |(bi, ((np, fl), [fac])): BlockItem| {
+            let b0 = r0 + bi * BLOCK;
+            let b1 = b0 + np[0].len() / pw;
+            // Pipes of row `b1` too, but in the last block.
+            let halo = b1 < end;
+            let v0 = b0.saturating_sub(1);
+            let v1 = (b1 + 1 + halo as usize).min(ph - 1);
+            let len = (v1 - v0 + 1) * pw;
+            BLOCK_ROWS.with_borrow_mut(|bb| {
+                let BlockRows {
+                    vel,
+                    np: np_h,
+                    fl: fl_h,
+                } = bb;
+                for a in vel.iter_mut() {
+                    if a.len() < len {
+                        a.resize(len, 0.0);
+                    }
+                }
+                for a in np_h.iter_mut().chain(fl_h.iter_mut()) {
+                    if a.len() < 2 * pw {
+                        a.resize(2 * pw, 0.0);
+                    }
+                }
+                let vel_of = |x: usize, vel: &mut [Vec<f64>; 6]| {
+                    let lr = (x - v0) * pw;
+                    let mut row = vel.each_mut().map(|a| &mut a[lr..lr + pw]);
+                    vel_row(simd, &k, pg, &inp1, seg3.row(x), x, &mut row);
+                };
+                for x in v0..=(b0 + 1).min(v1) {
+                    vel_of(x, vel);
+                }
+                for r in b0..b1 + halo as usize {
+                    if r + 2 <= v1 {
+                        vel_of(r + 2, vel);
+                    }
+                    let inp = Inputs {
+                        pipes,
+                        vel: vel.each_ref().map(|a| &a[..len]),
+                        vbase: v0 * pw,
+                        ..none
+                    };
+                    let segs = seg3.row(r);
+                    if r < b1 {
+                        let lr = (r - b0) * pw..(r - b0 + 1) * pw;
+                        let mut np_r = np.each_mut().map(|a| &mut a[lr.clone()]);
+                        let mut fl_r = fl.each_mut().map(|a| &mut a[lr.clone()]);
+                        pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
+                    } else {
+                        // The next block's first row, after a copy of this block's last
+                        // row of volumes (the factors read both).
+                        let last = (b1 - 1 - b0) * pw..(b1 - b0) * pw;
+                        for (h, f) in fl_h.iter_mut().zip(fl.iter()) {
+                            h[..pw].copy_from_slice(&f[last.clone()]);
+                        }
+                        let mut np_r = np_h.each_mut().map(|a| &mut a[..pw]);
+                        let mut fl_r = fl_h.each_mut().map(|a| &mut a[pw..2 * pw]);
+                        pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
+                    }
+                    // The factors of the row (the block's first row: the block above).
+                    if r > b0 {
+                        let inp = if r < b1 {
+                            Inputs {
+                                flux: fl.each_ref().map(|a| &**a),
+                                fbase: b0 * pw,
+                                ..none
+                            }
+                        } else {
+                            Inputs {
+                                flux: fl_h.each_ref().map(|a| &a[..2 * pw]),
+                                fbase: (r - 1) * pw,
+                                ..none
+                            }
+                        };
+                        let lr = (r - b0 - 1) * pw..(r - b0) * pw;
+                        factor_row(simd, &k, &inp, segs, r, &mut fac[lr]);
+                    }
+                }
+            });
+        };
+        if parallel {
+            np.par_iter_mut()
+                .zip(fl.par_iter_mut())
+                .zip(fac.par_iter_mut())
+                .enumerate()
+                .for_each(block);
+        } else {
+            np.iter_mut()
+                .zip(fl.iter_mut())
+                .zip(fac.iter_mut())
+                .enumerate()
+                .for_each(block);
+        }
+    }
+
+    // Pass 2: thickness update (seg2), pipes scaled by the upwind cell's factor (seg3), the
+    // content of each row per tile, the CFL maxima.
+    let ntx = state.tiles.ntx();
+    let stats: Vec<RowStats> = {
+        let inp = Inputs {
+            h: empty,
+            bed: empty,
+            nodata: &[],
+            near_wall: &[],
+            pipes: [empty; 4],
+            vel: [empty; 6],
+            vbase: 0,
+            new_pipes: new_pipes.each_ref().map(|v| v.as_slice()),
+            flux: flux.each_ref().map(|v| v.as_slice()),
+            fbase: 0,
+            factor,
+        };
+        let (h, pipes) = (&mut state.h, &mut state.pipes);
+        let prows = rows_of(pipes.each_mut().map(|v| &mut v[rows.clone()]), pw);
+        let row = |(ri, ((hrow, mut prow), trow)): RowItem| {
+            let r = r0 + ri;
+            update_row(
+                simd,
+                &k,
+                &inp,
+                seg2.row(r),
+                seg3.row(r),
+                r,
+                hrow,
+                &mut prow,
+                trow,
+            )
+        };
+        let (hr, tr) = (
+            &mut h[rows.clone()],
+            &mut row_tiles[r0 * ntx..(r0 + nr) * ntx],
+        );
+        if parallel {
+            hr.par_chunks_mut(pw)
+                .zip(prows)
+                .zip(tr.par_chunks_mut(ntx))
+                .enumerate()
+                .map(row)
+                .collect()
+        } else {
+            hr.chunks_mut(pw)
+                .zip(prows)
+                .zip(tr.chunks_mut(ntx))
+                .enumerate()
+                .map(row)
+                .collect()
+        }
+    };
+
+    let mut out = SubReport {
+        moved: 0.0,
+        outflow: 0.0,
+        max_speed: 0.0,
+        flowing: 0,
+        visited: seg3.cells,
+    };
+    let mut wave = 0.0f64;
+    state.tiles.clear();
+    for (ri, st) in stats.iter().enumerate() {
+        let r = r0 + ri;
+        out.moved += st.moved;
+        out.max_speed = out.max_speed.max(st.umax);
+        out.outflow += st.outflow;
+        out.flowing += st.flowing;
+        wave = wave.max(st.wave);
+        for &[a, b] in &row_tiles[r * ntx..r * ntx + st.tiles] {
+            state.tiles.add(r, a as usize, b as usize);
+        }
+    }
+    state.maxima = (out.max_speed, wave);
+    state.active = state.tiles.bbox().map(|b| b.grown(pw, ph));
+    out
+}

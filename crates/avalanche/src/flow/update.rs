@@ -1,0 +1,548 @@
+//! Pass 3 (outflow factors) and pass 4 (thickness and momentum update) on one row, with
+//! their per-cell stencils, for any lane width.
+
+use super::*;
+
+/// Outflow factors of pass 1 on one row.
+#[inline(always)]
+pub(super) fn factor_row_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    segs: &[[u32; 2]],
+    r: usize,
+    out: &mut [f64],
+) {
+    let pw = k.pw;
+    let (lo, hi) = if r >= 1 { (1, pw - 2) } else { (1, 0) };
+    for (c, visit) in walk(segs, lo, hi, None, V::N) {
+        let kk = r * pw + c;
+        match visit {
+            Visit::Chunk => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { factor_lanes::<V>(k, inp, kk, out, c) }
+            }
+            Visit::One => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { factor_lanes::<f64>(k, inp, kk, out, c) }
+            }
+            Visit::Border => {
+                if inp.h[kk] <= DRY {
+                    continue;
+                }
+                let mut vout = 0.0;
+                for d in 0..4 {
+                    vout += inp.flux[d][kk - inp.fbase].max(0.0);
+                    if let Some(kb) = k.back(c, r, d) {
+                        vout += (-inp.flux[d][kb - inp.fbase]).max(0.0);
+                    }
+                }
+                let avail = inp.h[kk] * k.area;
+                out[c] = if vout > avail { avail / vout } else { 1.0 };
+            }
+        }
+    }
+}
+
+/// Outflow factors of pass 1 on `V::N` cells whose back neighbours exist. Lanes at most `DRY` deep
+/// may get a factor too (finite, in [0, 1], never used).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[inline(always)]
+unsafe fn factor_lanes<V: Lanes>(k: &Consts, inp: &Inputs, kk: usize, out: &mut [f64], c: usize) {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let hk = ld::<V>(inp.h, kk);
+        if V::all(hk.le(V::splat(DRY))) {
+            return;
+        }
+        let zero = V::splat(0.0);
+        let mut vout = zero;
+        for d in 0..4 {
+            // (Zeros of either sign add nothing to `vout`, which starts at +0.)
+            let kf = kk - inp.fbase;
+            vout = vout + ld::<V>(inp.flux[d], kf).max(zero);
+            vout = vout + (-ld::<V>(inp.flux[d], kf - k.off[d])).max(zero);
+        }
+        let avail = hk * V::splat(k.area);
+        V::select(vout.gt(avail), avail / vout, V::splat(1.0)).store(out, c);
+    }
+}
+
+/// Lane accumulators of pass 2 (maxima and counts: any order gives the same result).
+pub(super) struct Acc<V> {
+    umax: V,
+    wave: V,
+    flowing: usize,
+}
+
+/// Pass 2 on one row.
+#[allow(clippy::needless_range_loop)]
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn update_row_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    seg2: &[[u32; 2]],
+    seg3: &[[u32; 2]],
+    r: usize,
+    hrow: &mut [f64],
+    prow: &mut [&mut [f64]; 4],
+    trow: &mut [[u32; 2]],
+) -> RowStats {
+    let (pw, ph) = (k.pw, k.ph);
+    let mut st = RowStats::default();
+    let zero = V::splat(0.0);
+    let mut acc = Acc {
+        umax: zero,
+        wave: zero,
+        flowing: 0,
+    };
+    let mut acc1 = Acc {
+        umax: 0.0,
+        wave: 0.0,
+        flowing: 0,
+    };
+    // The row's moved volume, summed cell by cell, pipe by pipe.
+    let mut moved = 0.0;
+    let (lo, hi) = if r >= 1 && r + 2 <= ph {
+        (1, pw - 2)
+    } else {
+        (1, 0)
+    };
+    let ghost_row = r == 0 || r == ph - 1;
+    let mut run: Option<(usize, usize)> = None;
+    let mut content = |c: usize, st: &mut RowStats| {
+        run = match run {
+            Some((a, _)) if a / TILE == c / TILE => Some((a, c)),
+            Some((a, b)) => {
+                trow[st.tiles] = [a as u32, b as u32];
+                st.tiles += 1;
+                Some((c, c))
+            }
+            None => Some((c, c)),
+        };
+    };
+    // Cells of seg3 in column order; those of seg2 also get their thickness. `next2` is the
+    // first segment of seg2 not left of the current cell.
+    let mut next2 = 0;
+    let mut in2 = |c: usize| {
+        while next2 < seg2.len() && (seg2[next2][1] as usize) < c {
+            next2 += 1;
+        }
+        match seg2.get(next2) {
+            Some(&[a, b]) if a as usize <= c => (true, b as usize),
+            Some(&[a, _]) => (false, a as usize),
+            None => (false, usize::MAX),
+        }
+    };
+    for (c, visit) in walk(seg3, lo, hi, None, V::N) {
+        let kk = r * pw + c;
+        let bits = match visit {
+            Visit::Chunk | Visit::One => {
+                let (inside, edge) = in2(c);
+                let n = if visit == Visit::Chunk { V::N } else { 1 };
+                // SAFETY (the three calls): `walk` only gives lane visits in the inner region
+                // of this pass, where the stencil lies in the padded arrays (all of length
+                // `pw·ph`).
+                if n == 1 {
+                    unsafe {
+                        update_lanes::<f64>(
+                            k, inp, kk, hrow, prow, c, &mut acc1, &mut moved, inside,
+                        )
+                    }
+                } else if (inside && c + n - 1 <= edge) || (!inside && c + n - 1 < edge) {
+                    // All lanes in seg2, or none.
+                    unsafe {
+                        update_lanes::<V>(k, inp, kk, hrow, prow, c, &mut acc, &mut moved, inside)
+                    }
+                } else {
+                    let mut bits = 0;
+                    for i in 0..n {
+                        let inside = in2(c + i).0;
+                        let b = unsafe {
+                            update_lanes::<f64>(
+                                k,
+                                inp,
+                                kk + i,
+                                hrow,
+                                prow,
+                                c + i,
+                                &mut acc1,
+                                &mut moved,
+                                inside,
+                            )
+                        };
+                        bits |= b << i;
+                    }
+                    bits
+                }
+            }
+            Visit::Border => {
+                if in2(c).0 {
+                    let mut dv = 0.0;
+                    for d in 0..4 {
+                        dv -= scaled_flux(k, inp, kk, c, r, d);
+                        if let Some(kb) = k.back(c, r, d) {
+                            let (dc, dr) = DIRS[d];
+                            dv += scaled_flux(
+                                k,
+                                inp,
+                                kb,
+                                (c as isize - dc) as usize,
+                                r - dr as usize,
+                                d,
+                            );
+                        }
+                    }
+                    let mut hn = hrow[c] + dv / k.area;
+                    if hn < 0.0 {
+                        hn = 0.0;
+                    }
+                    if ghost_row || c == 0 || c == pw - 1 {
+                        st.outflow += hn * k.area;
+                        hn = 0.0;
+                    } else if hn > 0.0 {
+                        acc1.flowing += 1;
+                    }
+                    let mut umax = 0.0f64;
+                    for d in 0..4 {
+                        umax = umax.max(scaled_pipe(k, inp, kk, c, r, d).abs());
+                        if let Some(kb) = k.back(c, r, d) {
+                            let (dc, dr) = DIRS[d];
+                            let u = scaled_pipe(
+                                k,
+                                inp,
+                                kb,
+                                (c as isize - dc) as usize,
+                                r - dr as usize,
+                                d,
+                            );
+                            umax = umax.max(u.abs());
+                        }
+                    }
+                    acc1.wave = acc1.wave.max((G * hn).sqrt() + umax);
+                    hrow[c] = hn;
+                }
+                let mut moving = false;
+                for d in 0..4 {
+                    let mut u = inp.new_pipes[d][kk];
+                    let mut f = inp.flux[d][kk];
+                    if f != 0.0 {
+                        let src = if f > 0.0 {
+                            kk
+                        } else {
+                            k.neighbour(c, r, d).unwrap_or(kk)
+                        };
+                        let s = inp.factor[src];
+                        f *= s;
+                        u *= s;
+                    }
+                    prow[d][c] = u;
+                    moved += f.abs();
+                    acc1.umax = acc1.umax.max(u.abs());
+                    moving |= u != 0.0;
+                }
+                (moving || hrow[c] > 0.0) as u32
+            }
+        };
+        let mut b = bits;
+        while b != 0 {
+            content(c + b.trailing_zeros() as usize, &mut st);
+            b &= b - 1;
+        }
+    }
+    if let Some((a, b)) = run {
+        trow[st.tiles] = [a as u32, b as u32];
+        st.tiles += 1;
+    }
+    st.moved = moved;
+    st.flowing = acc.flowing + acc1.flowing;
+    st.umax = acc1.umax;
+    st.wave = acc1.wave;
+    for i in 0..V::N {
+        st.umax = st.umax.max(acc.umax.lane(i));
+        st.wave = st.wave.max(acc.wave.lane(i));
+    }
+    st
+}
+
+/// A pipe's new velocity scaled by its upwind cell's factor (general code).
+pub(super) fn scaled_pipe(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    c: usize,
+    r: usize,
+    d: usize,
+) -> f64 {
+    let u = inp.new_pipes[d][kk];
+    let f = inp.flux[d][kk];
+    if f != 0.0 {
+        let src = if f > 0.0 {
+            kk
+        } else {
+            k.neighbour(c, r, d).unwrap_or(kk)
+        };
+        u * inp.factor[src]
+    } else {
+        u
+    }
+}
+
+/// A pipe's volume scaled by its upwind cell's factor (general code).
+pub(super) fn scaled_flux(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    c: usize,
+    r: usize,
+    d: usize,
+) -> f64 {
+    let f = inp.flux[d][kk];
+    if f != 0.0 {
+        let src = if f > 0.0 {
+            kk
+        } else {
+            k.neighbour(c, r, d).unwrap_or(kk)
+        };
+        f * inp.factor[src]
+    } else {
+        f
+    }
+}
+
+/// Pass 2 on `V::N` cells away from the ghost ring: the pipes they own scaled by their upwind
+/// cell's factor (volume moved, largest speed) and, with `thick`, their new thickness (and
+/// wave speed). A volume `f` scaled by the factor `s` is `f·s` even for a zero `f` (`s` is
+/// finite and ≥ 0), so the product needs no branch. Returns the lanes with content (snow or a
+/// moving pipe).
+///
+/// # Safety
+/// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
+/// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
+/// cell of the stencil is in the arrays.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+unsafe fn update_lanes<V: Lanes>(
+    k: &Consts,
+    inp: &Inputs,
+    kk: usize,
+    hrow: &mut [f64],
+    prow: &mut [&mut [f64]; 4],
+    c: usize,
+    acc: &mut Acc<V>,
+    moved: &mut f64,
+    thick: bool,
+) -> u32 {
+    // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
+    unsafe {
+        let zero = V::splat(0.0);
+        let fac = |i: usize| ld::<V>(inp.factor, i);
+        let mut dv = zero;
+        // Largest speed of the 8 pipes touching the cells.
+        let mut ucell = zero;
+        let mut moving = zero.ne(zero);
+        let mut absf = [zero; 4];
+        for d in 0..4 {
+            let off = k.off[d];
+            let f = ld::<V>(inp.flux[d], kk);
+            let s = V::select(f.gt(zero), fac(kk), fac(kk + off));
+            let u = ld::<V>(inp.new_pipes[d], kk);
+            let u = V::select(f.ne(zero), u * s, u);
+            let fs = f * s;
+            absf[d] = fs.abs();
+            u.store(prow[d], c);
+            acc.umax = acc.umax.max(u.abs());
+            moving = V::or(moving, u.ne(zero));
+            if thick {
+                dv = dv - fs;
+                ucell = ucell.max(u.abs());
+                let kb = kk - off;
+                let f = ld::<V>(inp.flux[d], kb);
+                let s = V::select(f.gt(zero), fac(kb), fac(kk));
+                dv = dv + f * s;
+                let u = ld::<V>(inp.new_pipes[d], kb);
+                ucell = ucell.max(V::select(f.ne(zero), u * s, u).abs());
+            }
+        }
+        // The row's volume in the order of the general code: cell by cell, pipe by pipe.
+        for i in 0..V::N {
+            for a in &absf {
+                *moved += a.lane(i);
+            }
+        }
+        if thick {
+            let hn = ld::<V>(hrow, c) + dv / V::splat(k.area);
+            let hn = V::select(hn.lt(zero), zero, hn);
+            hn.store(hrow, c);
+            acc.flowing += V::bits(hn.gt(zero)).count_ones() as usize;
+            acc.wave = acc.wave.max((V::splat(G) * hn).sqrt() + ucell);
+        }
+        V::bits(V::or(moving, ld::<V>(hrow, c).gt(zero)))
+    }
+}
+
+/// One pipe's new velocity and raw (unscaled) volume for a sub-step.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn pipe_update(
+    params: &AvalancheParams,
+    k: &Consts,
+    pg: &PipeGeometry,
+    inp: &Inputs,
+    kk: usize,
+    j: usize,
+    d: usize,
+    c: usize,
+    r: usize,
+) -> (f64, f64) {
+    let (h, bed, vel, vb) = (inp.h, inp.bed, &inp.vel, inp.vbase);
+    let dt = k.dt;
+    let (hi, hj) = (h[kk], h[j]);
+    if hi <= DRY && hj <= DRY {
+        return (0.0, 0.0);
+    }
+    let u0 = inp.pipes[d][kk];
+    let a = -G * ((bed[j] + hj) - (bed[kk] + hi)) / pg.len[d];
+    let vp = [
+        0.5 * (vel[VX][kk - vb] + vel[VX][j - vb]),
+        0.5 * (vel[VY][kk - vb] + vel[VY][j - vb]),
+    ];
+    let mut u = u0 + dt * a;
+    if params.momentum_advection {
+        u += advection(pg, inp, k.pw, kk, j, d, c, r, dt);
+    }
+    // Coulomb friction as one vector: the trial velocity at the pipe, `v + δt·(−g∇A)` (cell
+    // velocities and surface gradients averaged over the pipe's two cells), is slowed by
+    // `g·tanθc·δt` along its own direction and each pipe takes its share `e·v̂`; where the
+    // trial speed is below `g·tanθc·δt` the snow is held (static friction: the yield
+    // criterion `|∇A| ≤ tanθc` at rest, the same in every direction), and a pipe the force
+    // would reverse is set to zero.
+    let g = |i: usize| [vel[GX][i - vb], vel[GY][i - vb]];
+    let grad = match (vel[GX][kk - vb].is_nan(), vel[GX][j - vb].is_nan()) {
+        (false, false) => [
+            0.5 * (vel[GX][kk - vb] + vel[GX][j - vb]),
+            0.5 * (vel[GY][kk - vb] + vel[GY][j - vb]),
+        ],
+        (false, true) => g(kk),
+        (true, false) => g(j),
+        (true, true) => [0.0, 0.0],
+    };
+    let trial = [vp[0] - k.dtg * grad[0], vp[1] - k.dtg * grad[1]];
+    let tnorm = (trial[0] * trial[0] + trial[1] * trial[1]).sqrt();
+    let yield_dt = k.yield_dt;
+    let proj = if tnorm > 0.0 {
+        ((pg.e[d][0] * trial[0] + pg.e[d][1] * trial[1]) / tnorm).abs()
+    } else {
+        1.0
+    };
+    let fric = yield_dt * proj;
+    if (k.alpha > 0.0 && tnorm <= yield_dt) || u.abs() <= fric {
+        u = 0.0;
+    } else {
+        u -= fric * u.signum();
+    }
+    // Viscous term, implicit.
+    u /= 1.0 + dt * (1.0 - k.alpha) * params.k_viscous * 0.5 * (hi + hj);
+    let hup = if u > 0.0 { hi } else { hj };
+    if hup <= DRY {
+        return (0.0, 0.0);
+    }
+    (u, pg.width[d] * hup * u * dt)
+}
+
+/// Central-difference gradient of the surface `A = B + h` at padded cell `k` (one-sided next
+/// to nodata cells); `None` on the ghost ring.
+pub(super) fn surface_gradient(
+    pg: &PipeGeometry,
+    h: &[f64],
+    bed: &[f64],
+    nodata: &[bool],
+    pw: usize,
+    k: usize,
+) -> Option<[f64; 2]> {
+    let (r, c) = (k / pw, k % pw);
+    if r == 0 || c == 0 || r + 1 >= pg.ph || c + 1 >= pw || nodata[k] {
+        return None;
+    }
+    let a = |i: usize| bed[i] + h[i];
+    let ak = a(k);
+    let side = |i: usize| if nodata[i] { ak } else { a(i) };
+    let gx = (side(k + 1) - side(k - 1)) / (2.0 * pg.dx);
+    let gy = (side(k + pw) - side(k - pw)) / (2.0 * pg.dy);
+    Some([gx, gy])
+}
+
+/// Momentum-conservative upwind advection of the pipe velocity (Stelling & Duinmeijer 2003,
+/// generalised to the lattice of pipes sharing direction `d`): returns the change of `u` over
+/// `dt`, `Σ_f λ_f (u_f − u)` over the lattice neighbours `f` whose face brings momentum in,
+/// `λ_f = dt · Q_f / (Δ · h̄)` with `Q_f` the inflowing discharge at the face (mean of the cell
+/// discharges `h·v` of the two pipes' end cells), `h̄` the mean depth of the pipe's cells. The
+/// `λ` are scaled so that `Σ λ ≤ 1` (a convex combination: no overshoot).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn advection(
+    pg: &PipeGeometry,
+    inp: &Inputs,
+    pw: usize,
+    k: usize,
+    j: usize,
+    d: usize,
+    c: usize,
+    r: usize,
+    dt: f64,
+) -> f64 {
+    let (h, vel, vb) = (inp.h, &inp.vel, inp.vbase);
+    let hbar = 0.5 * (h[k] + h[j]);
+    if hbar <= DRY {
+        return 0.0;
+    }
+    let ph = pg.ph;
+    let u0 = inp.pipes[d][k];
+    let (dc, dr) = DIRS[d];
+    let qp = [
+        0.5 * (vel[QX][k - vb] + vel[QX][j - vb]),
+        0.5 * (vel[QY][k - vb] + vel[QY][j - vb]),
+    ];
+    // Lattice neighbours: (owner offset, axis, side) with side +1 for the + face.
+    let nbs: [(isize, isize, usize, f64); 4] = [
+        (-1, 0, 0, -1.0),
+        (1, 0, 0, 1.0),
+        (0, -1, 1, -1.0),
+        (0, 1, 1, 1.0),
+    ];
+    let mut lam = [0.0f64; 4];
+    let mut un = [0.0f64; 4];
+    let mut total = 0.0;
+    let rate = [dt / (pg.dx * hbar), dt / (pg.dy * hbar)];
+    for (m, &(oc, or, axis, side)) in nbs.iter().enumerate() {
+        let (cc, rr) = (c as isize + oc, r as isize + or);
+        let (jc, jr) = (cc + dc, rr + dr);
+        if cc < 0 || rr < 0 || jc < 0 || jr < 0 {
+            continue;
+        }
+        let (cc, rr, jc, jr) = (cc as usize, rr as usize, jc as usize, jr as usize);
+        if cc >= pw || jc >= pw || rr >= ph || jr >= ph {
+            continue;
+        }
+        let (kn, jn) = (rr * pw + cc, jr * pw + jc);
+        let qn = 0.5 * (vel[QX + axis][kn - vb] + vel[QX + axis][jn - vb]);
+        let q_face = 0.5 * (qp[axis] + qn);
+        // Inflow through the + face is q < 0, through the − face q > 0.
+        let inflow = -side * q_face;
+        if inflow > 0.0 {
+            lam[m] = rate[axis] * inflow;
+            un[m] = inp.pipes[d][kn];
+            total += lam[m];
+        }
+    }
+    let scale = if total > 1.0 { 1.0 / total } else { 1.0 };
+    let mut du = 0.0;
+    for m in 0..4 {
+        du += scale * lam[m] * (un[m] - u0);
+    }
+    du
+}
