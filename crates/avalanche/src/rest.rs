@@ -38,8 +38,26 @@ pub struct RestOutcome {
     /// Thickness laid down per cell, (row-major index, m), cells with a deposit only, in the
     /// order of the touched tiles.
     pub deposited: Vec<(u32, f32)>,
+    /// Peak flowing thickness (m) and peak speed (m/s) per cell the run reached, (row-major
+    /// index, value), cells with a positive peak only, in the order of the touched tiles: the
+    /// run's maps over its footprint.
+    pub peak_thickness: Vec<(u32, f64)>,
+    pub peak_speed: Vec<(u32, f64)>,
     /// Records taken (calls of `on_record`).
     pub records: u64,
+}
+
+impl RestOutcome {
+    /// A sparse list as a full grid of `len` cells (0 elsewhere).
+    pub fn dense<T: Copy + Into<f64>>(cells: &[(u32, T)], len: usize) -> Vec<f64> {
+        let mut out = vec![0.0; len];
+        for &(i, v) in cells {
+            if let Some(o) = out.get_mut(i as usize) {
+                *o = v.into();
+            }
+        }
+        out
+    }
 }
 
 /// A flow state and its buffers kept from one avalanche to the next on one terrain.
@@ -111,12 +129,20 @@ impl AvalancheWorkspace {
         });
         let w = terrain.geometry().width();
         let mut deposited = Vec::new();
+        let (mut peak_thickness, mut peak_speed) = (Vec::new(), Vec::new());
         for (r0, r1, c0, c1) in run.touched_cells() {
             for r in r0..=r1 {
                 for c in c0..=c1 {
+                    let i = r * w + c;
                     let h = run.state.snow_at(c, r);
                     if h > 0.0 {
-                        deposited.push(((r * w + c) as u32, h as f32));
+                        deposited.push((i as u32, h as f32));
+                    }
+                    if run.peak_thickness()[i] > 0.0 {
+                        peak_thickness.push((i as u32, run.peak_thickness()[i]));
+                    }
+                    if run.peak_speed()[i] > 0.0 {
+                        peak_speed.push((i as u32, run.peak_speed()[i]));
                     }
                 }
             }
@@ -129,6 +155,8 @@ impl AvalancheWorkspace {
             deposited_m3,
             released,
             deposited,
+            peak_thickness,
+            peak_speed,
             records,
         })
     }

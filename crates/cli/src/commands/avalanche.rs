@@ -15,7 +15,7 @@ use snowscape_avalanche::release_area::{
     release_from_shapefile,
 };
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, RunOptions,
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, RestOutcome, RunOptions,
 };
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
@@ -92,24 +92,25 @@ fn run_options(args: &AvalancheArgs) -> anyhow::Result<RunOptions> {
     Ok(o)
 }
 
-/// The released snow as a flowing state on the bare DEM, and the release cells.
+/// The terrain to release from (the bare DEM carrying the release's unstable snow), the
+/// release cells and their mask.
 ///
 /// A file gives the cells (and, from a shapefile's `thickness` field, their thickness;
 /// `--thickness` overrides it, 1 m by default). A point covers the DEM with `--thickness` of
 /// unstable snow and breaks it there (Cordonnier 2018 §6.1 rupture: the unstable snow within a
 /// reach proportional to its thickness, and everything down the fall lines below).
-fn released_state(
+fn release_terrain(
     dem: &Grid,
     spec: &ReleaseSpec,
     thickness: Option<f64>,
     dem_options: &ReadOptions,
-) -> anyhow::Result<(AvalancheState, ReleaseMask)> {
+) -> anyhow::Result<(LayeredTerrain, Vec<usize>, ReleaseMask)> {
     let g = dem.geometry();
-    match spec {
+    let mut terrain = LayeredTerrain::from_bedrock(dem.clone());
+    let mask = terrain.mask().clone();
+    let area = match spec {
         ReleaseSpec::Point(x, y) => {
-            let mut terrain = LayeredTerrain::from_bedrock(dem.clone());
             let t = thickness.unwrap_or(1.0) as f32;
-            let mask = terrain.mask().clone();
             for (i, v) in terrain
                 .layer_mut(SnowLayer::Unstable)
                 .iter_mut()
@@ -119,10 +120,7 @@ fn released_state(
                     *v = t;
                 }
             }
-            let rupture = release_at_point(&terrain, *x, *y, &RuptureParams::default())?;
-            let mut state = AvalancheState::from_terrain(&terrain)?;
-            rupture.mask.release(&mut terrain, &mut state)?;
-            Ok((state, rupture.mask))
+            release_at_point(&terrain, *x, *y, &RuptureParams::default())?.mask
         }
         ReleaseSpec::File(path) => {
             let is_shp = path
@@ -141,12 +139,20 @@ fn released_state(
                 area.thickness = None;
             }
             let h = area.thickness_field(thickness.unwrap_or(1.0))?;
-            let bed: Vec<f64> = dem.data().iter().map(|&z| z as f64).collect();
-            let mut state = AvalancheState::new(g, dem.mask(), &bed)?;
-            state.set_thickness(&h)?;
-            Ok((state, area))
+            for (i, v) in terrain
+                .layer_mut(SnowLayer::Unstable)
+                .iter_mut()
+                .enumerate()
+            {
+                if area.cells[i] && mask.is_valid(i) {
+                    *v = h[i] as f32;
+                }
+            }
+            area
         }
-    }
+    };
+    let cells = (0..area.cells.len()).filter(|&i| area.cells[i]).collect();
+    Ok((terrain, cells, area))
 }
 
 fn write_map(out: &mut Written, name: &str, dem: &Grid, values: Vec<f32>) -> anyhow::Result<()> {
@@ -174,10 +180,11 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let dem = args.dem_input.read(&args.dem).bad_input()?;
     let source = args.dem.display().to_string();
     let dem_options = args.dem_input.read_options().bad_input()?;
-    let (state, area) = released_state(&dem, &spec, args.thickness, &dem_options)
+    let (mut terrain, cells, area) = release_terrain(&dem, &spec, args.thickness, &dem_options)
         .with_context(|| format!("--release {}", args.release))
         .bad_input()?;
-    if state.flowing_volume() <= 0.0 {
+    let unstable = terrain.layer(SnowLayer::Unstable);
+    if !cells.iter().any(|&i| unstable[i] > 0.0) {
         return Err(anyhow!(
             "the release {} holds no snow (released volume 0 m³)",
             args.release
@@ -190,7 +197,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .job_failed()?;
     let relief = ReliefFrames::new(&dem, &view).job_failed()?;
     let t0 = Instant::now();
-    let mut av = AvalancheRun::new(state);
+    let mut workspace = AvalancheWorkspace::new();
     let bar = ProgressBar::new((options.duration_s * 10.0).ceil() as u64);
     if global.quiet {
         bar.set_draw_target(ProgressDrawTarget::hidden());
@@ -205,56 +212,80 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let mut next_frame = 0.0;
     let mut render_s = 0.0;
     let mut frame_error: Option<anyhow::Error> = None;
-    let summary = av
-        .run::<AvalancheError>(&params, &options, |r| {
-            bar.set_position((r.time() * 10.0).round() as u64);
-            bar.set_message(format!(
-                "t = {:.1} s, {:.0} m³ moving energy {:.3e}",
-                r.time(),
-                r.state.flowing_volume(),
-                r.kinetic_energy()
-            ));
-            if r.time() + 1e-9 >= next_frame || r.stop_reason().is_some() {
-                let tf = Instant::now();
-                let name = format!("frames/frame_{:04}.png", frames.len());
-                match render_frame(&relief, r)
-                    .and_then(|img| write_png(&args.out.join(&name), &img).map(|_| img))
-                {
-                    Ok(img) => {
-                        out.files.push(name);
-                        frames.push(img);
+    let outcome = workspace
+        .run_to_rest::<AvalancheError>(
+            &mut terrain,
+            &cells,
+            None,
+            &params,
+            &options,
+            SnowLayer::Stable,
+            |r| {
+                bar.set_position((r.time() * 10.0).round() as u64);
+                bar.set_message(format!(
+                    "t = {:.1} s, {:.0} m³ moving energy {:.3e}",
+                    r.time(),
+                    r.state.flowing_volume(),
+                    r.kinetic_energy()
+                ));
+                if r.time() + 1e-9 >= next_frame || r.stop_reason().is_some() {
+                    let tf = Instant::now();
+                    let name = format!("frames/frame_{:04}.png", frames.len());
+                    match render_frame(&relief, r)
+                        .and_then(|img| write_png(&args.out.join(&name), &img).map(|_| img))
+                    {
+                        Ok(img) => {
+                            out.files.push(name);
+                            frames.push(img);
+                        }
+                        Err(e) if frame_error.is_none() => frame_error = Some(e),
+                        Err(_) => {}
                     }
-                    Err(e) if frame_error.is_none() => frame_error = Some(e),
-                    Err(_) => {}
+                    render_s += tf.elapsed().as_secs_f64();
+                    next_frame += args.frame_interval;
                 }
-                render_s += tf.elapsed().as_secs_f64();
-                next_frame += args.frame_interval;
-            }
-            Ok(())
-        })
+                Ok(())
+            },
+        )
         .job_failed()?;
+    let summary = outcome.summary.clone();
     bar.finish_and_clear();
     if let Some(e) = frame_error {
         return Err(e).job_failed();
     }
     let wall = t0.elapsed().as_secs_f64();
 
-    let to_f32 = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+    let n = dem.geometry().len();
+    let map = |cells: &[(u32, f64)]| {
+        RestOutcome::dense(cells, n)
+            .iter()
+            .map(|&x| x as f32)
+            .collect::<Vec<f32>>()
+    };
     (|| -> anyhow::Result<()> {
         write_map(
             &mut out,
             "peak_thickness.tif",
             &dem,
-            to_f32(av.peak_thickness()),
+            map(&outcome.peak_thickness),
         )?;
-        write_map(&mut out, "peak_velocity.tif", &dem, to_f32(av.peak_speed()))?;
+        write_map(
+            &mut out,
+            "peak_velocity.tif",
+            &dem,
+            map(&outcome.peak_speed),
+        )?;
+        let deposit = RestOutcome::dense(&outcome.deposited, n);
         write_map(
             &mut out,
             "thickness.tif",
             &dem,
-            to_f32(&av.state.snow_thickness()),
+            deposit.iter().map(|&x| x as f32).collect(),
         )?;
-        let fp = av.footprint(options.footprint_threshold_m);
+        let fp: Vec<bool> = RestOutcome::dense(&outcome.peak_thickness, n)
+            .iter()
+            .map(|&h| h > options.footprint_threshold_m)
+            .collect();
         write_map(
             &mut out,
             "footprint.tif",
