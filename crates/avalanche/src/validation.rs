@@ -9,8 +9,8 @@
 //!   pure Coulomb friction the mass centre's travel angle `atan(drop / horizontal travel)` tends
 //!   to θc (a point mass with horizontal velocity `u` obeys `d(u²/2)/dx = g·(tanθ − tanθc)` on
 //!   the slope and `−g·tanθc` on the flat, so it stops after a horizontal travel `H / tanθc`).
-//! - [`run_release`]: a release shapefile on a real DEM, run to rest with
-//!   [`AvalancheRun`]; [`read_polyline`] and [`distance_to_polyline`] measure it against a
+//! - [`run_release`]: a release shapefile on a real DEM, run to rest on the one path every
+//!   front end shares ([`AvalancheWorkspace::run_to_rest`]); [`read_polyline`] and [`distance_to_polyline`] measure it against a
 //!   practitioner's path line, [`footprint_overlap`] against a reference peak-thickness raster
 //!   (compared by map coordinates).
 
@@ -18,9 +18,10 @@ use crate::flow::{
     AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, Border, G, step,
 };
 use crate::release_area::{ReleaseAreaError, ReleaseMask, release_from_shapefile};
+use crate::rest::{AvalancheWorkspace, RestOutcome};
 use crate::run::{AvalancheRun, RunOptions, RunSummary};
 use snowscape_io::{RasterError, ReadOptions};
-use snowscape_terrain::{Grid, GridGeometry, NodataMask};
+use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -335,16 +336,32 @@ pub fn run_release(
             }
         }
     }
-    let bed: Vec<f64> = grid.data().iter().map(|&v| v as f64).collect();
-    let mut state = AvalancheState::new(&g, grid.mask(), &bed)?;
-    state.set_thickness(&thickness)?;
+    // The release as unstable snow on the bare DEM, run to rest on the one path the season,
+    // the editor and the command line share.
+    let mut terrain = LayeredTerrain::from_bedrock(grid.clone());
+    let cells: Vec<usize> = (0..thickness.len())
+        .filter(|&i| thickness[i] > 0.0)
+        .collect();
+    let unstable = terrain.layer_mut(SnowLayer::Unstable);
+    for &i in &cells {
+        unstable[i] = thickness[i] as f32;
+    }
     let t0 = std::time::Instant::now();
-    let mut run = AvalancheRun::new(state);
-    let summary = run.run::<AvalancheError>(params, options, |_| Ok(()))?;
+    let outcome = AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
+        &mut terrain,
+        &cells,
+        None,
+        params,
+        options,
+        SnowLayer::Stable,
+        |_| Ok(()),
+    )?;
     let wall_s = t0.elapsed().as_secs_f64();
+    let n = g.len();
+    let summary = outcome.summary.clone();
     Ok(RealRun {
-        peak_thickness: run.peak_thickness().to_vec(),
-        final_thickness: run.state.snow_thickness(),
+        peak_thickness: RestOutcome::dense(&outcome.peak_thickness, n),
+        final_thickness: RestOutcome::dense(&outcome.deposited, n),
         dem: grid,
         release: mask,
         summary,
