@@ -8,13 +8,12 @@
 //! replay gives the same avalanches. These run to rest inside the season
 //! ([`Winter::trigger_avalanche`]) and are counted in its avalanche list and mass budget.
 //! Painted skier areas send [`SKIERS_PER_DAY`] skiers a day from cells drawn in proportion to
-//! the paint, each run to its terminus.
+//! the paint, each run to its terminus on the season's skier path ([`Winter::ski_from`]):
+//! counted in its skier statistics and volume budget (compaction), its avalanches started.
 
-use crate::live::LiveSkiers;
 use crate::protocol::ErrorCode;
 use crate::session::{Refusal, Session};
 use snowscape_season::winter::{SeasonError, Winter};
-use snowscape_skiers::{SkiArea, SkiScratch};
 use snowscape_terrain::random::uniform;
 
 /// Spacing of the avalanche release sites, m.
@@ -73,54 +72,20 @@ pub fn apply_painted(session: &mut Session, from_day: f64) -> Result<(), Refusal
         }) else {
             continue;
         };
-        ski_once(&mut session.winter, &mut session.skiers, i)?;
+        ski_once(&mut session.winter, i)?;
     }
     Ok(())
 }
 
-/// One skier from cell `i` to its terminus (nothing when the cell holds no skiable snow).
-fn ski_once(winter: &mut Winter, skiers: &mut Option<LiveSkiers>, i: usize) -> Result<(), Refusal> {
-    let p = winter.scenario().skiers.clone();
-    if skiers.is_none() {
-        match SkiArea::new(
-            &p.ski,
-            &winter.terrain,
-            p.terminus.clone(),
-            winter.scenario().seed,
-        ) {
-            Ok(area) => {
-                *skiers = Some(LiveSkiers {
-                    area,
-                    scratch: SkiScratch::default(),
-                    time_s: 0.0,
-                })
-            }
-            Err(_) => return Ok(()),
-        }
-    }
-    let Some(s) = skiers.as_mut() else {
-        return Ok(());
-    };
+/// One skier from cell `i` to its terminus on the season's own skier-run path
+/// ([`Winter::ski_from`]): its compaction in the season's budget, the avalanches it triggers
+/// run at once (nothing when the cell holds no skiable snow).
+fn ski_once(winter: &mut Winter, i: usize) -> Result<(), Refusal> {
     let g = winter.terrain.geometry().clone();
     let (c, r) = g.col_row(i);
     let (x, y) = g.cell_centre(c, r);
-    if s.area.spawn_at(&p.ski, &winter.terrain, x, y).is_err() {
-        return Ok(());
-    }
-    let mut t = 0.0;
-    while t < p.max_run_s {
-        let rep = snowscape_skiers::step(
-            &p.ski,
-            &mut s.area,
-            &mut winter.terrain,
-            &mut s.scratch,
-            p.step_s,
-        )
-        .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
-        t += p.step_s;
-        if rep.active == 0 {
-            break;
-        }
-    }
-    Ok(())
+    winter
+        .ski_from(x, y)
+        .map(|_| ())
+        .map_err(|e| (ErrorCode::Failed, e.to_string()))
 }

@@ -340,3 +340,40 @@ fn launched_skier_moves_and_packs_snow() {
     let stable: f32 = s.terrain().snow[1].iter().sum();
     assert!(stable > 0.0, "skiing packs unstable snow into stable snow");
 }
+
+#[test]
+fn painted_skiers_run_on_the_season_path() {
+    let mut s = session(128, 10.0);
+    for r in (8..120).step_by(6) {
+        for c in (8..120).step_by(6) {
+            let dab = ClientMessage::Brush {
+                stroke: 1,
+                op: BrushOp::Add,
+                target: BrushTarget::Unstable,
+                col: c as f64,
+                row: r as f64,
+                radius_m: 250.0,
+                strength: 0.4,
+                value: 0.0,
+            };
+            s.handle(dab, None, None).unwrap();
+        }
+    }
+    let (c, r) = steepest_cell(&s);
+    s.handle(
+        brush(2, BrushOp::Add, BrushTarget::SkiArea, c, r, 1.0),
+        None,
+        None,
+    )
+    .unwrap();
+    let runs = s.winter().ski_stats().runs;
+    s.handle(ClientMessage::Step { days: 1.0 }, None, None)
+        .unwrap();
+    let w = s.winter();
+    assert!(
+        w.ski_stats().runs > runs,
+        "painted skiers are counted as the season's skier runs ({} runs)",
+        w.ski_stats().runs
+    );
+    assert!(w.ski_stats().steps > 0 && w.ski_stats().distance_m > 0.0);
+}

@@ -6,10 +6,40 @@ use crate::scheduler::SECONDS_PER_DAY;
 use snowscape_skiers::SkiArea;
 
 impl Winter {
-    /// One skier run, from its start to its terminus (temporal zoom); avalanches it triggers
-    /// start at once. See [`crate::skiing`].
+    /// One scheduled skier run, from its start to its terminus (temporal zoom): the next of
+    /// the scenario's start points, or a start drawn from the snow; the season's clock moves
+    /// on by the run's duration. See [`crate::skiing`].
     pub(super) fn run_skier(&mut self, event_day: f64) -> Result<(), SeasonError> {
-        let day = event_day;
+        let p = self.scenario.skiers.clone();
+        let k = self.state.ski.runs as usize;
+        let start = p.starts.get(k % p.starts.len().max(1)).copied();
+        if let Some(elapsed) = self.ski_run(event_day, start)? {
+            self.state
+                .scheduler
+                .advance_clock(elapsed / SECONDS_PER_DAY);
+            self.update_avalanche_rate();
+        }
+        Ok(())
+    }
+
+    /// One skier from the map position `(x, y)` to its terminus, on the season's ski area, as
+    /// a scheduled run goes (its compaction in the budget, its avalanches started at once, its
+    /// tracks kept), without moving the season's clock: the editor's painted skier areas.
+    /// Returns the simulated seconds, `None` where no run could start (no skiable snow).
+    pub fn ski_from(&mut self, x: f64, y: f64) -> Result<Option<f64>, SeasonError> {
+        let day = self.state.scheduler.time_days();
+        let run = self.ski_run(day, Some([x, y]))?;
+        if run.is_some() {
+            self.update_avalanche_rate();
+        }
+        Ok(run)
+    }
+
+    /// The one skier-run path: the ski area (built or its terminus refreshed), a skier
+    /// spawned at `start` (or drawn from the snow), stepped to its terminus or `max_run_s`
+    /// with every step in the season's statistics and budget and the avalanches it triggers
+    /// started at once; returns the simulated seconds (`None` when no run could start).
+    fn ski_run(&mut self, day: f64, start: Option<[f64; 2]>) -> Result<Option<f64>, SeasonError> {
         let ski_err = |e: snowscape_skiers::SkiError| SeasonError::Skier {
             day,
             reason: e.to_string(),
@@ -26,32 +56,31 @@ impl Winter {
                 self.scenario.seed,
             ) {
                 Ok(a) => self.ski_area = Some(a),
-                Err(e) if no_snow(&e) => return Ok(()),
+                Err(e) if no_snow(&e) => return Ok(None),
                 Err(e) => return Err(ski_err(e)),
             }
             self.terminus_stale = false;
         }
         let Some(area) = self.ski_area.as_mut() else {
-            return Ok(());
+            return Ok(None);
         };
         if self.terminus_stale {
             match area.refresh_terminus(&p.ski, &self.terrain) {
                 Ok(()) => self.terminus_stale = false,
-                Err(e) if no_snow(&e) => return Ok(()),
+                Err(e) if no_snow(&e) => return Ok(None),
                 Err(e) => return Err(ski_err(e)),
             }
         }
         area.time_s = day * SECONDS_PER_DAY;
-        let k = self.state.ski.runs as usize;
-        let spawned = match p.starts.get(k % p.starts.len().max(1)) {
-            Some([x, y]) => area.spawn_at(&p.ski, &self.terrain, *x, *y).map(|_| 1),
+        let spawned = match start {
+            Some([x, y]) => area.spawn_at(&p.ski, &self.terrain, x, y).map(|_| 1),
             None => area
                 .spawn_weighted(&p.ski, &self.terrain, 1)
                 .map(|v| v.len()),
         };
         // A start point on bare ground or a map without snow: no run today.
         if !matches!(spawned, Ok(n) if n > 0) {
-            return Ok(());
+            return Ok(None);
         }
         self.state.ski.runs += 1;
         let mut elapsed = 0.0;
@@ -89,11 +118,7 @@ impl Winter {
                 break;
             }
         }
-        self.state
-            .scheduler
-            .advance_clock(elapsed / SECONDS_PER_DAY);
-        self.update_avalanche_rate();
-        Ok(())
+        Ok(Some(elapsed))
     }
 
     /// Fades the ski tracks under snow that `before` (total depth per cell) did not hold.
