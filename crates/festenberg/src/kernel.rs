@@ -56,15 +56,13 @@ pub struct KernelTable {
     side: usize,
     /// Quantised normalised weight of each table column; -1 outside the cylinder.
     weight: Vec<i64>,
-    /// Horizontal distance of each table column, in column spacings.
+    /// Horizontal distance of each table column, in column spacings; [`PAD`] more at the end
+    /// (for the lanes).
     distance: Vec<f32>,
-    /// Weight times the unit vector towards the column (x east, y north), in 2^-24 units.
-    towards: Vec<[i64; 2]>,
-    /// The same, east and north apart, and the distances, for the lanes; [`PAD`] more at the
-    /// end.
+    /// Weight times the unit vector towards the column, east (x) and north (y), in 2^-24
+    /// units; [`PAD`] more at the end.
     towards_x: Vec<i64>,
     towards_y: Vec<i64>,
-    distance_padded: Vec<f32>,
     /// Quantised weights as i32 when every one fits (always but for a kernel of a few
     /// columns), for the dense path's 32 × 32 → 64-bit products; 0 outside the cylinder,
     /// [`PAD`] zeros at the end.
@@ -136,17 +134,14 @@ impl KernelTable {
             v.extend([0; PAD]);
             v
         };
-        let mut distance_padded = distance.clone();
-        distance_padded.extend([0.0; PAD]);
+        distance.extend([0.0; PAD]);
         Self {
             reach,
             side,
             towards_x: pad(towards.iter().map(|t| t[0]).collect()),
             towards_y: pad(towards.iter().map(|t| t[1]).collect()),
-            distance_padded,
             weight,
             distance,
-            towards,
             weight32,
             spans,
             columns,
@@ -495,8 +490,8 @@ fn site_kernel(
 #[inline]
 fn boundary_term(sums: &mut Sums, table: &KernelTable, t: usize) {
     sums.edge = sums.edge.min(table.distance[t]);
-    sums.towards[0] += table.towards[t][0];
-    sums.towards[1] += table.towards[t][1];
+    sums.towards[0] += table.towards_x[t];
+    sums.towards[1] += table.towards_y[t];
 }
 
 /// `λ / h0` of a height difference `dz`, clipped to [-1, 1] (Eq. 6) and truncated to units of

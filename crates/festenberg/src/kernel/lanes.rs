@@ -177,12 +177,12 @@ unsafe fn dense_lanes_avx2<const PLAIN: bool>(
     assert!(
         table.towards_x.len() >= run.t0 + n + PAD
             && table.towards_y.len() >= run.t0 + n + PAD
-            && table.distance_padded.len() >= run.t0 + n + PAD
+            && table.distance.len() >= run.t0 + n + PAD
     );
     let (tx_ptr, ty_ptr, d_ptr) = (
         table.towards_x.as_ptr().wrapping_add(run.t0),
         table.towards_y.as_ptr().wrapping_add(run.t0),
-        table.distance_padded.as_ptr().wrapping_add(run.t0),
+        table.distance.as_ptr().wrapping_add(run.t0),
     );
     let infinity = _mm256_set1_ps(f32::INFINITY);
     let minus_infinity = _mm256_set1_ps(f32::NEG_INFINITY);
