@@ -2,10 +2,12 @@
 // playwright-core. Needs a running `snowscape serve`; SNOWSCAPE_URL says where.
 // Checks: the page draws a non-blank terrain, a brush stroke raises the snow depth where it
 // was applied (read back from the server), a triggered avalanche moves snow downhill, the
-// timeline steps a day, a second tab sees the same state, and malformed messages get error
-// replies without breaking the session. Writes screenshots to SNOWSCAPE_SHOTS (default /tmp).
+// timeline steps a day, a second tab sees the same state, malformed messages get error
+// replies without breaking the session, and requests from other origins or with other Host
+// names are refused. Writes screenshots to SNOWSCAPE_SHOTS (default /tmp).
 import { launchChromium, steepestCellInPage } from './common.mjs';
 import assert from 'node:assert/strict';
+import http from 'node:http';
 
 const url = process.env.SNOWSCAPE_URL;
 if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
@@ -166,6 +168,45 @@ await check('save and export from the page; exported files download', async () =
   assert.equal(Buffer.from(await glb.arrayBuffer()).subarray(0, 4).toString(), 'glTF');
   const escape = await fetch(`${base}/files/..%2F..%2Fetc%2Fpasswd`);
   assert.notEqual(escape.status, 200);
+});
+
+// A raw HTTP request with chosen headers (fetch would fix Host itself).
+const rawRequest = (path, headers) => new Promise((resolve, reject) => {
+  const u = new URL(base);
+  const req = http.request({ host: u.hostname, port: u.port, path, headers }, (res) => {
+    res.resume();
+    resolve(res.statusCode);
+  });
+  req.on('upgrade', (res, socket) => { socket.destroy(); resolve(res.statusCode); });
+  req.on('error', reject);
+  req.end();
+});
+
+await check('other sites, other local ports and rebinding names are refused (403)', async () => {
+  const host = new URL(base).host;
+  assert.equal(await rawRequest('/api/state', { Host: host }), 200);
+  assert.equal(await rawRequest('/api/state', { Host: 'evil.example' }), 403, 'DNS rebinding Host');
+  assert.equal(await rawRequest('/api/state', { Host: host, Origin: 'http://evil.example' }), 403);
+  assert.equal(await rawRequest('/files/e2e/project.json', { Host: `evil.example:${new URL(base).port}` }), 403);
+  const upgrade = { Host: host, Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
+    'Sec-WebSocket-Key': 'dGhlIHNhbXBsZSBub25jZQ==' };
+  assert.equal(await rawRequest('/ws', { ...upgrade, Origin: base }), 101, 'the page itself connects');
+  assert.equal(await rawRequest('/ws', { ...upgrade, Origin: 'http://evil.example' }), 403);
+  assert.equal(await rawRequest('/ws', { ...upgrade, Origin: 'http://127.0.0.1:1' }), 403, 'another local port');
+});
+
+await check('a page from another origin cannot connect to the editor', async () => {
+  const other = await context.newPage();
+  await other.goto('data:text/html,<title>elsewhere</title>');
+  const wsUrl = base.replace(/^http/, 'ws') + '/ws';
+  const outcome = await other.evaluate((u) => new Promise((resolve) => {
+    const ws = new WebSocket(u);
+    ws.onopen = () => { resolve('open'); ws.close(); };
+    ws.onerror = () => resolve('refused');
+    setTimeout(() => resolve('timeout'), 10000);
+  }), wsUrl);
+  assert.equal(outcome, 'refused');
+  await other.close();
 });
 
 await browser.close();

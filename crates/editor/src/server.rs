@@ -9,6 +9,13 @@
 //! - `GET /api/state`: the state summary; `GET /api/cell?col=C&row=R`: values at a cell.
 //! - `GET /files/<path>`: a file of the project folder (exports), read-only.
 //!
+//! **Who may talk to it.** Every request must name the served address in its `Host` header
+//! (`127.0.0.1:PORT`, `localhost:PORT`, `[::1]:PORT`, the `--bind` address; any IP literal
+//! when bound to all interfaces), and a request that carries an `Origin` (every browser
+//! WebSocket upgrade and cross-site fetch does) must come from a page of such an address;
+//! others get 403. This keeps other sites the artist visits, pages served from other local
+//! ports and DNS-rebinding names away from the session and the project files.
+//!
 //! One actor thread owns the session: messages are handled in order, and a live avalanche or
 //! skier advances one frame per loop turn between messages. A tab that falls behind the
 //! broadcast (its queue overflows) is sent the whole state again.
@@ -21,9 +28,11 @@ use crate::protocol::{
 };
 use crate::session::{CellValues, Exporter, Out, Outgoing, Refusal, Session, StateSummary};
 use axum::Router;
+use axum::extract::Request;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{Query, State};
 use axum::http::{StatusCode, Uri, header};
+use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use std::net::{IpAddr, SocketAddr};
@@ -182,7 +191,8 @@ pub fn serve_blocking(
         let local = listener
             .local_addr()
             .map_err(|source| ServeError::Bind { addr, source })?;
-        let app = router(config);
+        let allowed = Arc::new(AllowedHosts::new(config.bind, local.port()));
+        let app = router(config, allowed);
         on_ready(local);
         axum::serve(listener, app)
             .with_graceful_shutdown(async {
@@ -193,8 +203,92 @@ pub fn serve_blocking(
     })
 }
 
+/// The addresses the editor is served at, for the `Host` and `Origin` checks.
+#[derive(Debug, Clone)]
+pub struct AllowedHosts {
+    /// `host:port` authorities, lowercase.
+    names: Vec<String>,
+    port: u16,
+    /// Bound to all interfaces: any IP literal (never a DNS name) with the port.
+    any_ip: bool,
+}
+
+impl AllowedHosts {
+    /// The loopback names and the bind address, on `port`.
+    pub fn new(bind: IpAddr, port: u16) -> Self {
+        let authority = |ip: IpAddr| match ip {
+            IpAddr::V4(v4) => format!("{v4}:{port}"),
+            IpAddr::V6(v6) => format!("[{v6}]:{port}"),
+        };
+        let mut names = vec![
+            format!("127.0.0.1:{port}"),
+            format!("localhost:{port}"),
+            format!("[::1]:{port}"),
+        ];
+        if !bind.is_unspecified() {
+            names.push(authority(bind));
+        }
+        Self {
+            names,
+            port,
+            any_ip: bind.is_unspecified(),
+        }
+    }
+
+    /// Whether `authority` (`host:port`) names this server.
+    fn names(&self, authority: &str) -> bool {
+        let a = authority.to_ascii_lowercase();
+        if self.names.contains(&a) {
+            return true;
+        }
+        self.any_ip
+            && a.parse::<SocketAddr>()
+                .is_ok_and(|addr| addr.port() == self.port)
+    }
+
+    /// Whether a request with these `Host` and `Origin` headers may be served; the refusal
+    /// names the header and its value.
+    pub fn admits(&self, host: Option<&str>, origin: Option<&str>) -> Result<(), String> {
+        match host {
+            Some(h) if self.names(h) => {}
+            Some(h) => return Err(format!("Host {h:?} is not this editor's address")),
+            None => return Err("no Host header".into()),
+        }
+        if let Some(o) = origin {
+            let authority = o
+                .strip_prefix("http://")
+                .or_else(|| o.strip_prefix("https://"))
+                .unwrap_or("");
+            if !self.names(authority) {
+                return Err(format!("Origin {o:?} is not this editor's page"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Refuses, with 403, a request whose `Host` or `Origin` is not this server's
+/// ([`AllowedHosts::admits`]).
+async fn guard(State(allowed): State<Arc<AllowedHosts>>, req: Request, next: Next) -> Response {
+    let verdict = {
+        let header = |name: header::HeaderName| {
+            req.headers()
+                .get(name)
+                .map(|v| v.to_str().unwrap_or("(not text)").to_string())
+        };
+        allowed.admits(
+            header(header::HOST).as_deref(),
+            header(header::ORIGIN).as_deref(),
+        )
+    };
+    match verdict {
+        Ok(()) => next.run(req).await,
+        Err(why) => (StatusCode::FORBIDDEN, format!("snowscape serve: {why}\n")).into_response(),
+    }
+}
+
 /// The router, with the actor thread started.
-fn router(config: ServeConfig) -> Router {
+fn router(config: ServeConfig, allowed: Arc<AllowedHosts>) -> Router {
     let (tx, rx) = mpsc::unbounded_channel();
     let (updates, _) = broadcast::channel(4096);
     let state = AppState {
@@ -216,6 +310,7 @@ fn router(config: ServeConfig) -> Router {
         .route("/files/{*path}", get(file_handler))
         .fallback(get(asset_handler))
         .with_state(state)
+        .layer(middleware::from_fn_with_state(allowed, guard))
 }
 
 async fn asset_handler(State(s): State<AppState>, uri: Uri) -> Response {
@@ -375,5 +470,57 @@ async fn connection(mut socket: WebSocket, s: AppState) {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_served_address_and_its_pages_are_admitted() {
+        let a = AllowedHosts::new("127.0.0.1".parse().unwrap(), 8080);
+        for host in [
+            "127.0.0.1:8080",
+            "localhost:8080",
+            "LOCALHOST:8080",
+            "[::1]:8080",
+        ] {
+            assert!(a.admits(Some(host), None).is_ok(), "{host}");
+        }
+        assert!(
+            a.admits(Some("localhost:8080"), Some("http://localhost:8080"))
+                .is_ok()
+        );
+        assert!(
+            a.admits(Some("127.0.0.1:8080"), Some("http://127.0.0.1:8080"))
+                .is_ok()
+        );
+        let refused = [
+            (Some("evil.example"), None),
+            (Some("evil.example:8080"), None),
+            (Some("127.0.0.1:9090"), None),
+            (None, None),
+            (Some("127.0.0.1:8080"), Some("http://evil.example")),
+            (Some("127.0.0.1:8080"), Some("http://127.0.0.1:9090")),
+            (Some("127.0.0.1:8080"), Some("null")),
+            (
+                Some("127.0.0.1:8080"),
+                Some("http://localhost:8080.evil.example"),
+            ),
+        ];
+        for (host, origin) in refused {
+            let e = a.admits(host, origin).unwrap_err();
+            let named = origin.or(host).unwrap_or("no Host");
+            assert!(e.contains(named), "{e} names {named}");
+        }
+        // Bound to all interfaces: IP literals with the port, never a DNS name.
+        let all = AllowedHosts::new("0.0.0.0".parse().unwrap(), 8080);
+        assert!(
+            all.admits(Some("192.168.1.7:8080"), Some("http://192.168.1.7:8080"))
+                .is_ok()
+        );
+        assert!(all.admits(Some("rebind.evil.example:8080"), None).is_err());
+        assert!(all.admits(Some("192.168.1.7:8081"), None).is_err());
     }
 }
