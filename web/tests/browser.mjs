@@ -195,6 +195,28 @@ await check('other sites, other local ports and rebinding names are refused (403
   assert.equal(await rawRequest('/ws', { ...upgrade, Origin: 'http://127.0.0.1:1' }), 403, 'another local port');
 });
 
+await check('at most 16 tabs connect at once; a closed one frees its place', async () => {
+  const u = new URL(base);
+  const held = [];
+  const open = () => new Promise((resolve, reject) => {
+    const req = http.request({ host: u.hostname, port: u.port, path: '/ws', headers: {
+      Host: u.host, Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
+      'Sec-WebSocket-Key': 'dGhlIHNhbXBsZSBub25jZQ==' } });
+    req.on('upgrade', (res, socket) => { held.push(socket); resolve(res.statusCode); });
+    req.on('response', (res) => { res.resume(); resolve(res.statusCode); });
+    req.on('error', reject);
+    req.end();
+  });
+  const codes = [];
+  for (let k = 0; k < 20; k++) codes.push(await open());
+  assert.ok(codes.filter((c) => c === 101).length <= 16, codes.join(' '));
+  assert.equal(codes[codes.length - 1], 503, codes.join(' '));
+  for (const sock of held) sock.destroy();
+  await new Promise((r) => setTimeout(r, 500));
+  assert.equal(await open(), 101, 'a place is free again');
+  for (const sock of held) sock.destroy();
+});
+
 await check('a page from another origin cannot connect to the editor', async () => {
   const other = await context.newPage();
   await other.goto('data:text/html,<title>elsewhere</title>');

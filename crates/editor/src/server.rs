@@ -16,6 +16,9 @@
 //! others get 403. This keeps other sites the artist visits, pages served from other local
 //! ports and DNS-rebinding names away from the session and the project files.
 //!
+//! At most [`MAX_CONNECTIONS`] tabs are connected at once (more get 503); sockets send with
+//! `TCP_NODELAY`.
+//!
 //! One actor thread owns the session: messages are handled in order, and a live avalanche or
 //! skier advances one frame per loop turn between messages. A tab that falls behind the
 //! broadcast (its queue overflows) is sent the whole state again.
@@ -35,8 +38,10 @@ use axum::http::{StatusCode, Uri, header};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
+use axum::serve::ListenerExt;
 use std::net::{IpAddr, SocketAddr};
 use std::sync::Arc;
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 use thiserror::Error;
 use tokio::sync::{broadcast, mpsc, oneshot};
@@ -47,6 +52,8 @@ pub const SOCKET_MAX_BYTES: usize = 1 << 20;
 /// Shortest wall time between two frames of a live event when pacing (25 frames/s: an
 /// avalanche at its real speed with [`crate::live::RECORD_INTERVAL_S`] records).
 pub const FRAME_INTERVAL: Duration = Duration::from_millis(40);
+/// Most WebSocket connections at once (tabs); more are refused with 503.
+pub const MAX_CONNECTIONS: usize = 16;
 /// Largest project file served for download.
 const MAX_DOWNLOAD: u64 = 1 << 30;
 
@@ -95,6 +102,8 @@ struct AppState {
     updates: broadcast::Sender<Arc<Outgoing>>,
     project: ProjectDir,
     assets: Arc<Assets>,
+    /// Open WebSocket connections.
+    connections: Arc<std::sync::atomic::AtomicUsize>,
 }
 
 /// The actor: owns the session, handles commands in order, advances live events.
@@ -194,6 +203,10 @@ pub fn serve_blocking(
         let allowed = Arc::new(AllowedHosts::new(config.bind, local.port()));
         let app = router(config, allowed);
         on_ready(local);
+        // Small frames (a tile, a progress line) go out at once.
+        let listener = listener.tap_io(|tcp| {
+            let _ = tcp.set_nodelay(true);
+        });
         axum::serve(listener, app)
             .with_graceful_shutdown(async {
                 let _ = tokio::signal::ctrl_c().await;
@@ -296,6 +309,7 @@ fn router(config: ServeConfig, allowed: Arc<AllowedHosts>) -> Router {
         updates: updates.clone(),
         project: config.project.clone(),
         assets: Arc::new(config.assets),
+        connections: Arc::default(),
     };
     let (session, project, exporter, pace) =
         (config.session, config.project, config.exporter, config.pace);
@@ -382,9 +396,33 @@ async fn file_handler(
 }
 
 async fn ws_handler(State(s): State<AppState>, ws: WebSocketUpgrade) -> Response {
+    // A slot for this tab, or 503 when MAX_CONNECTIONS are open.
+    let open = s.connections.fetch_add(1, Ordering::SeqCst);
+    if open >= MAX_CONNECTIONS {
+        s.connections.fetch_sub(1, Ordering::SeqCst);
+        return (
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!("snowscape serve: {open} tabs are connected, the most it serves is {MAX_CONNECTIONS}\n"),
+        )
+            .into_response();
+    }
+    // Released when the connection ends, or when the upgrade never completes.
+    let slot = Slot(s.connections.clone());
     ws.max_message_size(SOCKET_MAX_BYTES)
         .max_frame_size(SOCKET_MAX_BYTES)
-        .on_upgrade(move |socket| connection(socket, s))
+        .on_upgrade(move |socket| async move {
+            connection(socket, s).await;
+            drop(slot);
+        })
+}
+
+/// One of the [`MAX_CONNECTIONS`] slots, given back when dropped.
+struct Slot(Arc<std::sync::atomic::AtomicUsize>);
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::SeqCst);
+    }
 }
 
 fn to_message(o: &Outgoing) -> Message {
