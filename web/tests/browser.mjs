@@ -217,6 +217,42 @@ await check('at most 16 tabs connect at once; a closed one frees its place', asy
   for (const sock of held) sock.destroy();
 });
 
+await check('a tab that asks for the whole state again and again without reading is dropped', async () => {
+  const u = new URL(base);
+  const payload = Buffer.from(JSON.stringify({ type: 'resync' }));
+  // One masked client text frame (RFC 6455 §5.2).
+  const frame = Buffer.alloc(6 + payload.length);
+  frame[0] = 0x81; frame[1] = 0x80 | payload.length;
+  const mask = [1, 2, 3, 4];
+  mask.forEach((m, k) => { frame[2 + k] = m; });
+  payload.forEach((b, k) => { frame[6 + k] = b ^ mask[k % 4]; });
+  const t0 = Date.now();
+  const closed = await new Promise((resolve, reject) => {
+    const req = http.request({ host: u.hostname, port: u.port, path: '/ws', headers: {
+      Host: u.host, Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
+      'Sec-WebSocket-Key': 'dGhlIHNhbXBsZSBub25jZQ==' } });
+    req.on('upgrade', (res, socket) => {
+      socket.pause(); // read nothing while the server's replies pile up
+      for (let k = 0; k < 200; k++) socket.write(frame);
+      // Past the server's send timeout, read what it sent: a dropped tab then sees the end.
+      setTimeout(() => {
+        socket.on('close', () => resolve(true));
+        socket.on('error', () => resolve(true));
+        socket.on('data', () => {});
+        socket.resume();
+        setTimeout(() => { socket.destroy(); resolve(false); }, 15000);
+      }, 13000);
+    });
+    req.on('error', reject);
+    req.end();
+  });
+  assert.ok(closed, 'the server kept a tab that never reads');
+  console.log(`     dropped after ${Date.now() - t0} ms`);
+  // The session goes on for the others.
+  const st = await (await fetch(`${base}/api/state`)).json();
+  assert.ok(st.width > 0);
+});
+
 await check('a page from another origin cannot connect to the editor', async () => {
   const other = await context.newPage();
   await other.goto('data:text/html,<title>elsewhere</title>');

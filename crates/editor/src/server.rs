@@ -21,7 +21,9 @@
 //!
 //! One actor thread owns the session: messages are handled in order, and a live avalanche or
 //! skier advances one frame per loop turn between messages. A tab that falls behind the
-//! broadcast (its queue overflows) is sent the whole state again.
+//! broadcast (its queue overflows) is sent the whole state again; one that lets
+//! [`MAX_PENDING_REPLIES`] of its own replies pile up, or does not take a message within
+//! [`SEND_TIMEOUT`], is dropped (memory per tab stays bounded).
 
 use crate::assets::{Assets, BUILD_HINT};
 use crate::project::{ProjectDir, ProjectError};
@@ -52,6 +54,12 @@ pub const SOCKET_MAX_BYTES: usize = 1 << 20;
 /// Shortest wall time between two frames of a live event when pacing (25 frames/s: an
 /// avalanche at its real speed with [`crate::live::RECORD_INTERVAL_S`] records).
 pub const FRAME_INTERVAL: Duration = Duration::from_millis(40);
+/// Most replies waiting for one tab (a full state is a few dozen messages); a tab that lets
+/// more pile up without reading them is dropped.
+pub const MAX_PENDING_REPLIES: usize = 256;
+/// Longest a send to one tab may wait (the tab's connection is full because it does not
+/// read); the tab is then dropped.
+pub const SEND_TIMEOUT: Duration = Duration::from_secs(10);
 /// Most WebSocket connections at once (tabs); more are refused with 503.
 pub const MAX_CONNECTIONS: usize = 16;
 /// Largest project file served for download.
@@ -87,13 +95,26 @@ pub struct ServeConfig {
 }
 
 enum Command {
-    Msg {
-        msg: ClientMessage,
-        reply: mpsc::UnboundedSender<Arc<Outgoing>>,
-    },
+    Msg { msg: ClientMessage, reply: ReplyTo },
     Join(oneshot::Sender<Vec<Outgoing>>),
     State(oneshot::Sender<StateSummary>),
     Probe(usize, usize, oneshot::Sender<Result<CellValues, Refusal>>),
+}
+
+/// Where the actor sends one tab's own replies: a bounded queue, and the flag it raises when
+/// the queue is full (the tab is not reading) so that the tab is dropped.
+#[derive(Clone)]
+struct ReplyTo {
+    tx: mpsc::Sender<Arc<Outgoing>>,
+    overflow: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl ReplyTo {
+    fn send(&self, m: Outgoing) {
+        if self.tx.try_send(Arc::new(m)).is_err() {
+            self.overflow.store(true, Ordering::SeqCst);
+        }
+    }
 }
 
 #[derive(Clone)]
@@ -174,7 +195,7 @@ fn actor(
                 }
                 Out::Sender(m) => {
                     if let Some(r) = &reply_to {
-                        let _ = r.send(Arc::new(m));
+                        r.send(m);
                     }
                 }
             }
@@ -436,20 +457,37 @@ fn error_message(code: ErrorCode, message: impl Into<String>) -> Message {
     Message::text(ServerMessage::error(code, message).to_json())
 }
 
+/// Sends `m`, waiting at most [`SEND_TIMEOUT`]; false when the tab is gone or not reading.
+async fn send_within(socket: &mut WebSocket, m: Message) -> bool {
+    matches!(
+        tokio::time::timeout(SEND_TIMEOUT, socket.send(m)).await,
+        Ok(Ok(()))
+    )
+}
+
 /// One tab: its messages go to the actor; the broadcast and its own replies come back.
 async fn connection(mut socket: WebSocket, s: AppState) {
     let mut updates = s.updates.subscribe();
-    let (reply_tx, mut replies) = mpsc::unbounded_channel::<Arc<Outgoing>>();
+    let (tx, mut replies) = mpsc::channel::<Arc<Outgoing>>(MAX_PENDING_REPLIES);
+    let reply_tx = ReplyTo {
+        tx,
+        overflow: Arc::default(),
+    };
     let Some(initial) = ask(&s, Command::Join).await else {
         return;
     };
     for o in &initial {
-        if socket.send(to_message(o)).await.is_err() {
+        if !send_within(&mut socket, to_message(o)).await {
             return;
         }
     }
     let mut limiter = RateLimiter::new(RATE_PER_S, RATE_BURST);
     loop {
+        if reply_tx.overflow.load(Ordering::SeqCst) {
+            // More than MAX_PENDING_REPLIES replies unread: drop the tab.
+            tracing::warn!("a tab that stopped reading its replies was dropped");
+            break;
+        }
         tokio::select! {
             incoming = socket.recv() => {
                 let reply = match incoming {
@@ -479,31 +517,31 @@ async fn connection(mut socket: WebSocket, s: AppState) {
                     }
                 };
                 if let Some(r) = reply
-                    && socket.send(r).await.is_err()
+                    && !send_within(&mut socket, r).await
                 {
                     break;
                 }
             }
             update = updates.recv() => {
                 let sent = match update {
-                    Ok(o) => socket.send(to_message(&o)).await,
+                    Ok(o) => send_within(&mut socket, to_message(&o)).await,
                     Err(broadcast::error::RecvError::Lagged(_)) => {
                         let Some(all) = ask(&s, Command::Join).await else { break };
-                        let mut r = Ok(());
+                        let mut r = true;
                         for o in &all {
-                            r = socket.send(to_message(o)).await;
-                            if r.is_err() { break; }
+                            r = send_within(&mut socket, to_message(o)).await;
+                            if !r { break; }
                         }
                         r
                     }
                     Err(broadcast::error::RecvError::Closed) => break,
                 };
-                if sent.is_err() {
+                if !sent {
                     break;
                 }
             }
             Some(reply) = replies.recv() => {
-                if socket.send(to_message(&reply)).await.is_err() {
+                if !send_within(&mut socket, to_message(&reply)).await {
                     break;
                 }
             }
