@@ -311,21 +311,46 @@ const LEVEL_M: f32 = 1e-3;
 /// limited it, and a cell has 8 neighbours).
 const ROUNDS: usize = 9;
 
+/// Sets up cell `i`'s bed, surface at the start and surface of the sweep (`surfaces`) and its
+/// flags from the snow it has, unless `stamp` says this step (`generation`) already did: the
+/// same sums as `LayeredTerrain::surface`.
+#[inline]
+fn set_up(
+    i: usize,
+    generation: u32,
+    bedrock: &[f32],
+    snow: &[Vec<f32>; 4],
+    surfaces: [&mut [f32]; 3],
+    stamp: &mut [u32],
+    flags: &mut [u8],
+) {
+    if stamp[i] == generation {
+        return;
+    }
+    stamp[i] = generation;
+    let [c, st, u, pw] = snow;
+    let [bed, surface0, surface] = surfaces;
+    let b = bedrock[i];
+    bed[i] = b + c[i];
+    surface0[i] = b + (c[i] + st[i] + u[i] + pw[i]);
+    surface[i] = surface0[i];
+    flags[i] = 0;
+}
+
 impl SheddingScratch {
     /// Sets up cell `i`'s bed, surfaces and flags from the snow it has, the first time the
     /// step looks at it (the same sums as `LayeredTerrain::surface`).
     #[inline]
     fn touch(&mut self, bedrock: &[f32], snow: &[Vec<f32>; 4], i: usize) {
-        if self.stamp[i] == self.generation {
-            return;
-        }
-        self.stamp[i] = self.generation;
-        let [c, st, u, pw] = snow;
-        let b = bedrock[i];
-        self.bed[i] = b + c[i];
-        self.surface0[i] = b + (c[i] + st[i] + u[i] + pw[i]);
-        self.surface[i] = self.surface0[i];
-        self.flags[i] = 0;
+        set_up(
+            i,
+            self.generation,
+            bedrock,
+            snow,
+            [&mut self.bed, &mut self.surface0, &mut self.surface],
+            &mut self.stamp,
+            &mut self.flags,
+        );
     }
 
     /// Rebuilds the bedrock order if the bedrock or the mask changed.

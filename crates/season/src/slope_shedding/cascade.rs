@@ -145,16 +145,15 @@ impl<V: Validity> Cascade<'_, V> {
     /// Sets up cell `j` the first time the step looks at it (as [`SheddingScratch::touch`]).
     #[inline]
     fn touch(&mut self, j: usize) {
-        if self.stamp[j] == self.generation {
-            return;
-        }
-        self.stamp[j] = self.generation;
-        let s = &self.snow;
-        let b = self.bedrock[j];
-        self.bed[j] = b + s[0][j];
-        self.surface0[j] = b + (s[0][j] + s[1][j] + s[2][j] + s[3][j]);
-        self.surface[j] = self.surface0[j];
-        self.flags[j] = 0;
+        set_up(
+            j,
+            self.generation,
+            self.bedrock,
+            self.snow,
+            [self.bed, self.surface0, self.surface],
+            self.stamp,
+            self.flags,
+        );
     }
 
     /// Sets up cell `i` and its valid neighbours: everything a visit of `i` reads.
