@@ -4,6 +4,7 @@
 mod common;
 
 use common::{session, snow_mean_altitude, steepest_cell};
+use snowscape_editor::Session;
 use snowscape_editor::project::ProjectDir;
 use snowscape_editor::protocol::{BrushOp, BrushTarget, ClientMessage, ErrorCode, decode};
 use snowscape_editor::session::{Out, Outgoing};
@@ -26,6 +27,25 @@ fn brush(
         radius_m: 100.0,
         strength,
         value: 0.0,
+    }
+}
+
+/// Unstable snow brushed over the whole 128² test terrain, so that a skier has a run.
+fn snow_everywhere(s: &mut Session) {
+    for r in (8..120).step_by(6) {
+        for c in (8..120).step_by(6) {
+            let dab = ClientMessage::Brush {
+                stroke: 1,
+                op: BrushOp::Add,
+                target: BrushTarget::Unstable,
+                col: c as f64,
+                row: r as f64,
+                radius_m: 250.0,
+                strength: 0.4,
+                value: 0.0,
+            };
+            s.handle(dab, None, None).unwrap();
+        }
     }
 }
 
@@ -298,22 +318,7 @@ fn save_and_load_round_trip_in_the_project_folder() {
 #[test]
 fn launched_skier_moves_and_packs_snow() {
     let mut s = session(128, 10.0);
-    // Snow everywhere so the skier has a run.
-    for r in (8..120).step_by(6) {
-        for c in (8..120).step_by(6) {
-            let dab = ClientMessage::Brush {
-                stroke: 1,
-                op: BrushOp::Add,
-                target: BrushTarget::Unstable,
-                col: c as f64,
-                row: r as f64,
-                radius_m: 250.0,
-                strength: 0.4,
-                value: 0.0,
-            };
-            s.handle(dab, None, None).unwrap();
-        }
-    }
+    snow_everywhere(&mut s);
     let (c, r) = steepest_cell(&s);
     s.handle(
         ClientMessage::LaunchSkier {
@@ -344,21 +349,7 @@ fn launched_skier_moves_and_packs_snow() {
 #[test]
 fn painted_skiers_run_on_the_season_path() {
     let mut s = session(128, 10.0);
-    for r in (8..120).step_by(6) {
-        for c in (8..120).step_by(6) {
-            let dab = ClientMessage::Brush {
-                stroke: 1,
-                op: BrushOp::Add,
-                target: BrushTarget::Unstable,
-                col: c as f64,
-                row: r as f64,
-                radius_m: 250.0,
-                strength: 0.4,
-                value: 0.0,
-            };
-            s.handle(dab, None, None).unwrap();
-        }
-    }
+    snow_everywhere(&mut s);
     let (c, r) = steepest_cell(&s);
     s.handle(
         brush(2, BrushOp::Add, BrushTarget::SkiArea, c, r, 1.0),
