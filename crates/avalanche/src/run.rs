@@ -79,6 +79,11 @@ impl Default for RunOptions {
     }
 }
 
+/// Longest run, s.
+pub const MAX_DURATION_S: f64 = 86_400.0;
+/// Most records one run may take (`duration_s / record_interval_s`).
+pub const MAX_RECORDS: f64 = 1e6;
+
 impl RunOptions {
     /// Checks every field, naming the offending one.
     pub fn validate(&self) -> Result<(), AvalancheError> {
@@ -95,6 +100,20 @@ impl RunOptions {
         };
         positive("duration_s", self.duration_s)?;
         positive("record_interval_s", self.record_interval_s)?;
+        if self.duration_s > MAX_DURATION_S {
+            return Err(AvalancheError::InvalidParameter {
+                name: "duration_s",
+                value: self.duration_s,
+                expected: "at most 86400 s (a day)",
+            });
+        }
+        if self.duration_s / self.record_interval_s > MAX_RECORDS {
+            return Err(AvalancheError::InvalidParameter {
+                name: "record_interval_s",
+                value: self.record_interval_s,
+                expected: "at least duration_s / 1000000 (at most a million records)",
+            });
+        }
         if !(self.stop_energy_fraction.is_finite()
             && (0.0..1.0).contains(&self.stop_energy_fraction))
         {
@@ -108,11 +127,11 @@ impl RunOptions {
             ("footprint_threshold_m", self.footprint_threshold_m),
             ("settle_thickness_m", self.settle_thickness_m),
         ] {
-            if !(value.is_finite() && value >= 0.0) {
+            if !(value.is_finite() && (0.0..=100.0).contains(&value)) {
                 return Err(AvalancheError::InvalidParameter {
                     name,
                     value,
-                    expected: "finite and >= 0",
+                    expected: "in [0, 100] m",
                 });
             }
         }

@@ -43,7 +43,7 @@ pub struct Cli {
 #[derive(Debug, Args)]
 pub struct GlobalArgs {
     /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long, global = true)]
+    #[arg(long, global = true, value_parser = crate::bounds::threads)]
     pub threads: Option<usize>,
     /// No progress bars and no messages except errors.
     #[arg(long, short, global = true)]
@@ -120,20 +120,21 @@ pub struct DemoArgs {
     pub seed: u64,
     /// Cell size of the procedural terrain, metres (512 cells of 20 m: a 10 km range with
     /// the generator's full relief).
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 20.0, value_parser = crate::bounds::metres)]
     pub cell_size: f64,
-    /// Length of the winter, days.
-    #[arg(long, default_value_t = 100.0)]
+    /// Length of the winter, days (0, 3650].
+    #[arg(long, default_value_t = 100.0, value_parser = crate::bounds::season_days)]
     pub days: f64,
-    /// Frames in the time-lapse (snapshots spread evenly over the season).
-    #[arg(long, default_value_t = 10)]
+    /// Frames in the time-lapse (snapshots spread evenly over the season), 0..=1000.
+    #[arg(long, default_value_t = 10, value_parser = crate::bounds::frames)]
     pub frames: usize,
     /// Latitude of the procedural terrain, degrees north (it has no georeferencing).
     #[arg(
         long,
         value_name = "DEG",
         default_value_t = 45.0,
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::bounds::latitude
     )]
     pub latitude: f64,
 }
@@ -147,8 +148,8 @@ pub struct RunArgs {
     /// 100-day winter fitted to the terrain's altitudes.
     #[arg(long)]
     pub scenario: Option<PathBuf>,
-    /// Length of the season, days (overrides the scenario).
-    #[arg(long)]
+    /// Length of the season, days (overrides the scenario), (0, 3650].
+    #[arg(long, value_parser = crate::bounds::season_days)]
     pub days: Option<f64>,
     /// Random seed (overrides the scenario).
     #[arg(long)]
@@ -161,7 +162,7 @@ pub struct RunArgs {
     pub resume: Option<PathBuf>,
     /// Stop at this day, write a checkpoint and exit (continue later with --resume): splits
     /// a long season into parts.
-    #[arg(long, value_name = "DAY")]
+    #[arg(long, value_name = "DAY", value_parser = crate::bounds::season_day)]
     pub stop_at: Option<f64>,
     /// Station forcing (CSV: time, air_temperature_c, precipitation_mm, wind_speed_m_s,
     /// wind_from_deg[, shortwave_in_w_m2, relative_humidity]; or a snobal input file): the
@@ -173,7 +174,12 @@ pub struct RunArgs {
     #[arg(long, value_name = "M", allow_hyphen_values = true)]
     pub station_altitude: Option<f64>,
     /// Latitude, degrees north (overrides the scenario and the DEM's georeferencing).
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        value_parser = crate::bounds::latitude
+    )]
     pub latitude: Option<f64>,
     #[command(flatten)]
     pub skiers: SkierArgs,
@@ -247,7 +253,7 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 1.0)]
     pub exaggeration: f64,
     /// Longest side of the image in pixels (bigger grids are downsampled).
-    #[arg(long, default_value_t = 2048)]
+    #[arg(long, default_value_t = 2048, value_parser = crate::bounds::image_side)]
     pub max_size: usize,
 }
 
@@ -274,8 +280,8 @@ pub struct AvalancheArgs {
     /// --thickness breaks there and everything down-slope within reach moves).
     #[arg(long, value_name = "FILE|X,Y", allow_hyphen_values = true)]
     pub release: String,
-    /// Release thickness, metres (default: the shapefile's thickness field, else 1 m).
-    #[arg(long)]
+    /// Release thickness, metres, (0, 50] (default: the shapefile's thickness field, else 1 m).
+    #[arg(long, value_parser = crate::bounds::release_thickness)]
     pub thickness: Option<f64>,
     /// Rest (friction) angle θc of the snow, degrees (default 30, Cordonnier 2018 Table 2).
     #[arg(long)]
@@ -288,7 +294,7 @@ pub struct AvalancheArgs {
     #[arg(long)]
     pub dry_fraction: Option<f64>,
     /// Longest simulated time, seconds (the run stops earlier once the snow is at rest).
-    #[arg(long, default_value_t = 600.0)]
+    #[arg(long, default_value_t = 600.0, value_parser = crate::bounds::avalanche_seconds)]
     pub duration: f64,
     /// Films thinner than this, metres (a cell and its 8 neighbours), come to rest as deposit
     /// instead of creeping on; 0 keeps every film flowing (pure Coulomb friction).
@@ -298,8 +304,8 @@ pub struct AvalancheArgs {
     /// stopCrit); 0 runs until the snow is at rest or --duration.
     #[arg(long, default_value_t = 0.01)]
     pub stop_energy: f64,
-    /// Simulated seconds between playback frames.
-    #[arg(long, default_value_t = 1.0)]
+    /// Simulated seconds between playback frames, [0.01, 3600].
+    #[arg(long, default_value_t = 1.0, value_parser = crate::bounds::frame_interval)]
     pub frame_interval: f64,
     /// Random seed (recorded; the flow itself is deterministic).
     #[arg(long, default_value_t = 1)]
@@ -319,7 +325,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 1024)]
     pub size: usize,
     /// Timed repetitions per kernel (the median is reported).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = crate::bounds::repeats)]
     pub repeats: usize,
     /// Where to write the JSON report.
     #[arg(long, default_value = "bench.json")]
@@ -352,7 +358,7 @@ pub struct ServeArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Cell size of the procedural terrain, metres.
-    #[arg(long = "terrain-cell-size", default_value_t = 20.0)]
+    #[arg(long = "terrain-cell-size", default_value_t = 20.0, value_parser = crate::bounds::metres)]
     pub terrain_cell_size: f64,
     /// Scenario file (TOML); default: a 100-day winter fitted to the terrain.
     #[arg(long)]
@@ -394,23 +400,23 @@ pub struct TransportArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out/transport")]
     pub out: PathBuf,
-    /// Simulated time, hours (overrides the scenario).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Simulated time, hours (overrides the scenario), (0, 8760].
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::bounds::transport_hours)]
     pub hours: Option<f64>,
-    /// Flakes of the precipitation map (overrides the scenario).
-    #[arg(long)]
+    /// Flakes of the precipitation map (overrides the scenario), 1..=100000000.
+    #[arg(long, value_parser = crate::bounds::flakes)]
     pub flakes: Option<usize>,
     /// Seed of the flakes (overrides the scenario): the same seed gives the same bytes.
     #[arg(long)]
     pub seed: Option<u64>,
     /// Stable Fluids iterations averaged into the mean wind (overrides the scenario).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::bounds::wind_iterations)]
     pub wind_iterations: Option<usize>,
     /// Voxel side of the wind grid, metres (overrides the scenario or the fitted grid).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::bounds::metres)]
     pub voxel_size: Option<f64>,
-    /// Voxel layers of the wind grid (overrides the scenario or the fitted grid).
-    #[arg(long)]
+    /// Voxel layers of the wind grid (overrides the scenario or the fitted grid), 1..=4096.
+    #[arg(long, value_parser = crate::bounds::voxel_layers)]
     pub voxel_layers: Option<usize>,
     /// Uniform snowfall instead of the precipitation map (Jubert 2018 Fig. 7.10).
     #[arg(long)]

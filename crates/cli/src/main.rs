@@ -3,6 +3,7 @@
 //! Exit codes: 0 success; 1 the job failed (an output could not be written, an internal error);
 //! 2 bad input (a usage error, an unreadable or invalid file, an invalid parameter).
 
+mod bounds;
 mod cli;
 mod commands;
 mod dem_input;
@@ -21,8 +22,8 @@ fn main() -> ExitCode {
     let args = cli::Cli::parse();
     init_logging(args.global.quiet, args.global.verbose);
     if let Some(n) = args.global.threads {
-        if n == 0 {
-            eprintln!("error: --threads must be at least 1 (got 0)");
+        if let Err(e) = bounds::check_threads(n) {
+            eprintln!("error: {e}");
             return ExitCode::from(2);
         }
         if let Err(e) = rayon::ThreadPoolBuilder::new()
@@ -40,8 +41,15 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure { code, error }) => {
             eprintln!("error: {error}");
+            // Error types that print their source inside their own message ("checkpoint:
+            // {0}") would repeat it: a cause already said by the line above is skipped.
+            let mut said = error.to_string();
             for cause in error.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
+                let text = cause.to_string();
+                if !said.contains(&text) {
+                    eprintln!("  caused by: {text}");
+                }
+                said = text;
             }
             ExitCode::from(code)
         }

@@ -10,7 +10,9 @@ use snowscape_render::{
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
 use std::path::{Path, PathBuf};
 
-/// Creates the output folder (and parents) and checks it can be written into.
+/// Creates the output folder (and parents), checks it can be written into, and removes the
+/// temporary files (`.snowscape-*.partial`) that an interrupted write left in it or in its
+/// subfolders.
 pub fn prepare_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
@@ -19,7 +21,130 @@ pub fn prepare_dir(dir: &Path) -> Result<()> {
         .tempfile_in(dir)
         .with_context(|| format!("output folder {} is not writable", dir.display()))?;
     drop(probe);
+    let removed = remove_partial_leftovers(dir);
+    if removed > 0 {
+        tracing::info!(
+            "removed {removed} unfinished temporary file(s) of an earlier run from {}",
+            dir.display()
+        );
+    }
     Ok(())
+}
+
+/// Whether `name` is one of the atomic writer's temporary files.
+fn is_partial(name: &str) -> bool {
+    (name.starts_with(".snowscape-") && name.ends_with(".partial"))
+        || name.starts_with(".snowscape-probe")
+}
+
+/// Removes temporary files of interrupted writes from `dir` and its direct subfolders;
+/// returns how many were removed.
+fn remove_partial_leftovers(dir: &Path) -> usize {
+    let mut removed = 0;
+    let mut folders = vec![dir.to_path_buf()];
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        folders.extend(
+            entries
+                .flatten()
+                .filter(|e| e.file_type().is_ok_and(|t| t.is_dir()))
+                .map(|e| e.path()),
+        );
+    }
+    for folder in folders {
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let is_file = e.file_type().is_ok_and(|t| t.is_file());
+            if is_file
+                && e.file_name().to_str().is_some_and(is_partial)
+                && std::fs::remove_file(e.path()).is_ok()
+            {
+                removed += 1;
+            }
+        }
+    }
+    removed
+}
+
+/// The outputs an earlier run listed in `dir/report.json`, plus any time-lapse frames in
+/// `dir/frames` (an interrupted run writes frames before any report): the files this
+/// program owns in the folder. Read it before a new run overwrites the report.
+pub fn earlier_outputs(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read(dir.join("report.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .and_then(|v| {
+            v.get("outputs")?.as_array().map(|a| {
+                a.iter()
+                    .filter_map(|s| s.as_str().map(String::from))
+                    .collect()
+            })
+        })
+        .unwrap_or_default();
+    if let Ok(entries) = std::fs::read_dir(dir.join("frames")) {
+        for e in entries.flatten() {
+            if let Some(n) = e.file_name().to_str()
+                && n.starts_with("frame_")
+                && n.ends_with(".png")
+            {
+                names.push(format!("frames/{n}"));
+            }
+        }
+    }
+    names.sort();
+    names.dedup();
+    names
+}
+
+/// The earlier outputs this run did not write again (stale: they describe another run).
+pub fn stale_outputs(earlier: &[String], written: &[String]) -> Vec<String> {
+    let now: std::collections::HashSet<&str> = written.iter().map(String::as_str).collect();
+    earlier
+        .iter()
+        .filter(|n| !now.contains(n.as_str()) && n.as_str() != "report.json")
+        .cloned()
+        .collect()
+}
+
+/// Writes `report` (a JSON object with an `outputs` list) to `dir/report.json`, listing and
+/// then removing the `earlier` outputs this run did not write again.
+pub fn write_report(dir: &Path, earlier: &[String], mut report: serde_json::Value) -> Result<()> {
+    let written: Vec<String> = report["outputs"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|s| s.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default();
+    let stale = stale_outputs(earlier, &written);
+    if !stale.is_empty() {
+        report["removed_stale"] = serde_json::json!(stale);
+    }
+    let text = serde_json::to_string_pretty(&report).context("cannot encode report.json")?;
+    write_bytes_atomic(&dir.join("report.json"), text.as_bytes())?;
+    remove_stale(dir, &stale);
+    Ok(())
+}
+
+/// Removes the `stale` files from `dir`: only plain relative names inside the folder (never
+/// `..` or an absolute path), and only files (a link is removed, not followed).
+pub fn remove_stale(dir: &Path, stale: &[String]) {
+    for name in stale {
+        let p = Path::new(name);
+        let inside = p
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
+        let path = dir.join(p);
+        let is_file = std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_dir());
+        if inside && is_file {
+            match std::fs::remove_file(&path) {
+                Ok(()) => tracing::info!("removed stale output {}", path.display()),
+                Err(e) => tracing::warn!("cannot remove stale output {}: {e}", path.display()),
+            }
+        }
+    }
 }
 
 /// Collects written file names relative to the output folder.

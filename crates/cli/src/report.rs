@@ -107,6 +107,10 @@ pub struct Report {
     pub warnings: Vec<String>,
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,
+    /// Files an earlier run wrote into this folder that this run did not write again; they
+    /// were removed (they described another run).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub removed_stale: Vec<String>,
 }
 
 /// Turns ordered stage timings into a JSON object (keys keep their order).

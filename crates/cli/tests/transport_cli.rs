@@ -194,7 +194,7 @@ fn bad_input_is_refused_naming_the_value() {
     let dem = shared("dem/rme_idaho_50m/dem.asc");
     let dem = dem.to_str().unwrap();
     refused(&["transport"], "no scene");
-    refused(&["transport", "--dem", dem, "--hours", "-3"], "duration_h");
+    refused(&["transport", "--dem", dem, "--hours", "-3"], "--hours");
     refused(
         &["transport", "--dem", "/nonexistent/dem.tif"],
         "/nonexistent/dem.tif",

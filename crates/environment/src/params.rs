@@ -235,9 +235,19 @@ impl SunParams {
             "must be in 1..=365",
         )?;
         let n = self.num_days as f64;
-        check_param("sun.num_days", n, self.num_days >= 1, "must be at least 1")?;
+        check_param(
+            "sun.num_days",
+            n,
+            (1.0..=3660.0).contains(&n),
+            "must be in 1..=3660",
+        )?;
         let s = self.day_step as f64;
-        check_param("sun.day_step", s, self.day_step >= 1, "must be at least 1")?;
+        check_param(
+            "sun.day_step",
+            s,
+            (1.0..=366.0).contains(&s),
+            "must be in 1..=366",
+        )?;
         let p = self.samples_per_hour as f64;
         check_param(
             "sun.samples_per_hour",
@@ -245,7 +255,12 @@ impl SunParams {
             (1.0..=60.0).contains(&p),
             "must be in 1..=60",
         )?;
-        check_param("sun.k_sun", self.k_sun, self.k_sun >= 0.0, "must be >= 0")
+        check_param(
+            "sun.k_sun",
+            self.k_sun,
+            (0.0..=10.0).contains(&self.k_sun),
+            "must be in [0, 10]",
+        )
     }
 }
 
@@ -259,7 +274,12 @@ impl SkyParams {
             (4.0..=360.0).contains(&n),
             "must be in 4..=360",
         )?;
-        check_param("sky.k_sky", self.k_sky, self.k_sky >= 0.0, "must be >= 0")
+        check_param(
+            "sky.k_sky",
+            self.k_sky,
+            (0.0..=10.0).contains(&self.k_sky),
+            "must be in [0, 10]",
+        )
     }
 }
 
@@ -288,13 +308,18 @@ impl BounceParams {
             "must be in 1..=16",
         )?;
         let r0 = self.min_radius_m;
-        check_param("bounce.min_radius_m", r0, r0 > 0.0, "must be > 0")?;
+        check_param(
+            "bounce.min_radius_m",
+            r0,
+            r0 > 0.0 && r0 <= 1e4,
+            "must be in (0, 10000] m",
+        )?;
         let r1 = self.max_radius_m;
         check_param(
             "bounce.max_radius_m",
             r1,
-            r1 >= r0,
-            "must be >= min_radius_m",
+            r1 >= r0 && r1 <= 1e4,
+            "must be in [min_radius_m, 10000] m",
         )
     }
 }
@@ -302,9 +327,24 @@ impl BounceParams {
 impl TemperatureParams {
     /// Checks every field is finite.
     pub fn validate(&self) -> Result<(), EnvironmentError> {
-        check_param("temperature.t0_c", self.t0_c, true, "must be finite")?;
-        check_param("temperature.kt", self.kt, true, "must be finite")?;
-        check_param("temperature.ki", self.ki, true, "must be finite")
+        check_param(
+            "temperature.t0_c",
+            self.t0_c,
+            self.t0_c.abs() <= 80.0,
+            "must be in [-80, 80] °C",
+        )?;
+        check_param(
+            "temperature.kt",
+            self.kt,
+            self.kt.abs() <= 0.1,
+            "must be in [-0.1, 0.1] °C/m",
+        )?;
+        check_param(
+            "temperature.ki",
+            self.ki,
+            self.ki.abs() <= 100.0,
+            "must be in [-100, 100] °C per unit of insolation",
+        )
     }
 }
 
@@ -318,17 +358,66 @@ impl WindParams {
             "must be finite",
         )?;
         let s = self.speed_m_s;
-        check_param("wind.speed_m_s", s, s >= 0.0, "must be >= 0")?;
-        check_param("wind.k_venturi", self.k_venturi, true, "must be finite")?;
+        check_param(
+            "wind.speed_m_s",
+            s,
+            (0.0..=100.0).contains(&s),
+            "must be in [0, 100] m/s",
+        )?;
+        check_param(
+            "wind.k_venturi",
+            self.k_venturi,
+            self.k_venturi.abs() <= 0.1,
+            "must be in [-0.1, 0.1] per m",
+        )?;
         if let Some(base) = self.venturi_base_m {
-            check_param("wind.venturi_base_m", base, true, "must be finite")?;
+            check_param(
+                "wind.venturi_base_m",
+                base,
+                base.abs() <= 1e5,
+                "must be a plausible altitude (|z| <= 100000 m)",
+            )?;
         }
-        check_param("wind.k_terrain", self.k_terrain, true, "must be finite")?;
-        check_param("wind.c_m_s2", self.c_m_s2, self.c_m_s2 > 0.0, "must be > 0")?;
+        check_param(
+            "wind.k_terrain",
+            self.k_terrain,
+            self.k_terrain.abs() <= 100.0,
+            "must be in [-100, 100]",
+        )?;
+        check_param(
+            "wind.c_m_s2",
+            self.c_m_s2,
+            self.c_m_s2 > 0.0 && self.c_m_s2 <= 1000.0,
+            "must be in (0, 1000] m/s²",
+        )?;
         let e = self.shadow_epsilon_m;
-        check_param("wind.shadow_epsilon_m", e, e >= 0.0, "must be >= 0")?;
+        check_param(
+            "wind.shadow_epsilon_m",
+            e,
+            (0.0..=1000.0).contains(&e),
+            "must be in [0, 1000] m",
+        )?;
+        let o = self.ordered_sweeps as f64;
+        check_param(
+            "wind.ordered_sweeps",
+            o,
+            self.ordered_sweeps <= 16,
+            "must be in 0..=16",
+        )?;
+        let m = self.max_iterations as f64;
+        check_param(
+            "wind.max_iterations",
+            m,
+            (1..=100_000).contains(&self.max_iterations),
+            "must be in 1..=100000",
+        )?;
         let t = self.tolerance_m;
-        check_param("wind.tolerance_m", t, t > 0.0, "must be > 0")
+        check_param(
+            "wind.tolerance_m",
+            t,
+            t > 0.0 && t <= 100.0,
+            "must be in (0, 100] m",
+        )
     }
 }
 

@@ -149,20 +149,20 @@ impl AvalancheParameters {
         check(
             "rate_per_km2_per_day",
             p.rate_per_km2_per_day,
-            p.rate_per_km2_per_day >= 0.0,
-            ">= 0",
+            (0.0..=100.0).contains(&p.rate_per_km2_per_day),
+            "within [0, 100] per km² per day",
         )?;
         check(
             "reference_unstable_m",
             p.reference_unstable_m,
-            p.reference_unstable_m > 0.0,
-            "> 0",
+            p.reference_unstable_m > 0.0 && p.reference_unstable_m <= 100.0,
+            "within (0, 100] m",
         )?;
         check(
             "min_unstable_m",
             p.min_unstable_m,
-            p.min_unstable_m >= 0.0,
-            ">= 0",
+            (0.0..=100.0).contains(&p.min_unstable_m),
+            "within [0, 100] m",
         )?;
         check(
             "slope_min_deg",
@@ -188,7 +188,12 @@ impl AvalancheParameters {
             p.slope_max_deg <= 90.0,
             "<= 90",
         )?;
-        check("skier_gain", p.skier_gain, p.skier_gain >= 0.0, ">= 0")?;
+        check(
+            "skier_gain",
+            p.skier_gain,
+            (0.0..=10_000.0).contains(&p.skier_gain),
+            "within [0, 10000]",
+        )?;
         check(
             "wet_temperature_c",
             p.wet_temperature_c,

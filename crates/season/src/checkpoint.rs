@@ -1,12 +1,14 @@
 //! Checkpoints: the whole state of a season run in one file, so an interrupted run resumes
 //! and ends bit-identical to an uninterrupted one.
 //!
-//! Layout (little-endian): the magic `SNOWCKPT`, a u32 format version, a u64 length and that
-//! many bytes of JSON header (the caller's run state: scheduler, budget, time, and a
-//! fingerprint of the inputs), then the four snow layers as raw f32, bottom to top, then the
-//! caller's extra per-cell f32 maps (version 2: the season's avalanche scour and deposit). The file
-//! is written atomically by the caller (temporary name, then rename), so a crash mid-write
-//! leaves the previous checkpoint intact.
+//! Layout (little-endian, format version 3): the magic `SNOWCKPT`, a u32 format version, a
+//! u64 length of the JSON header, a u64 length of the maps, the JSON header (the caller's run
+//! state: scheduler, budget, time, the resolved scenario and a fingerprint of the inputs),
+//! the four snow layers as raw f32, bottom to top, then the caller's extra per-cell f32 maps,
+//! and last a CRC-32 (IEEE) of every byte before it. A reader checks the magic, the version,
+//! the lengths (a short file is "truncated", naming both sizes) and the checksum (a flipped
+//! bit is refused) before it parses anything. The file is written atomically by the caller
+//! (temporary name, then rename), so a crash mid-write leaves the previous checkpoint intact.
 
 use serde::{Serialize, de::DeserializeOwned};
 use snowscape_terrain::{LayeredTerrain, random::mix64};
@@ -14,7 +16,12 @@ use std::io::{Read, Write};
 use thiserror::Error;
 
 const MAGIC: &[u8; 8] = b"SNOWCKPT";
-const VERSION: u32 = 2;
+/// The format this build writes and reads.
+pub const VERSION: u32 = 3;
+/// Bytes before the JSON header: magic, version, two lengths.
+const PREAMBLE: usize = 8 + 4 + 8 + 8;
+/// Largest JSON header accepted, bytes.
+const MAX_HEADER: u64 = 64 << 20;
 
 /// Why a checkpoint could not be written or read.
 #[derive(Debug, Error)]
@@ -23,16 +30,24 @@ pub enum CheckpointError {
     Io(#[from] std::io::Error),
     #[error("not a snowscape checkpoint (magic bytes {found:?})")]
     BadMagic { found: [u8; 8] },
-    #[error("checkpoint format version {found}, this build reads version {VERSION}")]
+    #[error(
+        "checkpoint format version {found}, this build reads version {VERSION} (start the run again without --resume)"
+    )]
     Version { found: u32 },
+    #[error("checkpoint is truncated: {found} bytes, its header announces {expected}")]
+    Truncated { expected: u64, found: u64 },
+    #[error("checkpoint has {extra} bytes after its checksum")]
+    TrailingBytes { extra: u64 },
+    #[error(
+        "checkpoint is corrupt: its checksum is {stored:08x} but its content sums to {computed:08x} (a damaged or partly copied file)"
+    )]
+    Checksum { stored: u32, computed: u32 },
     #[error("checkpoint header: {0}")]
     Header(#[from] serde_json::Error),
     #[error("checkpoint header of {0} bytes is implausibly large")]
     HeaderTooLarge(u64),
     #[error("checkpoint holds layers for {found} cells, the terrain has {expected}")]
     SizeMismatch { expected: usize, found: usize },
-    #[error("checkpoint layers are truncated: {0}")]
-    Truncated(std::io::Error),
 }
 
 /// A fingerprint of a terrain's bedrock and geometry, to refuse resuming on other inputs.
@@ -55,79 +70,150 @@ pub fn write<H: Serialize>(
     extra: &[&[f32]],
 ) -> Result<(), CheckpointError> {
     let json = serde_json::to_vec(header)?;
-    w.write_all(MAGIC)?;
-    w.write_all(&VERSION.to_le_bytes())?;
-    w.write_all(&(json.len() as u64).to_le_bytes())?;
-    w.write_all(&json)?;
-    let mut buf = Vec::with_capacity(terrain.geometry().len() * 4);
-    for layer in terrain
+    let maps: Vec<&[f32]> = terrain
         .snow
         .iter()
         .map(|l| l.as_slice())
         .chain(extra.iter().copied())
-    {
+        .collect();
+    let maps_len: usize = maps.iter().map(|m| 4 * m.len()).sum();
+    let mut crc = crc32fast::Hasher::new();
+    let mut put = |w: &mut dyn Write, bytes: &[u8]| -> std::io::Result<()> {
+        crc.update(bytes);
+        w.write_all(bytes)
+    };
+    put(w, MAGIC)?;
+    put(w, &VERSION.to_le_bytes())?;
+    put(w, &(json.len() as u64).to_le_bytes())?;
+    put(w, &(maps_len as u64).to_le_bytes())?;
+    put(w, &json)?;
+    let mut buf = Vec::with_capacity(terrain.geometry().len() * 4);
+    for layer in maps {
         buf.clear();
         for v in layer {
             buf.extend_from_slice(&v.to_le_bytes());
         }
-        w.write_all(&buf)?;
+        put(w, &buf)?;
     }
+    w.write_all(&crc.finalize().to_le_bytes())?;
     Ok(())
 }
 
-/// Reads a checkpoint written by [`write`] with `extra` extra maps: returns the header and the
-/// extra maps and overwrites the snow layers of `terrain` (whose bedrock and geometry come from
-/// the inputs, as in the original run).
+/// What a checkpoint holds, verified.
+#[derive(Debug, Clone)]
+pub struct Contents<H> {
+    /// The caller's run state.
+    pub header: H,
+    /// The four snow layers, bottom to top.
+    pub layers: [Vec<f32>; 4],
+    /// The caller's extra maps, in the order they were written.
+    pub extra: Vec<Vec<f32>>,
+}
+
+impl<H> Contents<H> {
+    /// Overwrites the snow layers of `terrain` (same geometry as the checkpoint's).
+    pub fn restore_layers(&mut self, terrain: &mut LayeredTerrain) {
+        for (layer, saved) in terrain.snow.iter_mut().zip(self.layers.iter_mut()) {
+            std::mem::swap(layer, saved);
+        }
+    }
+}
+
+/// Reads and verifies a checkpoint written by [`write`] for a terrain of `cells` cells with
+/// `extra` extra maps. Nothing is parsed before the lengths and the checksum are checked.
 pub fn read<H: DeserializeOwned>(
     r: &mut impl Read,
-    terrain: &mut LayeredTerrain,
+    cells: usize,
     extra: usize,
-) -> Result<(H, Vec<Vec<f32>>), CheckpointError> {
+) -> Result<Contents<H>, CheckpointError> {
+    let mut pre = [0u8; PREAMBLE];
+    let got = read_up_to(r, &mut pre)?;
     let mut magic = [0u8; 8];
-    r.read_exact(&mut magic)?;
-    if &magic != MAGIC {
+    magic.copy_from_slice(&pre[..8]);
+    if got < 8 || &magic != MAGIC {
         return Err(CheckpointError::BadMagic { found: magic });
     }
-    let mut b4 = [0u8; 4];
-    r.read_exact(&mut b4)?;
-    let version = u32::from_le_bytes(b4);
+    if got < PREAMBLE {
+        return Err(CheckpointError::Truncated {
+            expected: PREAMBLE as u64,
+            found: got as u64,
+        });
+    }
+    let word = |at: usize| u64::from_le_bytes(pre[at..at + 8].try_into().unwrap_or([0; 8]));
+    let version = u32::from_le_bytes([pre[8], pre[9], pre[10], pre[11]]);
     if version != VERSION {
         return Err(CheckpointError::Version { found: version });
     }
-    let mut b8 = [0u8; 8];
-    r.read_exact(&mut b8)?;
-    let len = u64::from_le_bytes(b8);
-    if len > 64 << 20 {
-        return Err(CheckpointError::HeaderTooLarge(len));
+    let (header_len, maps_len) = (word(12), word(20));
+    if header_len > MAX_HEADER {
+        return Err(CheckpointError::HeaderTooLarge(header_len));
     }
-    let mut json = vec![0u8; len as usize];
-    r.read_exact(&mut json)?;
-    let header: H = serde_json::from_slice(&json)?;
-    let n = terrain.geometry().len();
-    let mut raw = Vec::new();
-    r.read_to_end(&mut raw)?;
     let maps = 4 + extra;
-    if raw.len() != 4 * maps * n {
+    let expected_maps = (4 * maps * cells) as u64;
+    if maps_len != expected_maps {
         return Err(CheckpointError::SizeMismatch {
-            expected: n,
-            found: raw.len() / (4 * maps),
+            expected: cells,
+            found: (maps_len / (4 * maps as u64)) as usize,
         });
     }
-    for (k, layer) in terrain.snow.iter_mut().enumerate() {
-        let bytes = &raw[k * 4 * n..(k + 1) * 4 * n];
-        for (v, c) in layer.iter_mut().zip(bytes.chunks_exact(4)) {
-            *v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
-        }
+    // Both lengths are bounded now: the header by MAX_HEADER, the maps by the terrain.
+    let body_len = header_len + maps_len;
+    let mut body = vec![0u8; body_len as usize + 4];
+    let got_body = read_up_to(r, &mut body)?;
+    if got_body < body.len() {
+        return Err(CheckpointError::Truncated {
+            expected: PREAMBLE as u64 + body.len() as u64,
+            found: (PREAMBLE + got_body) as u64,
+        });
     }
-    let extra_maps = (4..maps)
-        .map(|k| {
-            raw[k * 4 * n..(k + 1) * 4 * n]
+    let mut rest = Vec::new();
+    let extra_bytes = r.take(1 << 20).read_to_end(&mut rest)?;
+    if extra_bytes > 0 {
+        return Err(CheckpointError::TrailingBytes {
+            extra: extra_bytes as u64,
+        });
+    }
+    let stored = u32::from_le_bytes(body[body_len as usize..].try_into().unwrap_or([0; 4]));
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(&pre);
+    crc.update(&body[..body_len as usize]);
+    let computed = crc.finalize();
+    if stored != computed {
+        return Err(CheckpointError::Checksum { stored, computed });
+    }
+    let header: H = serde_json::from_slice(&body[..header_len as usize])?;
+    let mut all: Vec<Vec<f32>> = body[header_len as usize..body_len as usize]
+        .chunks_exact(4 * cells.max(1))
+        .take(maps)
+        .map(|bytes| {
+            bytes
                 .chunks_exact(4)
                 .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
                 .collect()
         })
         .collect();
-    Ok((header, extra_maps))
+    all.resize(maps, Vec::new());
+    let extra_maps = all.split_off(4);
+    let layers: [Vec<f32>; 4] = all.try_into().unwrap_or_default();
+    Ok(Contents {
+        header,
+        layers,
+        extra: extra_maps,
+    })
+}
+
+/// Fills as much of `buf` as the reader holds; returns the bytes read.
+fn read_up_to(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match r.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
 }
 
 #[cfg(test)]
@@ -154,9 +240,10 @@ mod tests {
         let mut back = LayeredTerrain::from_bedrock(Grid::from_fn(t.geometry().clone(), |c, r| {
             (c * 7 + r) as f32
         }));
-        let (h, extra): ((String, u32), _) = read(&mut bytes.as_slice(), &mut back, 1).unwrap();
-        assert_eq!(extra, vec![vec![7.0f32; 15]]);
-        assert_eq!(h, ("day".to_string(), 42));
+        let mut c: Contents<(String, u32)> = read(&mut bytes.as_slice(), 15, 1).unwrap();
+        c.restore_layers(&mut back);
+        assert_eq!(c.extra, vec![vec![7.0f32; 15]]);
+        assert_eq!(c.header, ("day".to_string(), 42));
         assert_eq!(back, t);
         assert_eq!(bedrock_fingerprint(&back), bedrock_fingerprint(&t));
     }
@@ -166,18 +253,54 @@ mod tests {
         let t = terrain();
         let mut bytes = Vec::new();
         write(&mut bytes, &1u8, &t, &[]).unwrap();
-        let mut target = t.clone();
         let cut = &bytes[..bytes.len() - 3];
         assert!(matches!(
-            read::<u8>(&mut &cut[..], &mut target, 0),
-            Err(CheckpointError::SizeMismatch { .. })
+            read::<u8>(&mut &cut[..], 15, 0),
+            Err(CheckpointError::Truncated { expected, found })
+                if expected == bytes.len() as u64 && found == cut.len() as u64
+        ));
+        assert!(matches!(
+            read::<u8>(&mut &bytes[..10], 15, 0),
+            Err(CheckpointError::Truncated { .. })
         ));
         let mut bad = bytes.clone();
         bad[0] = b'X';
         assert!(matches!(
-            read::<u8>(&mut bad.as_slice(), &mut target, 0),
+            read::<u8>(&mut bad.as_slice(), 15, 0),
             Err(CheckpointError::BadMagic { .. })
         ));
-        assert!(read::<u8>(&mut &bytes[..10], &mut target, 0).is_err());
+        let mut longer = bytes.clone();
+        longer.push(0);
+        assert!(matches!(
+            read::<u8>(&mut longer.as_slice(), 15, 0),
+            Err(CheckpointError::TrailingBytes { extra: 1 })
+        ));
+        assert!(matches!(
+            read::<u8>(&mut bytes.as_slice(), 16, 0),
+            Err(CheckpointError::SizeMismatch { expected: 16, .. })
+        ));
+        let mut old = bytes.clone();
+        old[8..12].copy_from_slice(&2u32.to_le_bytes());
+        assert!(matches!(
+            read::<u8>(&mut old.as_slice(), 15, 0),
+            Err(CheckpointError::Version { found: 2 })
+        ));
+    }
+
+    #[test]
+    fn every_flipped_bit_is_refused() {
+        let t = terrain();
+        let mut bytes = Vec::new();
+        write(&mut bytes, &("state", 7u32), &t, &[&[1.5f32; 15]]).unwrap();
+        for byte in 0..bytes.len() {
+            for bit in 0..8 {
+                let mut b = bytes.clone();
+                b[byte] ^= 1 << bit;
+                assert!(
+                    read::<(String, u32)>(&mut b.as_slice(), 15, 1).is_err(),
+                    "a flip of bit {bit} of byte {byte} was accepted"
+                );
+            }
+        }
     }
 }

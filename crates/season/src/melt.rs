@@ -11,7 +11,7 @@
 //! removed volume.
 
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, check_finite, check_map, with_validity,
+    PhenomenonError, Validity, check_dt, check_map, check_range, with_validity,
 };
 use crate::{VolumeChange, ordered_sum};
 use rayon::prelude::*;
@@ -61,11 +61,12 @@ impl Default for MeltParams {
 }
 
 impl MeltParams {
-    /// Checks the parameters are finite and the rate non-negative.
+    /// Checks every field against its range: `k_melt` in [0, 0.1] m/(day·°C) (ten times
+    /// Table 2's 0.01), `t0_melt` in [−10, 10] °C, and the enhanced model's fields.
     pub fn validate(&self) -> Result<(), PhenomenonError> {
         self.enhanced.validate()?;
-        check_at_least("melt", "k_melt", self.k_melt, 0.0)?;
-        check_finite("melt", "t0_melt", self.t0_melt)
+        check_range("melt", "k_melt", self.k_melt, [0.0, 0.1], " m/(day·°C)")?;
+        check_range("melt", "t0_melt", self.t0_melt, [-10.0, 10.0], " °C")
     }
 }
 

@@ -31,6 +31,17 @@ pub enum PhenomenonError {
         value: f64,
         reason: &'static str,
     },
+    /// A parameter outside its documented range `[min, max]`.
+    #[error("invalid {phenomenon} parameter {name} = {value}: must be within [{min}, {max}]{unit}")]
+    OutOfRange {
+        phenomenon: &'static str,
+        name: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+        /// The unit, with a leading space (or empty).
+        unit: &'static str,
+    },
     /// A time step that is negative, NaN or infinite.
     #[error("invalid time step {dt_days} days: it must be finite and non-negative")]
     InvalidTimeStep { dt_days: f64 },
@@ -97,6 +108,29 @@ pub(crate) fn check_finite(
     value: f64,
 ) -> Result<(), PhenomenonError> {
     check_at_least(phenomenon, name, value, f64::MIN)
+}
+
+/// Checks that a parameter is a finite number within `[min, max]` (`unit` with a leading
+/// space, for the message).
+pub(crate) fn check_range(
+    phenomenon: &'static str,
+    name: &'static str,
+    value: f64,
+    [min, max]: [f64; 2],
+    unit: &'static str,
+) -> Result<(), PhenomenonError> {
+    if value.is_finite() && value >= min && value <= max {
+        Ok(())
+    } else {
+        Err(PhenomenonError::OutOfRange {
+            phenomenon,
+            name,
+            value,
+            min,
+            max,
+            unit,
+        })
+    }
 }
 
 /// Which cells hold data, as seen by a kernel.

@@ -37,7 +37,7 @@
 
 use crate::VolumeChange;
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, fill_surface, with_validity,
+    PhenomenonError, Validity, check_dt, check_range, fill_surface, with_validity,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -84,10 +84,12 @@ impl Default for DiffusionParams {
 }
 
 impl DiffusionParams {
-    /// Checks that the rest slope and the rate are finite and non-negative.
+    /// Checks the rest slope is in [0, 10] (rise over run) and the rate in [0, 100] 1/day
+    /// (two hundred times Table 2's 0.5; the sub-step count grows with it).
     pub fn validate(&self) -> Result<(), PhenomenonError> {
-        check_at_least("powder diffusion", "rest_slope", self.rest_slope, 0.0)?;
-        check_at_least("powder diffusion", "k_m", self.k_m, 0.0)
+        const P: &str = "powder diffusion";
+        check_range(P, "rest_slope", self.rest_slope, [0.0, 10.0], "")?;
+        check_range(P, "k_m", self.k_m, [0.0, 100.0], " 1/day")
     }
 
     /// Number of sub-steps a step of `dt_days` is split into (0 when nothing moves).

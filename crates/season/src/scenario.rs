@@ -50,6 +50,14 @@ pub enum ScenarioError {
         source_name: String,
         message: String,
     },
+    /// A phenomenon's parameter out of its documented range; `message` names the field, its
+    /// value and the range.
+    #[error("scenario {source_name}: [{section}] {message}")]
+    Parameter {
+        source_name: String,
+        section: &'static str,
+        message: String,
+    },
     /// A value out of range.
     #[error("scenario {source_name}: {key} = {value}: {reason}")]
     Invalid {
@@ -124,6 +132,39 @@ pub struct Parameters {
     pub snowtran: crate::snowtran_transport::SnowTranParams,
     pub avalanche: crate::avalanches::AvalancheParameters,
 }
+
+impl Parameters {
+    /// Checks every section; the error names the section (`parameters.melt`, ...) and the
+    /// message the field, its value and its range.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        fn section<E: std::fmt::Display>(
+            name: &'static str,
+            r: Result<(), E>,
+        ) -> Result<(), (&'static str, String)> {
+            r.map_err(|e| (name, e.to_string()))
+        }
+        section("parameters.environment", self.environment.validate())?;
+        if let Err((key, value, reason)) = self.climate.validate() {
+            return Err(("parameters.climate", format!("{key} = {value}: {reason}")));
+        }
+        section("parameters.snowfall", self.snowfall.validate())?;
+        section("parameters.melt", self.melt.validate())?;
+        section("parameters.stability", self.stability.validate())?;
+        section(
+            "parameters.powder_diffusion",
+            self.powder_diffusion.validate(),
+        )?;
+        section("parameters.wind_transport", self.wind_transport.validate())?;
+        section("parameters.slope_shedding", self.slope_shedding.validate())?;
+        section("parameters.snowtran", self.snowtran.validate())?;
+        section("parameters.avalanche", self.avalanche.validate())
+    }
+}
+
+/// Most frames (`snapshot_every_days` and `snapshot_days` together) one season may take.
+pub const MAX_SNAPSHOTS: f64 = 1000.0;
+/// Most checkpoints one season may write.
+pub const MAX_CHECKPOINTS: f64 = 1000.0;
 
 /// A whole season.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -257,15 +298,46 @@ impl Scenario {
                 "must be a plausible altitude (|z| <= 9000 m)",
             ));
         }
-        for (key, v) in [
-            ("snapshot_every_days", self.snapshot_every_days),
-            ("checkpoint_every_days", self.checkpoint_every_days),
+        for (key, v, most) in [
+            (
+                "snapshot_every_days",
+                self.snapshot_every_days,
+                MAX_SNAPSHOTS,
+            ),
+            (
+                "checkpoint_every_days",
+                self.checkpoint_every_days,
+                MAX_CHECKPOINTS,
+            ),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(bad(
                     key,
                     v.to_string(),
-                    "must be a non-negative number of days",
+                    "must be a non-negative number of days (0: never)",
+                ));
+            }
+            if v > 0.0 && self.days / v > most {
+                return Err(bad(
+                    key,
+                    v.to_string(),
+                    "is too frequent: at most 1000 per season (0: never)",
+                ));
+            }
+        }
+        if self.snapshot_days.len() as f64 > MAX_SNAPSHOTS {
+            return Err(bad(
+                "snapshot_days",
+                format!("{} days", self.snapshot_days.len()),
+                "lists more than 1000 days",
+            ));
+        }
+        for (k, &d) in self.snapshot_days.iter().enumerate() {
+            if !(d.is_finite() && d >= 0.0 && d <= self.days) {
+                return Err(bad(
+                    &format!("snapshot_days[{k}]"),
+                    d.to_string(),
+                    "must be a day of the season, within [0, days]",
                 ));
             }
         }
@@ -340,46 +412,67 @@ impl Scenario {
             }
         }
         for (k, a) in self.avalanches.iter().enumerate() {
-            if !(a.day.is_finite() && a.day >= 0.0 && a.x.is_finite() && a.y.is_finite()) {
+            if !(a.day.is_finite() && a.x.is_finite() && a.y.is_finite()) {
                 return Err(bad(
                     &format!("avalanche[{k}]"),
                     format!("day {} x {} y {}", a.day, a.x, a.y),
-                    "needs day >= 0 and finite map coordinates x, y",
+                    "needs a finite day and finite map coordinates x, y",
+                ));
+            }
+            if !(0.0..=self.days).contains(&a.day) {
+                return Err(bad(
+                    &format!("avalanche[{k}].day"),
+                    a.day.to_string(),
+                    "must be a day of the season, within [0, days]",
                 ));
             }
         }
-        if let Err((key, value, reason)) = self.parameters.climate.validate() {
-            return Err(bad(&format!("parameters.{key}"), value.to_string(), reason));
+        if let Err(e) = self.events.validate() {
+            return Err(ScenarioError::Parameter {
+                source_name: source_name.to_string(),
+                section: "events",
+                message: e.to_string(),
+            });
         }
-        if let Err(e) = self.parameters.melt.validate() {
-            return Err(bad("parameters.melt", e.to_string(), "is out of range"));
+        if let Err(message) = self.skiers.validate() {
+            return Err(ScenarioError::Parameter {
+                source_name: source_name.to_string(),
+                section: "skiers",
+                message,
+            });
         }
-        if let Err(e) = self.parameters.snowfall.validate() {
-            return Err(bad("parameters.snowfall", e.to_string(), "is out of range"));
+        if let Err((section, message)) = self.parameters.validate() {
+            return Err(ScenarioError::Parameter {
+                source_name: source_name.to_string(),
+                section,
+                message,
+            });
         }
-        if let Err(e) = self.parameters.slope_shedding.validate() {
-            return Err(bad(
-                "parameters.slope_shedding",
-                e.to_string(),
-                "is out of range",
-            ));
+        Ok(())
+    }
+
+    /// Checks what needs the terrain: every `[[avalanche]]` and skier start lies on the grid.
+    /// Run it with [`Scenario::validate`] before any work starts.
+    pub fn validate_on(
+        &self,
+        geometry: &snowscape_terrain::GridGeometry,
+        source_name: &str,
+    ) -> Result<(), ScenarioError> {
+        let outside = |key: String, x: f64, y: f64| ScenarioError::Invalid {
+            source_name: source_name.to_string(),
+            key,
+            value: format!("x {x} y {y}"),
+            reason: "lies outside the terrain",
+        };
+        for (k, a) in self.avalanches.iter().enumerate() {
+            if geometry.map_to_cell(a.x, a.y).is_none() {
+                return Err(outside(format!("avalanche[{k}]"), a.x, a.y));
+            }
         }
-        if let Err(e) = self.parameters.environment.validate() {
-            return Err(bad(
-                "parameters.environment",
-                e.to_string(),
-                "is out of range",
-            ));
-        }
-        if let Err(e) = self.skiers.validate() {
-            return Err(bad("skiers", e, "is out of range"));
-        }
-        if let Err(e) = self.parameters.avalanche.validate() {
-            return Err(bad(
-                "parameters.avalanche",
-                e.to_string(),
-                "is out of range",
-            ));
+        for (k, p) in self.skiers.starts.iter().enumerate() {
+            if geometry.map_to_cell(p[0], p[1]).is_none() {
+                return Err(outside(format!("skiers.starts[{k}]"), p[0], p[1]));
+            }
         }
         Ok(())
     }

@@ -18,6 +18,7 @@
 //! event sequence is a pure function of the seed and the scheduler state, which is plain data
 //! (`Serialize`) and can be checkpointed and resumed bit-identically.
 
+use crate::phenomenon::{PhenomenonError, check_range};
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::random;
 
@@ -99,6 +100,39 @@ pub struct EventFrequencies {
     pub powder_diffusion: f64,
     /// Wind-Transport-Step, per day. Paper: twice a day.
     pub wind_transport: f64,
+}
+
+/// Most events of one kind per day (every ~15 minutes): the season's work grows with it.
+pub const MAX_EVENTS_PER_DAY: f64 = 100.0;
+
+impl EventFrequencies {
+    /// Checks every frequency: within [0, 100] per day (`snowfall_start` within [0, 10]),
+    /// and the mean snowfall period within [0.01, 365] days.
+    pub fn validate(&self) -> Result<(), PhenomenonError> {
+        const P: &str = "events";
+        check_range(
+            P,
+            "snowfall_start",
+            self.snowfall_start,
+            [0.0, 10.0],
+            " per day",
+        )?;
+        for (name, v) in [
+            ("snowfall_step", self.snowfall_step),
+            ("melt_and_state", self.melt_and_state),
+            ("powder_diffusion", self.powder_diffusion),
+            ("wind_transport", self.wind_transport),
+        ] {
+            check_range(P, name, v, [0.0, MAX_EVENTS_PER_DAY], " per day")?;
+        }
+        check_range(
+            P,
+            "snowfall_mean_days",
+            self.snowfall_mean_days,
+            [0.01, 365.0],
+            " days",
+        )
+    }
 }
 
 impl Default for EventFrequencies {

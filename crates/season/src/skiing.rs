@@ -55,17 +55,29 @@ impl Default for SkierParameters {
     }
 }
 
+/// Most skier runs per day (a busy resort's lift capacity): each run costs a descent.
+pub const MAX_SKIERS_PER_DAY: f64 = 10_000.0;
+
 impl SkierParameters {
     /// Checks every field; the message names the offending one.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.per_day.is_finite() && self.per_day >= 0.0) {
-            return Err(format!("per_day = {} must be >= 0", self.per_day));
+        if !(self.per_day.is_finite() && (0.0..=MAX_SKIERS_PER_DAY).contains(&self.per_day)) {
+            return Err(format!(
+                "per_day = {} must be within [0, {MAX_SKIERS_PER_DAY}] runs per day",
+                self.per_day
+            ));
         }
-        if !(self.step_s.is_finite() && self.step_s > 0.0) {
-            return Err(format!("step_s = {} must be > 0", self.step_s));
+        if !(self.step_s.is_finite() && self.step_s >= 0.01 && self.step_s <= 60.0) {
+            return Err(format!(
+                "step_s = {} must be within [0.01, 60] s",
+                self.step_s
+            ));
         }
-        if !(self.max_run_s.is_finite() && self.max_run_s > 0.0) {
-            return Err(format!("max_run_s = {} must be > 0", self.max_run_s));
+        if !(self.max_run_s.is_finite() && self.max_run_s > 0.0 && self.max_run_s <= 86_400.0) {
+            return Err(format!(
+                "max_run_s = {} must be within (0, 86400] s",
+                self.max_run_s
+            ));
         }
         for (k, p) in self.starts.iter().enumerate() {
             if !(p[0].is_finite() && p[1].is_finite()) {

@@ -96,7 +96,7 @@
 
 use crate::VolumeChange;
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, check_finite, with_validity,
+    PhenomenonError, Validity, check_dt, check_finite, check_range, with_validity,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -179,12 +179,30 @@ impl SheddingParams {
                 reason,
             })
         };
-        check_at_least(NAME, "exp_scale_m", self.exp_scale_m, 0.0)?;
-        check_at_least(NAME, "exp_rate_per_deg", self.exp_rate_per_deg, 0.0)?;
-        check_at_least(NAME, "power_scale_m", self.power_scale_m, 0.0)?;
-        check_finite(NAME, "power_exponent", self.power_exponent)?;
-        check_at_least(NAME, "min_holding_depth_m", self.min_holding_depth_m, 0.0)?;
-        check_at_least(NAME, "min_slope_deg", self.min_slope_deg, 0.0)?;
+        check_range(NAME, "exp_scale_m", self.exp_scale_m, [0.0, 1e4], " m")?;
+        check_range(
+            NAME,
+            "exp_rate_per_deg",
+            self.exp_rate_per_deg,
+            [0.0, 10.0],
+            " 1/°",
+        )?;
+        check_range(NAME, "power_scale_m", self.power_scale_m, [0.0, 1e6], " m")?;
+        check_range(
+            NAME,
+            "power_exponent",
+            self.power_exponent,
+            [-10.0, 10.0],
+            "",
+        )?;
+        check_range(
+            NAME,
+            "min_holding_depth_m",
+            self.min_holding_depth_m,
+            [0.0, 100.0],
+            " m",
+        )?;
+        check_range(NAME, "min_slope_deg", self.min_slope_deg, [0.0, 90.0], " °")?;
         if self.min_slope_deg > 90.0 {
             return bad(
                 "min_slope_deg",
@@ -196,7 +214,7 @@ impl SheddingParams {
         if self.dynamic_ratio <= 0.0 || self.dynamic_ratio > 1.0 {
             return bad("dynamic_ratio", self.dynamic_ratio, "must be in (0, 1]");
         }
-        check_finite(NAME, "flow_exponent", self.flow_exponent)?;
+        check_range(NAME, "flow_exponent", self.flow_exponent, [0.0, 10.0], "")?;
         if self.flow_exponent <= 0.0 {
             return bad("flow_exponent", self.flow_exponent, "must be > 0");
         }

@@ -20,8 +20,8 @@
 //! start in practice. The tests check the behaviour these values produce.
 
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, check_finite, check_map, fill_surface,
-    row_gradient_norm, with_validity,
+    PhenomenonError, Validity, check_dt, check_map, check_range, fill_surface, row_gradient_norm,
+    with_validity,
 };
 use crate::{VolumeChange, ordered_sum};
 use rayon::prelude::*;
@@ -84,16 +84,20 @@ impl Default for SnowfallParams {
 }
 
 impl SnowfallParams {
-    /// Checks the parameters are finite and the rates non-negative.
+    /// Checks every field against its range (the message states it): `k_snow` in
+    /// [0, 0.01] 1/day (a hundred times Table 2's 1e-4), `a0_precip` in [−1000, 9000] m,
+    /// `k_powdery` in [0, 100], `sc0` in [0, 10], `k_sc_powdery` in [0, 1] 1/°C,
+    /// `t0_powdery` in [−50, 10] °C, `k_unstable` in [0, 1] 1/°, `s_u_deg` in [0, 90] °.
     pub fn validate(&self) -> Result<(), PhenomenonError> {
-        check_at_least("snowfall", "k_snow", self.k_snow, 0.0)?;
-        check_finite("snowfall", "a0_precip", self.a0_precip)?;
-        check_at_least("snowfall", "k_powdery", self.k_powdery, 0.0)?;
-        check_finite("snowfall", "sc0", self.sc0)?;
-        check_at_least("snowfall", "k_sc_powdery", self.k_sc_powdery, 0.0)?;
-        check_finite("snowfall", "t0_powdery", self.t0_powdery)?;
-        check_at_least("snowfall", "k_unstable", self.k_unstable, 0.0)?;
-        check_finite("snowfall", "s_u_deg", self.s_u_deg)
+        const P: &str = "snowfall";
+        check_range(P, "k_snow", self.k_snow, [0.0, 0.01], " 1/day")?;
+        check_range(P, "a0_precip", self.a0_precip, [-1000.0, 9000.0], " m")?;
+        check_range(P, "k_powdery", self.k_powdery, [0.0, 100.0], "")?;
+        check_range(P, "sc0", self.sc0, [0.0, 10.0], "")?;
+        check_range(P, "k_sc_powdery", self.k_sc_powdery, [0.0, 1.0], " 1/°C")?;
+        check_range(P, "t0_powdery", self.t0_powdery, [-50.0, 10.0], " °C")?;
+        check_range(P, "k_unstable", self.k_unstable, [0.0, 1.0], " 1/°")?;
+        check_range(P, "s_u_deg", self.s_u_deg, [0.0, 90.0], " °")
     }
 }
 

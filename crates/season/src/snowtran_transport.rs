@@ -22,7 +22,7 @@
 //!    the only volume changes, reported to the season budget.
 
 use crate::VolumeChange;
-use crate::phenomenon::{PhenomenonError, check_at_least, check_dt};
+use crate::phenomenon::{PhenomenonError, check_dt, check_range};
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
 use snowscape_transport::step::{SceneMaps, SnowState, StepScratch, step};
@@ -88,11 +88,12 @@ impl SnowTranParams {
                 return Err(bad(name, v, "a percentage in [0, 100]"));
             }
         }
-        check_at_least(
+        check_range(
             "snowtran wind transport",
             "max_substep_s",
             self.max_substep_s,
-            1.0,
+            [60.0, 86_400.0],
+            " s",
         )?;
         Ok(self.transport.validate()?)
     }

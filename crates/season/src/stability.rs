@@ -29,8 +29,8 @@
 //! `1 − e^(−x)` to first order without a per-cell exponential.
 
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, check_finite, check_map, fill_surface,
-    row_gradient_norm, with_validity,
+    PhenomenonError, Validity, check_dt, check_map, check_range, fill_surface, row_gradient_norm,
+    with_validity,
 };
 use crate::{VolumeChange, ordered_sum};
 use rayon::prelude::*;
@@ -98,18 +98,16 @@ impl Default for StabilityParams {
 impl StabilityParams {
     /// Checks ranges: temperatures ordered `t_freeze < t_cool < t_warm`, rates non-negative,
     /// `slope_ref_deg` in (0, 90), `min_slope_factor` in [0, 1], density ratio in (0, 1].
+    /// Each temperature lies in [−60, 30] °C and the rates in [0, 10] 1/day (1/(day·m) for
+    /// `k_compaction`).
     pub fn validate(&self) -> Result<(), PhenomenonError> {
         const P: &str = "stability";
-        check_finite(P, "t_freeze", self.t_freeze)?;
-        check_at_least(P, "t_cool", self.t_cool, self.t_freeze)?;
-        check_at_least(P, "t_warm", self.t_warm, self.t_cool)?;
-        if self.t_cool == self.t_freeze || self.t_warm == self.t_cool {
-            return Err(PhenomenonError::InvalidParameter {
-                phenomenon: P,
-                name: "t_cool",
-                value: self.t_cool,
-                reason: "temperatures must be strictly ordered t_freeze < t_cool < t_warm",
-            });
+        for (name, t) in [
+            ("t_freeze", self.t_freeze),
+            ("t_cool", self.t_cool),
+            ("t_warm", self.t_warm),
+        ] {
+            check_range(P, name, t, [-60.0, 30.0], " °C")?;
         }
         for (name, v) in [
             ("k_warm", self.k_warm),
@@ -117,7 +115,15 @@ impl StabilityParams {
             ("k_age", self.k_age),
             ("k_compaction", self.k_compaction),
         ] {
-            check_at_least(P, name, v, 0.0)?;
+            check_range(P, name, v, [0.0, 10.0], " 1/day")?;
+        }
+        if self.t_cool <= self.t_freeze || self.t_warm <= self.t_cool {
+            return Err(PhenomenonError::InvalidParameter {
+                phenomenon: P,
+                name: "t_cool",
+                value: self.t_cool,
+                reason: "temperatures must be strictly ordered t_freeze < t_cool < t_warm",
+            });
         }
         let in_range = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
         for (name, v, lo, hi, ok) in [

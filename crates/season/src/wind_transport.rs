@@ -44,7 +44,7 @@
 
 use crate::VolumeChange;
 use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_dt, check_map, fill_surface, with_validity,
+    PhenomenonError, Validity, check_dt, check_map, check_range, fill_surface, with_validity,
 };
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
@@ -110,11 +110,19 @@ impl Default for WindTransportParams {
 }
 
 impl WindTransportParams {
-    /// Checks the rates are finite and non-negative and the slab slope in [0, 90).
+    /// Checks the rates are in [0, 100] (a thousand and five hundred times the defaults) and
+    /// the slab slope in [0, 90).
     pub fn validate(&self) -> Result<(), PhenomenonError> {
-        check_at_least("wind transport", "k_erosion", self.k_erosion, 0.0)?;
-        check_at_least("wind transport", "k_tamping", self.k_tamping, 0.0)?;
-        check_at_least("wind transport", "slab_slope_deg", self.slab_slope_deg, 0.0)?;
+        const P: &str = "wind transport";
+        check_range(P, "k_erosion", self.k_erosion, [0.0, 100.0], "")?;
+        check_range(
+            P,
+            "k_tamping",
+            self.k_tamping,
+            [0.0, 100.0],
+            " 1/(day·m·s⁻²)",
+        )?;
+        check_range(P, "slab_slope_deg", self.slab_slope_deg, [0.0, 90.0], " °")?;
         if self.slab_slope_deg >= 90.0 {
             return Err(PhenomenonError::InvalidParameter {
                 phenomenon: "wind transport",

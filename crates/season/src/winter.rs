@@ -8,7 +8,7 @@
 //! and a resumed run ends bit-identical to an uninterrupted one.
 
 use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, Trigger};
-use crate::checkpoint::{self, CheckpointError, bedrock_fingerprint};
+use crate::checkpoint::{CheckpointError, bedrock_fingerprint};
 use crate::forcing::StationForcing;
 use crate::melt::{self, MeltModel, SnowpackState};
 use crate::phenomenon::PhenomenonError;
@@ -61,15 +61,28 @@ pub enum SeasonError {
     Skier { day: f64, reason: String },
     #[error("avalanche at map position ({x}, {y}): {reason}")]
     AvalanchePosition { x: f64, y: f64, reason: String },
-    #[error("checkpoint: {0}")]
+    #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
     #[error(
-        "checkpoint was written for other inputs (bedrock fingerprint {found:016x}, expected {expected:016x}) or another scenario"
+        "the checkpoint was written on another terrain ({checkpoint}); this run's terrain is {now}: resume with the same --dem and reader options"
     )]
-    CheckpointMismatch { expected: u64, found: u64 },
+    CheckpointTerrain { checkpoint: String, now: String },
+    #[error(
+        "the checkpoint was written with {key} = {checkpoint}; this run has {key} = {now}: resume with the same scenario and options (or start again)"
+    )]
+    CheckpointScenario {
+        key: String,
+        checkpoint: String,
+        now: String,
+    },
+    #[error(
+        "the checkpoint was written with another weather timeline or station forcing record: resume with the same --forcing file"
+    )]
+    CheckpointForcing,
 }
 
 mod budget;
+mod resume;
 mod skier_runs;
 mod snowpack;
 
@@ -85,6 +98,10 @@ struct RunState {
     forced_index: usize,
     fingerprint: u64,
     scenario_digest: u64,
+    /// The resolved scenario, to name what changed when a resume is refused.
+    scenario: serde_json::Value,
+    /// The terrain's size and cell size, for the same purpose.
+    terrain: String,
     /// Every avalanche so far.
     avalanches: Vec<AvalancheRecord>,
     /// Next scenario avalanche to trigger.
@@ -226,6 +243,8 @@ impl Winter {
             forced_index: 0,
             fingerprint: bedrock_fingerprint(&terrain),
             scenario_digest: digest,
+            scenario: serde_json::to_value(&scenario).unwrap_or_default(),
+            terrain: resume::terrain_summary(&terrain),
             avalanches: Vec::new(),
             user_avalanche_index: 0,
             ski: SkiStats::default(),
@@ -395,8 +414,18 @@ impl Winter {
 
     /// Runs events until the clock reaches `day` (or the season ends).
     pub fn run_until(&mut self, day: f64) -> Result<(), SeasonError> {
+        self.run_until_unless(day, &std::sync::atomic::AtomicBool::new(false))
+    }
+
+    /// [`Winter::run_until`], stopping early (between two events, where a checkpoint is
+    /// consistent) as soon as `stop` is set: how a front end honours Ctrl-C or a cancel.
+    pub fn run_until_unless(
+        &mut self,
+        day: f64,
+        stop: &std::sync::atomic::AtomicBool,
+    ) -> Result<(), SeasonError> {
         let end = day.min(self.scenario.days);
-        while self.day() < end {
+        while self.day() < end && !stop.load(std::sync::atomic::Ordering::Relaxed) {
             self.apply_timeline()?;
             let Some(event) = self.state.scheduler.next_event() else {
                 break;
@@ -774,77 +803,6 @@ impl Winter {
         }
         *self.wall_seconds.entry(name).or_default() += t.elapsed().as_secs_f64();
         Ok(())
-    }
-
-    /// Writes a checkpoint of the whole run state to `w`.
-    pub fn write_checkpoint(&self, w: &mut impl std::io::Write) -> Result<(), SeasonError> {
-        let m = &self.avalanche_maps;
-        let [age, cold, liquid, melting] = self.pack.arrays();
-        checkpoint::write(
-            w,
-            &self.state,
-            &self.terrain,
-            &[
-                &m.scour,
-                &m.deposit,
-                age,
-                cold,
-                liquid,
-                melting,
-                &self.pending_rain,
-            ],
-        )?;
-        Ok(())
-    }
-
-    /// Restores a run from a checkpoint written by a run of the same scenario on the same
-    /// terrain (anything else is refused).
-    pub fn resume(
-        scenario: Scenario,
-        terrain: LayeredTerrain,
-        r: &mut impl std::io::Read,
-    ) -> Result<Self, SeasonError> {
-        Self::resume_with_forcing(scenario, terrain, None, r)
-    }
-
-    /// [`Winter::resume`] for a season driven by station forcing (the same record).
-    pub fn resume_with_forcing(
-        scenario: Scenario,
-        terrain: LayeredTerrain,
-        forcing: Option<StationForcing>,
-        r: &mut impl std::io::Read,
-    ) -> Result<Self, SeasonError> {
-        let mut w = Self::with_forcing(scenario, terrain, forcing)?;
-        let (state, mut extra): (RunState, _) = checkpoint::read(r, &mut w.terrain, 7)?;
-        w.pending_rain = extra.pop().unwrap_or_default();
-        let pack = extra.split_off(2);
-        w.pack = SnowpackState::from_arrays(pack);
-        w.avalanche_maps.deposit = extra.pop().unwrap_or_default();
-        w.avalanche_maps.scour = extra.pop().unwrap_or_default();
-        if state.fingerprint != w.state.fingerprint
-            || state.scenario_digest != w.state.scenario_digest
-        {
-            return Err(SeasonError::CheckpointMismatch {
-                expected: w.state.fingerprint,
-                found: state.fingerprint,
-            });
-        }
-        let weather_changed = state.weather_index != 0;
-        w.state = state;
-        if weather_changed {
-            w.refresh_weather_maps()?;
-        }
-        w.refresh_air_temperature();
-        // The hazard map of the restored snow (for `avalanche_hazard`; a start recomputes it);
-        // the scheduler's rate is the checkpointed one.
-        w.hazard.compute(
-            &w.scenario.parameters.avalanche,
-            &w.terrain,
-            &w.slope_deg,
-            None,
-        );
-        w.hazard_stale = true;
-        Ok(w)
     }
 }
 

@@ -56,6 +56,9 @@ impl Default for AvalancheParams {
     }
 }
 
+/// Largest `max_substeps`.
+pub const MAX_SUBSTEPS: usize = 10_000_000;
+
 impl AvalancheParams {
     /// Checks every field, naming the offending one.
     pub fn validate(&self) -> Result<(), AvalancheError> {
@@ -66,14 +69,14 @@ impl AvalancheParams {
                 expected,
             })
         };
-        if !(self.density.is_finite() && self.density > 0.0) {
-            return bad("density", self.density, "finite and > 0");
+        if !(self.density.is_finite() && self.density > 0.0 && self.density <= 1000.0) {
+            return bad("density", self.density, "in (0, 1000] kg/m³");
         }
         if !(self.rest_angle_deg.is_finite() && (0.0..90.0).contains(&self.rest_angle_deg)) {
             return bad("rest_angle_deg", self.rest_angle_deg, "in [0, 90)");
         }
-        if !(self.k_viscous.is_finite() && self.k_viscous >= 0.0) {
-            return bad("k_viscous", self.k_viscous, "finite and >= 0");
+        if !(self.k_viscous.is_finite() && (0.0..=100.0).contains(&self.k_viscous)) {
+            return bad("k_viscous", self.k_viscous, "in [0, 100] 1/(m·s)");
         }
         if !(0.0..=1.0).contains(&self.alpha) {
             return bad("alpha", self.alpha, "in [0, 1]");
@@ -81,8 +84,8 @@ impl AvalancheParams {
         if !(self.courant > 0.0 && self.courant <= 1.0) {
             return bad("courant", self.courant, "in (0, 1]");
         }
-        if self.max_substeps == 0 {
-            return bad("max_substeps", 0.0, ">= 1");
+        if !(1..=MAX_SUBSTEPS).contains(&self.max_substeps) {
+            return bad("max_substeps", self.max_substeps as f64, "in 1..=10000000");
         }
         Ok(())
     }

@@ -38,15 +38,20 @@ impl RuptureParams {
                 expected,
             })
         };
-        if !(self.reach_per_unstable_m.is_finite() && self.reach_per_unstable_m >= 0.0) {
+        if !(self.reach_per_unstable_m.is_finite()
+            && (0.0..=10_000.0).contains(&self.reach_per_unstable_m))
+        {
             return bad(
                 "reach_per_unstable_m",
                 self.reach_per_unstable_m,
-                "finite and >= 0",
+                "in [0, 10000] m per m",
             );
         }
-        if !(self.min_unstable_m.is_finite() && self.min_unstable_m > 0.0) {
-            return bad("min_unstable_m", self.min_unstable_m, "finite and > 0");
+        if !(self.min_unstable_m.is_finite()
+            && self.min_unstable_m > 0.0
+            && self.min_unstable_m <= 100.0)
+        {
+            return bad("min_unstable_m", self.min_unstable_m, "in (0, 100] m");
         }
         if !(self.min_slope_deg.is_finite() && (0.0..90.0).contains(&self.min_slope_deg)) {
             return bad("min_slope_deg", self.min_slope_deg, "in [0, 90)");

@@ -5,7 +5,7 @@
 use crate::cli::{AvalancheArgs, GlobalArgs};
 use crate::commands::render::preview_options;
 use crate::failure::{ExitCodeExt, Failure};
-use crate::outputs::{Written, prepare_dir, write_png};
+use crate::outputs::{Written, earlier_outputs, prepare_dir, write_png, write_report};
 use crate::report::InputSummary;
 use anyhow::{Context, anyhow, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -191,6 +191,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         ))
         .bad_input();
     }
+    let earlier = earlier_outputs(&args.out);
     prepare_dir(&args.out).bad_input()?;
     std::fs::create_dir_all(args.out.join("frames"))
         .with_context(|| format!("cannot create {}/frames", args.out.display()))
@@ -325,10 +326,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         "timings": { "flow_s": wall - render_s, "frames_s": render_s },
         "outputs": out.files,
     });
-    let text = serde_json::to_string_pretty(&report)
-        .map_err(|e| anyhow!("cannot encode report.json: {e}"))
-        .job_failed()?;
-    write_bytes_atomic(&args.out.join("report.json"), text.as_bytes()).job_failed()?;
+    write_report(&args.out, &earlier, report).job_failed()?;
     if !global.quiet {
         println!(
             "avalanche: released {:.0} m³, ran {:.1} s ({:?}), runout {:.0} m, travel angle {:.1}°, footprint {:.0} m², {:.2} s wall -> {}",

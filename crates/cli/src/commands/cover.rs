@@ -9,13 +9,12 @@
 use crate::cli::GlobalArgs;
 use crate::dem_input::DemInputArgs;
 use crate::failure::{BAD_INPUT, ExitCodeExt, Failure};
-use crate::outputs::{prepare_dir, write_png};
+use crate::outputs::{earlier_outputs, prepare_dir, write_png, write_report};
 use crate::report::{InputSummary, timings_object};
 use anyhow::{Context, anyhow, bail};
 use clap::{Args, ValueEnum};
 use serde_json::json;
 use snowscape_festenberg::{CoverParams, FestenbergError, GrowthParams, cover, grow_cover};
-use snowscape_io::write_bytes_atomic;
 use snowscape_mesh::preview::{PreviewOptions, write_preview};
 use snowscape_mesh::terrain::{grid_object, place_on_grid};
 use snowscape_mesh::write::{write_glb, write_obj};
@@ -75,10 +74,10 @@ pub struct CoverArgs {
     pub resolution: Option<f64>,
     /// Also write a growth animation of N frames (diffusion: Eq. 2 with a four-neighbour
     /// Laplacian, no bridges or overhangs) as growth/frame_NNNN.glb.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = crate::bounds::frames)]
     pub growth: Option<usize>,
     /// Time budget of the anytime accumulation loop, seconds (fearing; default 20).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::bounds::wall_seconds)]
     pub budget: Option<f64>,
     /// Mean flake flutter radius fr, metres (fearing; default: the material's, 0.05 for snow,
     /// 0 for water).
@@ -119,6 +118,8 @@ pub struct CoverInput {
     /// The DEM, where the mesh stands and the ground height there.
     pub dem: Option<serde_json::Value>,
     pub read_s: f64,
+    /// The outputs an earlier run left in the output folder.
+    pub earlier: Vec<String>,
 }
 
 /// Runs `snowscape cover`.
@@ -221,6 +222,7 @@ fn read_input(args: &CoverArgs) -> anyhow::Result<CoverInput> {
         extent_m,
         dem,
         read_s: t0.elapsed().as_secs_f64(),
+        earlier: earlier_outputs(&args.out),
     })
 }
 
@@ -404,10 +406,7 @@ fn cover_diffusion(
         "wall_s": t0.elapsed().as_secs_f64(),
         "outputs": files,
     });
-    let text = serde_json::to_string_pretty(&report)
-        .map_err(|e| anyhow!("cannot encode report.json: {e}"))
-        .job_failed()?;
-    write_bytes_atomic(&dir.join("report.json"), text.as_bytes()).job_failed()?;
+    write_report(dir, &input.earlier, report).job_failed()?;
     if !global.quiet {
         println!(
             "cover (diffusion): {} sites + {} bridge sites, snow {} vertices / {} triangles, \

@@ -112,6 +112,13 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .context("--days/--seed/--skiers")
         .bad_input()?;
     let bedrock = args.dem_input.read(&args.dem).bad_input()?;
+    let scenario_name = scenario_path
+        .as_ref()
+        .map_or("the command line".to_string(), |p| p.display().to_string());
+    scenario
+        .validate_on(bedrock.geometry(), &scenario_name)
+        .with_context(|| format!("on the terrain {}", args.dem.display()))
+        .bad_input()?;
     if args.resume.is_none() {
         crate::outputs::prepare_dir(&out).bad_input()?;
         let text = toml::to_string(&scenario)

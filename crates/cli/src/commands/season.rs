@@ -3,7 +3,9 @@
 //! checkpoints, then every output and `report.json`.
 
 use crate::failure::{ExitCodeExt, Failure};
-use crate::outputs::{Written, prepare_dir, write_all, write_png};
+use crate::outputs::{
+    Written, earlier_outputs, prepare_dir, remove_stale, stale_outputs, write_all, write_png,
+};
 use crate::progress::Stages;
 use crate::report::{InputSummary, MassBudget, Report, timings_object};
 use anyhow::{Context, anyhow};
@@ -99,6 +101,7 @@ fn install_interrupt_flag() -> Arc<AtomicBool> {
 
 /// Runs the season and writes every output.
 pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
+    let earlier = earlier_outputs(&job.out);
     prepare_dir(&job.out).bad_input()?;
     std::fs::create_dir_all(job.out.join("frames"))
         .with_context(|| format!("cannot create {}/frames", job.out.display()))
@@ -165,7 +168,7 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
     for &m in milestones.iter().filter(|&&m| m > start_day) {
         while winter.day() < m {
             let next = (winter.day() + CHUNK_DAYS).min(m);
-            winter.run_until(next).job_failed()?;
+            winter.run_until_unless(next, &interrupted).job_failed()?;
             bar.set_position((winter.day() * 10.0) as u64);
             if interrupted.load(Ordering::SeqCst) {
                 // A chunk that reached a snapshot day writes its frame before the checkpoint:
@@ -236,7 +239,7 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
     write_checkpoint(&job.out, &winter).job_failed()?;
     out.files.push(CHECKPOINT.into());
 
-    let report = season_report(
+    let mut report = season_report(
         job.command,
         &job.extra_parameters,
         input,
@@ -244,8 +247,10 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
         stages.finish(),
         out.files,
     );
+    report.removed_stale = stale_outputs(&earlier, &report.outputs);
     let text = serde_json::to_vec_pretty(&report).job_failed()?;
     write_bytes_atomic(&job.out.join("report.json"), &text).job_failed()?;
+    remove_stale(&job.out, &report.removed_stale);
     if !job.quiet {
         let b = &report.mass_budget;
         println!(
@@ -386,6 +391,7 @@ fn season_report(
         water_budget: Some(b.water.clone()),
         warnings: season_warnings(winter),
         outputs,
+        removed_stale: Vec::new(),
     }
 }
 

@@ -73,7 +73,12 @@ impl ShelteringParams {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), EnvironmentError> {
         let d = self.dmax_m;
-        check_param("sheltering.dmax_m", d, d > 0.0, "must be > 0")?;
+        check_param(
+            "sheltering.dmax_m",
+            d,
+            d > 0.0 && d <= 2000.0,
+            "must be in (0, 2000] m",
+        )?;
         let h = self.window_half_deg;
         check_param(
             "sheltering.window_half_deg",
@@ -82,7 +87,12 @@ impl ShelteringParams {
             "must be in [0, 90]",
         )?;
         let s = self.window_step_deg;
-        check_param("sheltering.window_step_deg", s, s > 0.0, "must be > 0")
+        check_param(
+            "sheltering.window_step_deg",
+            s,
+            (0.5..=90.0).contains(&s),
+            "must be in [0.5, 90] °",
+        )
     }
 
     /// The ray directions (wind FROM, degrees) around `wind_from_deg`, in window order.

@@ -39,7 +39,7 @@
 //! Every sum is per cell in a fixed order and rows run in parallel, so results are identical
 //! for any thread count.
 
-use crate::phenomenon::{PhenomenonError, check_at_least, check_finite};
+use crate::phenomenon::{PhenomenonError, check_range};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
@@ -118,21 +118,11 @@ impl EnhancedMeltParams {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), PhenomenonError> {
         const P: &str = "melt.enhanced";
-        let in_range = |name: &'static str, v: f64, lo: f64, hi: f64| {
-            if v.is_finite() && v >= lo && v <= hi {
-                Ok(())
-            } else {
-                Err(PhenomenonError::InvalidParameter {
-                    phenomenon: P,
-                    name,
-                    value: v,
-                    reason: "out of its range (see the parameter docs)",
-                })
-            }
-        };
+        let in_range =
+            |name: &'static str, v: f64, lo: f64, hi: f64| check_range(P, name, v, [lo, hi], "");
         in_range("f_t_mm_per_h_c", self.f_t_mm_per_h_c, 0.0, 10.0)?;
         in_range("f_r_mm_per_h_w_m2", self.f_r_mm_per_h_w_m2, 0.0, 1.0)?;
-        check_finite(P, "threshold_c", self.threshold_c)?;
+        check_range(P, "threshold_c", self.threshold_c, [-10.0, 10.0], " °C")?;
         in_range(
             "cold_content_mm_per_h_c",
             self.cold_content_mm_per_h_c,
@@ -149,7 +139,7 @@ impl EnhancedMeltParams {
         in_range("min_albedo", self.min_albedo, 0.0, self.fresh_albedo)?;
         in_range("cold_decay", self.cold_decay, 0.0, 1.0)?;
         in_range("melt_decay", self.melt_decay, 0.0, 1.0)?;
-        check_at_least(P, "reset_swe_m", self.reset_swe_m, 0.0)?;
+        check_range(P, "reset_swe_m", self.reset_swe_m, [0.0, 1.0], " m")?;
         in_range("min_window_hours", self.min_window_hours, 0.0, 240.0)?;
         for (k, d) in self.layer_density_kg_m3.iter().enumerate() {
             in_range(

@@ -32,9 +32,7 @@
 //! border outflow.
 
 use super::{Context, WindMaps};
-use crate::phenomenon::{
-    PhenomenonError, Validity, check_at_least, check_finite, row_gradient_norm,
-};
+use crate::phenomenon::{PhenomenonError, Validity, check_range, row_gradient_norm};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
@@ -95,16 +93,41 @@ const NAME: &str = "wind transport sx_redistribution";
 impl SxParams {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), PhenomenonError> {
-        check_finite(NAME, "exposed_below_deg", self.exposed_below_deg)?;
-        check_finite(NAME, "sheltered_above_deg", self.sheltered_above_deg)?;
-        check_at_least(NAME, "k_exposed", self.k_exposed, 0.0)?;
-        check_at_least(NAME, "k_deposit", self.k_deposit, 0.0)?;
-        check_at_least(NAME, "speed_exponent", self.speed_exponent, 0.0)?;
+        check_range(
+            NAME,
+            "exposed_below_deg",
+            self.exposed_below_deg,
+            [-90.0, 90.0],
+            " °",
+        )?;
+        check_range(
+            NAME,
+            "sheltered_above_deg",
+            self.sheltered_above_deg,
+            [-90.0, 90.0],
+            " °",
+        )?;
+        check_range(NAME, "k_exposed", self.k_exposed, [0.0, 1.0], " 1/day")?;
+        check_range(NAME, "k_deposit", self.k_deposit, [0.0, 1.0], " 1/day")?;
+        check_range(NAME, "speed_exponent", self.speed_exponent, [0.0, 10.0], "")?;
+        check_range(
+            NAME,
+            "settling_length_m",
+            self.settling_length_m,
+            [0.0, 1e5],
+            " m",
+        )?;
+        check_range(
+            NAME,
+            "reference_speed_m_s",
+            self.reference_speed_m_s,
+            [0.0, 100.0],
+            " m/s",
+        )?;
         for (name, v) in [
             ("settling_length_m", self.settling_length_m),
             ("reference_speed_m_s", self.reference_speed_m_s),
         ] {
-            check_finite(NAME, name, v)?;
             if v <= 0.0 {
                 return Err(PhenomenonError::InvalidParameter {
                     phenomenon: NAME,
