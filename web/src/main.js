@@ -10,7 +10,7 @@ import { setupPanels } from './panels.js';
 
 const $ = (id) => document.getElementById(id);
 const grids = {};
-const app = { state: null, grids, frames: 0, errors: [], messages: [], lastSkiers: null, lastAvalanche: null };
+const app = { state: null, grids, frames: 0, errors: [], notices: [], messages: [], lastSkiers: null, lastAvalanche: null };
 window.snowscape = app;
 
 // ---------- connection ----------
@@ -21,8 +21,13 @@ function send(msg) {
 app.send = send;
 app.sendRaw = (text) => ws.send(text);
 
+// A server bound beyond loopback asks for its access token: the page was opened with
+// `?token=…` (the server also set a cookie on that load; the URL's token is passed on as well).
+const token = new URLSearchParams(location.search).get('token');
+const wsPath = token ? `/ws?token=${encodeURIComponent(token)}` : '/ws';
+
 function connect() {
-  ws = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`);
+  ws = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}${wsPath}`);
   ws.binaryType = 'arraybuffer';
   ws.onopen = () => status('connected');
   ws.onclose = () => { status('disconnected; reconnecting…'); setTimeout(connect, 1000); };
@@ -34,12 +39,20 @@ function connect() {
 
 function status(text) { $('status').textContent = text; }
 
+// A job's line: a season step counts its days, the others say what they do.
+function jobText(m) {
+  const amount = m.kind === 'step' ? ` ${m.done.toFixed(2)} of ${m.total.toFixed(2)} days` : '';
+  return `${m.message}: ${m.phase}${amount} (${m.elapsed_s.toFixed(1)} s)`;
+}
+
 function onText(m) {
   app.messages.push(m.type);
   if (app.messages.length > 200) app.messages.shift();
   switch (m.type) {
     case 'state': onState(m); break;
     case 'error': app.errors.push(m); status(`error (${m.code}): ${m.message}`); break;
+    case 'notice': app.notices.push(m.message); status(m.message); break;
+    case 'job': app.lastJob = m; status(jobText(m)); break;
     case 'avalanche':
       app.lastAvalanche = m;
       status(`avalanche ${m.phase}: t=${m.time_s.toFixed(1)} s, ${m.flowing_m3.toFixed(0)} m³ moving` +

@@ -1,6 +1,7 @@
 // The side panel: timeline (play, pause, step, scrub), weather-timeline editor, parameter
 // panel (every numeric and boolean field of the scenario's `parameters`, Table 2 of
-// Cordonnier et al. 2018), undo/redo, save/load/export.
+// Cordonnier et al. 2018), undo/redo, save/load/export, and cancel for the running job or live
+// event.
 const $ = (id) => document.getElementById(id);
 const WEATHER = ['from_day', 'sea_level_temperature_c', 'wind_from_deg', 'wind_speed_m_s', 'rain_snow_altitude_m', 'snowfall_per_week'];
 
@@ -13,6 +14,7 @@ export function setupPanels(app, send) {
   $('undo').onclick = () => send({ type: 'undo' });
   $('redo').onclick = () => send({ type: 'redo' });
   $('step').onclick = () => send({ type: 'step', days: 1 });
+  $('cancel').onclick = () => { if (playing) $('play').click(); send({ type: 'cancel' }); };
   $('play').onclick = () => {
     playing = !playing;
     $('play').textContent = playing ? 'pause' : 'play';
@@ -87,9 +89,10 @@ export function setupPanels(app, send) {
 
   return {
     onState(s) {
+      $('cancel').disabled = !s.busy;
       $('scrub').max = String(Math.max(0, s.snapshots.length - 1));
       $('scrub').value = String(s.current);
-      $('day').textContent = `day ${s.day.toFixed(2)} of ${s.season_days} · ${s.snapshots.length} snapshots · undo ${s.undo} / redo ${s.redo} · ${s.season_avalanches} season avalanches · snow ${(s.snow_volume_m3 / 1e6).toFixed(3)} hm³`;
+      $('day').textContent = `day ${s.day.toFixed(2)} of ${s.season_days} · ${s.snapshots.length} snapshots (${(s.snapshot_bytes / 2 ** 20).toFixed(0)} of ${(s.snapshot_budget_bytes / 2 ** 20).toFixed(0)} MiB) · undo ${s.undo} / redo ${s.redo} · ${s.season_avalanches} season avalanches · snow ${(s.snow_volume_m3 / 1e6).toFixed(3)} hm³`;
       const key = JSON.stringify(s.scenario);
       if (key !== paramsShownFor) {
         paramsShownFor = key;

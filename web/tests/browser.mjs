@@ -3,8 +3,11 @@
 // Checks: the page draws a non-blank terrain, a brush stroke raises the snow depth where it
 // was applied (read back from the server), a triggered avalanche moves snow downhill, the
 // timeline steps a day, a second tab sees the same state, malformed messages get error
-// replies without breaking the session, and requests from other origins or with other Host
-// names are refused. Writes screenshots to SNOWSCAPE_SHOTS (default /tmp).
+// replies without breaking the session, requests from other origins or with other Host
+// names are refused, a long step runs on a worker (another tab is answered meanwhile) and
+// the cancel button stops it, and (with SNOWSCAPE_TOKEN_URL, a server bound to 0.0.0.0) the
+// page needs its access token and then runs on the cookie. Writes screenshots to
+// SNOWSCAPE_SHOTS (default /tmp).
 import { launchChromium, steepestCellInPage } from './common.mjs';
 import assert from 'node:assert/strict';
 import http from 'node:http';
@@ -131,6 +134,37 @@ await check('the timeline steps a day', async () => {
   const srv = await (await fetch(`${base}/api/state`)).json();
   assert.equal(srv.day, s.day);
   await page.screenshot({ path: `${shots}/editor_day1.png` });
+});
+
+await check('a long step runs on a worker: another tab is answered meanwhile, and cancel stops it', async () => {
+  const d0 = await page.evaluate(() => window.snowscape.state.day);
+  const p2 = await context.newPage();
+  await p2.goto(url);
+  await p2.waitForFunction(() => window.snowscape && window.snowscape.state && window.snowscape.frames >= 10, null, { timeout: 60000 });
+  const prev = await page.evaluate(() => (window.snowscape.lastJob || { id: 0 }).id);
+  await page.evaluate(() => window.snowscape.send({ type: 'step', days: 99 }));
+  await page.waitForFunction((prev) => { const j = window.snowscape.lastJob; return j && j.id > prev; }, prev, { timeout: 10000 });
+  // The other tab's probe is answered while the step runs (its job is not over yet).
+  const seen = await p2.evaluate(() => new Promise((resolve) => {
+    const a = window.snowscape;
+    a.lastCell = null;
+    const t0 = performance.now();
+    a.send({ type: 'probe', col: 10, row: 10 });
+    const poll = setInterval(() => {
+      if (a.lastCell) { clearInterval(poll); resolve({ phase: a.lastJob && a.lastJob.phase, ms: performance.now() - t0 }); }
+    }, 2);
+  }));
+  assert.ok(['started', 'running'].includes(seen.phase), `the step was ${seen.phase} when the probe came back`);
+  console.log(`     probe answered in ${seen.ms.toFixed(0)} ms while the step ran`);
+  assert.ok(await page.isEnabled('#cancel'), 'cancel is offered while the step runs');
+  await page.click('#cancel');
+  await page.waitForFunction(() => ['cancelled', 'ended', 'failed'].includes(window.snowscape.lastJob.phase), null, { timeout: 120000 });
+  const job = await page.evaluate(() => window.snowscape.lastJob);
+  assert.equal(job.phase, 'cancelled', JSON.stringify(job));
+  await page.waitForFunction(() => !window.snowscape.state.busy, null, { timeout: 10000 });
+  assert.equal(await page.evaluate(() => window.snowscape.state.day), d0, 'the season stays where the step started');
+  assert.ok(!(await page.isEnabled('#cancel')));
+  await p2.close();
 });
 
 await check('malformed messages get error replies and the session goes on', async () => {
@@ -266,6 +300,27 @@ await check('a page from another origin cannot connect to the editor', async () 
   assert.equal(outcome, 'refused');
   await other.close();
 });
+
+const tokenUrl = process.env.SNOWSCAPE_TOKEN_URL;
+if (tokenUrl) {
+  await check('bound beyond loopback, the page needs its token and runs on the cookie it sets', async () => {
+    const u = new URL(tokenUrl);
+    const bare = `${u.origin}/`;
+    assert.ok(u.searchParams.get('token').length === 32, tokenUrl.replace(/token=.*/, 'token=…'));
+    assert.equal((await fetch(`${u.origin}/api/state`)).status, 403);
+    const ctx = await browser.newContext({ viewport: { width: 800, height: 600 } });
+    const p = await ctx.newPage();
+    assert.equal((await p.goto(bare)).status(), 403, 'without the token');
+    assert.equal((await p.goto(tokenUrl)).status(), 200, 'with the printed URL');
+    await p.waitForFunction(() => window.snowscape && window.snowscape.state && window.snowscape.frames >= 10, null, { timeout: 60000 });
+    const cookie = (await ctx.cookies()).find((c) => c.name === `snowscape_token_${u.port}`);
+    assert.ok(cookie && cookie.httpOnly && cookie.sameSite === 'Strict', JSON.stringify(cookie && { ...cookie, value: '…' }));
+    // Reloaded without the token in the URL: its files and its WebSocket go on the cookie.
+    assert.equal((await p.goto(bare)).status(), 200, 'on the cookie');
+    await p.waitForFunction(() => window.snowscape && window.snowscape.state && window.snowscape.frames >= 10, null, { timeout: 60000 });
+    await ctx.close();
+  });
+}
 
 await browser.close();
 const failed = results.filter((r) => r[1] !== 'ok');

@@ -369,7 +369,9 @@ pub struct ServeArgs {
     /// Port to listen on (0: any free port).
     #[arg(long, default_value_t = 8080)]
     pub port: u16,
-    /// Address to listen on (127.0.0.1: this machine only).
+    /// Address to listen on (127.0.0.1: this machine only). Any other address (0.0.0.0, a
+    /// network address) makes the editor reachable from the network: it then asks for the
+    /// random access token in the URL it prints.
     #[arg(long, default_value = "127.0.0.1")]
     pub bind: std::net::IpAddr,
     /// Folder of the built page (default: embedded in the binary, or web/ beside it).
@@ -378,6 +380,10 @@ pub struct ServeArgs {
     /// Run live avalanches and skiers as fast as they compute instead of at 25 frames/s.
     #[arg(long)]
     pub no_pace: bool,
+    /// Memory the timeline's snapshots may take, MiB: past it the oldest are dropped (never
+    /// the first, which a new scenario restarts from).
+    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    pub snapshot_memory: u64,
     #[command(flatten)]
     pub dem_input: DemInputArgs,
 }

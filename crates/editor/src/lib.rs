@@ -11,16 +11,23 @@
 //! - [`brush`]: add / remove / smooth / set, per layer or on the total depth, and painting of
 //!   the avalanche probability and skier areas; [`painted`]: what those maps do in a step.
 //! - [`live`]: avalanches and skiers stepped on the server and streamed frame by frame.
-//! - [`timeline`]: the snapshots the page plays and scrubs.
+//! - [`job`]: long work (season steps, scenario changes, loads, exports) on a worker, with
+//!   progress and cancel.
+//! - [`timeline`]: the snapshots the page plays and scrubs, within a memory budget.
+//! - [`page_scenario`]: the scenario the page sends, read and checked.
 //! - [`protocol`]: the JSON messages, their decoder (byte cap, validation) and the rate cap;
 //!   [`wire`]: the binary tile frames (16-bit quantised values, dirty tiles only).
 //! - [`project`]: the project folder (save, load, exports; no path leaves it).
-//! - [`server`]: axum over WebSocket with the session in an actor thread; [`assets`]: the
-//!   page's files (embedded, or a folder).
+//! - [`server`]: axum over WebSocket with the session in an actor thread; [`access`]: who may
+//!   talk to it (Host and Origin, the access token beyond loopback); [`assets`]: the page's
+//!   files (embedded, or a folder).
 
+pub mod access;
 pub mod assets;
 pub mod brush;
+pub mod job;
 pub mod live;
+pub mod page_scenario;
 pub mod painted;
 pub mod project;
 pub mod protocol;
@@ -31,5 +38,5 @@ pub mod wire;
 
 pub use assets::{Assets, BUILD_HINT};
 pub use project::{ProjectDir, ProjectError};
-pub use server::{ServeConfig, ServeError, serve_blocking};
+pub use server::{ServeConfig, ServeError, Served, serve_blocking, serve_until};
 pub use session::{Exporter, Session};

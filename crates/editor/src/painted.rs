@@ -11,8 +11,9 @@
 //! the paint, each run to its terminus on the season's skier path ([`Winter::ski_from`]):
 //! counted in its skier statistics and volume budget (compaction), its avalanches started.
 
+use crate::brush::PaintMaps;
 use crate::protocol::ErrorCode;
-use crate::session::{Refusal, Session};
+use crate::session::Refusal;
 use snowscape_season::winter::{SeasonError, Winter};
 use snowscape_terrain::random::uniform;
 
@@ -25,21 +26,21 @@ pub const MAX_EVENTS_PER_STEP: usize = 32;
 const STREAM_AVALANCHE: u64 = 0xed17_a7a1;
 const STREAM_SKIER: u64 = 0xed17_5c1e;
 
-/// Applies the painted maps to the days since `from_day`.
-pub fn apply_painted(session: &mut Session, from_day: f64) -> Result<(), Refusal> {
-    let days = session.winter.day() - from_day;
+/// Applies the painted maps to the days of `winter` since `from_day`.
+pub fn apply_painted(winter: &mut Winter, paint: &PaintMaps, from_day: f64) -> Result<(), Refusal> {
+    let days = winter.day() - from_day;
     if days <= 0.0 {
         return Ok(());
     }
     let key = from_day.to_bits();
-    let seed = session.winter.scenario().seed ^ key;
-    let g = session.winter.terrain.geometry().clone();
+    let seed = winter.scenario().seed ^ key;
+    let g = winter.terrain.geometry().clone();
     let stride = ((SITE_SPACING_M / g.cell_size_x()).round() as usize).max(1);
     let mut fired = 0;
     'sites: for r in (stride / 2..g.height()).step_by(stride) {
         for c in (stride / 2..g.width()).step_by(stride) {
             let i = g.index(c, r);
-            let p = session.paint.avalanche_probability[i] as f64;
+            let p = paint.avalanche_probability[i] as f64;
             if p <= 0.0 {
                 continue;
             }
@@ -48,7 +49,7 @@ pub fn apply_painted(session: &mut Session, from_day: f64) -> Result<(), Refusal
                 continue;
             }
             let (x, y) = g.cell_centre(c, r);
-            match session.winter.trigger_avalanche(x, y) {
+            match winter.trigger_avalanche(x, y) {
                 Ok(_) | Err(SeasonError::AvalanchePosition { .. }) => {}
                 Err(e) => return Err((ErrorCode::Failed, e.to_string())),
             }
@@ -58,7 +59,7 @@ pub fn apply_painted(session: &mut Session, from_day: f64) -> Result<(), Refusal
             }
         }
     }
-    let total: f64 = session.paint.ski_area.iter().map(|&v| v as f64).sum();
+    let total: f64 = paint.ski_area.iter().map(|&v| v as f64).sum();
     let runs = ((days * SKIERS_PER_DAY).round() as usize).min(MAX_EVENTS_PER_STEP);
     if total <= 0.0 || runs == 0 {
         return Ok(());
@@ -66,13 +67,13 @@ pub fn apply_painted(session: &mut Session, from_day: f64) -> Result<(), Refusal
     for k in 0..runs {
         let u = uniform(seed, STREAM_SKIER, k as u64) * total;
         let mut acc = 0.0;
-        let Some(i) = session.paint.ski_area.iter().position(|&v| {
+        let Some(i) = paint.ski_area.iter().position(|&v| {
             acc += v as f64;
             acc > u
         }) else {
             continue;
         };
-        ski_once(&mut session.winter, i)?;
+        ski_once(winter, i)?;
     }
     Ok(())
 }

@@ -117,6 +117,9 @@ pub enum ClientMessage {
     },
     /// Asks for the whole state again (after a lost frame).
     Resync {},
+    /// Stops the running job (a season step, a scenario change, a load, an export: its
+    /// result is dropped) or the live avalanche or skier ([`crate::job`]).
+    Cancel {},
 }
 
 /// Error codes of [`ServerMessage::Error`].
@@ -139,7 +142,7 @@ pub enum ErrorCode {
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum ServerMessage {
     /// The session state; sent on connect and after every change of it.
-    State(crate::session::StateSummary),
+    State(Box<crate::session::StateSummary>),
     /// A request was refused; the session goes on.
     Error { code: ErrorCode, message: String },
     /// Layer values at a cell (reply to `probe`).
@@ -148,6 +151,12 @@ pub enum ServerMessage {
     Avalanche(crate::live::AvalancheProgress),
     /// Live skiers: positions in grid cells.
     Skiers(crate::live::SkierProgress),
+    /// A job (a season step, a scenario change, a load, an export): started, progressing,
+    /// cancelling, ended, cancelled or failed.
+    Job(crate::job::JobProgress),
+    /// Something every tab should know that is not an error (old snapshots dropped for the
+    /// memory budget, ...).
+    Notice { message: String },
     /// A project was saved or loaded, or outputs were exported; `files` relative to the
     /// project folder.
     Done {

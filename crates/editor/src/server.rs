@@ -9,29 +9,34 @@
 //! - `GET /api/state`: the state summary; `GET /api/cell?col=C&row=R`: values at a cell.
 //! - `GET /files/<path>`: a file of the project folder (exports), read-only.
 //!
-//! **Who may talk to it.** Every request must name the served address in its `Host` header
-//! (`127.0.0.1:PORT`, `localhost:PORT`, `[::1]:PORT`, the `--bind` address; any IP literal
-//! when bound to all interfaces), and a request that carries an `Origin` (every browser
-//! WebSocket upgrade and cross-site fetch does) must come from a page of such an address;
-//! others get 403. This keeps other sites the artist visits, pages served from other local
-//! ports and DNS-rebinding names away from the session and the project files.
+//! **Who may talk to it** ([`crate::access`]): every request must name the served address in
+//! its `Host` header and come from one of its pages when it carries an `Origin`; bound beyond
+//! loopback, every request must also carry the server's access token (query or cookie).
+//! Others get 403.
 //!
 //! At most [`MAX_CONNECTIONS`] tabs are connected at once (more get 503); sockets send with
 //! `TCP_NODELAY`.
 //!
 //! One actor thread owns the session: messages are handled in order, and a live avalanche or
-//! skier advances one frame per loop turn between messages. A tab that falls behind the
+//! skier advances one frame per loop turn between messages. Long work (a season step, a
+//! scenario change, a load, an export) runs on a worker thread ([`crate::job`]): the actor
+//! goes on answering every tab (state, cell values, resync; mutating requests get `busy`),
+//! broadcasts the job's progress, and installs its outcome when it ends; `cancel` stops it. A tab that falls behind the
 //! broadcast (its queue overflows) is sent the whole state again; one that lets
 //! [`MAX_PENDING_REPLIES`] of its own replies pile up, or does not take a message within
 //! [`SEND_TIMEOUT`], is dropped (memory per tab stays bounded).
 
+use crate::access::{AccessToken, Admitted, Credentials, Gate, token_required};
 use crate::assets::{Assets, BUILD_HINT};
+use crate::job::{Job, JobOutcome, JobProgress};
 use crate::project::{ProjectDir, ProjectError};
 use crate::protocol::{
     ClientMessage, ErrorCode, MAX_MESSAGE_BYTES, RATE_BURST, RATE_PER_S, RateLimiter,
     ServerMessage, decode,
 };
-use crate::session::{CellValues, Exporter, Out, Outgoing, Refusal, Session, StateSummary};
+use crate::session::{
+    CellValues, Exporter, Out, Outgoing, Refusal, Session, Started, StateSummary,
+};
 use axum::Router;
 use axum::extract::Request;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
@@ -77,6 +82,8 @@ pub enum ServeError {
     Runtime(std::io::Error),
     #[error("the server stopped: {0}")]
     Stopped(std::io::Error),
+    #[error("{0}")]
+    Token(String),
     #[error(transparent)]
     Project(#[from] ProjectError),
 }
@@ -95,10 +102,19 @@ pub struct ServeConfig {
 }
 
 enum Command {
-    Msg { msg: ClientMessage, reply: ReplyTo },
+    Msg {
+        msg: ClientMessage,
+        reply: ReplyTo,
+    },
     Join(oneshot::Sender<Vec<Outgoing>>),
     State(oneshot::Sender<StateSummary>),
     Probe(usize, usize, oneshot::Sender<Result<CellValues, Refusal>>),
+    /// From a job's worker.
+    JobProgress(JobProgress),
+    JobDone {
+        id: u64,
+        outcome: JobOutcome,
+    },
 }
 
 /// Where the actor sends one tab's own replies: a bounded queue, and the flag it raises when
@@ -127,18 +143,65 @@ struct AppState {
     connections: Arc<std::sync::atomic::AtomicUsize>,
 }
 
-/// The actor: owns the session, handles commands in order, advances live events.
+/// Runs `job` on a worker thread that reports to the actor through `commands`.
+fn spawn_job(job: Job, commands: mpsc::UnboundedSender<Command>) -> Result<(), String> {
+    let id = job.id();
+    std::thread::Builder::new()
+        .name(format!("snowscape-job-{id}"))
+        .spawn(move || {
+            let progress = commands.clone();
+            // A panic in the work must still end the job, or the session would stay busy.
+            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                job.run(&mut |p| {
+                    let _ = progress.send(Command::JobProgress(p));
+                })
+            }))
+            .unwrap_or_else(|_| {
+                tracing::error!("job {id} stopped on an internal error (panic)");
+                JobOutcome::Failed((
+                    ErrorCode::Failed,
+                    "the job stopped on an internal error; the session is unchanged".into(),
+                ))
+            });
+            let _ = commands.send(Command::JobDone { id, outcome });
+        })
+        .map(|_| ())
+        .map_err(|e| format!("cannot start a worker thread: {e}"))
+}
+
+/// Sends outputs: [`Out::All`] to every tab, [`Out::Sender`] to `reply_to`.
+fn route(outs: Vec<Out>, updates: &broadcast::Sender<Arc<Outgoing>>, reply_to: Option<&ReplyTo>) {
+    for o in outs {
+        match o {
+            Out::All(m) => {
+                let _ = updates.send(Arc::new(m));
+            }
+            Out::Sender(m) => {
+                if let Some(r) = reply_to {
+                    r.send(m);
+                }
+            }
+        }
+    }
+}
+
+/// The actor: owns the session, handles commands in order, advances live events, and hands
+/// long work to a worker ([`crate::job`]) whose progress and outcome come back as commands,
+/// so that other tabs are answered while it runs.
 fn actor(
     mut session: Session,
     mut commands: mpsc::UnboundedReceiver<Command>,
+    to_self: mpsc::WeakUnboundedSender<Command>,
     updates: broadcast::Sender<Arc<Outgoing>>,
     project: ProjectDir,
     exporter: Option<Arc<Exporter>>,
     pace: bool,
 ) {
     let mut last_frame = Instant::now();
+    // The tab that asked for the running job (its own replies, an export's files).
+    let mut job_asker: Option<ReplyTo> = None;
     loop {
-        let cmd = if session.busy() {
+        let cmd = if session.live() {
             match commands.try_recv() {
                 Ok(c) => Some(c),
                 Err(mpsc::error::TryRecvError::Empty) => None,
@@ -150,19 +213,29 @@ fn actor(
                 None => return,
             }
         };
-        let mut outs: Vec<Out> = Vec::new();
-        let mut reply_to = None;
         match cmd {
             Some(Command::Msg { msg, reply }) => {
-                match session.handle(msg, Some(&project), exporter.as_deref()) {
-                    Ok(o) => outs = o,
-                    Err((code, message)) => {
-                        outs.push(Out::Sender(Outgoing::Text(
-                            ServerMessage::error(code, message).to_json(),
-                        )));
+                let outs = match session.start(msg, Some(&project), exporter.as_ref()) {
+                    Ok(Started::Done(o)) => o,
+                    Ok(Started::Job(job, mut o)) => {
+                        let id = job.id();
+                        let spawned = to_self
+                            .upgrade()
+                            .ok_or_else(|| "the server is stopping".to_string())
+                            .and_then(|tx| spawn_job(job, tx));
+                        match spawned {
+                            Ok(()) => job_asker = Some(reply.clone()),
+                            Err(e) => o.extend(
+                                session.finish_job(id, JobOutcome::Failed((ErrorCode::Failed, e))),
+                            ),
+                        }
+                        o
                     }
-                }
-                reply_to = Some(reply);
+                    Err((code, message)) => vec![Out::Sender(Outgoing::Text(
+                        ServerMessage::error(code, message).to_json(),
+                    ))],
+                };
+                route(outs, &updates, Some(&reply));
             }
             Some(Command::Join(tx)) => {
                 let _ = tx.send(session.full_state());
@@ -173,6 +246,17 @@ fn actor(
             Some(Command::Probe(c, r, tx)) => {
                 let _ = tx.send(session.probe(c, r));
             }
+            Some(Command::JobProgress(p)) => {
+                route(
+                    session.job_progress(p).into_iter().collect(),
+                    &updates,
+                    None,
+                );
+            }
+            Some(Command::JobDone { id, outcome }) => {
+                let outs = session.finish_job(id, outcome);
+                route(outs, &updates, job_asker.take().as_ref());
+            }
             None => {
                 if pace {
                     let since = last_frame.elapsed();
@@ -181,33 +265,81 @@ fn actor(
                     }
                 }
                 last_frame = Instant::now();
-                outs = session.tick().unwrap_or_else(|(code, message)| {
+                let outs = session.tick().unwrap_or_else(|(code, message)| {
                     vec![Out::All(Outgoing::Text(
                         ServerMessage::error(code, message).to_json(),
                     ))]
                 });
-            }
-        }
-        for o in outs {
-            match o {
-                Out::All(m) => {
-                    let _ = updates.send(Arc::new(m));
-                }
-                Out::Sender(m) => {
-                    if let Some(r) = &reply_to {
-                        r.send(m);
-                    }
-                }
+                route(outs, &updates, None);
             }
         }
     }
 }
 
-/// Starts the server and blocks until Ctrl-C. `on_ready` gets the address listened on.
+/// Where the server listens, and the access token when it asks for one.
+#[derive(Debug, Clone)]
+pub struct Served {
+    /// The address listened on.
+    pub addr: SocketAddr,
+    /// The token every request must carry (bound beyond loopback), else `None`.
+    pub token: Option<AccessToken>,
+}
+
+impl Served {
+    /// The URL to open: on this machine (a loopback address when bound to all interfaces),
+    /// with the token when one is asked.
+    pub fn url(&self) -> String {
+        let ip = match self.addr.ip() {
+            IpAddr::V4(v4) if v4.is_unspecified() => IpAddr::V4(std::net::Ipv4Addr::LOCALHOST),
+            IpAddr::V6(v6) if v6.is_unspecified() => IpAddr::V6(std::net::Ipv6Addr::LOCALHOST),
+            ip => ip,
+        };
+        let addr = SocketAddr::new(ip, self.addr.port());
+        match &self.token {
+            Some(t) => format!("http://{addr}/?token={}", t.as_str()),
+            None => format!("http://{addr}/"),
+        }
+    }
+
+    /// The warning to print when the editor is reachable from the network, else `None`.
+    pub fn network_warning(&self) -> Option<String> {
+        self.token.as_ref()?;
+        let (ip, port) = (self.addr.ip(), self.addr.port());
+        let from_elsewhere = if ip.is_unspecified() {
+            format!(
+                "from another machine use this machine's address with port {port} and the same ?token="
+            )
+        } else {
+            "from another machine use the same URL".to_string()
+        };
+        Some(format!(
+            "warning: bound to {ip}, the editor is reachable from the network: anyone who has the URL with its token can edit this session and download the project folder's files; {from_elsewhere}"
+        ))
+    }
+}
+
+/// Starts the server and blocks until Ctrl-C. `on_ready` gets where it listens.
 pub fn serve_blocking(
     config: ServeConfig,
-    on_ready: impl FnOnce(SocketAddr),
+    on_ready: impl FnOnce(&Served),
 ) -> Result<(), ServeError> {
+    serve_until(config, on_ready, async {
+        let _ = tokio::signal::ctrl_c().await;
+    })
+}
+
+/// Starts the server and blocks until `stop` completes (then shuts down gracefully).
+/// `on_ready` gets where it listens. Bound beyond loopback, the server draws an
+/// [`AccessToken`] that every request must carry ([`crate::access`]).
+pub fn serve_until(
+    config: ServeConfig,
+    on_ready: impl FnOnce(&Served),
+    stop: impl std::future::Future<Output = ()> + Send + 'static,
+) -> Result<(), ServeError> {
+    let token = token_required(config.bind)
+        .then(AccessToken::generate)
+        .transpose()
+        .map_err(ServeError::Token)?;
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -221,108 +353,53 @@ pub fn serve_blocking(
         let local = listener
             .local_addr()
             .map_err(|source| ServeError::Bind { addr, source })?;
-        let allowed = Arc::new(AllowedHosts::new(config.bind, local.port()));
-        let app = router(config, allowed);
-        on_ready(local);
+        let gate = Arc::new(Gate::new(config.bind, local.port(), token.clone()));
+        let app = router(config, gate);
+        on_ready(&Served { addr: local, token });
         // Small frames (a tile, a progress line) go out at once.
         let listener = listener.tap_io(|tcp| {
             let _ = tcp.set_nodelay(true);
         });
         axum::serve(listener, app)
-            .with_graceful_shutdown(async {
-                let _ = tokio::signal::ctrl_c().await;
-            })
+            .with_graceful_shutdown(stop)
             .await
             .map_err(ServeError::Stopped)
     })
 }
 
-/// The addresses the editor is served at, for the `Host` and `Origin` checks.
-#[derive(Debug, Clone)]
-pub struct AllowedHosts {
-    /// `host:port` authorities, lowercase.
-    names: Vec<String>,
-    port: u16,
-    /// Bound to all interfaces: any IP literal (never a DNS name) with the port.
-    any_ip: bool,
-}
-
-impl AllowedHosts {
-    /// The loopback names and the bind address, on `port`.
-    pub fn new(bind: IpAddr, port: u16) -> Self {
-        let authority = |ip: IpAddr| match ip {
-            IpAddr::V4(v4) => format!("{v4}:{port}"),
-            IpAddr::V6(v6) => format!("[{v6}]:{port}"),
-        };
-        let mut names = vec![
-            format!("127.0.0.1:{port}"),
-            format!("localhost:{port}"),
-            format!("[::1]:{port}"),
-        ];
-        if !bind.is_unspecified() {
-            names.push(authority(bind));
-        }
-        Self {
-            names,
-            port,
-            any_ip: bind.is_unspecified(),
-        }
-    }
-
-    /// Whether `authority` (`host:port`) names this server.
-    fn names(&self, authority: &str) -> bool {
-        let a = authority.to_ascii_lowercase();
-        if self.names.contains(&a) {
-            return true;
-        }
-        self.any_ip
-            && a.parse::<SocketAddr>()
-                .is_ok_and(|addr| addr.port() == self.port)
-    }
-
-    /// Whether a request with these `Host` and `Origin` headers may be served; the refusal
-    /// names the header and its value.
-    pub fn admits(&self, host: Option<&str>, origin: Option<&str>) -> Result<(), String> {
-        match host {
-            Some(h) if self.names(h) => {}
-            Some(h) => return Err(format!("Host {h:?} is not this editor's address")),
-            None => return Err("no Host header".into()),
-        }
-        if let Some(o) = origin {
-            let authority = o
-                .strip_prefix("http://")
-                .or_else(|| o.strip_prefix("https://"))
-                .unwrap_or("");
-            if !self.names(authority) {
-                return Err(format!("Origin {o:?} is not this editor's page"));
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Refuses, with 403, a request whose `Host` or `Origin` is not this server's
-/// ([`AllowedHosts::admits`]).
-async fn guard(State(allowed): State<Arc<AllowedHosts>>, req: Request, next: Next) -> Response {
+/// Refuses, with 403, a request whose `Host` or `Origin` is not this server's, or that lacks
+/// the access token when one is required ([`Gate::admits`]); sets the token's cookie when it
+/// came in the query.
+async fn guard(State(gate): State<Arc<Gate>>, req: Request, next: Next) -> Response {
     let verdict = {
-        let header = |name: header::HeaderName| {
-            req.headers()
-                .get(name)
-                .map(|v| v.to_str().unwrap_or("(not text)").to_string())
-        };
-        allowed.admits(
-            header(header::HOST).as_deref(),
-            header(header::ORIGIN).as_deref(),
-        )
+        let headers = req.headers();
+        let text = |v: &header::HeaderValue| v.to_str().unwrap_or("(not text)").to_string();
+        let host = headers.get(header::HOST).map(text);
+        let origin = headers.get(header::ORIGIN).map(text);
+        let cookies: Vec<String> = headers.get_all(header::COOKIE).iter().map(text).collect();
+        let cookies: Vec<&str> = cookies.iter().map(String::as_str).collect();
+        gate.admits(Credentials {
+            host: host.as_deref(),
+            origin: origin.as_deref(),
+            query: req.uri().query(),
+            cookies: &cookies,
+        })
     };
     match verdict {
-        Ok(()) => next.run(req).await,
+        Ok(Admitted::Open) => next.run(req).await,
+        Ok(Admitted::SetCookie(cookie)) => {
+            let mut res = next.run(req).await;
+            if let Ok(v) = header::HeaderValue::from_str(&cookie) {
+                res.headers_mut().append(header::SET_COOKIE, v);
+            }
+            res
+        }
         Err(why) => (StatusCode::FORBIDDEN, format!("snowscape serve: {why}\n")).into_response(),
     }
 }
 
 /// The router, with the actor thread started.
-fn router(config: ServeConfig, allowed: Arc<AllowedHosts>) -> Router {
+fn router(config: ServeConfig, gate: Arc<Gate>) -> Router {
     let (tx, rx) = mpsc::unbounded_channel();
     let (updates, _) = broadcast::channel(4096);
     let state = AppState {
@@ -334,9 +411,10 @@ fn router(config: ServeConfig, allowed: Arc<AllowedHosts>) -> Router {
     };
     let (session, project, exporter, pace) =
         (config.session, config.project, config.exporter, config.pace);
+    let to_self = state.commands.downgrade();
     std::thread::Builder::new()
         .name("snowscape-editor".into())
-        .spawn(move || actor(session, rx, updates, project, exporter, pace))
+        .spawn(move || actor(session, rx, to_self, updates, project, exporter, pace))
         .ok();
     Router::new()
         .route("/ws", get(ws_handler))
@@ -345,7 +423,7 @@ fn router(config: ServeConfig, allowed: Arc<AllowedHosts>) -> Router {
         .route("/files/{*path}", get(file_handler))
         .fallback(get(asset_handler))
         .with_state(state)
-        .layer(middleware::from_fn_with_state(allowed, guard))
+        .layer(middleware::from_fn_with_state(gate, guard))
 }
 
 async fn asset_handler(State(s): State<AppState>, uri: Uri) -> Response {
@@ -546,57 +624,5 @@ async fn connection(mut socket: WebSocket, s: AppState) {
                 }
             }
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn only_the_served_address_and_its_pages_are_admitted() {
-        let a = AllowedHosts::new("127.0.0.1".parse().unwrap(), 8080);
-        for host in [
-            "127.0.0.1:8080",
-            "localhost:8080",
-            "LOCALHOST:8080",
-            "[::1]:8080",
-        ] {
-            assert!(a.admits(Some(host), None).is_ok(), "{host}");
-        }
-        assert!(
-            a.admits(Some("localhost:8080"), Some("http://localhost:8080"))
-                .is_ok()
-        );
-        assert!(
-            a.admits(Some("127.0.0.1:8080"), Some("http://127.0.0.1:8080"))
-                .is_ok()
-        );
-        let refused = [
-            (Some("evil.example"), None),
-            (Some("evil.example:8080"), None),
-            (Some("127.0.0.1:9090"), None),
-            (None, None),
-            (Some("127.0.0.1:8080"), Some("http://evil.example")),
-            (Some("127.0.0.1:8080"), Some("http://127.0.0.1:9090")),
-            (Some("127.0.0.1:8080"), Some("null")),
-            (
-                Some("127.0.0.1:8080"),
-                Some("http://localhost:8080.evil.example"),
-            ),
-        ];
-        for (host, origin) in refused {
-            let e = a.admits(host, origin).unwrap_err();
-            let named = origin.or(host).unwrap_or("no Host");
-            assert!(e.contains(named), "{e} names {named}");
-        }
-        // Bound to all interfaces: IP literals with the port, never a DNS name.
-        let all = AllowedHosts::new("0.0.0.0".parse().unwrap(), 8080);
-        assert!(
-            all.admits(Some("192.168.1.7:8080"), Some("http://192.168.1.7:8080"))
-                .is_ok()
-        );
-        assert!(all.admits(Some("rebind.evil.example:8080"), None).is_err());
-        assert!(all.admits(Some("192.168.1.7:8081"), None).is_err());
     }
 }

@@ -5,19 +5,23 @@
 //! with brushes, the scenario and the parameters, or by triggering avalanches and skiers. The
 //! session is free of I/O: [`Session::handle`] turns a [`ClientMessage`] into [`Out`]puts for
 //! every tab or for the sender alone, and [`Session::tick`] advances a live event by one frame;
-//! the server ([`crate::server`]) moves them over the network.
+//! the server ([`crate::server`]) moves them over the network. Long work (a season step, a
+//! scenario change, a load, an export) is a [`crate::job::Job`] that [`Session::start`] hands
+//! out and [`Session::finish_job`] takes back, so that the server can run it on a worker.
 
 use crate::brush::{self, CellRect, Dab, Edit, PaintMaps};
+use crate::job::{Job, JobOutcome, JobProgress, RunningJob};
 use crate::live::{LiveAvalanche, LiveSkiers, skier_progress, tiles_near};
 use crate::protocol::{BrushTarget, ClientMessage, ErrorCode, ServerMessage};
 use crate::timeline::Timeline;
 use crate::wire::{self, Channel, Field, Quant, TILE};
 use serde::{Deserialize, Serialize};
-use snowscape_season::scenario::{Scenario, WeatherPeriod};
+use snowscape_season::scenario::WeatherPeriod;
 use snowscape_season::winter::Winter;
 use snowscape_skiers::{SkiArea, SkiScratch};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
 use std::path::Path;
+use std::sync::Arc;
 
 /// A message on its way out.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,6 +42,14 @@ pub enum Out {
 /// A refused request: the reply's code and message.
 pub type Refusal = (ErrorCode, String);
 
+/// What [`Session::start`] made of a message.
+pub enum Started {
+    /// Handled: the outputs.
+    Done(Vec<Out>),
+    /// A job for a worker, and the outputs to send now (its `started` message).
+    Job(Job, Vec<Out>),
+}
+
 /// Writes the outputs of `snowscape run` for a season state into a folder; returns the
 /// written file names (the command-line front end supplies it).
 pub type Exporter = dyn Fn(&Winter, &Path) -> Result<Vec<String>, String> + Send + Sync;
@@ -57,8 +69,10 @@ pub struct StateSummary {
     pub current: usize,
     pub undo: usize,
     pub redo: usize,
-    /// A live avalanche or skier is running (season steps wait).
+    /// A live avalanche or skier, or a job, is running (season steps wait).
     pub busy: bool,
+    /// The running job (a season step, a scenario change, a load, an export), if any.
+    pub job: Option<JobProgress>,
     /// Avalanches of the season so far (not counting live ones).
     pub season_avalanches: usize,
     /// The scenario (weather timeline, Table 2 parameters), as JSON.
@@ -67,6 +81,11 @@ pub struct StateSummary {
     pub weather: Vec<WeatherPeriod>,
     /// Snow volume, m³.
     pub snow_volume_m3: f64,
+    /// The snapshots' memory budget and their estimated memory, bytes; snapshots dropped
+    /// for the budget so far (the oldest, never the first).
+    pub snapshot_budget_bytes: u64,
+    pub snapshot_bytes: u64,
+    pub snapshots_dropped: usize,
 }
 
 /// Values at one cell (reply to `probe`).
@@ -91,11 +110,14 @@ pub struct Session {
     redo: Vec<Edit>,
     seq: u32,
     bedrock_quant: Quant,
-    source: String,
-    avalanche: Option<LiveAvalanche>,
+    pub(crate) source: String,
+    pub(crate) avalanche: Option<LiveAvalanche>,
     pub(crate) skiers: Option<LiveSkiers>,
     /// Skier descents in progress.
-    skiing: bool,
+    pub(crate) skiing: bool,
+    /// The job running on a worker, and the last job's number.
+    pub(crate) job: Option<RunningJob>,
+    pub(crate) job_seq: u64,
     /// What the user did, in order (saved with the project).
     pub(crate) history: Vec<serde_json::Value>,
 }
@@ -130,8 +152,41 @@ impl Session {
             avalanche: None,
             skiers: None,
             skiing: false,
+            job: None,
+            job_seq: 0,
             history: Vec::new(),
         }
+    }
+
+    /// Sets the memory the timeline's snapshots may take, bytes (kept across scenario
+    /// changes and loads); the oldest snapshots past it are dropped.
+    pub fn set_snapshot_budget(&mut self, bytes: u64) {
+        self.timeline.set_budget(bytes);
+    }
+
+    /// Replaces this session by `next` (a new scenario, a loaded project), keeping the
+    /// snapshot budget and the job numbers.
+    pub(crate) fn replace_with(&mut self, mut next: Session) {
+        next.set_snapshot_budget(self.timeline.budget_bytes());
+        next.job_seq = self.job_seq;
+        *self = next;
+    }
+
+    /// The notice (to every tab, and the log) that `dropped` old snapshots went for the
+    /// memory budget.
+    pub(crate) fn dropped_notice(&self, dropped: usize) -> Option<Out> {
+        if dropped == 0 {
+            return None;
+        }
+        let t = &self.timeline;
+        let message = format!(
+            "{dropped} old snapshot(s) dropped to keep the timeline within its memory budget of {} MiB ({} snapshots of {:.1} MiB kept; the first one stays)",
+            t.budget_bytes() >> 20,
+            t.len(),
+            t.bytes() as f64 / t.len().max(1) as f64 / (1u64 << 20) as f64,
+        );
+        tracing::info!("{message}");
+        Some(Out::All(text(&ServerMessage::Notice { message })))
     }
 
     /// The season being edited.
@@ -145,8 +200,13 @@ impl Session {
     }
 
     /// Whether a live event is running ([`Session::tick`] advances it).
-    pub fn busy(&self) -> bool {
+    pub fn live(&self) -> bool {
         self.avalanche.is_some() || self.skiing
+    }
+
+    /// Whether a live event or a job is running (the season waits).
+    pub fn busy(&self) -> bool {
+        self.live() || self.job.is_some()
     }
 
     /// The state summary.
@@ -164,10 +224,14 @@ impl Session {
             undo: self.undo.len(),
             redo: self.redo.len(),
             busy: self.busy(),
+            job: self.job().cloned(),
             season_avalanches: self.winter.avalanches().len(),
             scenario: serde_json::to_value(self.winter.scenario()).unwrap_or_default(),
             weather: self.winter.weather().to_vec(),
             snow_volume_m3: self.winter.terrain.snow_volume(),
+            snapshot_budget_bytes: self.timeline.budget_bytes(),
+            snapshot_bytes: self.timeline.bytes(),
+            snapshots_dropped: self.timeline.dropped(),
         }
     }
 
@@ -252,7 +316,7 @@ impl Session {
             .map(Outgoing::Binary)
     }
 
-    fn layer_frames(&mut self, tiles: &[(usize, usize)]) -> Vec<Out> {
+    pub(crate) fn layer_frames(&mut self, tiles: &[(usize, usize)]) -> Vec<Out> {
         if tiles.is_empty() {
             return Vec::new();
         }
@@ -263,13 +327,13 @@ impl Session {
             .collect()
     }
 
-    fn state_out(&self) -> Out {
-        Out::All(text(&ServerMessage::State(self.summary())))
+    pub(crate) fn state_out(&self) -> Out {
+        Out::All(text(&ServerMessage::State(Box::new(self.summary()))))
     }
 
     /// Everything a tab needs: the state and every channel in full.
     pub fn full_state(&mut self) -> Vec<Outgoing> {
-        let mut v = vec![text(&ServerMessage::State(self.summary()))];
+        let mut v = vec![text(&ServerMessage::State(Box::new(self.summary())))];
         for c in [
             Channel::Bedrock,
             Channel::Compacted,
@@ -287,7 +351,7 @@ impl Session {
         v
     }
 
-    fn everything(&mut self) -> Vec<Out> {
+    pub(crate) fn everything(&mut self) -> Vec<Out> {
         self.full_state().into_iter().map(Out::All).collect()
     }
 
@@ -314,28 +378,87 @@ impl Session {
         }
     }
 
-    fn log(&mut self, entry: serde_json::Value) {
+    pub(crate) fn log(&mut self, entry: serde_json::Value) {
         self.history.push(entry);
     }
 
-    /// Handles one message; `export` writes outputs, `project` is the project folder.
+    /// Forgets undo and redo (the season moved on, or a live event changed the snow).
+    pub(crate) fn clear_undo(&mut self) {
+        self.undo.clear();
+        self.redo.clear();
+    }
+
+    /// Handles one message at once, running any job it starts on this thread (tests, and
+    /// callers without a network); `export` writes outputs, `project` is the project folder.
     pub fn handle(
         &mut self,
         msg: ClientMessage,
         project: Option<&crate::project::ProjectDir>,
-        export: Option<&Exporter>,
+        export: Option<&Arc<Exporter>>,
     ) -> Result<Vec<Out>, Refusal> {
-        let allowed_when_busy = matches!(
-            msg,
-            ClientMessage::Brush { .. } | ClientMessage::Probe { .. } | ClientMessage::Resync {}
-        );
-        if self.busy() && !allowed_when_busy {
-            return refuse(
-                ErrorCode::Busy,
-                "a live avalanche or skier is running; try again when it ends",
-            );
+        match self.start(msg, project, export)? {
+            Started::Done(out) => Ok(out),
+            Started::Job(job, mut out) => {
+                let id = job.id();
+                match job.run(&mut |_| {}) {
+                    // A failed job is a refusal, as at once.
+                    JobOutcome::Failed(refusal) => {
+                        self.finish_job(id, JobOutcome::Failed(refusal.clone()));
+                        Err(refusal)
+                    }
+                    outcome => {
+                        out.extend(self.finish_job(id, outcome));
+                        Ok(out)
+                    }
+                }
+            }
         }
-        match msg {
+    }
+
+    /// Why `msg` must wait, if it must: while a job runs only `probe`, `resync` and `cancel`
+    /// are answered; while a live event runs, brushes too.
+    fn busy_refusal(&self, msg: &ClientMessage) -> Option<Refusal> {
+        let reads = matches!(
+            msg,
+            ClientMessage::Probe { .. } | ClientMessage::Resync {} | ClientMessage::Cancel {}
+        );
+        if reads {
+            return None;
+        }
+        if let Some(j) = self.job() {
+            return Some((
+                ErrorCode::Busy,
+                format!(
+                    "{} is running ({}); send cancel to stop it, or try again when it ends",
+                    j.kind.describe(),
+                    j.message
+                ),
+            ));
+        }
+        (self.live() && !matches!(msg, ClientMessage::Brush { .. })).then(|| {
+            (
+                ErrorCode::Busy,
+                "a live avalanche or skier is running; send cancel to stop it, or try again when it ends"
+                    .to_string(),
+            )
+        })
+    }
+
+    /// Handles one message: at once ([`Started::Done`]), or as a [`Job`] for a worker
+    /// ([`Started::Job`], with the job's `started` message) whose outcome goes to
+    /// [`Session::finish_job`]. `export` writes outputs, `project` is the project folder.
+    pub fn start(
+        &mut self,
+        msg: ClientMessage,
+        project: Option<&crate::project::ProjectDir>,
+        export: Option<&Arc<Exporter>>,
+    ) -> Result<Started, Refusal> {
+        msg.validate().map_err(|e| (e.code(), e.to_string()))?;
+        if let Some(refusal) = self.busy_refusal(&msg) {
+            return Err(refusal);
+        }
+        let job = |r: Result<(Job, Vec<Out>), Refusal>| r.map(|(j, o)| Started::Job(j, o));
+        let done = match msg {
             ClientMessage::Brush {
                 stroke,
                 op,
@@ -409,27 +532,7 @@ impl Session {
                 out.push(self.state_out());
                 Ok(out)
             }
-            ClientMessage::Step { days } => {
-                self.timeline.store(&self.winter, &self.paint);
-                let from = self.winter.day();
-                if self.winter.finished() {
-                    return refuse(
-                        ErrorCode::InvalidValue,
-                        format!("the season ends at day {}", self.winter.scenario().days),
-                    );
-                }
-                self.winter
-                    .run_until(from + days)
-                    .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
-                crate::painted::apply_painted(self, from)?;
-                self.timeline.push(&self.winter, &self.paint);
-                self.undo.clear();
-                self.redo.clear();
-                self.log(
-                    serde_json::json!({"action": "step", "from": from, "to": self.winter.day()}),
-                );
-                Ok(self.everything())
-            }
+            ClientMessage::Step { days } => return job(self.step_job(days)),
             ClientMessage::Seek { index } => {
                 self.timeline.store(&self.winter, &self.paint);
                 let (w, p) = self.timeline.seek(index).ok_or_else(|| {
@@ -443,8 +546,7 @@ impl Session {
                 })?;
                 self.winter = w;
                 self.paint = p;
-                self.undo.clear();
-                self.redo.clear();
+                self.clear_undo();
                 Ok(self.everything())
             }
             ClientMessage::TriggerAvalanche { col, row } => {
@@ -476,20 +578,7 @@ impl Session {
                 Ok(out)
             }
             ClientMessage::LaunchSkier { col, row } => self.launch_skier(col, row),
-            ClientMessage::SetScenario { scenario } => {
-                let s: Scenario = serde_json::from_value(scenario)
-                    .map_err(|e| (ErrorCode::InvalidValue, format!("invalid scenario: {e}")))?;
-                s.validate("the page")
-                    .map_err(|e| (ErrorCode::InvalidValue, e.to_string()))?;
-                let (first, paint) = self.timeline.first();
-                let winter = Winter::new(s, first.terrain.clone())
-                    .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
-                let history = std::mem::take(&mut self.history);
-                *self = Self::with_paint(winter, paint, self.source.clone());
-                self.history = history;
-                self.log(serde_json::json!({"action": "set_scenario"}));
-                Ok(self.everything())
-            }
+            ClientMessage::SetScenario { scenario } => return job(self.scenario_job(scenario)),
             ClientMessage::Save { name } => {
                 let p = project.ok_or((ErrorCode::Failed, "no project folder".to_string()))?;
                 let files = p
@@ -501,51 +590,17 @@ impl Session {
                     files,
                 }))])
             }
-            ClientMessage::Load { name } => {
-                let p = project.ok_or((ErrorCode::Failed, "no project folder".to_string()))?;
-                let loaded = p.load(&name).map_err(|e| {
-                    let code = match e {
-                        crate::project::ProjectError::NotFound(_) => ErrorCode::NotFound,
-                        _ => ErrorCode::Failed,
-                    };
-                    (code, e.to_string())
-                })?;
-                *self = loaded;
-                let mut out = self.everything();
-                out.push(Out::All(text(&ServerMessage::Done {
-                    what: "loaded".into(),
-                    name,
-                    files: Vec::new(),
-                })));
-                Ok(out)
-            }
-            ClientMessage::Export { name } => {
-                let p = project.ok_or((ErrorCode::Failed, "no project folder".to_string()))?;
-                let export = export.ok_or((
-                    ErrorCode::Failed,
-                    "this server cannot export outputs".to_string(),
-                ))?;
-                let dir = p
-                    .create_dir(&format!("exports/{name}"))
-                    .map_err(|e| (ErrorCode::BadPath, e.to_string()))?;
-                let files = export(&self.winter, &dir).map_err(|e| (ErrorCode::Failed, e))?;
-                let files = files
-                    .into_iter()
-                    .map(|f| format!("exports/{name}/{f}"))
-                    .collect();
-                Ok(vec![Out::Sender(text(&ServerMessage::Done {
-                    what: "exported".into(),
-                    name,
-                    files,
-                }))])
-            }
+            ClientMessage::Load { name } => return job(self.load_job(name, project)),
+            ClientMessage::Export { name } => return job(self.export_job(name, project, export)),
+            ClientMessage::Cancel {} => self.cancel(),
             ClientMessage::Probe { col, row } => Ok(vec![Out::Sender(text(&ServerMessage::Cell(
                 self.probe(col, row)?,
             )))]),
             ClientMessage::Resync {} => {
                 Ok(self.full_state().into_iter().map(Out::Sender).collect())
             }
-        }
+        };
+        done.map(Started::Done)
     }
 
     fn launch_skier(&mut self, col: f64, row: f64) -> Result<Vec<Out>, Refusal> {

@@ -4,16 +4,26 @@
 //! A snapshot is a fork of the season ([`Winter`] clones continue identically) with the
 //! painted maps. Stepping from an earlier snapshot drops the later ones (a new branch). Edits
 //! made at a snapshot are written back into it before the timeline moves, so scrubbing away
-//! and back keeps them. The number of snapshots is capped by memory: past the cap, the
-//! snapshot whose neighbours are closest in time is dropped (never the first, last or current).
+//! and back keeps them.
+//!
+//! **Memory budget.** A snapshot takes about [`SNAPSHOT_BYTES_PER_CELL`] bytes per grid cell
+//! (measured by `tests/snapshot_memory.rs`), so the number kept is the budget
+//! ([`DEFAULT_SNAPSHOT_BUDGET_BYTES`] unless `snowscape serve --snapshot-memory` says
+//! otherwise) over one snapshot's size, at least 2 and at most [`MAX_SNAPSHOTS`]. Past it the
+//! oldest snapshots are dropped, but never the first (a new scenario restarts from it) nor
+//! the current one; [`Timeline::push`] says how many went, and the session tells the page.
 
 use crate::brush::PaintMaps;
 use snowscape_season::winter::Winter;
 
-/// Memory the snapshots may take, bytes (a season clone takes about 200 bytes per cell).
-pub const SNAPSHOT_BUDGET_BYTES: usize = 2 << 30;
-/// Approximate bytes per cell of one snapshot.
-const BYTES_PER_CELL: usize = 200;
+/// Memory the snapshots may take by default, bytes (1 GiB).
+pub const DEFAULT_SNAPSHOT_BUDGET_BYTES: u64 = 1 << 30;
+/// Bytes per grid cell of one snapshot: the season's clone (layers, environment maps,
+/// scratch buffers, avalanche and skier maps) and the painted maps. Measured at 128² and 256²
+/// after three days with skiers (272 and 261 bytes per cell) and rounded up.
+pub const SNAPSHOT_BYTES_PER_CELL: u64 = 320;
+/// Most snapshots kept, whatever the budget (the state message lists their days).
+pub const MAX_SNAPSHOTS: usize = 1000;
 
 struct Snapshot {
     day: f64,
@@ -26,14 +36,17 @@ pub struct Timeline {
     snaps: Vec<Snapshot>,
     current: usize,
     edited: bool,
-    max: usize,
+    /// Estimated bytes of one snapshot.
+    snapshot_bytes: u64,
+    budget_bytes: u64,
+    /// Snapshots dropped for the budget so far.
+    dropped: usize,
 }
 
 impl Timeline {
-    /// A timeline whose first snapshot is `winter`.
+    /// A timeline whose first snapshot is `winter`, within the default budget.
     pub fn new(winter: &Winter, paint: &PaintMaps) -> Self {
-        let cells = winter.terrain.geometry().len().max(1);
-        let max = (SNAPSHOT_BUDGET_BYTES / (cells * BYTES_PER_CELL)).clamp(4, 400);
+        let cells = winter.terrain.geometry().len().max(1) as u64;
         Self {
             snaps: vec![Snapshot {
                 day: winter.day(),
@@ -42,7 +55,9 @@ impl Timeline {
             }],
             current: 0,
             edited: false,
-            max,
+            snapshot_bytes: cells * SNAPSHOT_BYTES_PER_CELL,
+            budget_bytes: DEFAULT_SNAPSHOT_BUDGET_BYTES,
+            dropped: 0,
         }
     }
 
@@ -62,10 +77,30 @@ impl Timeline {
     pub fn is_empty(&self) -> bool {
         self.snaps.is_empty()
     }
-    /// Most snapshots kept.
+    /// Most snapshots kept: the budget over one snapshot's size, within 2..=[`MAX_SNAPSHOTS`].
     pub fn max(&self) -> usize {
-        self.max
+        let n = self.budget_bytes / self.snapshot_bytes.max(1);
+        (n.min(MAX_SNAPSHOTS as u64) as usize).max(2)
     }
+    /// The memory budget, bytes.
+    pub fn budget_bytes(&self) -> u64 {
+        self.budget_bytes
+    }
+    /// Estimated memory of the snapshots kept, bytes.
+    pub fn bytes(&self) -> u64 {
+        self.snaps.len() as u64 * self.snapshot_bytes
+    }
+    /// Snapshots dropped for the budget so far.
+    pub fn dropped(&self) -> usize {
+        self.dropped
+    }
+
+    /// Sets the memory budget; returns how many snapshots it dropped.
+    pub fn set_budget(&mut self, bytes: u64) -> usize {
+        self.budget_bytes = bytes;
+        self.enforce_budget()
+    }
+
     /// The working state differs from the current snapshot.
     pub fn mark_edited(&mut self) {
         self.edited = true;
@@ -82,8 +117,9 @@ impl Timeline {
         self.edited = false;
     }
 
-    /// Appends the state after a step (dropping the snapshots after the current one).
-    pub fn push(&mut self, winter: &Winter, paint: &PaintMaps) {
+    /// Appends the state after a step (dropping the snapshots after the current one);
+    /// returns how many old snapshots the budget dropped.
+    pub fn push(&mut self, winter: &Winter, paint: &PaintMaps) -> usize {
         self.snaps.truncate(self.current + 1);
         self.snaps.push(Snapshot {
             day: winter.day(),
@@ -92,20 +128,24 @@ impl Timeline {
         });
         self.current = self.snaps.len() - 1;
         self.edited = false;
-        while self.snaps.len() > self.max {
-            let n = self.snaps.len();
-            let gap = |k: usize| self.snaps[k + 1].day - self.snaps[k - 1].day;
-            let Some(k) = (1..n - 1)
-                .filter(|&k| k != self.current)
-                .min_by(|&a, &b| gap(a).total_cmp(&gap(b)))
-            else {
+        self.enforce_budget()
+    }
+
+    /// Drops the oldest snapshots past [`Timeline::max`], never the first nor the current.
+    fn enforce_budget(&mut self) -> usize {
+        let mut dropped = 0;
+        while self.snaps.len() > self.max() {
+            let Some(k) = (1..self.snaps.len()).find(|&k| k != self.current) else {
                 break;
             };
             self.snaps.remove(k);
             if self.current > k {
                 self.current -= 1;
             }
+            dropped += 1;
         }
+        self.dropped += dropped;
+        dropped
     }
 
     /// Makes snapshot `index` current; returns a copy of its state.

@@ -368,3 +368,65 @@ fn painted_skiers_run_on_the_season_path() {
     );
     assert!(w.ski_stats().steps > 0 && w.ski_stats().distance_m > 0.0);
 }
+
+#[test]
+fn a_scenario_that_is_not_a_json_object_is_refused() {
+    let mut s = session(128, 10.0);
+    let mut good = s.summary().scenario;
+    for bad in [
+        serde_json::json!([]),
+        serde_json::json!([1, 2, 3]),
+        serde_json::json!(null),
+        serde_json::json!(7),
+        serde_json::json!("days"),
+    ] {
+        let e = s
+            .handle(ClientMessage::SetScenario { scenario: bad }, None, None)
+            .unwrap_err();
+        assert_eq!(e.0, ErrorCode::InvalidValue);
+        assert!(e.1.contains("must be a JSON object"), "{}", e.1);
+    }
+    good["parameters"] = serde_json::json!([]);
+    let e = s
+        .handle(ClientMessage::SetScenario { scenario: good }, None, None)
+        .unwrap_err();
+    assert_eq!(e.0, ErrorCode::InvalidValue);
+    assert!(e.1.contains("scenario.parameters"), "{}", e.1);
+    assert_eq!(s.summary().season_days, 10.0, "the season is unchanged");
+}
+
+#[test]
+fn the_timeline_keeps_within_its_memory_budget_and_keeps_the_first_snapshot() {
+    let mut s = session(128, 30.0);
+    let one = s.summary().snapshot_bytes;
+    s.set_snapshot_budget(3 * one + one / 2);
+    let mut notices = Vec::new();
+    for _ in 0..12 {
+        let out = s
+            .handle(ClientMessage::Step { days: 0.5 }, None, None)
+            .unwrap();
+        notices.extend(out.iter().filter_map(|o| match o {
+            Out::All(Outgoing::Text(t)) if t.contains("\"type\":\"notice\"") => Some(t.clone()),
+            _ => None,
+        }));
+        let st = s.summary();
+        assert!(st.snapshots.len() <= 3, "{} snapshots", st.snapshots.len());
+        assert!(st.snapshot_bytes <= st.snapshot_budget_bytes);
+        assert_eq!(st.snapshots[0], 0.0, "the first snapshot stays");
+        assert_eq!(st.current, st.snapshots.len() - 1);
+    }
+    let st = s.summary();
+    assert_eq!(st.snapshots.len(), 3);
+    assert_eq!(st.snapshots_dropped, 10, "13 snapshots made, 3 kept");
+    assert!((st.snapshots[2] - st.day).abs() < 1e-9 && st.snapshots[1] < st.snapshots[2]);
+    assert_eq!(notices.len(), 10, "one notice per step that dropped one");
+    assert!(notices[0].contains("memory budget"), "{}", notices[0]);
+    // A new scenario restarts from the first snapshot and keeps the budget.
+    let mut sc = st.scenario.clone();
+    sc["days"] = serde_json::json!(20.0);
+    s.handle(ClientMessage::SetScenario { scenario: sc }, None, None)
+        .unwrap();
+    let st = s.summary();
+    assert_eq!((st.day, st.snapshots.len()), (0.0, 1));
+    assert_eq!(st.snapshot_budget_bytes, 3 * one + one / 2);
+}

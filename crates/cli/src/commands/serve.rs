@@ -73,6 +73,13 @@ pub fn run(args: &ServeArgs, global: &GlobalArgs) -> Result<(), Failure> {
             )
         }
     };
+    if !(1..=1 << 20).contains(&args.snapshot_memory) {
+        return Err(anyhow!(
+            "--snapshot-memory must be within 1..=1048576 MiB, got {}",
+            args.snapshot_memory
+        ))
+        .bad_input();
+    }
     let project = ProjectDir::open(&args.project).bad_input()?;
     let assets = Assets::find(args.web_dir.as_deref());
     if matches!(assets, Assets::Missing) {
@@ -82,8 +89,10 @@ pub fn run(args: &ServeArgs, global: &GlobalArgs) -> Result<(), Failure> {
         eprintln!("preparing the season (environment precompute)…");
     }
     let winter = Winter::new(scenario, LayeredTerrain::from_bedrock(bedrock)).job_failed()?;
+    let mut session = Session::new(winter, source);
+    session.set_snapshot_budget(args.snapshot_memory << 20);
     let config = ServeConfig {
-        session: Session::new(winter, source),
+        session,
         project,
         bind: args.bind,
         port: args.port,
@@ -92,8 +101,14 @@ pub fn run(args: &ServeArgs, global: &GlobalArgs) -> Result<(), Failure> {
         pace: !args.no_pace,
     };
     let root = config.project.root().display().to_string();
-    serve_blocking(config, |addr| {
-        println!("snowscape editor: http://{addr}/  (project folder {root}; Ctrl-C stops)");
+    serve_blocking(config, |served| {
+        println!(
+            "snowscape editor: {}  (project folder {root}; Ctrl-C stops)",
+            served.url()
+        );
+        if let Some(warning) = served.network_warning() {
+            eprintln!("{warning}");
+        }
     })
     .job_failed()
 }
