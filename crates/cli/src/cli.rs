@@ -382,7 +382,7 @@ pub struct ServeArgs {
     pub no_pace: bool,
     /// Memory the timeline's snapshots may take, MiB: past it the oldest are dropped (never
     /// the first, which a new scenario restarts from).
-    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    #[arg(long, value_name = "MIB", default_value_t = 2048)]
     pub snapshot_memory: u64,
     #[command(flatten)]
     pub dem_input: DemInputArgs,

@@ -16,8 +16,8 @@
 use crate::brush::PaintMaps;
 use snowscape_season::winter::Winter;
 
-/// Memory the snapshots may take by default, bytes (1 GiB).
-pub const DEFAULT_SNAPSHOT_BUDGET_BYTES: u64 = 1 << 30;
+/// Memory the snapshots may take by default, bytes (2 GiB: 6 snapshots at 1024², 100 at 256²).
+pub const DEFAULT_SNAPSHOT_BUDGET_BYTES: u64 = 2 << 30;
 /// Bytes per grid cell of one snapshot: the season's clone (layers, environment maps,
 /// scratch buffers, avalanche and skier maps) and the painted maps. Measured at 128² and 256²
 /// after three days with skiers (272 and 261 bytes per cell) and rounded up.
