@@ -395,6 +395,72 @@ fn a_scenario_that_is_not_a_json_object_is_refused() {
     assert_eq!(s.summary().season_days, 10.0, "the season is unchanged");
 }
 
+/// Issue 19 item 3: the page's parameters get the scenario files' validation, before they
+/// take effect (each case once aborted the process, hung every tab, or broke every step).
+#[test]
+fn hostile_parameters_from_the_page_are_refused_before_they_take_effect() {
+    let mut s = session(128, 10.0);
+    let good = s.summary().scenario;
+    for (path, value, needle) in [
+        (
+            &["parameters", "powder_diffusion", "k_m"][..],
+            serde_json::json!(1e9),
+            "k_m",
+        ),
+        (
+            &["parameters", "environment", "wind", "ordered_sweeps"][..],
+            serde_json::json!(1_000_000_000u64),
+            "ordered_sweeps",
+        ),
+        (
+            &["skiers", "per_day"][..],
+            serde_json::json!(1e9),
+            "per_day",
+        ),
+        (
+            &["events", "melt_and_state"][..],
+            serde_json::json!(1e9),
+            "melt_and_state",
+        ),
+        (
+            &["events", "wind_transport"][..],
+            serde_json::json!(-1.0),
+            "wind_transport",
+        ),
+        (
+            &["parameters", "melt", "k_melt"][..],
+            serde_json::json!(-1.0),
+            "k_melt = -1",
+        ),
+        (
+            &["parameters", "stability", "t_cool"][..],
+            serde_json::json!(1e9),
+            "t_cool",
+        ),
+        (
+            &["snapshot_every_days"][..],
+            serde_json::json!(1e-9),
+            "snapshot_every_days",
+        ),
+    ] {
+        let mut bad = good.clone();
+        let mut at = &mut bad;
+        for k in &path[..path.len() - 1] {
+            at = &mut at[*k];
+        }
+        at[path[path.len() - 1]] = value;
+        let e = s
+            .handle(ClientMessage::SetScenario { scenario: bad }, None, None)
+            .unwrap_err();
+        assert_eq!(e.0, ErrorCode::InvalidValue, "{path:?}: {}", e.1);
+        assert!(e.1.contains(needle), "{path:?}: {}", e.1);
+    }
+    assert_eq!(s.summary().season_days, 10.0, "the season is unchanged");
+    // The session still steps.
+    s.handle(ClientMessage::Step { days: 0.5 }, None, None)
+        .unwrap();
+}
+
 #[test]
 fn the_timeline_keeps_within_its_memory_budget_and_keeps_the_first_snapshot() {
     let mut s = session(128, 30.0);
