@@ -137,12 +137,24 @@ await check('the timeline steps a day', async () => {
 });
 
 await check('a long step runs on a worker: another tab is answered meanwhile, and cancel stops it', async () => {
+  // A season long and busy enough that the step cannot end before the test cancels it on
+  // any machine (a 99-day step of the default season took under a second).
+  const original = await page.evaluate(() => structuredClone(window.snowscape.state.scenario));
+  const heavy = structuredClone(original);
+  heavy.days = 3650;
+  heavy.events.melt_and_state = 100;
+  heavy.events.wind_transport = 100;
+  const setScenario = async (sc) => {
+    await page.evaluate((sc) => window.snowscape.send({ type: 'set_scenario', scenario: sc }), sc);
+    await page.waitForFunction((days) => window.snowscape.state.season_days === days && !window.snowscape.state.busy, sc.days, { timeout: 120000 });
+  };
+  await setScenario(heavy);
   const d0 = await page.evaluate(() => window.snowscape.state.day);
   const p2 = await context.newPage();
   await p2.goto(url);
   await p2.waitForFunction(() => window.snowscape && window.snowscape.state && window.snowscape.frames >= 10, null, { timeout: 60000 });
   const prev = await page.evaluate(() => (window.snowscape.lastJob || { id: 0 }).id);
-  await page.evaluate(() => window.snowscape.send({ type: 'step', days: 99 }));
+  await page.evaluate(() => window.snowscape.send({ type: 'step', days: 365 }));
   await page.waitForFunction((prev) => { const j = window.snowscape.lastJob; return j && j.id > prev; }, prev, { timeout: 10000 });
   // The other tab's probe is answered while the step runs (its job is not over yet).
   const seen = await p2.evaluate(() => new Promise((resolve) => {
@@ -165,6 +177,7 @@ await check('a long step runs on a worker: another tab is answered meanwhile, an
   assert.equal(await page.evaluate(() => window.snowscape.state.day), d0, 'the season stays where the step started');
   assert.ok(!(await page.isEnabled('#cancel')));
   await p2.close();
+  await setScenario(original);
 });
 
 await check('malformed messages get error replies and the session goes on', async () => {
