@@ -219,20 +219,39 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
     stages.record("season", t_season.elapsed().as_secs_f64());
     winter.terrain.check_invariants().job_failed()?;
 
+    // Ctrl-C while the outputs are written stops between two of them (each file is written
+    // whole or not at all); the final checkpoint lets `--resume` write them again.
+    let stop_if_interrupted = || -> Result<(), Failure> {
+        if !interrupted.load(Ordering::SeqCst) {
+            return Ok(());
+        }
+        write_checkpoint(&job.out, &winter).job_failed()?;
+        Err(Failure {
+            code: INTERRUPTED,
+            error: anyhow!(
+                "interrupted while writing the outputs; the season is complete: write them with --resume {}",
+                job.out.display()
+            ),
+        })
+    };
     let mut out = Written::new(&job.out);
     let frames: Vec<RgbaImage> = frames.into_iter().flatten().collect();
     out.files.extend((0..frames.len()).map(frame_name));
+    stop_if_interrupted()?;
     write_all(&mut out, &winter.terrain, &frames, &job.view, &mut stages).job_failed()?;
+    stop_if_interrupted()?;
     stages
         .run("write_environment", || {
             write_environment(&mut out, &winter.terrain)
         })
         .job_failed()?;
+    stop_if_interrupted()?;
     stages
         .run("write_avalanches", || {
             write_avalanche_maps(&mut out, &winter)
         })
         .job_failed()?;
+    stop_if_interrupted()?;
     stages
         .run("write_ski_tracks", || write_ski_tracks(&mut out, &winter))
         .job_failed()?;
