@@ -82,7 +82,7 @@ mod tiles;
 mod update;
 mod walk;
 
-pub use params::{AvalancheError, AvalancheParams, AvalancheReport, Border};
+pub use params::{AvalancheError, AvalancheParams, AvalancheReport, Border, FrictionLaw};
 use pipes::*;
 use substep::substep;
 use update::*;
@@ -412,6 +412,8 @@ struct Consts {
     coulomb: bool,
     /// Viscous coefficient `dt·(1 − α)·kv/2` (0: no viscous term).
     visc: f64,
+    /// Voellmy turbulent-drag coefficient `dt·g/ξ` (0: Coulomb law).
+    turb: f64,
     adv: bool,
     closed: bool,
     alpha: f64,
@@ -435,16 +437,27 @@ struct Consts {
 
 impl Consts {
     fn new(params: &AvalancheParams, pg: &PipeGeometry, pw: usize, ph: usize, dt: f64) -> Self {
-        let mu_g = params.rest_angle_deg.to_radians().tan() * G;
+        let mu_g = params.dry_friction() * G;
+        let alpha = params.dry_weight();
+        let voellmy = params.friction == FrictionLaw::Voellmy;
         Self {
             dt,
             dtg: dt * G,
-            yield_dt: params.alpha * mu_g * dt,
-            coulomb: params.alpha > 0.0,
-            visc: dt * (1.0 - params.alpha) * params.k_viscous * 0.5,
+            yield_dt: alpha * mu_g * dt,
+            coulomb: alpha > 0.0,
+            visc: if voellmy {
+                0.0
+            } else {
+                dt * (1.0 - alpha) * params.k_viscous * 0.5
+            },
+            turb: if voellmy {
+                dt * G / params.voellmy_xi_m_s2
+            } else {
+                0.0
+            },
             adv: params.momentum_advection,
             closed: params.border == Border::Closed,
-            alpha: params.alpha,
+            alpha,
             pw,
             ph,
             len: pg.len,

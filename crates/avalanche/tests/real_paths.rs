@@ -205,6 +205,53 @@ fn avawog_release_runs_down_its_gully() {
 /// samosAT has one). Asserted, loosely (a regression bound, not an agreement claim): volume
 /// within 1 % of AvaFrame's, the reference footprint within 0.5 % of its documented 114,000 m²,
 /// recall ≥ 0.9, Jaccard ≥ 0.1 and our footprint at most 8 times the reference's.
+/// The overlap of avaKot's footprint with AvaFrame's, the flow run with `params`.
+fn avakot_overlap(params: &AvalancheParams) -> snowscape_avalanche::validation::Overlap {
+    let dem = data("dem/avaframe_avaKot/avaKot.asc");
+    let rel = data("dem/avaframe_avaKot/REL/relKot.shp");
+    let reference = read_dem(
+        &data(
+            "reference/avaframe_benchmarks/avaKotNullTest/relKot_989874a9be_C_S_null_dfa_pft.asc",
+        ),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let r = run_release(
+        &dem,
+        &rel,
+        1.0,
+        ThicknessConvention::SlopeNormal,
+        params,
+        &RunOptions::default(),
+    )
+    .unwrap();
+    check_run("avaKot", &r);
+    footprint_overlap(r.dem.geometry(), &r.peak_thickness, &reference, 0.01)
+}
+
+/// Issue 20: the Voellmy law (AvaFrame's defaults μ = 0.155, ξ = 4000 m/s²) on avaKot,
+/// against AvaFrame's samosAT reference: its footprint is closer than the paper's Coulomb
+/// law's (a regression bound; the samosAT law itself is not implemented yet).
+#[test]
+fn avakot_voellmy_footprint_is_closer_to_avaframe_than_coulomb() {
+    let coulomb = avakot_overlap(&AvalancheParams::default());
+    let voellmy = avakot_overlap(&AvalancheParams {
+        friction: snowscape_avalanche::FrictionLaw::Voellmy,
+        ..AvalancheParams::default()
+    });
+    for (name, o) in [("coulomb", &coulomb), ("voellmy", &voellmy)] {
+        eprintln!(
+            "avaKot {name} vs AvaFrame: footprint {:.0} m² vs {:.0} m², Jaccard {:.3}, recall {:.3}, precision {:.3}",
+            o.ours_m2, o.reference_m2, o.jaccard, o.recall, o.precision
+        );
+    }
+    assert!(
+        voellmy.jaccard > coulomb.jaccard,
+        "{voellmy:?} vs {coulomb:?}"
+    );
+    assert!(voellmy.recall >= 0.9, "recall {}", voellmy.recall);
+}
+
 #[test]
 fn avakot_release_against_avaframe_reference() {
     let dem = data("dem/avaframe_avaKot/avaKot.asc");

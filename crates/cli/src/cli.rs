@@ -215,6 +215,13 @@ pub struct InfoArgs {
     pub json: bool,
 }
 
+/// The friction law of `snowscape avalanche`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FrictionArg {
+    Coulomb,
+    Voellmy,
+}
+
 /// Colouring of a rendered preview.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum RenderMode {
@@ -293,6 +300,16 @@ pub struct AvalancheArgs {
     /// Dry/wet mix α in [0, 1]: 1 dry (Coulomb friction only), 0 wet (viscous only).
     #[arg(long)]
     pub dry_fraction: Option<f64>,
+    /// Basal friction law: coulomb (the paper's: --friction-angle, --viscosity,
+    /// --dry-fraction) or voellmy (--mu, --xi; as RAMMS and AvaFrame com1DFA).
+    #[arg(long, value_enum, default_value_t = FrictionArg::Coulomb)]
+    pub friction_model: FrictionArg,
+    /// Voellmy dry-friction coefficient μ (default 0.155, AvaFrame com1DFA).
+    #[arg(long)]
+    pub mu: Option<f64>,
+    /// Voellmy turbulence coefficient ξ, m/s² (default 4000, AvaFrame com1DFA).
+    #[arg(long)]
+    pub xi: Option<f64>,
     /// Longest simulated time, seconds (the run stops earlier once the snow is at rest).
     #[arg(long, default_value_t = 600.0, value_parser = crate::bounds::avalanche_seconds)]
     pub duration: f64,

@@ -13,6 +13,21 @@ pub enum Border {
     Closed,
 }
 
+/// The basal friction law of the flow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionLaw {
+    /// The paper's: Coulomb friction `g·tanθc` weighted by α, and a viscous term
+    /// `−(1 − α)·kv·h·u` (Cordonnier et al. 2018, §6.1, Table 2).
+    #[default]
+    Coulomb,
+    /// Voellmy-Salm: a dry-friction deceleration `μ·g` and a turbulent drag `g·u²/(ξ·h)`
+    /// (Voellmy 1955; Salm 1993; as in RAMMS and AvaFrame com1DFA's `frictModel = Voellmy`).
+    /// In this horizontal-projection model the drive is `g·|∇A|`, so on a uniform plane of
+    /// slope `tanθ > μ` a layer of thickness `h` tends to `u = sqrt(ξ·h·(tanθ − μ))`.
+    Voellmy,
+}
+
 /// Parameters of the avalanche flow (Cordonnier et al. 2018, Table 2 via DESIGN.md §4).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -39,6 +54,14 @@ pub struct AvalancheParams {
     pub border: Border,
     /// Upper bound on the number of sub-steps in one call to [`step`]. Default 1 000 000.
     pub max_substeps: usize,
+    /// Basal friction law. Default `coulomb` (the paper's).
+    pub friction: FrictionLaw,
+    /// Voellmy dry-friction coefficient μ (with `friction = "voellmy"`). Default 0.155
+    /// (AvaFrame com1DFA's `muvoellmy`).
+    pub voellmy_mu: f64,
+    /// Voellmy turbulence coefficient ξ, m/s² (with `friction = "voellmy"`). Default 4000
+    /// (AvaFrame com1DFA's `xsivoellmy`; RAMMS uses 1000–3000 for large avalanches).
+    pub voellmy_xi_m_s2: f64,
 }
 
 impl Default for AvalancheParams {
@@ -52,6 +75,9 @@ impl Default for AvalancheParams {
             momentum_advection: true,
             border: Border::Open,
             max_substeps: 1_000_000,
+            friction: FrictionLaw::Coulomb,
+            voellmy_mu: 0.155,
+            voellmy_xi_m_s2: 4000.0,
         }
     }
 }
@@ -60,6 +86,22 @@ impl Default for AvalancheParams {
 pub const MAX_SUBSTEPS: usize = 10_000_000;
 
 impl AvalancheParams {
+    /// The dry-friction coefficient of the law: `tanθc` (Coulomb) or μ (Voellmy).
+    pub fn dry_friction(&self) -> f64 {
+        match self.friction {
+            FrictionLaw::Coulomb => self.rest_angle_deg.to_radians().tan(),
+            FrictionLaw::Voellmy => self.voellmy_mu,
+        }
+    }
+
+    /// The weight of the dry friction: α (Coulomb), 1 (Voellmy: no viscous mix).
+    pub fn dry_weight(&self) -> f64 {
+        match self.friction {
+            FrictionLaw::Coulomb => self.alpha,
+            FrictionLaw::Voellmy => 1.0,
+        }
+    }
+
     /// Checks every field, naming the offending one.
     pub fn validate(&self) -> Result<(), AvalancheError> {
         let bad = |name: &'static str, value: f64, expected: &'static str| {
@@ -83,6 +125,19 @@ impl AvalancheParams {
         }
         if !(self.courant > 0.0 && self.courant <= 1.0) {
             return bad("courant", self.courant, "in (0, 1]");
+        }
+        if !(self.voellmy_mu.is_finite() && (0.0..=2.0).contains(&self.voellmy_mu)) {
+            return bad("voellmy_mu", self.voellmy_mu, "in [0, 2]");
+        }
+        if !(self.voellmy_xi_m_s2.is_finite()
+            && self.voellmy_xi_m_s2 >= 10.0
+            && self.voellmy_xi_m_s2 <= 1e5)
+        {
+            return bad(
+                "voellmy_xi_m_s2",
+                self.voellmy_xi_m_s2,
+                "in [10, 100000] m/s²",
+            );
         }
         if !(1..=MAX_SUBSTEPS).contains(&self.max_substeps) {
             return bad("max_substeps", self.max_substeps as f64, "in 1..=10000000");

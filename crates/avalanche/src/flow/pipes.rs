@@ -273,6 +273,16 @@ unsafe fn pipe_lanes<V: Lanes>(
             // (With no viscosity the division is by exactly 1.)
             u = u / (V::splat(1.0) + V::splat(k.visc) * (hk + hj));
         }
+        if k.turb != 0.0 {
+            // [`super::update::turbulent_depth`] lane by lane.
+            let depth = V::select(
+                (half * (hk + hj)).lt(V::splat(MIN_TURBULENT_DEPTH)),
+                V::splat(MIN_TURBULENT_DEPTH),
+                half * (hk + hj),
+            );
+            let speed = V::select(tnorm.gt(yield_dt), tnorm - yield_dt, zero);
+            u = u / (V::splat(1.0) + V::splat(k.turb) * speed / depth);
+        }
         let hup = V::select(u.gt(zero), hk, hj);
         let dead = V::or(dead, hup.le(V::splat(DRY)));
         let f = V::splat(k.width[d]) * hup * u * V::splat(k.dt);

@@ -387,6 +387,16 @@ unsafe fn update_lanes<V: Lanes>(
     }
 }
 
+/// The flow depth the Voellmy drag `g·u²/(ξ·h)` of a pipe divides by: the mean of its two
+/// cells, at least 1 cm (a film at a front does not stop at once).
+#[inline(always)]
+pub(super) fn turbulent_depth(hi: f64, hj: f64) -> f64 {
+    (0.5 * (hi + hj)).max(MIN_TURBULENT_DEPTH)
+}
+
+/// Smallest depth of the Voellmy drag, m.
+pub(super) const MIN_TURBULENT_DEPTH: f64 = 0.01;
+
 /// One pipe's new velocity and raw (unscaled) volume for a sub-step.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn pipe_update(
@@ -448,6 +458,12 @@ pub(super) fn pipe_update(
     }
     // Viscous term, implicit.
     u /= 1.0 + dt * (1.0 - k.alpha) * params.k_viscous * 0.5 * (hi + hj);
+    if k.turb != 0.0 {
+        // The drag `g·|v|·v/(ξ·h)` along the pipe: its speed is the flow's (the trial
+        // velocity's norm after the dry friction), not the pipe's component, or diagonal
+        // pipes would escape it.
+        u /= 1.0 + k.turb * (tnorm - yield_dt).max(0.0) / turbulent_depth(hi, hj);
+    }
     let hup = if u > 0.0 { hi } else { hj };
     if hup <= DRY {
         return (0.0, 0.0);

@@ -21,12 +21,37 @@
 use crate::kernel::{Kernel, KernelError};
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, AvalancheWorkspace,
-    RunOptions, cfl_dt, release_from_shapefile, step,
+    FrictionLaw, RunOptions, cfl_dt, release_from_shapefile, step,
 };
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 
-/// The avalanche flow kernels on a `size`² grid.
+/// The avalanche flow kernels on a `size`² grid: one sub-step under each friction law (the
+/// Voellmy law's cost next to the paper's Coulomb law), and whole runs to rest.
 pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
+    let mut kernels = vec![
+        substep_kernel("avalanche/substep", AvalancheParams::default(), size)?,
+        substep_kernel(
+            "avalanche/substep_voellmy",
+            AvalancheParams {
+                friction: FrictionLaw::Voellmy,
+                ..AvalancheParams::default()
+            },
+            size,
+        )?,
+    ];
+    kernels.push(run_to_rest_kernel(
+        "avalanche/slope_run_to_rest",
+        slope_onto_flat(size)?,
+    )?);
+    kernels.push(run_to_rest_kernel(
+        "avalanche/avakot_run_to_rest",
+        avakot()?,
+    )?);
+    Ok(kernels)
+}
+
+/// One CFL sub-step per call of a 1 m square release flowing down a 35° plane of 2 m cells.
+fn substep_kernel(name: &str, params: AvalancheParams, size: usize) -> Result<Kernel, KernelError> {
     let geometry = GridGeometry::square(size, size, 2.0)?;
     let tan = 35f64.to_radians().tan();
     let bed: Vec<f64> = (0..size * size)
@@ -47,24 +72,14 @@ pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
         })
         .collect();
     state.set_thickness(&h)?;
-    let params = AvalancheParams::default();
     let mut scratch = AvalancheScratch::default();
     let warm = step(&params, &mut state, &mut scratch, 2.0)?;
     let cells = warm.active_cells;
-    let mut kernels = vec![Kernel::new("avalanche/substep", cells, 560.0, move || {
+    Ok(Kernel::new(name, cells, 560.0, move || {
         let dt = cfl_dt(&params, &state);
         step(&params, &mut state, &mut scratch, dt)?;
         Ok(())
-    })];
-    kernels.push(run_to_rest_kernel(
-        "avalanche/slope_run_to_rest",
-        slope_onto_flat(size)?,
-    )?);
-    kernels.push(run_to_rest_kernel(
-        "avalanche/avakot_run_to_rest",
-        avakot()?,
-    )?);
-    Ok(kernels)
+    }))
 }
 
 /// A terrain with unstable snow where it releases, and the released cells.

@@ -2,7 +2,7 @@
 //! terrain, with the maps practitioners compare (peak thickness and velocity, deposit,
 //! footprint), playback frames and a report.
 
-use crate::cli::{AvalancheArgs, GlobalArgs};
+use crate::cli::{AvalancheArgs, FrictionArg, GlobalArgs};
 use crate::commands::render::preview_options;
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::{Written, earlier_outputs, prepare_dir, write_png, write_report};
@@ -15,7 +15,8 @@ use snowscape_avalanche::release_area::{
     release_from_shapefile,
 };
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, RestOutcome, RunOptions,
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, RestOutcome,
+    RunOptions,
 };
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
@@ -64,8 +65,22 @@ fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
     if let Some(a) = args.dry_fraction {
         p.alpha = a;
     }
-    p.validate()
-        .map_err(|e| anyhow!(e).context("--friction-angle / --viscosity / --dry-fraction"))?;
+    p.friction = match args.friction_model {
+        FrictionArg::Coulomb => FrictionLaw::Coulomb,
+        FrictionArg::Voellmy => FrictionLaw::Voellmy,
+    };
+    if p.friction == FrictionLaw::Coulomb && (args.mu.is_some() || args.xi.is_some()) {
+        bail!("--mu and --xi are the Voellmy law's: add --friction-model voellmy");
+    }
+    if let Some(m) = args.mu {
+        p.voellmy_mu = m;
+    }
+    if let Some(x) = args.xi {
+        p.voellmy_xi_m_s2 = x;
+    }
+    p.validate().map_err(|e| {
+        anyhow!(e).context("--friction-angle / --viscosity / --dry-fraction / --mu / --xi")
+    })?;
     Ok(p)
 }
 

@@ -1,0 +1,105 @@
+//! The Voellmy friction law against its analytic solution: a uniform layer on a long
+//! inclined plane accelerates as `du/dt = g·(tanθ − μ) − g·u²/(ξ·h)` (horizontal-projection
+//! form, see [`FrictionLaw::Voellmy`]) and tends to `u∞ = sqrt(ξ·h·(tanθ − μ))`, reaching
+//! `u∞·tanh(t/τ)` with `τ = u∞ / (g·(tanθ − μ))`. Far from the layer's ends (which waves reach
+//! at ~`sqrt(g·h)` relative to the snow) the simulated speed follows it.
+
+use snowscape_avalanche::{
+    AvalancheParams, AvalancheScratch, AvalancheState, Border, FrictionLaw, step,
+};
+use snowscape_terrain::{GridGeometry, NodataMask};
+
+const G: f64 = 9.81;
+
+/// Speed at the layer's centre after `t` s of a `h`-metre layer on a `slope_deg` plane.
+fn centre_speed(params: &AvalancheParams, slope_deg: f64, h: f64, t: f64) -> (f64, f64) {
+    let (w, rows, dx) = (6, 500, 5.0);
+    let g = GridGeometry::square(w, rows, dx).unwrap();
+    let tan = slope_deg.to_radians().tan();
+    // Row 0 is the top: the bed falls with the row.
+    let bed: Vec<f64> = (0..w * rows)
+        .map(|i| 3000.0 - tan * dx * (i / w) as f64)
+        .collect();
+    let mut s = AvalancheState::new(&g, &NodataMask::all_valid(), &bed).unwrap();
+    let depth: Vec<f64> = (0..w * rows)
+        .map(|i| if (40..340).contains(&(i / w)) { h } else { 0.0 })
+        .collect();
+    s.set_thickness(&depth).unwrap();
+    let mut scratch = AvalancheScratch::default();
+    let mut done = 0.0;
+    while done < t {
+        let dt = (t - done).min(0.5);
+        step(params, &mut s, &mut scratch, dt).unwrap();
+        done += dt;
+    }
+    // The uniform part of the layer (no wave from its ends has reached it; its thickness
+    // is the centre's, which the layer's first spreading leaves a little above `h`), in the
+    // middle column: its median speed and its thickness.
+    let hc = s.thickness_at(3, 190);
+    let mut speeds: Vec<f64> = (0..rows)
+        .filter(|&row| (s.thickness_at(3, row) - hc).abs() < 1e-3 * hc)
+        .map(|row| {
+            let v = s.velocity_at(3, row);
+            (v[0] * v[0] + v[1] * v[1]).sqrt()
+        })
+        .collect();
+    assert!(speeds.len() > 50, "only {} uniform rows left", speeds.len());
+    speeds.sort_by(f64::total_cmp);
+    (speeds[speeds.len() / 2], hc)
+}
+
+fn voellmy(mu: f64, xi: f64) -> AvalancheParams {
+    AvalancheParams {
+        friction: FrictionLaw::Voellmy,
+        voellmy_mu: mu,
+        voellmy_xi_m_s2: xi,
+        border: Border::Closed,
+        ..AvalancheParams::default()
+    }
+}
+
+#[test]
+fn a_uniform_layer_on_a_plane_follows_the_analytic_voellmy_speed() {
+    for (slope, mu, xi, h) in [(35.0f64, 0.6, 1000.0, 1.0), (30.0, 0.4, 2000.0, 0.5)] {
+        let drive = slope.to_radians().tan() - mu;
+        let tau_of = |h: f64| (xi * h * drive).sqrt() / (G * drive);
+        for t in [0.5 * tau_of(h), 3.0 * tau_of(h)] {
+            let (got, hc) = centre_speed(&voellmy(mu, xi), slope, h, t);
+            let u_inf = (xi * hc * drive).sqrt();
+            let want = u_inf * (t / tau_of(hc)).tanh();
+            let err = (got - want).abs() / want;
+            println!(
+                "slope {slope}°, μ {mu}, ξ {xi}, h {hc:.4}: t = {t:.1} s, speed {got:.3} m/s, analytic {want:.3} m/s ({:.2} %)",
+                100.0 * err
+            );
+            assert!(err < 0.02, "speed {got} m/s, analytic {want} m/s");
+        }
+    }
+}
+
+#[test]
+fn voellmy_with_more_turbulent_drag_is_slower_and_a_gentle_slope_holds() {
+    let fast = centre_speed(&voellmy(0.3, 4000.0), 35.0, 1.0, 20.0).0;
+    let slow = centre_speed(&voellmy(0.3, 500.0), 35.0, 1.0, 20.0).0;
+    assert!(slow < 0.5 * fast, "ξ 500: {slow} m/s, ξ 4000: {fast} m/s");
+    // tanθ < μ: static friction holds the layer.
+    let held = centre_speed(&voellmy(0.8, 4000.0), 35.0, 1.0, 5.0).0;
+    assert_eq!(held, 0.0);
+}
+
+#[test]
+fn the_coulomb_law_is_unchanged_by_the_voellmy_fields() {
+    let base = AvalancheParams {
+        border: Border::Closed,
+        ..AvalancheParams::default()
+    };
+    let other = AvalancheParams {
+        voellmy_mu: 0.9,
+        voellmy_xi_m_s2: 50.0,
+        ..base.clone()
+    };
+    assert_eq!(
+        centre_speed(&base, 35.0, 1.0, 4.0).0.to_bits(),
+        centre_speed(&other, 35.0, 1.0, 4.0).0.to_bits()
+    );
+}
