@@ -82,7 +82,9 @@ mod tiles;
 mod update;
 mod walk;
 
-pub use params::{AvalancheError, AvalancheParams, AvalancheReport, Border, FrictionLaw};
+pub use params::{
+    AvalancheError, AvalancheParams, AvalancheReport, Border, FrictionLaw, SamosAtParams,
+};
 use pipes::*;
 use substep::substep;
 use update::*;
@@ -402,6 +404,34 @@ struct SubReport {
     visited: usize,
 }
 
+/// The samosAT law's constants of one sub-step.
+#[derive(Clone, Copy)]
+struct Samos {
+    /// `μ·g·dt`: the dry friction's speed change at high speed.
+    mu_g_dt: f64,
+    rs0: f64,
+    inv_kappa: f64,
+    b: f64,
+    /// `1/R`.
+    inv_r: f64,
+}
+
+impl Samos {
+    /// The dry friction's speed change over the sub-step at speed `speed` (the sub-step's
+    /// start) on depth `depth`: `μ·g·dt·(1 + Rs0/(Rs0 + u²/(g·h)))`.
+    #[inline(always)]
+    fn yield_dt(&self, speed: f64, depth: f64) -> f64 {
+        self.mu_g_dt * (1.0 + self.rs0 / (self.rs0 + speed * speed / (G * depth)))
+    }
+
+    /// The turbulent drag's `dt/(h·div²)` with `div = ln(max(h/R, 1))/κ + B`.
+    #[inline(always)]
+    fn drag(&self, dt: f64, depth: f64) -> f64 {
+        let div = (depth * self.inv_r).max(1.0).ln() * self.inv_kappa + self.b;
+        dt / (depth * div * div)
+    }
+}
+
 /// Constants of one sub-step.
 struct Consts {
     dt: f64,
@@ -414,6 +444,8 @@ struct Consts {
     visc: f64,
     /// Voellmy turbulent-drag coefficient `dt·g/ξ` (0: Coulomb law).
     turb: f64,
+    /// The samosAT law's constants (`None`: another law).
+    samos: Option<Samos>,
     adv: bool,
     closed: bool,
     alpha: f64,
@@ -440,12 +472,22 @@ impl Consts {
         let mu_g = params.dry_friction() * G;
         let alpha = params.dry_weight();
         let voellmy = params.friction == FrictionLaw::Voellmy;
+        let samos = (params.friction == FrictionLaw::SamosAt).then(|| {
+            let s = &params.samos_at;
+            Samos {
+                mu_g_dt: s.mu * G * dt,
+                rs0: s.rs0,
+                inv_kappa: 1.0 / s.kappa,
+                b: s.b,
+                inv_r: 1.0 / s.roughness_m,
+            }
+        });
         Self {
             dt,
             dtg: dt * G,
             yield_dt: alpha * mu_g * dt,
             coulomb: alpha > 0.0,
-            visc: if voellmy {
+            visc: if voellmy || samos.is_some() {
                 0.0
             } else {
                 dt * (1.0 - alpha) * params.k_viscous * 0.5
@@ -455,6 +497,7 @@ impl Consts {
             } else {
                 0.0
             },
+            samos,
             adv: params.momentum_advection,
             closed: params.border == Border::Closed,
             alpha,

@@ -1,11 +1,11 @@
-//! The Voellmy friction law against its analytic solution: a uniform layer on a long
+//! The Voellmy and samosAT friction laws against their analytic plane solutions. Voellmy: a uniform layer on a long
 //! inclined plane accelerates as `du/dt = g·(tanθ − μ) − g·u²/(ξ·h)` (horizontal-projection
 //! form, see [`FrictionLaw::Voellmy`]) and tends to `u∞ = sqrt(ξ·h·(tanθ − μ))`, reaching
 //! `u∞·tanh(t/τ)` with `τ = u∞ / (g·(tanθ − μ))`. Far from the layer's ends (which waves reach
 //! at ~`sqrt(g·h)` relative to the snow) the simulated speed follows it.
 
 use snowscape_avalanche::{
-    AvalancheParams, AvalancheScratch, AvalancheState, Border, FrictionLaw, step,
+    AvalancheParams, AvalancheScratch, AvalancheState, Border, FrictionLaw, SamosAtParams, step,
 };
 use snowscape_terrain::{GridGeometry, NodataMask};
 
@@ -102,4 +102,54 @@ fn the_coulomb_law_is_unchanged_by_the_voellmy_fields() {
         centre_speed(&base, 35.0, 1.0, 4.0).0.to_bits(),
         centre_speed(&other, 35.0, 1.0, 4.0).0.to_bits()
     );
+}
+
+/// samosAT's steady speed on a plane: the `u` where the drive `g·(tanθ − μ·(1 + Rs0/(Rs0 +
+/// u²/(g·h))))` equals the drag `u²/(h·(ln(max(h/R, 1))/κ + B)²)` (bisection).
+fn samos_steady_speed(s: &SamosAtParams, tan: f64, h: f64) -> f64 {
+    let div = (h / s.roughness_m).max(1.0).ln() / s.kappa + s.b;
+    let net = |u: f64| {
+        G * (tan - s.mu * (1.0 + s.rs0 / (s.rs0 + u * u / (G * h)))) - u * u / (h * div * div)
+    };
+    let (mut lo, mut hi) = (0.0, 200.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if net(mid) > 0.0 { lo = mid } else { hi = mid }
+    }
+    lo
+}
+
+#[test]
+fn a_uniform_layer_on_a_plane_reaches_the_steady_samosat_speed() {
+    for (slope, s, h) in [
+        (35.0f64, SamosAtParams::small(), 1.0),
+        (30.0, SamosAtParams::default(), 0.5),
+    ] {
+        let params = AvalancheParams {
+            friction: FrictionLaw::SamosAt,
+            samos_at: s,
+            border: Border::Closed,
+            ..AvalancheParams::default()
+        };
+        let (got, hc) = centre_speed(&params, slope, h, 20.0);
+        let want = samos_steady_speed(&s, slope.to_radians().tan(), hc);
+        let err = (got - want).abs() / want;
+        println!(
+            "samosAT μ {} on {slope}°, h {hc:.4}: speed {got:.3} m/s after 20 s, steady {want:.3} m/s ({:.2} %)",
+            s.mu,
+            100.0 * err
+        );
+        assert!(err < 0.02, "speed {got} m/s, steady {want} m/s");
+    }
+    // At rest the dry friction is twice μ: a slope with μ < tanθ < 2μ holds.
+    let held = AvalancheParams {
+        friction: FrictionLaw::SamosAt,
+        samos_at: SamosAtParams {
+            mu: 0.45,
+            ..SamosAtParams::default()
+        },
+        border: Border::Closed,
+        ..AvalancheParams::default()
+    };
+    assert_eq!(centre_speed(&held, 35.0, 1.0, 5.0).0, 0.0);
 }

@@ -220,6 +220,12 @@ pub struct InfoArgs {
 pub enum FrictionArg {
     Coulomb,
     Voellmy,
+    /// AvaFrame com1DFA's samosAT (μ = 0.155).
+    #[value(name = "samosat")]
+    SamosAt,
+    /// AvaFrame com1DFA's samosATSmall (μ = 0.22), for small avalanches.
+    #[value(name = "samosat-small")]
+    SamosAtSmall,
 }
 
 /// Colouring of a rendered preview.
@@ -301,7 +307,8 @@ pub struct AvalancheArgs {
     #[arg(long)]
     pub dry_fraction: Option<f64>,
     /// Basal friction law: coulomb (the paper's: --friction-angle, --viscosity,
-    /// --dry-fraction) or voellmy (--mu, --xi; as RAMMS and AvaFrame com1DFA).
+    /// --dry-fraction), voellmy (--mu, --xi; as RAMMS and AvaFrame com1DFA), or AvaFrame's
+    /// samosat / samosat-small (--mu overrides their μ).
     #[arg(long, value_enum, default_value_t = FrictionArg::Coulomb)]
     pub friction_model: FrictionArg,
     /// Voellmy dry-friction coefficient μ (default 0.155, AvaFrame com1DFA).

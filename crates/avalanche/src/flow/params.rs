@@ -26,6 +26,50 @@ pub enum FrictionLaw {
     /// In this horizontal-projection model the drive is `g·|∇A|`, so on a uniform plane of
     /// slope `tanθ > μ` a layer of thickness `h` tends to `u = sqrt(ξ·h·(tanθ − μ))`.
     Voellmy,
+    /// samosAT as AvaFrame com1DFA computes it (`SamosATfric`): a dry friction
+    /// `μ·g·(1 + Rs0/(Rs0 + Rs))` with `Rs = u²/(g·h)` (twice μ at rest, μ when fast) and a
+    /// turbulent drag `u²/(h·(ln(max(h/R, 1))/κ + B)²)`. AvaFrame's τ0 enters its
+    /// configuration but not that function, and is left out here too.
+    SamosAt,
+}
+
+/// The samosAT law's coefficients (AvaFrame com1DFA; its `samosATSmall` set, for small
+/// avalanches, has μ = 0.22, `samosATMedium` μ = 0.17, the others equal).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SamosAtParams {
+    /// Dry-friction coefficient μ = tanδ. Default 0.155 (AvaFrame `musamosat`).
+    pub mu: f64,
+    /// Reference Froude-type number Rs0. Default 0.222 (AvaFrame `Rs0samosat`).
+    pub rs0: f64,
+    /// Von Kármán constant κ. Default 0.43 (AvaFrame `kappasamosat`).
+    pub kappa: f64,
+    /// Roughness length R, m. Default 0.05 (AvaFrame `Rsamosat`).
+    pub roughness_m: f64,
+    /// Offset B of the logarithmic profile. Default 4.13 (AvaFrame `Bsamosat`).
+    pub b: f64,
+}
+
+impl Default for SamosAtParams {
+    fn default() -> Self {
+        Self {
+            mu: 0.155,
+            rs0: 0.222,
+            kappa: 0.43,
+            roughness_m: 0.05,
+            b: 4.13,
+        }
+    }
+}
+
+impl SamosAtParams {
+    /// AvaFrame's `samosATSmall` set (μ = 0.22), the one of its avaKot reference run.
+    pub fn small() -> Self {
+        Self {
+            mu: 0.22,
+            ..Self::default()
+        }
+    }
 }
 
 /// Parameters of the avalanche flow (Cordonnier et al. 2018, Table 2 via DESIGN.md §4).
@@ -62,6 +106,8 @@ pub struct AvalancheParams {
     /// Voellmy turbulence coefficient ξ, m/s² (with `friction = "voellmy"`). Default 4000
     /// (AvaFrame com1DFA's `xsivoellmy`; RAMMS uses 1000–3000 for large avalanches).
     pub voellmy_xi_m_s2: f64,
+    /// The samosAT law's coefficients (with `friction = "samos_at"`).
+    pub samos_at: SamosAtParams,
 }
 
 impl Default for AvalancheParams {
@@ -78,6 +124,7 @@ impl Default for AvalancheParams {
             friction: FrictionLaw::Coulomb,
             voellmy_mu: 0.155,
             voellmy_xi_m_s2: 4000.0,
+            samos_at: SamosAtParams::default(),
         }
     }
 }
@@ -91,6 +138,7 @@ impl AvalancheParams {
         match self.friction {
             FrictionLaw::Coulomb => self.rest_angle_deg.to_radians().tan(),
             FrictionLaw::Voellmy => self.voellmy_mu,
+            FrictionLaw::SamosAt => self.samos_at.mu,
         }
     }
 
@@ -98,7 +146,7 @@ impl AvalancheParams {
     pub fn dry_weight(&self) -> f64 {
         match self.friction {
             FrictionLaw::Coulomb => self.alpha,
-            FrictionLaw::Voellmy => 1.0,
+            FrictionLaw::Voellmy | FrictionLaw::SamosAt => 1.0,
         }
     }
 
@@ -138,6 +186,24 @@ impl AvalancheParams {
                 self.voellmy_xi_m_s2,
                 "in [10, 100000] m/s²",
             );
+        }
+        let s = &self.samos_at;
+        for (name, v, lo, hi, expected) in [
+            ("samos_at.mu", s.mu, 0.0, 2.0, "in [0, 2]"),
+            ("samos_at.rs0", s.rs0, 1e-6, 100.0, "in [1e-6, 100]"),
+            ("samos_at.kappa", s.kappa, 0.01, 10.0, "in [0.01, 10]"),
+            (
+                "samos_at.roughness_m",
+                s.roughness_m,
+                1e-4,
+                10.0,
+                "in [1e-4, 10] m",
+            ),
+            ("samos_at.b", s.b, 0.1, 100.0, "in [0.1, 100]"),
+        ] {
+            if !(v.is_finite() && v >= lo && v <= hi) {
+                return bad(name, v, expected);
+            }
         }
         if !(1..=MAX_SUBSTEPS).contains(&self.max_substeps) {
             return bad("max_substeps", self.max_substeps as f64, "in 1..=10000000");

@@ -239,10 +239,37 @@ unsafe fn pipe_lanes<V: Lanes>(
         let half = V::splat(0.5);
         let lv = |a: usize, i: usize| ld::<V>(inp.vel[a], i - inp.vbase);
         let dtg = V::splat(k.dtg);
-        let t0 = half * (lv(VX, kk) + lv(VX, j)) - dtg * (half * (lv(GX, kk) + lv(GX, j)));
-        let t1 = half * (lv(VY, kk) + lv(VY, j)) - dtg * (half * (lv(GY, kk) + lv(GY, j)));
+        let (v0, v1) = (
+            half * (lv(VX, kk) + lv(VX, j)),
+            half * (lv(VY, kk) + lv(VY, j)),
+        );
+        let t0 = v0 - dtg * (half * (lv(GX, kk) + lv(GX, j)));
+        let t1 = v1 - dtg * (half * (lv(GY, kk) + lv(GY, j)));
         let tnorm = (t0 * t0 + t1 * t1).sqrt();
-        let yield_dt = V::splat(k.yield_dt);
+        // The samosAT law's depth and, lane by lane, its dry friction and drag factor.
+        let samos = k.samos.map(|s| {
+            let mean = half * (hk + hj);
+            let depth = V::select(
+                mean.lt(V::splat(MIN_TURBULENT_DEPTH)),
+                V::splat(MIN_TURBULENT_DEPTH),
+                mean,
+            );
+            // [`Samos::yield_dt`] and [`Samos::drag`] in lanes (only the logarithm lane by lane).
+            let start2 = v0 * v0 + v1 * v1;
+            let rs0 = V::splat(s.rs0);
+            let one = V::splat(1.0);
+            let y = V::splat(s.mu_g_dt) * (one + rs0 / (rs0 + start2 / (V::splat(G) * depth)));
+            let mut logs = [0.0; 8];
+            for (i, l) in logs.iter_mut().enumerate().take(V::N) {
+                *l = (depth.lane(i) * s.inv_r).max(1.0).ln();
+            }
+            let div = V::load_ptr(logs.as_ptr()) * V::splat(s.inv_kappa) + V::splat(s.b);
+            (y, V::splat(k.dt) / (depth * div * div))
+        });
+        let yield_dt = match samos {
+            None => V::splat(k.yield_dt),
+            Some((y, _)) => y,
+        };
         let dead = if k.coulomb {
             V::or(dead, tnorm.le(yield_dt))
         } else {
@@ -282,6 +309,10 @@ unsafe fn pipe_lanes<V: Lanes>(
             );
             let speed = V::select(tnorm.gt(yield_dt), tnorm - yield_dt, zero);
             u = u / (V::splat(1.0) + V::splat(k.turb) * speed / depth);
+        }
+        if let Some((_, drag)) = samos {
+            let speed = V::select(tnorm.gt(yield_dt), tnorm - yield_dt, zero);
+            u = u / (V::splat(1.0) + drag * speed);
         }
         let hup = V::select(u.gt(zero), hk, hj);
         let dead = V::or(dead, hup.le(V::splat(DRY)));

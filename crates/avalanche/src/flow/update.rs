@@ -444,7 +444,14 @@ pub(super) fn pipe_update(
     };
     let trial = [vp[0] - k.dtg * grad[0], vp[1] - k.dtg * grad[1]];
     let tnorm = (trial[0] * trial[0] + trial[1] * trial[1]).sqrt();
-    let yield_dt = k.yield_dt;
+    let yield_dt = match &k.samos {
+        None => k.yield_dt,
+        // Rs from the speed at the start of the sub-step (at rest: twice μ, exactly).
+        Some(s) => s.yield_dt(
+            (vp[0] * vp[0] + vp[1] * vp[1]).sqrt(),
+            turbulent_depth(hi, hj),
+        ),
+    };
     let proj = if tnorm > 0.0 {
         ((pg.e[d][0] * trial[0] + pg.e[d][1] * trial[1]) / tnorm).abs()
     } else {
@@ -463,6 +470,10 @@ pub(super) fn pipe_update(
         // velocity's norm after the dry friction), not the pipe's component, or diagonal
         // pipes would escape it.
         u /= 1.0 + k.turb * (tnorm - yield_dt).max(0.0) / turbulent_depth(hi, hj);
+    }
+    if let Some(s) = &k.samos {
+        let depth = turbulent_depth(hi, hj);
+        u /= 1.0 + s.drag(dt, depth) * (tnorm - yield_dt).max(0.0);
     }
     let hup = if u > 0.0 { hi } else { hj };
     if hup <= DRY {

@@ -38,6 +38,14 @@ pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
             },
             size,
         )?,
+        substep_kernel(
+            "avalanche/substep_samosat",
+            AvalancheParams {
+                friction: FrictionLaw::SamosAt,
+                ..AvalancheParams::default()
+            },
+            size,
+        )?,
     ];
     kernels.push(run_to_rest_kernel(
         "avalanche/slope_run_to_rest",

@@ -16,7 +16,7 @@ use snowscape_avalanche::release_area::{
 };
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, RestOutcome,
-    RunOptions,
+    RunOptions, SamosAtParams,
 };
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
@@ -68,12 +68,21 @@ fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
     p.friction = match args.friction_model {
         FrictionArg::Coulomb => FrictionLaw::Coulomb,
         FrictionArg::Voellmy => FrictionLaw::Voellmy,
+        FrictionArg::SamosAt => FrictionLaw::SamosAt,
+        FrictionArg::SamosAtSmall => {
+            p.samos_at = SamosAtParams::small();
+            FrictionLaw::SamosAt
+        }
     };
     if p.friction == FrictionLaw::Coulomb && (args.mu.is_some() || args.xi.is_some()) {
         bail!("--mu and --xi are the Voellmy law's: add --friction-model voellmy");
     }
+    if p.friction == FrictionLaw::SamosAt && args.xi.is_some() {
+        bail!("--xi is the Voellmy law's; samosAT has no ξ");
+    }
     if let Some(m) = args.mu {
         p.voellmy_mu = m;
+        p.samos_at.mu = m;
     }
     if let Some(x) = args.xi {
         p.voellmy_xi_m_s2 = x;
