@@ -271,6 +271,25 @@ pub enum ThicknessConvention {
     SlopeNormal,
 }
 
+impl ThicknessConvention {
+    /// Turns release thicknesses measured this way into the flow's vertical ones, in place,
+    /// on the bed `dem` (slope-normal: `d / cosθ`).
+    pub fn to_vertical(self, thickness: &mut [f64], dem: &Grid) {
+        if self == ThicknessConvention::SlopeNormal {
+            let g = dem.geometry();
+            let w = g.width();
+            for (i, t) in thickness.iter_mut().enumerate() {
+                if *t > 0.0 {
+                    let slope =
+                        snowscape_terrain::surface::slope(dem.data(), g, dem.mask(), i % w, i / w)
+                            as f64;
+                    *t /= slope.cos();
+                }
+            }
+        }
+    }
+}
+
 /// A release on a real DEM run to rest.
 #[derive(Debug, Clone)]
 pub struct RealRun {
@@ -325,17 +344,7 @@ pub fn run_release(
     let g = grid.geometry().clone();
     let mask = release_from_shapefile(release, &g, grid.mask())?;
     let mut thickness = mask.thickness_field(default_thickness_m)?;
-    if convention == ThicknessConvention::SlopeNormal {
-        let w = g.width();
-        for (i, t) in thickness.iter_mut().enumerate() {
-            if *t > 0.0 {
-                let slope =
-                    snowscape_terrain::surface::slope(grid.data(), &g, grid.mask(), i % w, i / w)
-                        as f64;
-                *t /= slope.cos();
-            }
-        }
-    }
+    convention.to_vertical(&mut thickness, &grid);
     // The release as unstable snow on the bare DEM, run to rest on the one path the season,
     // the editor and the command line share.
     let mut terrain = LayeredTerrain::from_bedrock(grid.clone());

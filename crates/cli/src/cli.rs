@@ -215,6 +215,13 @@ pub struct InfoArgs {
     pub json: bool,
 }
 
+/// How `snowscape avalanche`'s release thickness is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ThicknessArg {
+    Vertical,
+    SlopeNormal,
+}
+
 /// The friction law of `snowscape avalanche`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum FrictionArg {
@@ -296,6 +303,10 @@ pub struct AvalancheArgs {
     /// Release thickness, metres, (0, 50] (default: the shapefile's thickness field, else 1 m).
     #[arg(long, value_parser = crate::bounds::release_thickness)]
     pub thickness: Option<f64>,
+    /// How the release thickness is measured: vertical (the flow's own) or slope-normal (as
+    /// AvaFrame com1DFA and field measurements give it; the flow then starts with d/cosθ).
+    #[arg(long, value_enum, default_value_t = ThicknessArg::Vertical)]
+    pub thickness_measured: ThicknessArg,
     /// Rest (friction) angle θc of the snow, degrees (default 30, Cordonnier 2018 Table 2).
     #[arg(long)]
     pub friction_angle: Option<f64>,

@@ -140,3 +140,53 @@ fn run_with_skiers_writes_tracks() {
     assert!(dir.join("ski_tracks.png").is_file());
     assert!(r["avalanches"].is_array());
 }
+
+/// Issue 20: `snowscape avalanche` as a practitioner runs AvaFrame's avaKot benchmark: its
+/// release thickness measured normal to the slope and the samosATSmall friction of the
+/// reference run. The released volume is AvaFrame's (its 4 328 073.7 kg at 200 kg/m³) within
+/// 1 %, the report names the law and the convention, and the law and convention flags refuse
+/// what does not belong to them.
+#[test]
+fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/dem/avaframe_avaKot");
+    let (dem, rel) = (d.join("avaKot.asc"), d.join("REL/relKot.shp"));
+    assert!(dem.is_file() && rel.is_file(), "avaKot is missing from the shared data");
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("kot");
+    let o = snowscape(&[
+        "--quiet",
+        "avalanche",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--release",
+        rel.to_str().unwrap(),
+        "--friction-model",
+        "samosat-small",
+        "--thickness-measured",
+        "slope-normal",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let v = r["released_volume_m3"].as_f64().unwrap();
+    let avaframe = 4_328_073.727009 / 200.0;
+    assert!((v - avaframe).abs() < 0.01 * avaframe, "{v} m³ vs {avaframe} m³");
+    assert_eq!(r["parameters"]["thickness_measured"], "slope-normal");
+    assert_eq!(r["parameters"]["flow"]["friction"], "samos_at");
+    assert_eq!(r["parameters"]["flow"]["samos_at"]["mu"], 0.22);
+    let o = snowscape(&[
+        "avalanche",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--release",
+        rel.to_str().unwrap(),
+        "--xi",
+        "1000",
+        "--out",
+        out.path().join("x").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--friction-model voellmy"));
+}

@@ -2,18 +2,20 @@
 //! terrain, with the maps practitioners compare (peak thickness and velocity, deposit,
 //! footprint), playback frames and a report.
 
-use crate::cli::{AvalancheArgs, FrictionArg, GlobalArgs};
+use crate::cli::{AvalancheArgs, FrictionArg, GlobalArgs, ThicknessArg};
 use crate::commands::render::preview_options;
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::{Written, earlier_outputs, prepare_dir, write_png, write_report};
 use crate::report::InputSummary;
 use anyhow::{Context, anyhow, bail};
+use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 use snowscape_avalanche::release_area::{
     RasterRelease, ReleaseMask, RuptureParams, release_at_point, release_from_raster,
     release_from_shapefile,
 };
+use snowscape_avalanche::validation::ThicknessConvention;
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, RestOutcome,
     RunOptions, SamosAtParams,
@@ -127,6 +129,7 @@ fn release_terrain(
     dem: &Grid,
     spec: &ReleaseSpec,
     thickness: Option<f64>,
+    convention: ThicknessConvention,
     dem_options: &ReadOptions,
 ) -> anyhow::Result<(LayeredTerrain, Vec<usize>, ReleaseMask)> {
     let g = dem.geometry();
@@ -134,14 +137,15 @@ fn release_terrain(
     let mask = terrain.mask().clone();
     let area = match spec {
         ReleaseSpec::Point(x, y) => {
-            let t = thickness.unwrap_or(1.0) as f32;
+            let mut h = vec![thickness.unwrap_or(1.0); g.len()];
+            convention.to_vertical(&mut h, dem);
             for (i, v) in terrain
                 .layer_mut(SnowLayer::Unstable)
                 .iter_mut()
                 .enumerate()
             {
                 if mask.is_valid(i) {
-                    *v = t;
+                    *v = h[i] as f32;
                 }
             }
             release_at_point(&terrain, *x, *y, &RuptureParams::default())?.mask
@@ -162,7 +166,8 @@ fn release_terrain(
             if thickness.is_some() {
                 area.thickness = None;
             }
-            let h = area.thickness_field(thickness.unwrap_or(1.0))?;
+            let mut h = area.thickness_field(thickness.unwrap_or(1.0))?;
+            convention.to_vertical(&mut h, dem);
             for (i, v) in terrain
                 .layer_mut(SnowLayer::Unstable)
                 .iter_mut()
@@ -204,9 +209,14 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let dem = args.dem_input.read(&args.dem).bad_input()?;
     let source = args.dem.display().to_string();
     let dem_options = args.dem_input.read_options().bad_input()?;
-    let (mut terrain, cells, area) = release_terrain(&dem, &spec, args.thickness, &dem_options)
-        .with_context(|| format!("--release {}", args.release))
-        .bad_input()?;
+    let convention = match args.thickness_measured {
+        ThicknessArg::Vertical => ThicknessConvention::Vertical,
+        ThicknessArg::SlopeNormal => ThicknessConvention::SlopeNormal,
+    };
+    let (mut terrain, cells, area) =
+        release_terrain(&dem, &spec, args.thickness, convention, &dem_options)
+            .with_context(|| format!("--release {}", args.release))
+            .bad_input()?;
     let unstable = terrain.layer(SnowLayer::Unstable);
     if !cells.iter().any(|&i| unstable[i] > 0.0) {
         return Err(anyhow!(
@@ -334,7 +344,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         "release_cells": area.count(),
         "release_area_m2": area.area_m2(),
         "release_warnings": area.warnings,
-        "parameters": { "flow": params, "run": options, "thickness_m": args.thickness },
+        "parameters": { "flow": params, "run": options, "thickness_m": args.thickness, "thickness_measured": args.thickness_measured.to_possible_value().map(|v| v.get_name().to_string()) },
         "seed": args.seed,
         "threads": rayon::current_num_threads(),
         "released_volume_m3": summary.released_volume_m3,
