@@ -13,6 +13,7 @@
 //! cross-section and momentum advection, so that waves travel at `sqrt(g·h)` and the dam-break
 //! front follows Ritter's `2·sqrt(g·h0)`); [`flow`]'s module documentation states the equations.
 
+pub mod comparison;
 pub mod convert;
 pub mod flow;
 pub mod release_area;

@@ -328,6 +328,19 @@ pub struct AvalancheArgs {
     /// Voellmy turbulence coefficient ξ, m/s² (default 4000, AvaFrame com1DFA).
     #[arg(long)]
     pub xi: Option<f64>,
+    /// Compare with a reference peak-thickness raster (e.g. AvaFrame's `*_pft.asc`, matched
+    /// by map coordinates), AIMEC-like along --path: runout difference, true/false
+    /// positive/negative areas, profiles (report.json, comparison_profile.csv,
+    /// comparison.png).
+    #[arg(long, value_name = "REF.asc|tif")]
+    pub compare: Option<std::path::PathBuf>,
+    /// The avalanche path of --compare (a line shapefile, e.g. AvaFrame's
+    /// LINES/path_aimec.shp); default: the thalweg of the run.
+    #[arg(long, value_name = "LINE.shp", requires = "compare")]
+    pub path: Option<std::path::PathBuf>,
+    /// Half-width of the corridor around the path that --compare counts, metres.
+    #[arg(long, default_value_t = 300.0, value_parser = crate::bounds::metres)]
+    pub corridor: f64,
     /// Longest simulated time, seconds (the run stops earlier once the snow is at rest).
     #[arg(long, default_value_t = 600.0, value_parser = crate::bounds::avalanche_seconds)]
     pub duration: f64,

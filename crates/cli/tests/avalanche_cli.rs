@@ -144,13 +144,23 @@ fn run_with_skiers_writes_tracks() {
 /// Issue 20: `snowscape avalanche` as a practitioner runs AvaFrame's avaKot benchmark: its
 /// release thickness measured normal to the slope and the samosATSmall friction of the
 /// reference run. The released volume is AvaFrame's (its 4 328 073.7 kg at 200 kg/m³) within
-/// 1 %, the report names the law and the convention, and the law and convention flags refuse
-/// what does not belong to them.
+/// 1 %, the report names the law and the convention, `--compare` measures the run against
+/// AvaFrame's along its AIMEC path, and the law flags refuse what does not belong to them.
 #[test]
 fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
     let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/dem/avaframe_avaKot");
     let (dem, rel) = (d.join("avaKot.asc"), d.join("REL/relKot.shp"));
-    assert!(dem.is_file() && rel.is_file(), "avaKot is missing from the shared data");
+    assert!(
+        dem.is_file() && rel.is_file(),
+        "avaKot is missing from the shared data"
+    );
+    let reference = d.join(
+        "../../reference/avaframe_benchmarks/avaKotNullTest/relKot_989874a9be_C_S_null_dfa_pft.asc",
+    );
+    assert!(
+        reference.is_file(),
+        "AvaFrame's avaKot reference is missing"
+    );
     let out = tempfile::tempdir().unwrap();
     let dir = out.path().join("kot");
     let o = snowscape(&[
@@ -164,6 +174,10 @@ fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
         "samosat-small",
         "--thickness-measured",
         "slope-normal",
+        "--compare",
+        reference.to_str().unwrap(),
+        "--path",
+        d.join("LINES/path_aimec.shp").to_str().unwrap(),
         "--out",
         dir.to_str().unwrap(),
     ]);
@@ -172,10 +186,29 @@ fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
         serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     let v = r["released_volume_m3"].as_f64().unwrap();
     let avaframe = 4_328_073.727009 / 200.0;
-    assert!((v - avaframe).abs() < 0.01 * avaframe, "{v} m³ vs {avaframe} m³");
+    assert!(
+        (v - avaframe).abs() < 0.01 * avaframe,
+        "{v} m³ vs {avaframe} m³"
+    );
     assert_eq!(r["parameters"]["thickness_measured"], "slope-normal");
     assert_eq!(r["parameters"]["flow"]["friction"], "samos_at");
     assert_eq!(r["parameters"]["flow"]["samos_at"]["mu"], 0.22);
+    // The AIMEC-like comparison along AvaFrame's own path: runout within 5 % of the
+    // reference's (measured −29 m of 1583 m), footprint Jaccard ≥ 0.6 (measured 0.675).
+    let c = &r["comparison"];
+    let (ours, theirs) = (
+        c["runout_s_m"].as_f64().unwrap(),
+        c["reference_runout_s_m"].as_f64().unwrap(),
+    );
+    assert!(
+        (ours - theirs).abs() < 0.05 * theirs,
+        "runout {ours} m vs {theirs} m"
+    );
+    assert!(c["jaccard"].as_f64().unwrap() >= 0.6, "{c}");
+    assert_eq!(c["path_source"], "given");
+    for f in ["comparison.png", "comparison_profile.csv"] {
+        assert!(dir.join(f).is_file(), "{f} missing");
+    }
     let o = snowscape(&[
         "avalanche",
         "--dem",

@@ -225,6 +225,12 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         ))
         .bad_input();
     }
+    let compare = args
+        .compare
+        .as_deref()
+        .map(|r| super::avalanche_compare::read_inputs(r, args.path.as_deref()))
+        .transpose()
+        .bad_input()?;
     let earlier = earlier_outputs(&args.out);
     prepare_dir(&args.out).bad_input()?;
     std::fs::create_dir_all(args.out.join("frames"))
@@ -332,6 +338,21 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         Ok(())
     })()
     .job_failed()?;
+    let comparison = compare
+        .as_ref()
+        .map(|inputs| {
+            super::avalanche_compare::compare_and_write(
+                &mut out,
+                inputs,
+                &dem,
+                &RestOutcome::dense(&outcome.peak_thickness, n),
+                &RestOutcome::dense(&outcome.peak_speed, n),
+                options.footprint_threshold_m,
+                args.corridor,
+            )
+        })
+        .transpose()
+        .job_failed()?;
     out.files.push("report.json".into());
     let report = json!({
         "snowscape_version": env!("CARGO_PKG_VERSION"),
@@ -358,6 +379,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         "simulated_s": summary.simulated_s,
         "wall_s": wall,
         "timings": { "flow_s": wall - render_s, "frames_s": render_s },
+        "comparison": comparison,
         "outputs": out.files,
     });
     write_report(&args.out, &earlier, report).job_failed()?;

@@ -1,6 +1,7 @@
 //! One module per verb; [`dispatch`] is the only entry point.
 
 mod avalanche;
+mod avalanche_compare;
 mod bench;
 mod convert;
 pub mod cover;

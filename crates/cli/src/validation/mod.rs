@@ -24,7 +24,7 @@
 pub mod classes;
 pub mod figures;
 pub mod matching;
-mod pixel_font;
+pub mod pixel_font;
 pub mod stats;
 pub mod summary;
 
