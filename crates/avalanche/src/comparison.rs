@@ -139,13 +139,13 @@ pub fn compare_along_path(
             .then(|| (s, ((s / bin) as usize).min(bins.saturating_sub(1))))
     };
     let w = geometry.width();
-    for i in 0..peak_thickness.len() {
-        if peak_thickness[i] > threshold_m {
+    for (i, &peak) in peak_thickness.iter().enumerate() {
+        if peak > threshold_m {
             let (x, y) = geometry.cell_centre(i % w, i / w);
             if let Some((s, k)) = place(x, y) {
                 runout = runout.max(s);
                 let b = &mut profile[k];
-                b.thickness_m = b.thickness_m.max(peak_thickness[i]);
+                b.thickness_m = b.thickness_m.max(peak);
                 b.speed_m_s = b.speed_m_s.max(peak_speed.get(i).copied().unwrap_or(0.0));
             }
         }
