@@ -122,14 +122,14 @@ fn bench(c: &mut Criterion) {
     group.sample_size(10);
     group.throughput(Throughput::Elements(field.len() as u64));
     group.bench_function("kernel_sites", |b| {
-        b.iter(|| black_box(evaluate(black_box(&field), r.radius_m, r.bucket_columns)))
+        b.iter(|| black_box(evaluate(black_box(&field), r.radius_m)))
     });
     group.bench_function("cover_sites", |b| {
         b.iter(|| black_box(cover(black_box(&s), &p).expect("cover")))
     });
     group.finish();
     let t = std::time::Instant::now();
-    let k = evaluate(&field, r.radius_m, r.bucket_columns);
+    let k = evaluate(&field, r.radius_m);
     let secs = t.elapsed().as_secs_f64();
     eprintln!(
         "festenberg kernel: {} sites in {secs:.3} s = {:.3e} sites/s ({:.3e} members/s), {} threads",

@@ -26,19 +26,18 @@
 //! The boundary direction (for the overhangs of Section 5.3) is the kernel-weighted mean of the
 //! unit vectors from `p` towards its boundary members: "the smoothed direction of r".
 //!
-//! Cost and determinism: the kernel is local, so members are found through a spatial grid of
-//! square buckets of columns (`bucket_columns` on a side) and only the buckets that meet the
-//! cylinder's square are visited: O(sites × kernel columns), never O(sites²) (the paper's
-//! O(n²) of Fig. 15 was an implementation accident). Each row of the disk is one run of
-//! columns (`KernelTable::spans`). The columns of at most two sites, whose member choice is a
+//! Cost and determinism: the kernel is local and the sites stand in a regular grid of columns,
+//! so each row of the disk is one run of the map's columns (`KernelTable::spans`, clipped to
+//! the map): O(sites × kernel columns), never O(sites²) (the paper's O(n²) of Fig. 15 was an
+//! implementation accident). The columns of at most two sites, whose member choice is a
 //! couple of comparisons, are read from contiguous per-column arrays (bases and flags) and
 //! summed eight at a time with AVX2 where the CPU has it, a scalar loop elsewhere; the columns
 //! of three sites or more go member by member through [`SiteField::member`]
 //! ([`evaluate_reference`] takes that path for every column). Weights and terms are summed as
 //! 64-bit fixed-point integers (weights in units of 2^-32, `λ / h0` in units of 2^-24, exact
 //! 32 × 32 → 64-bit products), so the sums are exact and do not depend on the order of the
-//! members or on the path: results are bit-identical for every bucket size, every thread
-//! count and with or without AVX2 (tested against [`evaluate_reference`] and lane against
+//! members or on the path: results are bit-identical for every thread count and with or
+//! without AVX2 (tested against [`evaluate_reference`] and lane against
 //! scalar).
 
 use crate::sites::SiteField;
@@ -63,9 +62,10 @@ pub struct KernelTable {
     /// units; [`PAD`] more at the end.
     towards_x: Vec<i64>,
     towards_y: Vec<i64>,
-    /// Quantised weights as i32 when every one fits (always but for a kernel of a few
-    /// columns), for the dense path's 32 × 32 → 64-bit products; 0 outside the cylinder,
-    /// [`PAD`] zeros at the end.
+    /// Quantised weights as i32 when every one fits and every row's weights sum to less
+    /// than 2^32 (always but for a kernel of a few columns), for the dense path's 32 × 32 →
+    /// 64-bit products and 32-bit sums over a run; 0 outside the cylinder, [`PAD`] zeros at
+    /// the end.
     weight32: Option<Vec<i32>>,
     /// For each table row, the offsets `dx` in `lo..=hi` of the columns inside the cylinder
     /// (a disk's row is one run of columns).
@@ -124,7 +124,11 @@ impl KernelTable {
                 (lo as i32 - reach, hi as i32 - reach)
             })
             .collect();
-        let weight32 = weight.iter().all(|&w| w < i64::from(i32::MAX)).then(|| {
+        let fits = weight.iter().all(|&w| w < i64::from(i32::MAX))
+            && weight
+                .chunks(side)
+                .all(|row| row.iter().map(|&w| w.max(0)).sum::<i64>() <= i64::from(u32::MAX));
+        let weight32 = fits.then(|| {
             let mut w32: Vec<i32> = weight.iter().map(|&w| w.max(0) as i32).collect();
             w32.extend([0; PAD]);
             w32
@@ -179,15 +183,9 @@ pub fn clipped(dz: f32, h0: f32) -> f32 {
     if dz.abs() < h0 { dz } else { h0.copysign(dz) }
 }
 
-/// Evaluates the kernel of radius `radius_m` at every site of `field`, visiting the columns
-/// bucket by bucket (`bucket_columns` >= 1 on a side; results do not depend on it).
-pub fn evaluate(field: &SiteField, radius_m: f64, bucket_columns: usize) -> KernelField {
-    evaluate_with(
-        field,
-        KernelTable::new(radius_m, field.cell_size),
-        radius_m,
-        bucket_columns,
-    )
+/// Evaluates the kernel of radius `radius_m` at every site of `field`.
+pub fn evaluate(field: &SiteField, radius_m: f64) -> KernelField {
+    evaluate_with(field, KernelTable::new(radius_m, field.cell_size), radius_m)
 }
 
 /// [`evaluate`] member by member through [`SiteField::member`], without the fast path for
@@ -196,21 +194,16 @@ pub fn evaluate(field: &SiteField, radius_m: f64, bucket_columns: usize) -> Kern
 pub fn evaluate_reference(field: &SiteField, radius_m: f64) -> KernelField {
     let mut table = KernelTable::new(radius_m, field.cell_size);
     table.weight32 = None;
-    evaluate_with(field, table, radius_m, 1)
+    evaluate_with(field, table, radius_m)
 }
 
-fn evaluate_with(
-    field: &SiteField,
-    table: KernelTable,
-    radius_m: f64,
-    bucket_columns: usize,
-) -> KernelField {
+fn evaluate_with(field: &SiteField, table: KernelTable, radius_m: f64) -> KernelField {
     let dense = DenseColumns::new(field);
     let n = field.len();
     let per_site: Vec<(f32, f32, [f32; 2], f32, f32, u64)> = (0..n)
         .into_par_iter()
         .with_min_len(256)
-        .map(|i| site_kernel(field, &dense, &table, radius_m, bucket_columns.max(1), i))
+        .map(|i| site_kernel(field, &dense, &table, radius_m, i))
         .collect();
     let mut out = KernelField {
         height: Vec::with_capacity(n),
@@ -366,7 +359,6 @@ fn site_kernel(
     dense: &DenseColumns,
     table: &KernelTable,
     radius_m: f64,
-    bucket: usize,
     i: usize,
 ) -> (f32, f32, [f32; 2], f32, f32, u64) {
     let (w, h) = (field.width as i64, field.height as i64);
@@ -379,7 +371,6 @@ fn site_kernel(
     let h0 = field.depth;
     let inv_h0 = 1.0 / h0;
     let roomy = field.roomy(i);
-    let b = bucket as i64;
     let mut lanes = LaneSums::default();
     let mut sums = Sums {
         edge: f32::INFINITY,
@@ -399,66 +390,60 @@ fn site_kernel(
             roomy,
         );
     };
-    for by in y0 / b..=y1 / b {
-        let (ya, yb) = ((by * b).max(y0), (by * b + b - 1).min(y1));
-        for bx in x0 / b..=x1 / b {
-            let (xa, xb) = ((bx * b).max(x0), (bx * b + b - 1).min(x1));
-            for y in ya..=yb {
-                // The disk's run of columns in this row, within the bucket.
-                let trow = (y - cy + reach) as usize;
-                let (lo, hi) = table.spans[trow];
-                let (sa, sb) = (xa.max(cx + i64::from(lo)), xb.min(cx + i64::from(hi)));
-                if sa > sb {
-                    continue;
-                }
-                let t0 = trow * table.side + (sa - cx + reach) as usize;
-                let c0 = (y * w + sa) as usize;
-                let len = (sb - sa + 1) as usize;
-                let Some(weight32) = &table.weight32 else {
-                    for k in 0..len {
-                        general(&mut sums, t0 + k, c0 + k);
-                    }
-                    continue;
-                };
-                // The row's columns of at most two sites take the fast path (the others'
-                // lanes masked off), then the columns of three or more the general one.
-                // Plain stretches (empty and one-visible-site columns only) at either end of
-                // the row, the stretch between its first and last other columns in full.
-                let o = y as usize * w as usize;
-                let (first, after_last) = (
-                    dense.next_complex[o + sa as usize] as usize,
-                    dense.complex_upto[o + sb as usize] as usize,
-                );
-                let parts = if first > sb as usize {
-                    [(0, len, true), (len, len, false), (len, len, true)]
-                } else {
-                    let (k0, k1) = (first - sa as usize, after_last - sa as usize);
-                    [(0, k0, true), (k0, k1, false), (k1, len, true)]
-                };
-                for (k0, k1, plain) in parts {
-                    if k1 > k0 {
-                        let run = DenseRun {
-                            base: &dense.base[c0 + k0..],
-                            upper: &dense.upper[c0 + k0..],
-                            flags: &dense.flags[c0 + k0..],
-                            roomy,
-                            plain,
-                            weight: &weight32[t0 + k0..],
-                            len: k1 - k0,
-                            table,
-                            t0: t0 + k0,
-                        };
-                        dense_run(&mut sums, &mut lanes, &run, s, h0, inv_h0);
-                    }
-                }
-                let next = &dense.next_multi[y as usize * (w as usize + 1)..];
-                let mut x = next[sa as usize] as usize;
-                while x <= sb as usize {
-                    let k = x - sa as usize;
-                    general(&mut sums, t0 + k, c0 + k);
-                    x = next[x + 1] as usize;
-                }
+    for y in y0..=y1 {
+        // The disk's run of columns in this row, within the map.
+        let trow = (y - cy + reach) as usize;
+        let (lo, hi) = table.spans[trow];
+        let (sa, sb) = (x0.max(cx + i64::from(lo)), x1.min(cx + i64::from(hi)));
+        if sa > sb {
+            continue;
+        }
+        let t0 = trow * table.side + (sa - cx + reach) as usize;
+        let c0 = (y * w + sa) as usize;
+        let len = (sb - sa + 1) as usize;
+        let Some(weight32) = &table.weight32 else {
+            for k in 0..len {
+                general(&mut sums, t0 + k, c0 + k);
             }
+            continue;
+        };
+        // The row's columns of at most two sites take the fast path (the others' lanes
+        // masked off), then the columns of three or more the general one. Plain stretches
+        // (empty and one-visible-site columns only) at either end of the row, the stretch
+        // between its first and last other columns in full.
+        let o = y as usize * w as usize;
+        let (first, after_last) = (
+            dense.next_complex[o + sa as usize] as usize,
+            dense.complex_upto[o + sb as usize] as usize,
+        );
+        let parts = if first > sb as usize {
+            [(0, len, true), (len, len, false), (len, len, true)]
+        } else {
+            let (k0, k1) = (first - sa as usize, after_last - sa as usize);
+            [(0, k0, true), (k0, k1, false), (k1, len, true)]
+        };
+        for (k0, k1, plain) in parts {
+            if k1 > k0 {
+                let run = DenseRun {
+                    base: &dense.base[c0 + k0..],
+                    upper: &dense.upper[c0 + k0..],
+                    flags: &dense.flags[c0 + k0..],
+                    roomy,
+                    plain,
+                    weight: &weight32[t0 + k0..],
+                    len: k1 - k0,
+                    table,
+                    t0: t0 + k0,
+                };
+                dense_run(&mut sums, &mut lanes, &run, s, h0, inv_h0);
+            }
+        }
+        let next = &dense.next_multi[y as usize * (w as usize + 1)..];
+        let mut x = next[sa as usize] as usize;
+        while x <= sb as usize {
+            let k = x - sa as usize;
+            general(&mut sums, t0 + k, c0 + k);
+            x = next[x + 1] as usize;
         }
     }
     lanes.add_to(&mut sums);

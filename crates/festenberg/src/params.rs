@@ -27,7 +27,7 @@ pub const DEPTH_SHARE: f64 = 0.02;
 pub const COLUMNS_ALONG: f64 = 256.0;
 
 /// What the user asks for; `None` lengths are resolved from the scene diameter.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct CoverParams {
     /// Initial snow height `h0`, metres (Section 5.2).
     pub depth_m: Option<f64>,
@@ -48,25 +48,6 @@ pub struct CoverParams {
     /// Horizontal extent `[x_min, y_min, x_max, y_max]` of the height-span map, scene
     /// metres; `None`: the scene's bounds with two empty columns around them.
     pub extent_m: Option<[f64; 4]>,
-    /// Side of the kernel's neighbour-lookup buckets, in columns (>= 1). A performance knob
-    /// only: results are identical for every value.
-    pub bucket_columns: usize,
-}
-
-impl Default for CoverParams {
-    fn default() -> Self {
-        Self {
-            depth_m: None,
-            radius_m: None,
-            bridge_m: None,
-            overhang: false,
-            overhang_m: None,
-            resolution_m: None,
-            mask_scale_m: None,
-            extent_m: None,
-            bucket_columns: 16,
-        }
-    }
 }
 
 /// Every length fixed, metres.
@@ -81,7 +62,6 @@ pub struct Resolved {
     pub overhang_m: Option<f64>,
     pub resolution_m: f64,
     pub mask_scale_m: f64,
-    pub bucket_columns: usize,
 }
 
 impl CoverParams {
@@ -122,13 +102,6 @@ impl CoverParams {
         } else {
             None
         };
-        if self.bucket_columns == 0 {
-            return Err(invalid(
-                "kernel bucket size",
-                0.0,
-                "at least 1 column per bucket",
-            ));
-        }
         let rc = radius_m / resolution_m;
         let columns = (std::f64::consts::PI * rc * rc).ceil();
         if columns > MAX_KERNEL_COLUMNS as f64 {
@@ -147,7 +120,6 @@ impl CoverParams {
             overhang_m,
             resolution_m,
             mask_scale_m,
-            bucket_columns: self.bucket_columns,
         })
     }
 }

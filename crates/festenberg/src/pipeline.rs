@@ -142,9 +142,7 @@ pub fn cover(scene: &Scene, params: &CoverParams) -> Result<SnowCover, Festenber
     let (r, map, field) = timer.run("height_span_and_bridges", || {
         prepare_sites(scene, params, true)
     })?;
-    let kernel = timer.run("kernel", || {
-        kernel::evaluate(&field, r.radius_m, r.bucket_columns)
-    });
+    let kernel = timer.run("kernel", || kernel::evaluate(&field, r.radius_m));
     let links = timer.run("links", || links(&field));
     let offsets = r
         .overhang_m

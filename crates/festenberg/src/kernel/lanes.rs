@@ -194,27 +194,33 @@ unsafe fn dense_lanes_avx2<const PLAIN: bool>(
     let mut edge = unsafe { _mm256_loadu_ps(acc.edge.as_ptr()) };
     let (mut towards_x, mut towards_y) = (load(&acc.towards_x), load(&acc.towards_y));
     let (mut even, mut odd) = (load(&acc.lambda_even), load(&acc.lambda_odd));
-    let (mut member, mut visible) = (load(&acc.member), load(&acc.visible));
-    let mut weight = load(&acc.weight);
-    let mut visited = 0u32;
+    // The run's weights, of members and of visible members as 32-bit lane sums (a lane holds
+    // part of one disk row, whose weights sum to less than 2^32: `KernelTable::weight32`),
+    // widened once at the end; the fast-path columns counted the same way.
+    let zero = _mm256_setzero_si256();
+    let (mut weight, mut member, mut visible, mut counted) = (zero, zero, zero, zero);
+    let (eight, mut remaining) = (_mm256_set1_epi32(8), _mm256_set1_epi32(n as i32));
     let mut k = 0;
     while k < n {
         // The lanes still in the run.
-        let tail = _mm256_cmpgt_epi32(_mm256_set1_epi32((n - k) as i32), lane);
+        let tail = _mm256_cmpgt_epi32(remaining, lane);
+        remaining = _mm256_sub_epi32(remaining, eight);
         // SAFETY: k < n and every slice holds n + PAD >= k + 8 values.
-        let (b, w) = unsafe {
+        let (b, table_w) = unsafe {
             (
                 _mm256_loadu_ps(run.base.as_ptr().add(k)),
                 _mm256_loadu_si256(run.weight.as_ptr().add(k).cast()),
             )
         };
-        let (live, dz, is_member, seen);
+        let (live, dz, w);
         if PLAIN {
-            // Every column is empty (base -∞) or one visible site.
+            // Every column is empty (base -∞) or one visible site: visible members are the
+            // members, added at the end.
             live = tail;
             dz = _mm256_sub_ps(b, vs);
-            is_member = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_NEQ_UQ>(b, minus_infinity));
-            seen = is_member;
+            w = _mm256_and_si256(table_w, live);
+            let is_member = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_NEQ_UQ>(b, minus_infinity));
+            member = _mm256_add_epi32(member, _mm256_and_si256(w, is_member));
         } else {
             // SAFETY: as above.
             let (b_upper, f) = unsafe {
@@ -237,12 +243,13 @@ unsafe fn dense_lanes_avx2<const PLAIN: bool>(
             );
             let up = _mm256_and_si256(has(f, two_bit), _mm256_or_si256(nearer, moves));
             dz = _mm256_blendv_ps(dz_lower, dz_upper, _mm256_castsi256_ps(up));
-            is_member = has(f, member_bit);
-            seen = _mm256_blendv_epi8(has(f, seen_bit), has(f, seen_upper_bit), up);
+            w = _mm256_and_si256(table_w, live);
+            let seen = _mm256_blendv_epi8(has(f, seen_bit), has(f, seen_upper_bit), up);
+            member = _mm256_add_epi32(member, _mm256_and_si256(w, has(f, member_bit)));
+            visible = _mm256_add_epi32(visible, _mm256_and_si256(w, seen));
+            counted = _mm256_sub_epi32(counted, live);
         }
-        visited += _mm256_movemask_ps(_mm256_castsi256_ps(live)).count_ones();
-        let w = _mm256_and_si256(w, live);
-        weight = _mm256_add_epi64(weight, widen(w));
+        weight = _mm256_add_epi32(weight, w);
         // `max` returns its second operand for a NaN, as `f32::max(x, -1)` returns -1 (and
         // an empty column's -∞ gives -1).
         let x = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(dz, vinv), vlo), vhi);
@@ -253,16 +260,11 @@ unsafe fn dense_lanes_avx2<const PLAIN: bool>(
             odd,
             _mm256_mul_epi32(_mm256_srli_epi64::<32>(w), _mm256_srli_epi64::<32>(q)),
         );
-        // Weights (>= 0) of members and of visible members, widened to 64 bits.
-        member = _mm256_add_epi64(member, widen(_mm256_and_si256(w, is_member)));
-        visible = _mm256_add_epi64(visible, widen(_mm256_and_si256(w, seen)));
         // Boundary members (drops by more than h0, empty columns): the nearest one's
         // distance and the weighted directions, with the 64-bit sums as two halves.
-        let drops = _mm256_and_si256(
-            _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(dz, vdrop)),
-            live,
-        );
-        if _mm256_testz_si256(drops, drops) == 0 {
+        let drops = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(dz, vdrop));
+        if _mm256_testz_si256(drops, live) == 0 {
+            let drops = _mm256_and_si256(drops, live);
             // SAFETY: t0 + k + 8 <= t0 + n + PAD, within the padded tables (asserted).
             let (d, x0, x1, y0, y1) = unsafe {
                 (
@@ -290,20 +292,37 @@ unsafe fn dense_lanes_avx2<const PLAIN: bool>(
         }
         k += 8;
     }
+    if PLAIN {
+        visible = member;
+    }
+    let add = |v: &mut [i64; 4], lanes: __m256i| {
+        // SAFETY: `v` holds four i64.
+        unsafe {
+            let sum = _mm256_add_epi64(_mm256_loadu_si256(v.as_ptr().cast()), widen(lanes));
+            _mm256_storeu_si256(v.as_mut_ptr().cast(), sum)
+        }
+    };
+    add(&mut acc.weight, weight);
+    add(&mut acc.member, member);
+    add(&mut acc.visible, visible);
     let store = |v: __m256i, to: &mut [i64; 4]| {
         // SAFETY: `to` holds four i64.
         unsafe { _mm256_storeu_si256(to.as_mut_ptr().cast(), v) }
     };
     store(even, &mut acc.lambda_even);
     store(odd, &mut acc.lambda_odd);
-    store(member, &mut acc.member);
-    store(visible, &mut acc.visible);
-    store(weight, &mut acc.weight);
     store(towards_x, &mut acc.towards_x);
     store(towards_y, &mut acc.towards_y);
     // SAFETY: `acc.edge` holds eight f32.
     unsafe { _mm256_storeu_ps(acc.edge.as_mut_ptr(), edge) };
-    acc.visited += u64::from(visited);
+    acc.visited += if PLAIN {
+        n as u64
+    } else {
+        let mut c = [0u32; 8];
+        // SAFETY: `c` holds eight u32.
+        unsafe { _mm256_storeu_si256(c.as_mut_ptr().cast(), counted) };
+        c.iter().map(|&v| u64::from(v)).sum()
+    };
 }
 
 #[cfg(test)]
