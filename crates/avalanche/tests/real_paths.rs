@@ -192,21 +192,13 @@ fn avawog_release_runs_down_its_gully() {
     );
 }
 
-/// avaKot (Kontertal): relKot.shp (1 m, measured normal to the slope as AvaFrame does) against
-/// AvaFrame com1DFA's reference run (samosATSmall friction; peak flow thickness on a 5.000 m
-/// grid offset from the 4.998 m DEM: compared by map coordinates, reference cells looked up in
-/// our grid at their centres).
-///
-/// Measured: released 21,681 m³ (AvaFrame: 4,328,073.7 kg at 200 kg/m³ = 21,640 m³); footprint
-/// (peak > 1 cm) 683,000 m² against the reference's 114,050 m²; Jaccard index 0.165; our
-/// footprint covers 98.8 % of the reference's. The flow follows the reference's gully but a
-/// thin sheet also leaves it where it bends and fans over the open slope north-west of it:
-/// pure Coulomb friction has no velocity-dependent drag to hold a thin fast film (AvaFrame's
-/// samosAT has one). Asserted, loosely (a regression bound, not an agreement claim): volume
-/// within 1 % of AvaFrame's, the reference footprint within 0.5 % of its documented 114,000 m²,
-/// recall ≥ 0.9, Jaccard ≥ 0.1 and our footprint at most 8 times the reference's.
 /// The overlap of avaKot's footprint with AvaFrame's, the flow run with `params`.
-fn avakot_overlap(params: &AvalancheParams) -> snowscape_avalanche::validation::Overlap {
+fn avakot_overlap(
+    params: &AvalancheParams,
+) -> (
+    snowscape_avalanche::validation::RealRun,
+    snowscape_avalanche::validation::Overlap,
+) {
     let dem = data("dem/avaframe_avaKot/avaKot.asc");
     let rel = data("dem/avaframe_avaKot/REL/relKot.shp");
     let reference = read_dem(
@@ -226,7 +218,8 @@ fn avakot_overlap(params: &AvalancheParams) -> snowscape_avalanche::validation::
     )
     .unwrap();
     check_run("avaKot", &r);
-    footprint_overlap(r.dem.geometry(), &r.peak_thickness, &reference, 0.01)
+    let o = footprint_overlap(r.dem.geometry(), &r.peak_thickness, &reference, 0.01);
+    (r, o)
 }
 
 /// Issue 20: the friction laws on avaKot against AvaFrame's reference run (com1DFA,
@@ -234,12 +227,12 @@ fn avakot_overlap(params: &AvalancheParams) -> snowscape_avalanche::validation::
 /// recall 0.925), Voellmy with AvaFrame's defaults comes closer than the paper's Coulomb law.
 #[test]
 fn avakot_footprints_under_each_friction_law_against_avaframe() {
-    let coulomb = avakot_overlap(&AvalancheParams::default());
-    let voellmy = avakot_overlap(&AvalancheParams {
+    let (_, coulomb) = avakot_overlap(&AvalancheParams::default());
+    let (_, voellmy) = avakot_overlap(&AvalancheParams {
         friction: snowscape_avalanche::FrictionLaw::Voellmy,
         ..AvalancheParams::default()
     });
-    let samos = avakot_overlap(&AvalancheParams {
+    let (_, samos) = avakot_overlap(&AvalancheParams {
         friction: snowscape_avalanche::FrictionLaw::SamosAt,
         samos_at: snowscape_avalanche::SamosAtParams::small(),
         ..AvalancheParams::default()
@@ -261,34 +254,28 @@ fn avakot_footprints_under_each_friction_law_against_avaframe() {
     assert!(voellmy.recall >= 0.9, "recall {}", voellmy.recall);
 }
 
+/// avaKot (Kontertal): relKot.shp (1 m, measured normal to the slope as AvaFrame does) against
+/// AvaFrame com1DFA's reference run (samosATSmall friction; peak flow thickness on a 5.000 m
+/// grid offset from the 4.998 m DEM: compared by map coordinates, reference cells looked up in
+/// our grid at their centres).
+///
+/// Measured: released 21,681 m³ (AvaFrame: 4,328,073.7 kg at 200 kg/m³ = 21,640 m³); footprint
+/// (peak > 1 cm) 683,000 m² against the reference's 114,050 m²; Jaccard index 0.165; our
+/// footprint covers 98.8 % of the reference's. The flow follows the reference's gully but a
+/// thin sheet also leaves it where it bends and fans over the open slope north-west of it:
+/// pure Coulomb friction has no velocity-dependent drag to hold a thin fast film (AvaFrame's
+/// samosAT has one). Asserted, loosely (a regression bound, not an agreement claim): volume
+/// within 1 % of AvaFrame's, the reference footprint within 0.5 % of its documented 114,000 m²,
+/// recall ≥ 0.9, Jaccard ≥ 0.1 and our footprint at most 8 times the reference's.
 #[test]
 fn avakot_release_against_avaframe_reference() {
-    let dem = data("dem/avaframe_avaKot/avaKot.asc");
-    let rel = data("dem/avaframe_avaKot/REL/relKot.shp");
-    let reference = read_dem(
-        &data(
-            "reference/avaframe_benchmarks/avaKotNullTest/relKot_989874a9be_C_S_null_dfa_pft.asc",
-        ),
-        &ReadOptions::default(),
-    )
-    .unwrap();
-    let r = run_release(
-        &dem,
-        &rel,
-        1.0,
-        ThicknessConvention::SlopeNormal,
-        &AvalancheParams::default(),
-        &RunOptions::default(),
-    )
-    .unwrap();
-    check_run("avaKot", &r);
+    let (r, o) = avakot_overlap(&AvalancheParams::default());
     let avaframe_volume = 4_328_073.727009 / 200.0;
     let v = r.summary.released_volume_m3;
     assert!(
         (v - avaframe_volume).abs() < 0.01 * avaframe_volume,
         "released {v} m³, AvaFrame {avaframe_volume} m³"
     );
-    let o = footprint_overlap(r.dem.geometry(), &r.peak_thickness, &reference, 0.01);
     eprintln!(
         "avaKot vs AvaFrame: footprint {:.0} m² vs {:.0} m², both {:.0} m², Jaccard {:.3}, \
          recall {:.3}, precision {:.3}",

@@ -3,26 +3,29 @@
 //! and cover parameters) are checked there as well, with the same ranges; these bound the
 //! flags that size the work itself (days, hours, frames, threads, time budgets).
 
-/// A parser for a finite number within `[lo, hi]` (`unit` for the message).
-fn number_within(text: &str, lo: f64, hi: f64, unit: &str) -> Result<f64, String> {
+/// A parser for a finite number within `[lo, hi]`, or `(lo, hi]` when `open_low` (`unit`
+/// for the message).
+fn number_in(text: &str, lo: f64, hi: f64, open_low: bool, unit: &str) -> Result<f64, String> {
+    let range = format!("{}{lo}, {hi}]{unit}", if open_low { "(" } else { "[" });
     let v: f64 = text
         .trim()
         .parse()
-        .map_err(|_| format!("not a number (expected a value within [{lo}, {hi}]{unit})"))?;
-    if v.is_finite() && v >= lo && v <= hi {
+        .map_err(|_| format!("not a number (expected a value within {range})"))?;
+    let above = if open_low { v > lo } else { v >= lo };
+    if v.is_finite() && above && v <= hi {
         Ok(v)
     } else {
-        Err(format!("must be within [{lo}, {hi}]{unit}"))
+        Err(format!("must be within {range}"))
     }
+}
+
+fn number_within(text: &str, lo: f64, hi: f64, unit: &str) -> Result<f64, String> {
+    number_in(text, lo, hi, false, unit)
 }
 
 /// A parser for a positive finite number at most `hi` (`(0, hi]`).
 fn positive_up_to(text: &str, hi: f64, unit: &str) -> Result<f64, String> {
-    match number_within(text, 0.0, hi, unit) {
-        Ok(v) if v > 0.0 => Ok(v),
-        Err(e) if e.starts_with("not a number") => Err(e.replace("[0,", "(0,")),
-        _ => Err(format!("must be within (0, {hi}]{unit}")),
-    }
+    number_in(text, 0.0, hi, true, unit)
 }
 
 /// A season's length, days: (0, 3650] (ten years).

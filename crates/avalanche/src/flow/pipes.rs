@@ -246,14 +246,15 @@ unsafe fn pipe_lanes<V: Lanes>(
         let t0 = v0 - dtg * (half * (lv(GX, kk) + lv(GX, j)));
         let t1 = v1 - dtg * (half * (lv(GY, kk) + lv(GY, j)));
         let tnorm = (t0 * t0 + t1 * t1).sqrt();
-        // The samosAT law's depth and, lane by lane, its dry friction and drag factor.
+        // [`super::update::turbulent_depth`] lane by lane: the depth both drag laws divide by.
+        let mean = half * (hk + hj);
+        let depth = V::select(
+            mean.lt(V::splat(MIN_TURBULENT_DEPTH)),
+            V::splat(MIN_TURBULENT_DEPTH),
+            mean,
+        );
+        // The samosAT law's dry friction and drag factor.
         let samos = k.samos.map(|s| {
-            let mean = half * (hk + hj);
-            let depth = V::select(
-                mean.lt(V::splat(MIN_TURBULENT_DEPTH)),
-                V::splat(MIN_TURBULENT_DEPTH),
-                mean,
-            );
             // [`Samos::yield_dt`] and [`Samos::drag`] in lanes (only the logarithm lane by lane).
             let start2 = v0 * v0 + v1 * v1;
             let rs0 = V::splat(s.rs0);
@@ -301,12 +302,6 @@ unsafe fn pipe_lanes<V: Lanes>(
             u = u / (V::splat(1.0) + V::splat(k.visc) * (hk + hj));
         }
         if k.turb != 0.0 {
-            // [`super::update::turbulent_depth`] lane by lane.
-            let depth = V::select(
-                (half * (hk + hj)).lt(V::splat(MIN_TURBULENT_DEPTH)),
-                V::splat(MIN_TURBULENT_DEPTH),
-                half * (hk + hj),
-            );
             let speed = V::select(tnorm.gt(yield_dt), tnorm - yield_dt, zero);
             u = u / (V::splat(1.0) + V::splat(k.turb) * speed / depth);
         }
