@@ -237,7 +237,9 @@ pub fn write_timelapse(out: &mut Written, frames: &[RgbaImage], delay_ms: u32) -
     Ok(())
 }
 
-/// Every output of a snow-covered terrain, each stage timed.
+/// Every output of a snow-covered terrain, each stage timed. The four writers are
+/// independent (different files) and run at the same time; their files are listed in a fixed
+/// order, and the first error (in that order) is returned once all have finished.
 pub fn write_all(
     out: &mut Written,
     terrain: &LayeredTerrain,
@@ -245,9 +247,39 @@ pub fn write_all(
     view: &PreviewOptions,
     stages: &mut Stages,
 ) -> Result<()> {
-    stages.run("write_rasters", || write_rasters(out, terrain))?;
-    stages.run("render_previews", || write_previews(out, terrain, view))?;
-    stages.run("write_glb", || write_glb(out, terrain))?;
-    stages.run("write_timelapse", || write_timelapse(out, frames, 400))?;
-    Ok(())
+    let dir = out.dir.clone();
+    let timed = |write: &(dyn Fn(&mut Written) -> Result<()> + Sync)| {
+        let mut files = Written::new(&dir);
+        let t0 = std::time::Instant::now();
+        let result = write(&mut files);
+        (files, t0.elapsed().as_secs_f64(), result)
+    };
+    let ((rasters, previews), (glb, timelapse)) = rayon::join(
+        || {
+            rayon::join(
+                || timed(&|w| write_rasters(w, terrain)),
+                || timed(&|w| write_previews(w, terrain, view)),
+            )
+        },
+        || {
+            rayon::join(
+                || timed(&|w| write_glb(w, terrain)),
+                || timed(&|w| write_timelapse(w, frames, 400)),
+            )
+        },
+    );
+    let mut first_error = None;
+    for (name, (files, seconds, result)) in [
+        ("write_rasters", rasters),
+        ("render_previews", previews),
+        ("write_glb", glb),
+        ("write_timelapse", timelapse),
+    ] {
+        stages.finished(name, seconds);
+        out.files.extend(files.files);
+        if let Err(e) = result {
+            first_error.get_or_insert(e);
+        }
+    }
+    first_error.map_or(Ok(()), Err)
 }

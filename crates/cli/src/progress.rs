@@ -37,6 +37,12 @@ impl Stages {
         out
     }
 
+    /// Counts a stage that ran elsewhere (concurrently with others) in `seconds`.
+    pub fn finished(&mut self, name: &str, seconds: f64) {
+        self.record(name, seconds);
+        self.bar.inc(1);
+    }
+
     /// Adds `seconds` to the timing of `name` (stages may run several times).
     pub fn record(&mut self, name: &str, seconds: f64) {
         match self.timings.iter_mut().find(|(n, _)| n == name) {

@@ -36,6 +36,7 @@ use crate::phenomenon::{PhenomenonError, Validity, check_range, row_gradient_nor
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 /// Parameters of the Sx-driven redistribution.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -261,6 +262,12 @@ pub(super) fn run<V: Validity>(
 }
 
 /// The ordered sweep downwind: scour, carry, keep, pass on.
+///
+/// The columns are cut in two halves, upwind and downwind, swept at the same time: the only
+/// load that crosses between them is each row's east/west carry at the cut, which the upwind
+/// half hands over row by row (the downwind half waits for it). Each cell does the same
+/// arithmetic in the same order as in one sequential sweep, so the layers are bit-identical
+/// for any thread count; the sums are per half, added in a fixed order.
 fn sweep<V: Validity>(
     ctx: &Context,
     valid: &V,
@@ -277,64 +284,169 @@ fn sweep<V: Validity>(
     } else {
         (0..h).collect()
     };
-    let cols: Vec<usize> = if dc > 0 {
-        (0..w).collect()
-    } else {
-        (0..w).rev().collect()
-    };
     scratch.from_row.clear();
     scratch.from_row.resize(w, 0.0);
-    let mut sums = SxSums::default();
+    let mid = w / 2;
     let [_, _, unstable, powder] = &mut terrain.snow;
-    for &row in &rows {
-        let mut carry = 0.0f32;
-        for &col in &cols {
-            let i = row * w + col;
-            let from_above = std::mem::take(&mut scratch.from_row[col]);
-            if !valid.at(i) {
+    // Each row's (unstable, powder) in the west and east halves.
+    let (mut west, mut east) = (Vec::with_capacity(h), Vec::with_capacity(h));
+    for (u, p) in unstable.chunks_mut(w).zip(powder.chunks_mut(w)) {
+        let ((uw, ue), (pw, pe)) = (u.split_at_mut(mid), p.split_at_mut(mid));
+        west.push((uw, pw));
+        east.push((ue, pe));
+    }
+    let (from_west, from_east) = scratch.from_row.split_at_mut(mid);
+    let west = Half {
+        first_col: 0,
+        rows: west,
+        from_row: from_west,
+    };
+    let east = Half {
+        first_col: mid,
+        rows: east,
+        from_row: from_east,
+    };
+    let (upwind, downwind) = if dc > 0 { (west, east) } else { (east, west) };
+    let handover: Vec<AtomicU32> = (0..h).map(|_| AtomicU32::new(0)).collect();
+    let handed = AtomicUsize::new(0);
+    let maps = SweepMaps {
+        ctx,
+        valid,
+        scour: &scratch.scour,
+        keep: &scratch.keep,
+        slab: &scratch.slab,
+        fx,
+        dc,
+        dr,
+    };
+    let (up, down) = rayon::join(
+        || {
+            upwind.sweep(
+                &maps,
+                &rows,
+                |_| 0.0,
+                |k, carry| {
+                    handover[k].store(carry.to_bits(), Ordering::Relaxed);
+                    handed.store(k + 1, Ordering::Release);
+                },
+            )
+        },
+        || {
+            downwind.sweep(
+                &maps,
+                &rows,
+                |k| {
+                    let mut spins = 0u32;
+                    while handed.load(Ordering::Acquire) <= k {
+                        spins += 1;
+                        if spins < 1 << 10 {
+                            std::hint::spin_loop();
+                        } else {
+                            std::thread::yield_now();
+                        }
+                    }
+                    f32::from_bits(handover[k].load(Ordering::Relaxed))
+                },
+                |_, _| {},
+            )
+        },
+    );
+    SxSums {
+        eroded: up.eroded + down.eroded,
+        deposited: up.deposited + down.deposited,
+        deposited_unstable: up.deposited_unstable + down.deposited_unstable,
+        border: up.border + down.border,
+    }
+}
+
+/// What both halves of the sweep read.
+struct SweepMaps<'a, V> {
+    ctx: &'a Context<'a>,
+    valid: &'a V,
+    scour: &'a [f32],
+    keep: &'a [f32],
+    slab: &'a [bool],
+    fx: f32,
+    dc: isize,
+    dr: isize,
+}
+
+/// A half of the columns: per row its (unstable, powder) and the loads handed down from the
+/// row before, indexed from `first_col`.
+struct Half<'a> {
+    first_col: usize,
+    rows: Vec<(&'a mut [f32], &'a mut [f32])>,
+    from_row: &'a mut [f32],
+}
+
+impl Half<'_> {
+    /// Sweeps the half's columns downwind, row by row in `rows` order: each row starts with
+    /// the carry `carry_in(k)` from the other half (k the position in `rows`) and ends by
+    /// handing its carry to `carry_out`.
+    fn sweep<V: Validity>(
+        mut self,
+        m: &SweepMaps<V>,
+        rows: &[usize],
+        carry_in: impl Fn(usize) -> f32,
+        mut carry_out: impl FnMut(usize, f32),
+    ) -> SxSums {
+        let w = m.ctx.geometry.width();
+        let n_cols = self.from_row.len();
+        let mut sums = SxSums::default();
+        for (k, &row) in rows.iter().enumerate() {
+            let mut carry = if n_cols == 0 { 0.0 } else { carry_in(k) };
+            let (unstable, powder) = &mut self.rows[row];
+            for step in 0..n_cols {
+                let local = if m.dc > 0 { step } else { n_cols - 1 - step };
+                let col = self.first_col + local;
+                let i = row * w + col;
+                let from_above = std::mem::take(&mut self.from_row[local]);
+                if !m.valid.at(i) {
+                    carry = 0.0;
+                    continue;
+                }
+                let e = m.scour[i];
+                if e > 0.0 {
+                    let from_powder = e.min(powder[local]);
+                    powder[local] -= from_powder;
+                    unstable[local] -= (e - from_powder).min(unstable[local]);
+                    sums.eroded += f64::from(e);
+                }
+                let load = carry + from_above + e;
                 carry = 0.0;
-                continue;
-            }
-            let e = scratch.scour[i];
-            if e > 0.0 {
-                let from_powder = e.min(powder[i]);
-                powder[i] -= from_powder;
-                unstable[i] -= (e - from_powder).min(unstable[i]);
-                sums.eroded += f64::from(e);
-            }
-            let load = carry + from_above + e;
-            carry = 0.0;
-            if load <= 0.0 {
-                continue;
-            }
-            let mut kept = load * scratch.keep[i];
-            let out = load - kept;
-            let to_x = out * fx;
-            let to_y = out - to_x;
-            // The east/west share.
-            match ctx.geometry.neighbour(col, row, dc, 0) {
-                None => sums.border += f64::from(to_x),
-                Some(j) if valid.at(j) => carry = to_x,
-                Some(_) => kept += to_x,
-            }
-            // The north/south share.
-            match ctx.geometry.neighbour(col, row, 0, dr) {
-                None => sums.border += f64::from(to_y),
-                Some(j) if valid.at(j) => scratch.from_row[col] = to_y,
-                Some(_) => kept += to_y,
-            }
-            if kept > 0.0 {
-                sums.deposited += f64::from(kept);
-                if scratch.slab[i] {
-                    unstable[i] += kept;
-                    sums.deposited_unstable += f64::from(kept);
-                } else {
-                    powder[i] += kept;
+                if load <= 0.0 {
+                    continue;
+                }
+                let mut kept = load * m.keep[i];
+                let out = load - kept;
+                let to_x = out * m.fx;
+                let to_y = out - to_x;
+                // The east/west share.
+                match m.ctx.geometry.neighbour(col, row, m.dc, 0) {
+                    None => sums.border += f64::from(to_x),
+                    Some(j) if m.valid.at(j) => carry = to_x,
+                    Some(_) => kept += to_x,
+                }
+                // The north/south share.
+                match m.ctx.geometry.neighbour(col, row, 0, m.dr) {
+                    None => sums.border += f64::from(to_y),
+                    Some(j) if m.valid.at(j) => self.from_row[local] = to_y,
+                    Some(_) => kept += to_y,
+                }
+                if kept > 0.0 {
+                    sums.deposited += f64::from(kept);
+                    if m.slab[i] {
+                        unstable[local] += kept;
+                        sums.deposited_unstable += f64::from(kept);
+                    } else {
+                        powder[local] += kept;
+                    }
                 }
             }
+            carry_out(k, carry);
         }
+        sums
     }
-    sums
 }
 
 /// Checks the Sx map of `wind`, if any, against the grid.
