@@ -1,6 +1,6 @@
 //! Long work off the request path: a season step (days of the season, Cordonnier et al. 2018,
-//! Section 5), a scenario change (the environment precompute of Section 4), loading a project
-//! and exporting the outputs.
+//! Section 5), a scenario change (the environment precompute of Section 4), loading and
+//! saving a project and exporting the outputs.
 //!
 //! [`Session::start`] turns such a message into a [`Job`]: owned copies of what the work reads
 //! (a fork of the season, the painted maps, the new scenario and the first snapshot's
@@ -20,7 +20,7 @@
 
 use crate::brush::PaintMaps;
 use crate::live::skier_progress;
-use crate::project::{ProjectDir, ProjectError};
+use crate::project::{ProjectContents, ProjectDir, ProjectError};
 use crate::protocol::{ErrorCode, ServerMessage};
 use crate::session::{Exporter, Out, Outgoing, Refusal, Session};
 use serde::{Deserialize, Serialize};
@@ -45,6 +45,7 @@ pub enum JobKind {
     SetScenario,
     Load,
     Export,
+    Save,
 }
 
 impl JobKind {
@@ -55,6 +56,7 @@ impl JobKind {
             JobKind::SetScenario => "a scenario change (the environment precompute)",
             JobKind::Load => "loading a project",
             JobKind::Export => "an export",
+            JobKind::Save => "saving a project",
         }
     }
 }
@@ -116,6 +118,11 @@ enum Work {
         name: String,
         export: Arc<Exporter>,
     },
+    Save {
+        project: ProjectDir,
+        name: String,
+        contents: Box<ProjectContents>,
+    },
 }
 
 /// Work handed to a worker: everything it needs, owned.
@@ -131,6 +138,7 @@ pub enum JobOutcome {
     SetScenario(Box<Session>),
     Loaded { session: Box<Session>, name: String },
     Exported { name: String, files: Vec<String> },
+    Saved { name: String, files: Vec<String> },
     Cancelled,
     Failed(Refusal),
 }
@@ -226,6 +234,20 @@ impl Job {
                     name,
                 },
                 Err(e) => JobOutcome::Failed((ErrorCode::Failed, e)),
+            },
+            Work::Save {
+                project,
+                name,
+                contents,
+            } => match project.save(&name, &contents) {
+                Ok(files) => JobOutcome::Saved { name, files },
+                Err(e) => {
+                    let code = match e {
+                        ProjectError::BadPath(_) => ErrorCode::BadPath,
+                        _ => ErrorCode::Failed,
+                    };
+                    JobOutcome::Failed((code, e.to_string()))
+                }
             },
         };
         // A cancel asked while the uninterruptible part ran drops its result.
@@ -371,6 +393,27 @@ impl Session {
         Ok(self.new_job(JobKind::Export, 1.0, message, work))
     }
 
+    /// Saving project `name` as a job: the session's contents are copied now, the files
+    /// written by the worker.
+    pub(crate) fn save_job(
+        &mut self,
+        name: String,
+        project: Option<&ProjectDir>,
+    ) -> Result<(Job, Vec<Out>), Refusal> {
+        let project = project
+            .ok_or((ErrorCode::Failed, "no project folder".to_string()))?
+            .clone();
+        crate::protocol::check_name(&name).map_err(|e| (ErrorCode::BadPath, e.to_string()))?;
+        let contents = Box::new(ProjectContents::of(self));
+        let message = format!("saving project {name}");
+        let work = Work::Save {
+            project,
+            name,
+            contents,
+        };
+        Ok(self.new_job(JobKind::Save, 1.0, message, work))
+    }
+
     /// Takes a worker's progress report; returns the message for the tabs (none when the
     /// job is not the running one).
     pub fn job_progress(&mut self, p: JobProgress) -> Option<Out> {
@@ -438,6 +481,14 @@ impl Session {
             JobOutcome::Exported { name, files } => {
                 out.push(Out::Sender(text(&ServerMessage::Done {
                     what: "exported".into(),
+                    name,
+                    files,
+                })));
+                out.push(self.state_out());
+            }
+            JobOutcome::Saved { name, files } => {
+                out.push(Out::All(text(&ServerMessage::Done {
+                    what: "saved".into(),
                     name,
                     files,
                 })));

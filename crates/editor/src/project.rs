@@ -53,6 +53,30 @@ pub struct ProjectDir {
     root: PathBuf,
 }
 
+/// What a project saves, copied out of a session so that the files are written off the
+/// request path (a save is a job: [`crate::job`]).
+pub struct ProjectContents {
+    pub winter: Winter,
+    pub paint: PaintMaps,
+    /// Where the session's terrain came from.
+    pub source: String,
+    pub snapshot_days: Vec<f64>,
+    pub history: Vec<serde_json::Value>,
+}
+
+impl ProjectContents {
+    /// A copy of what `session` would save now.
+    pub fn of(session: &Session) -> Self {
+        Self {
+            winter: session.winter().clone(),
+            paint: session.paint().clone(),
+            source: session.summary().source,
+            snapshot_days: session.timeline.days(),
+            history: session.history.clone(),
+        }
+    }
+}
+
 impl ProjectDir {
     /// Opens (creating if missing) the project folder `dir`.
     pub fn open(dir: &Path) -> Result<Self, ProjectError> {
@@ -130,11 +154,11 @@ impl ProjectDir {
     }
 
     /// Saves the session as project `name`; returns the written files (relative).
-    pub fn save(&self, name: &str, s: &Session) -> Result<Vec<String>, ProjectError> {
+    pub fn save(&self, name: &str, s: &ProjectContents) -> Result<Vec<String>, ProjectError> {
         crate::protocol::check_name(name).map_err(|e| ProjectError::BadPath(e.to_string()))?;
         let dir_rel = format!("projects/{name}");
         let dir = self.create_dir(&dir_rel)?;
-        let w = s.winter();
+        let w = &s.winter;
         let t = &w.terrain;
         let content = |what: &'static str, path: &Path| {
             let path = path.display().to_string();
@@ -155,11 +179,8 @@ impl ProjectDir {
             .map_err(|e| content("terrain", &p)(e.to_string()))?;
         write_geotiff(&p, &grid).map_err(|e| content("terrain", &p)(e.to_string()))?;
         for (file, values) in [
-            (
-                "avalanche_probability.tif",
-                &s.paint().avalanche_probability,
-            ),
-            ("ski_area.tif", &s.paint().ski_area),
+            ("avalanche_probability.tif", &s.paint.avalanche_probability),
+            ("ski_area.tif", &s.paint.ski_area),
         ] {
             let p = put(file);
             let grid = t
@@ -179,9 +200,9 @@ impl ProjectDir {
         write_bytes_atomic(&p, &bytes).map_err(|e| content("checkpoint", &p)(e.to_string()))?;
         let p = put("history.json");
         let history = serde_json::json!({
-            "source": s.summary().source,
+            "source": s.source,
             "day": w.day(),
-            "snapshot_days": s.timeline.days(),
+            "snapshot_days": s.snapshot_days,
             "actions": s.history,
         });
         let text = serde_json::to_vec_pretty(&history)

@@ -579,17 +579,7 @@ impl Session {
             }
             ClientMessage::LaunchSkier { col, row } => self.launch_skier(col, row),
             ClientMessage::SetScenario { scenario } => return job(self.scenario_job(scenario)),
-            ClientMessage::Save { name } => {
-                let p = project.ok_or((ErrorCode::Failed, "no project folder".to_string()))?;
-                let files = p
-                    .save(&name, self)
-                    .map_err(|e| (ErrorCode::Failed, e.to_string()))?;
-                Ok(vec![Out::All(text(&ServerMessage::Done {
-                    what: "saved".into(),
-                    name,
-                    files,
-                }))])
-            }
+            ClientMessage::Save { name } => return job(self.save_job(name, project)),
             ClientMessage::Load { name } => return job(self.load_job(name, project)),
             ClientMessage::Export { name } => return job(self.export_job(name, project, export)),
             ClientMessage::Cancel {} => self.cancel(),

@@ -289,7 +289,28 @@ fn save_and_load_round_trip_in_the_project_folder() {
     let out = s
         .handle(ClientMessage::Save { name: "p1".into() }, Some(&pd), None)
         .unwrap();
-    assert_eq!(out.len(), 1);
+    // A save is a job: started, ended, then the "saved" message with the files written.
+    let messages: Vec<serde_json::Value> = out
+        .iter()
+        .filter_map(|o| match o {
+            Out::All(Outgoing::Text(t)) => serde_json::from_str::<serde_json::Value>(t).ok(),
+            _ => None,
+        })
+        .collect();
+    let phases: Vec<&serde_json::Value> = messages
+        .iter()
+        .filter(|m| m["type"] == "job")
+        .map(|m| &m["phase"])
+        .collect();
+    assert_eq!(phases, ["started", "ended"], "{messages:?}");
+    let saved = messages
+        .iter()
+        .find(|m| m["what"] == "saved")
+        .expect("a saved message");
+    assert!(
+        saved["files"].as_array().is_some_and(|f| f.len() >= 5),
+        "{saved}"
+    );
     assert!(tmp.path().join("projects/p1/checkpoint.bin").is_file());
     let saved = s.summary();
     let layers = s.terrain().snow.clone();
