@@ -32,6 +32,9 @@ fn live_avalanche_updates_per_second_on_1024() {
         value: 0.0,
     };
     s.handle(dab, None, None).unwrap();
+    // The start (rupture, release, the first frames) is answered on the request path: it
+    // must stay short.
+    let start = Instant::now();
     s.handle(
         ClientMessage::TriggerAvalanche {
             col: c as f64,
@@ -41,6 +44,10 @@ fn live_avalanche_updates_per_second_on_1024() {
         None,
     )
     .unwrap();
+    println!(
+        "1024²: the trigger_avalanche answer took {:.1} ms",
+        start.elapsed().as_secs_f64() * 1e3
+    );
     let t = Instant::now();
     let (mut frames, mut bytes, mut max_bytes) = (0usize, 0usize, 0usize);
     while s.busy() && frames < 400 {
