@@ -1,18 +1,20 @@
-//! Issue 20, item 5: the frictional dam break of Mangeney et al. (2000, "Analytical solution
+//! Issue 20, item 5: the flow against AvaFrame's analytic avalanche tests. First the
+//! frictional dam break of Mangeney et al. (2000, "Analytical solution
 //! for testing debris avalanche numerical models", Pure Appl. Geophys. 157) against the
 //! analytic profiles AvaFrame's `ana1Tests.damBreak` writes
 //! (`../shared/data/reference/avaframe_analytic/dambreak_mangeney2000.csv`): a 1 m thick
-//! (slope-normal) column behind a dam at x = 0 on a 22° plane with 21° Coulomb friction, a
-//! back wall at x = −120 m, released at t = 0.
+//! (slope-normal) column behind a dam at x = 0 on a 22° plane with 21° Coulomb friction,
+//! released at t = 0 (the similarity solution is at the end of the file).
 //!
 //! The analytic solution is of the Savage-Hutter equations in slope coordinates: thickness
-//! normal to the slope, gravity `g cos θ` across it, and x the horizontal projection. The
-//! flow here is the pipe model on a horizontal grid with vertical thickness (`h_v = h_n /
-//! cos θ`) and gravity `g`: the front wave speed `2 sqrt(g h)` and the net acceleration `g
-//! (tan θ − tan δ)` then differ from the analytic `2 sqrt(g h cos θ)` and `g cos θ (tan θ −
-//! tan δ)` by the shallow-slope approximation (a few per cent at 22°), and the first-order
-//! scheme smears the front. The checks, at t = 10 and 20 s, compare slope-normal thickness
-//! by horizontal position: the position of the front (the furthest cell with more than 5 cm)
+//! normal to the slope, gravity `g cos θ` across it, x the horizontal projection. The flow
+//! here is the pipe model on a horizontal grid with vertical thickness (`h_v = h_n / cos θ`)
+//! and gravity `g`, the shallow-slope form: projected on the horizontal, its sliding
+//! acceleration `g (tan θ − tan δ)` and its wave speed `sqrt(g h_v)` are 1/cos²θ (16 % at 22°)
+//! above Savage-Hutter's `g cos²θ (tan θ − tan δ)` and `cos²θ sqrt(g h_v)` (see the
+//! similarity solution below, where this is 49 % at 35°), and the first-order scheme smears
+//! the front. The checks, at t = 10 and 20 s, compare slope-normal thickness by horizontal
+//! position: the position of the front (the furthest cell with more than 5 cm)
 //! and the L1 profile error relative to the analytic volume. Without friction the front runs
 //! far ahead, without momentum advection it lags far behind: both fail the tolerances.
 
@@ -170,8 +172,8 @@ fn coulomb() -> AvalancheParams {
 }
 
 /// Tolerances at t = 10 and 20 s: front within 15 % of the analytic front's distance from the
-/// dam (the vertical-thickness model's wave speed and acceleration are 1/cos 22° = 7.9 %
-/// above the analytic ones, and the first-order front runs ahead), L1 profile error below
+/// dam (the shallow-slope model's wave speed and acceleration run 16 % above the analytic ones,
+/// module docs), L1 profile error below
 /// 12 % of the analytic volume in the window. Measured (2026-12-03): front +11.0 % and
 /// +10.2 %, L1 5.2 % and 8.3 %; frictionless the front reaches the grid's end (+177 %),
 /// without advection it lags (−48 %).
@@ -216,4 +218,96 @@ fn dam_break_without_friction_or_advection_misses_mangeney() {
         c.front_m, c.front_exact_m
     );
     assert!(c.front_m < 0.85 * c.front_exact_m, "front {}", c.front_m);
+}
+
+/// Issue 20, item 5: AvaFrame's similarity solution (Hutter et al. 1993's parabolic-cap
+/// similarity solution of the Savage-Hutter equations, as AvaFrame's `ana1Tests.simiSol`
+/// writes it: a cap of L = 80 m and H = 4 m on a 35° plane with 25° friction) at t = 5 s,
+/// from its own thickness at t = 0, on the plane DEM
+/// (`dem/avaframe_synthetic_avaSimilaritySol`, 401x101 cells of 5 m). Thickness normal to the
+/// slope (ours is vertical: × cos 35°), compared cell by cell.
+///
+/// **What it shows (measured 2026-12-03).** L1 error 30.0 % of the analytic volume (48.6 %
+/// for a cap that did not move), peak 2.89 m against 3.44 m, and the centre of mass 30.4 m
+/// downslope (horizontal) against the analytic 19.2 m. The flow solves its own equations: the
+/// centre of mass follows the pipe model's sliding law `½ g (tan θ − tan δ) t²` = 28.7 m
+/// (within 10 %, asserted; the rest is the cap's spreading). But those equations are the
+/// shallow-slope form on a horizontal grid: Savage-Hutter's horizontal acceleration is
+/// `g cos²θ (tan θ − tan δ)`, so on a 35° plane the model moves 1/cos²35° = 1.49 times too far.
+/// A slope-corrected gravity in the momentum equation is the fix (not done yet; the
+/// assertions here hold the model to its own law and to beating the cap at rest, so they
+/// will need tightening, not loosening, when it lands).
+#[test]
+fn similarity_solution_at_five_seconds() {
+    use snowscape_io::{ReadOptions, read_dem};
+    let read = |rel: &str| read_dem(&data(rel), &ReadOptions::default()).unwrap();
+    let dem = read("dem/avaframe_synthetic_avaSimilaritySol/DEM_IP_Topo.asc");
+    let h_start = read("reference/avaframe_analytic/simisol_h_t00.asc");
+    let h_end = read("reference/avaframe_analytic/simisol_h_t05.asc");
+    let g = dem.geometry().clone();
+    assert_eq!((g.width(), g.height()), (401, 101));
+    assert_eq!(h_start.data().len(), g.len());
+    let cos = 35f64.to_radians().cos();
+    let bed: Vec<f64> = dem.data().iter().map(|&z| f64::from(z)).collect();
+    let mut state = AvalancheState::new(&g, &NodataMask::all_valid(), &bed).unwrap();
+    let h0: Vec<f64> = h_start.data().iter().map(|&h| f64::from(h) / cos).collect();
+    state.set_thickness(&h0).unwrap();
+    let params = AvalancheParams {
+        alpha: 1.0,
+        k_viscous: 0.0,
+        rest_angle_deg: 25.0,
+        border: Border::Open,
+        ..AvalancheParams::default()
+    };
+    let mut scratch = AvalancheScratch::default();
+    step(&params, &mut state, &mut scratch, 5.0).unwrap();
+    let ours: Vec<f64> = state.thickness().iter().map(|h| h * cos).collect();
+    let exact: Vec<f64> = h_end.data().iter().map(|&h| f64::from(h)).collect();
+    let start: Vec<f64> = h_start.data().iter().map(|&h| f64::from(h)).collect();
+    let volume: f64 = exact.iter().sum();
+    let l1 = |a: &[f64]| {
+        a.iter()
+            .zip(&exact)
+            .map(|(x, y)| (x - y).abs())
+            .sum::<f64>()
+            / volume
+    };
+    let centre = |h: &[f64]| {
+        let w = g.width();
+        let (m, s) = h.iter().enumerate().fold((0.0, 0.0), |(m, s), (i, &v)| {
+            (m + v, s + v * (i % w) as f64 * g.cell_size_x())
+        });
+        s / m
+    };
+    let peak = |h: &[f64]| h.iter().copied().fold(0.0, f64::max);
+    let (travel, travel_exact) = (
+        centre(&ours) - centre(&start),
+        centre(&exact) - centre(&start),
+    );
+    eprintln!(
+        "similarity solution t = 5 s: L1 {:.1} % (a cap at rest: {:.1} %), peak {:.2} m vs {:.2} m, \
+         centre of mass travel {travel:.1} m vs {travel_exact:.1} m",
+        100.0 * l1(&ours),
+        100.0 * l1(&start),
+        peak(&ours),
+        peak(&exact)
+    );
+    let (tan, tan_d) = (35f64.to_radians().tan(), 25f64.to_radians().tan());
+    let model_travel = 0.5 * snowscape_avalanche::flow::G * (tan - tan_d) * 25.0;
+    assert!(
+        (travel - model_travel).abs() < 0.1 * model_travel,
+        "centre of mass travel {travel} m, the model's sliding law gives {model_travel} m"
+    );
+    assert!(
+        l1(&ours) < 0.75 * l1(&start),
+        "L1 {} is not far below the cap at rest's {}",
+        l1(&ours),
+        l1(&start)
+    );
+    let moved: f64 = state.thickness().iter().sum::<f64>();
+    let released: f64 = h0.iter().sum();
+    assert!(
+        (moved - released).abs() < 1e-9 * released,
+        "volume {moved} vs {released}"
+    );
 }
