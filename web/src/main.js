@@ -118,14 +118,46 @@ function buildMesh(s) {
   geo.setIndex(idx);
   mesh = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true }));
   scene.add(mesh);
+  // The camera stays where the artist put it across steps, scrubs and loads of the same
+  // terrain; only a terrain of another size or cell size is framed anew.
+  const key = `${s.width}x${s.height}x${s.cell_size_m}`;
+  if (framedFor !== key) { framedFor = key; setView('home'); }
+}
+
+// Where the camera was last framed for (the grid's size and cell size).
+let framedFor = null;
+
+// Home (an oblique view of the whole terrain) or top (straight down, north up).
+function setView(kind) {
+  const s = app.state;
+  if (!s) return;
   const cs = s.cell_size_m;
   const ext = Math.max(s.width, s.height) * cs;
-  controls.target.set(s.width * cs / 2, meshMid(), s.height * cs / 2);
-  camera.position.set(s.width * cs / 2, meshMid() + ext * 0.8, s.height * cs * 1.4);
+  const mid = meshMid();
+  controls.target.set(s.width * cs / 2, mid, s.height * cs / 2);
+  if (kind === 'top') camera.position.set(s.width * cs / 2, mid + ext * 1.2, s.height * cs / 2 + 1e-3 * ext);
+  else camera.position.set(s.width * cs / 2, mid + ext * 0.8, s.height * cs * 1.4);
   camera.far = ext * 20;
   camera.updateProjectionMatrix();
   controls.update();
+  app.view = kind;
+  redraw = true;
 }
+app.setView = setView;
+app.cameraPosition = () => camera.position.toArray();
+
+// Keys: Ctrl+Z undo, Ctrl+Shift+Z or Ctrl+Y redo, H home view, T top view (not while typing
+// in a field).
+window.addEventListener('keydown', (e) => {
+  const t = e.target;
+  if (t && (t.tagName === 'INPUT' || t.tagName === 'TEXTAREA' || t.tagName === 'SELECT' || t.isContentEditable)) return;
+  const mod = e.ctrlKey || e.metaKey;
+  const k = e.key.toLowerCase();
+  if (mod && k === 'z') { e.preventDefault(); send({ type: e.shiftKey ? 'redo' : 'undo' }); }
+  else if (mod && k === 'y') { e.preventDefault(); send({ type: 'redo' }); }
+  else if (!mod && !e.altKey && k === 'h') setView('home');
+  else if (!mod && !e.altKey && k === 't') setView('top');
+});
 
 function meshMid() {
   const b = grids.bedrock;

@@ -13,6 +13,8 @@ export function setupPanels(app, send) {
 
   $('undo').onclick = () => send({ type: 'undo' });
   $('redo').onclick = () => send({ type: 'redo' });
+  $('view-home').onclick = () => window.snowscape.setView('home');
+  $('view-top').onclick = () => window.snowscape.setView('top');
   $('step').onclick = () => send({ type: 'step', days: 1 });
   $('cancel').onclick = () => { if (playing) $('play').click(); send({ type: 'cancel' }); };
   $('play').onclick = () => {

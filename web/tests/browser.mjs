@@ -5,7 +5,8 @@
 // timeline steps a day, a second tab sees the same state, malformed messages get error
 // replies without breaking the session, requests from other origins or with other Host
 // names are refused, a long step runs on a worker (another tab is answered meanwhile) and
-// the cancel button stops it, and (with SNOWSCAPE_TOKEN_URL, a server bound to 0.0.0.0) the
+// the cancel button stops it, Ctrl+Z / Ctrl+Y undo and redo, the home and top views and a camera
+// that a step keeps, and (with SNOWSCAPE_TOKEN_URL, a server bound to 0.0.0.0) the
 // page needs its access token and then runs on the cookie. Writes screenshots to
 // SNOWSCAPE_SHOTS (default /tmp).
 import { launchChromium, steepestCellInPage } from './common.mjs';
@@ -97,6 +98,25 @@ await check('a second tab sees the same state', async () => {
   await p2.close();
 });
 
+await check('Ctrl+Z undoes the stroke, Ctrl+Y redoes it; H and T set the view, which a step keeps', async () => {
+  await page.evaluate(() => document.activeElement && document.activeElement.blur());
+  const undo = () => page.evaluate(() => [window.snowscape.state.undo, window.snowscape.state.redo]);
+  assert.deepEqual(await undo(), [1, 0]);
+  await page.keyboard.press('Control+z');
+  await page.waitForFunction(() => window.snowscape.state.undo === 0, null, { timeout: 10000 });
+  assert.deepEqual(await undo(), [0, 1]);
+  await page.keyboard.press('Control+y');
+  await page.waitForFunction(() => window.snowscape.state.undo === 1, null, { timeout: 10000 });
+  const home = await page.evaluate(() => window.snowscape.cameraPosition());
+  await page.keyboard.press('t');
+  const top = await page.evaluate(() => window.snowscape.cameraPosition());
+  assert.notDeepEqual(top, home, 'the top view moves the camera');
+  assert.ok(top[1] > home[1], 'the top view looks from higher up');
+  await page.screenshot({ path: `${shots}/editor_top_view.png` });
+  await page.keyboard.press('h');
+  assert.deepEqual(await page.evaluate(() => window.snowscape.cameraPosition()), home);
+});
+
 await check('a triggered avalanche moves snow downhill', async () => {
   // The steepest cell of the bedrock, loaded with unstable snow through brush messages.
   const site = await steepestCellInPage(page);
@@ -127,8 +147,13 @@ await check('a triggered avalanche moves snow downhill', async () => {
 
 await check('the timeline steps a day', async () => {
   const d0 = await page.evaluate(() => window.snowscape.state.day);
+  await page.keyboard.press('t');
+  const view = await page.evaluate(() => window.snowscape.cameraPosition());
   await page.click('#step');
   await page.waitForFunction((d0) => window.snowscape.state.day >= d0 + 0.99, d0, { timeout: 120000 });
+  await page.waitForTimeout(500);
+  assert.deepEqual(await page.evaluate(() => window.snowscape.cameraPosition()), view, 'the step kept the camera');
+  await page.keyboard.press('h');
   const s = await page.evaluate(() => window.snowscape.state);
   assert.equal(s.snapshots.length, 2);
   const srv = await (await fetch(`${base}/api/state`)).json();
