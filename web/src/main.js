@@ -301,7 +301,94 @@ renderer.domElement.addEventListener('pointerdown', (ev) => {
   if (tool === 'avalanche') send({ type: 'trigger_avalanche', col: at.col, row: at.row });
   if (tool === 'skier') send({ type: 'launch_skier', col: at.col, row: at.row });
 });
-renderer.domElement.addEventListener('pointermove', (ev) => { if (painting) pending = ev; });
+renderer.domElement.addEventListener('pointermove', (ev) => {
+  if (painting) pending = ev;
+  hover = ev;
+});
+renderer.domElement.addEventListener('pointerleave', () => { hover = null; showHover(null); });
+
+// ---------- hover readout and brush ring ----------
+// What lies under the cursor, read from the grids the page holds (no server round trip):
+// altitude, slope and aspect of the bedrock (central differences), each layer, and the
+// environment channels.
+let hover = null;
+const readout = document.createElement('div');
+readout.id = 'readout';
+document.getElementById('view').appendChild(readout);
+const ringPoints = 96;
+const ringGeo = new THREE.BufferGeometry();
+ringGeo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * ringPoints), 3));
+const ring = new THREE.LineLoop(ringGeo, new THREE.LineBasicMaterial({ color: 0xff7a1a, depthTest: false }));
+ring.renderOrder = 10;
+ring.visible = false;
+scene.add(ring);
+
+// Surface height (bedrock + snow + flow) at fractional cell (c, r), nearest cell.
+function surfaceAt(c, r) {
+  const s = app.state;
+  const cc = Math.max(0, Math.min(s.width - 1, Math.round(c)));
+  const rr = Math.max(0, Math.min(s.height - 1, Math.round(r)));
+  const k = rr * s.width + cc;
+  let z = grids.bedrock[k];
+  if (!Number.isFinite(z)) return null;
+  for (const l of ['compacted', 'stable', 'unstable', 'powder', 'flow']) z += grids[l] ? grids[l][k] || 0 : 0;
+  return z;
+}
+
+// The readout's numbers at cell (c, r): null outside the grid or on nodata.
+function cellReadout(c, r) {
+  const s = app.state, b = grids.bedrock;
+  const col = Math.round(c), row = Math.round(r);
+  if (col < 0 || row < 0 || col >= s.width || row >= s.height) return null;
+  const k = row * s.width + col;
+  if (!Number.isFinite(b[k])) return null;
+  const at = (cc, rr) => b[Math.max(0, Math.min(s.height - 1, rr)) * s.width + Math.max(0, Math.min(s.width - 1, cc))];
+  const cs = s.cell_size_m;
+  // Rows run north to south: dz/dy (north) = (z above − z below) / 2 cs.
+  const gx = (at(col + 1, row) - at(col - 1, row)) / (2 * cs);
+  const gy = (at(col, row - 1) - at(col, row + 1)) / (2 * cs);
+  const slope = Math.atan(Math.hypot(gx, gy)) * 180 / Math.PI;
+  // Aspect: the compass direction the slope faces (downhill), 0 = north, clockwise.
+  const aspect = (Math.atan2(-gx, -gy) * 180 / Math.PI + 360) % 360;
+  const layer = (l) => (grids[l] ? grids[l][k] || 0 : 0);
+  const depth = ['compacted', 'stable', 'unstable', 'powder'].reduce((d, l) => d + layer(l), 0);
+  const out = { col, row, altitude: b[k], slope, aspect, depth,
+    compacted: layer('compacted'), stable: layer('stable'), unstable: layer('unstable'), powder: layer('powder') };
+  for (const e of ['temperature', 'sun', 'wind', 'flow']) if (grids[e] && Number.isFinite(grids[e][k])) out[e] = grids[e][k];
+  return out;
+}
+app.cellReadout = cellReadout;
+
+function showHover(at) {
+  const v = at && app.state && grids.bedrock ? cellReadout(at.col, at.row) : null;
+  app.hover = v;
+  if (!v) { readout.style.display = 'none'; if (ring.visible) { ring.visible = false; redraw = true; } return; }
+  const compass = ['N', 'NE', 'E', 'SE', 'S', 'SW', 'W', 'NW'][Math.round(v.aspect / 45) % 8];
+  let text = `cell (${v.col}, ${v.row}) · ${v.altitude.toFixed(0)} m · slope ${v.slope.toFixed(0)}° · faces ${compass} (${v.aspect.toFixed(0)}°)\n`
+    + `snow ${v.depth.toFixed(2)} m: compacted ${v.compacted.toFixed(2)}, stable ${v.stable.toFixed(2)}, unstable ${v.unstable.toFixed(2)}, powder ${v.powder.toFixed(2)}`;
+  if (v.temperature !== undefined) text += `\nair ${v.temperature.toFixed(1)} °C`;
+  if (v.sun !== undefined) text += ` · direct sun ${v.sun.toFixed(1)} h/day`;
+  if (v.wind !== undefined) text += ` · wind ${v.wind.toFixed(1)} m/s`;
+  if (v.flow) text += ` · flowing ${v.flow.toFixed(2)} m`;
+  readout.textContent = text;
+  readout.style.display = 'block';
+  // The brush ring: the brush's radius drawn on the snow surface around the cursor.
+  const brushing = $('tool').value === 'brush';
+  if (brushing) {
+    const s = app.state, cs = s.cell_size_m;
+    const radius = Math.max(cs, Number($('radius').value) || 0);
+    const pos = ringGeo.attributes.position.array;
+    for (let k = 0; k < ringPoints; k++) {
+      const a = (2 * Math.PI * k) / ringPoints;
+      const x = at.col * cs + radius * Math.cos(a), z = at.row * cs + radius * Math.sin(a);
+      const y = surfaceAt(x / cs, z / cs);
+      pos[3 * k] = x; pos[3 * k + 1] = (y ?? v.altitude) + 1.5; pos[3 * k + 2] = z;
+    }
+    ringGeo.attributes.position.needsUpdate = true;
+    ringGeo.computeBoundingSphere();
+  }
+  if (ring.visible !== brushing || brushing) { ring.visible = brushing; redraw = true; }
+}
 window.addEventListener('pointerup', () => { painting = false; pending = null; });
 $('tool').addEventListener('change', () => { controls.enabled = $('tool').value === 'orbit'; });
 $('shade').addEventListener('change', dirtyAll);
@@ -318,6 +405,7 @@ controls.addEventListener('change', app.redraw);
 window.addEventListener('resize', app.redraw);
 function loop() {
   if (painting && pending) { const at = pick(pending); pending = null; if (at) dab(at); }
+  if (hover) { const ev = hover; hover = null; showHover(pick(ev)); }
   if (dirty.size > 0) { refreshMesh(); redraw = true; }
   controls.update();
   if (redraw) { renderer.render(scene, camera); redraw = false; app.renders = (app.renders || 0) + 1; }

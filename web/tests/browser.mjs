@@ -5,7 +5,7 @@
 // timeline steps a day, a second tab sees the same state, malformed messages get error
 // replies without breaking the session, requests from other origins or with other Host
 // names are refused, a long step runs on a worker (another tab is answered meanwhile) and
-// the cancel button stops it, Ctrl+Z / Ctrl+Y undo and redo, the home and top views and a camera
+// the cancel button stops it, a hover readout that matches the server's cell, Ctrl+Z / Ctrl+Y undo and redo, the home and top views and a camera
 // that a step keeps, and (with SNOWSCAPE_TOKEN_URL, a server bound to 0.0.0.0) the
 // page needs its access token and then runs on the cookie. Writes screenshots to
 // SNOWSCAPE_SHOTS (default /tmp).
@@ -80,6 +80,23 @@ await check('a brush stroke raises the snow depth where it was applied (server s
   assert.ok(after > before + 1, `depth at (${c}, ${r}) went ${before} -> ${after}`);
   await page.waitForTimeout(500);
   await page.screenshot({ path: `${shots}/editor_brush.png` });
+});
+
+await check('hovering shows the cell under the cursor (as the server has it) and the brush ring', async () => {
+  await page.selectOption('#tool', 'brush');
+  const box = await page.locator('#view canvas').boundingBox();
+  const x = box.x + box.width * 0.4, y = box.y + box.height * 0.55;
+  await page.mouse.move(x, y);
+  await page.mouse.move(x + 2, y + 1);
+  await page.waitForFunction(() => window.snowscape.hover, null, { timeout: 5000 });
+  const h = await page.evaluate(() => window.snowscape.hover);
+  const srv = await cell(h.col, h.row);
+  assert.ok(Math.abs(h.altitude - srv.bedrock) < 0.5, `readout ${h.altitude} m, server ${srv.bedrock} m`);
+  assert.ok(Math.abs(h.depth - srv.depth) < 0.01, `readout depth ${h.depth} m, server ${srv.depth} m`);
+  assert.ok(h.slope >= 0 && h.slope < 90 && h.aspect >= 0 && h.aspect < 360, JSON.stringify(h));
+  const text = await page.locator('#readout').textContent();
+  assert.match(text, /slope \d+° · faces [NESW]+/);
+  await page.screenshot({ path: `${shots}/editor_hover.png` });
 });
 
 await check('a second tab sees the same state', async () => {
