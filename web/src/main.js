@@ -108,14 +108,28 @@ function buildMesh(s) {
   geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
   geo.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
   geo.setAttribute('normal', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
+  // Quads with a nodata corner are not drawn (a clipped DEM's outline stays open instead of
+  // walls down to altitude 0), and the views frame the valid cells only.
+  const b = grids.bedrock;
+  const validAt = (i, j) => {
+    const k = Math.min(s.height - 1, j * step) * s.width + Math.min(s.width - 1, i * step);
+    return !b || Number.isFinite(b[k]);
+  };
   const idx = [];
+  let [c0, c1, r0, r1] = [Infinity, -Infinity, Infinity, -Infinity];
   for (let j = 0; j < meshH - 1; j++) {
     for (let i = 0; i < meshW - 1; i++) {
+      if (!(validAt(i, j) && validAt(i + 1, j) && validAt(i, j + 1) && validAt(i + 1, j + 1))) continue;
       const a = j * meshW + i;
       idx.push(a, a + meshW, a + 1, a + 1, a + meshW, a + meshW + 1);
+      c0 = Math.min(c0, i * step); c1 = Math.max(c1, (i + 1) * step);
+      r0 = Math.min(r0, j * step); r1 = Math.max(r1, (j + 1) * step);
     }
   }
+  validBox = Number.isFinite(c0) ? [c0, Math.min(c1, s.width - 1), r0, Math.min(r1, s.height - 1)] : [0, s.width - 1, 0, s.height - 1];
   geo.setIndex(idx);
+  app.meshTriangles = idx.length / 3;
+  app.meshQuads = (meshW - 1) * (meshH - 1);
   mesh = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true }));
   scene.add(mesh);
   // The camera stays where the artist put it across steps, scrubs and loads of the same
@@ -126,18 +140,22 @@ function buildMesh(s) {
 
 // Where the camera was last framed for (the grid's size and cell size).
 let framedFor = null;
+// The box of the valid cells [col0, col1, row0, row1].
+let validBox = null;
 
 // Home (an oblique view of the whole terrain) or top (straight down, north up).
 function setView(kind) {
   const s = app.state;
   if (!s) return;
   const cs = s.cell_size_m;
-  const ext = Math.max(s.width, s.height) * cs;
+  const [c0, c1, r0, r1] = validBox || [0, s.width - 1, 0, s.height - 1];
+  const ext = Math.max(c1 - c0 + 1, r1 - r0 + 1) * cs;
   const mid = meshMid();
-  controls.target.set(s.width * cs / 2, mid, s.height * cs / 2);
-  if (kind === 'top') camera.position.set(s.width * cs / 2, mid + ext * 1.2, s.height * cs / 2 + 1e-3 * ext);
-  else camera.position.set(s.width * cs / 2, mid + ext * 0.8, s.height * cs * 1.4);
-  camera.far = ext * 20;
+  const x = (c0 + c1 + 1) * cs / 2, z = (r0 + r1 + 1) * cs / 2;
+  controls.target.set(x, mid, z);
+  if (kind === 'top') camera.position.set(x, mid + ext * 1.2, z + 1e-3 * ext);
+  else camera.position.set(x, mid + ext * 0.8, z + ext * 0.9);
+  camera.far = Math.max(s.width, s.height) * cs * 20;
   camera.updateProjectionMatrix();
   controls.update();
   app.view = kind;
@@ -189,6 +207,7 @@ function refreshMesh() {
   dirty.clear();
   const b = grids.bedrock;
   if (!b) return;
+  const nodataZ = meshMid();
   const rgb = [0, 0, 0];
   for (const [i0, i1, j0, j1] of ranges) {
     for (let j = j0; j <= j1; j++) {
@@ -200,7 +219,7 @@ function refreshMesh() {
         let depth = 0;
         for (const l of ['compacted', 'stable', 'unstable', 'powder']) depth += grids[l] ? grids[l][k] : 0;
         const flow = grids.flow ? grids.flow[k] || 0 : 0;
-        const z = Number.isFinite(b[k]) ? b[k] : 0;
+        const z = Number.isFinite(b[k]) ? b[k] : nodataZ;
         pos[3 * v] = c * cs;
         pos[3 * v + 1] = z + depth + flow;
         pos[3 * v + 2] = r * cs;

@@ -342,6 +342,28 @@ await check('a tab that asks for the whole state again and again without reading
   assert.ok(st.width > 0);
 });
 
+await check('a real DEM with nodata (avaMal): nodata cells are not drawn and the view frames the valid cells', async () => {
+  const demUrl = process.env.SNOWSCAPE_DEM_URL;
+  assert.ok(demUrl, 'SNOWSCAPE_DEM_URL is not set (scripts/browser-tests.sh starts that server)');
+  const p = await context.newPage();
+  await p.goto(demUrl);
+  await p.waitForFunction(() => window.snowscape && window.snowscape.meshTriangles > 0, null, { timeout: 120000 });
+  await p.waitForTimeout(2000);
+  const m = await p.evaluate(() => {
+    const s = window.snowscape.state, b = window.snowscape.grids.bedrock;
+    let valid = 0;
+    for (let i = 0; i < b.length; i++) if (Number.isFinite(b[i])) valid++;
+    return { triangles: window.snowscape.meshTriangles, quads: window.snowscape.meshQuads, valid, cells: s.width * s.height };
+  });
+  const share = m.triangles / 2 / m.quads;
+  console.log(`     avaMal: ${(100 * m.valid / m.cells).toFixed(1)} % valid cells, ${(100 * share).toFixed(1)} % of the quads drawn`);
+  assert.ok(m.valid < 0.8 * m.cells, 'avaMal has nodata');
+  assert.ok(share < m.valid / m.cells + 0.02, `${share} of the quads drawn for ${m.valid / m.cells} valid cells`);
+  assert.ok(share > m.valid / m.cells - 0.1, `only ${share} of the quads drawn`);
+  await p.screenshot({ path: `${shots}/editor_avamal.png` });
+  await p.close();
+});
+
 await check('a page from another origin cannot connect to the editor', async () => {
   const other = await context.newPage();
   await other.goto('data:text/html,<title>elsewhere</title>');

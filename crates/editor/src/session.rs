@@ -274,8 +274,21 @@ impl Session {
         let (w, h) = (g.width(), g.height());
         let env = self.winter.environment();
         let wind: Vec<f32>;
+        let masked: Vec<f32>;
         let (values, quant): (&[f32], Quant) = match channel {
-            Channel::Bedrock => (&t.bedrock, self.bedrock_quant),
+            // Nodata cells go out as the wire's nodata code, so the page does not draw them.
+            Channel::Bedrock => match t.mask().invalid_cells() {
+                Some(invalid) => {
+                    masked = t
+                        .bedrock
+                        .iter()
+                        .zip(invalid)
+                        .map(|(&z, &bad)| if bad { f32::NAN } else { z })
+                        .collect();
+                    (&masked, self.bedrock_quant)
+                }
+                None => (&t.bedrock, self.bedrock_quant),
+            },
             Channel::Compacted => (t.layer(SnowLayer::Compacted), Quant::THICKNESS),
             Channel::Stable => (t.layer(SnowLayer::Stable), Quant::THICKNESS),
             Channel::Unstable => (t.layer(SnowLayer::Unstable), Quant::THICKNESS),
