@@ -204,8 +204,8 @@ impl ProjectDir {
             reason: e,
         };
         let p = file("bedrock.tif")?;
-        let bedrock =
-            read_terrain(&p, &ReadOptions::default()).map_err(|e| bad("terrain", &p, e.to_string()))?;
+        let bedrock = read_terrain(&p, &ReadOptions::default())
+            .map_err(|e| bad("terrain", &p, e.to_string()))?;
         let p = file("scenario.toml")?;
         let text = std::fs::read_to_string(&p).map_err(io_err(&p))?;
         let scenario = Scenario::from_toml(&text, &p.display().to_string())

@@ -65,7 +65,11 @@ fn kind_of(t: std::fs::FileType) -> &'static str {
             return "a socket";
         }
     }
-    if t.is_dir() { "a directory" } else { "not a file" }
+    if t.is_dir() {
+        "a directory"
+    } else {
+        "not a file"
+    }
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> InputError + '_ {
@@ -151,13 +155,23 @@ mod tests {
         assert_eq!(read_regular(&p, 5).unwrap(), b"12345");
         assert_eq!(read_regular_text(&p).unwrap(), "12345");
         let e = read_regular(&p, 4).unwrap_err();
-        assert!(matches!(e, InputError::TooLarge { bytes: 5, max: 4, .. }));
+        assert!(matches!(
+            e,
+            InputError::TooLarge {
+                bytes: 5,
+                max: 4,
+                ..
+            }
+        ));
     }
 
     #[test]
     fn devices_and_directories_are_refused() {
         let e = open_regular(Path::new("/dev/zero")).unwrap_err();
-        assert!(e.to_string().contains("/dev/zero is a character device"), "{e}");
+        assert!(
+            e.to_string().contains("/dev/zero is a character device"),
+            "{e}"
+        );
         let d = tempfile::tempdir().unwrap();
         let e = open_regular(d.path()).unwrap_err();
         assert!(e.to_string().contains("a directory"), "{e}");

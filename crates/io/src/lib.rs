@@ -131,10 +131,11 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
 /// output.
 pub fn read_terrain(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
     let grid = read_dem(path, opts)?;
-    grid.check_terrain().map_err(|source| RasterError::Terrain {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    grid.check_terrain()
+        .map_err(|source| RasterError::Terrain {
+            path: path.to_path_buf(),
+            source,
+        })?;
     Ok(grid)
 }
 

@@ -68,7 +68,10 @@ fn truncated_geotiff_is_a_tiff_error() {
     };
     let e = read_dem(&p, &o).unwrap_err();
     assert!(
-        matches!(e, RasterError::TiffTruncated { .. } | RasterError::Tiff { .. }),
+        matches!(
+            e,
+            RasterError::TiffTruncated { .. } | RasterError::Tiff { .. }
+        ),
         "{e:?}"
     );
     assert_names(&e, &p, "cut.tif");
@@ -160,7 +163,15 @@ fn nan_and_infinite_heights_name_their_cell() {
         let p = write_tmp(d.path(), "nan.asc", text.as_bytes());
         let e = read(&p);
         assert!(
-            matches!(e, RasterError::AscValue { col: 2, row: 1, line: 8, .. }),
+            matches!(
+                e,
+                RasterError::AscValue {
+                    col: 2,
+                    row: 1,
+                    line: 8,
+                    ..
+                }
+            ),
             "{tok}: {e:?}"
         );
         assert_names(&e, &p, &format!("{tok:?}"));
@@ -341,7 +352,10 @@ fn devices_and_fifos_are_refused_by_every_reader() {
         };
         let e = read_dem(Path::new("/dev/zero"), &o).unwrap_err();
         assert!(
-            matches!(e, RasterError::Input(snowscape_io::InputError::NotRegular { .. })),
+            matches!(
+                e,
+                RasterError::Input(snowscape_io::InputError::NotRegular { .. })
+            ),
             "{f}: {e:?}"
         );
         assert!(e.to_string().contains("character device"), "{f}: {e}");
@@ -370,9 +384,21 @@ fn read_terrain_refuses_what_cannot_be_a_terrain() {
         ("one.asc", head(1, 1) + "5\n", "1x1"),
         ("row.asc", head(5, 1) + "1 2 3 4 5\n", "5x1"),
         ("col.asc", head(1, 3) + "1\n2\n3\n", "1x3"),
-        ("void.asc", head(2, 2) + "-9999 -9999\n-9999 -9999\n", "0 valid cells"),
-        ("lone.asc", head(3, 2) + "-9999 7 -9999\n-9999 -9999 -9999\n", "1 valid cells"),
-        ("spike.asc", head(2, 2) + "1 2\n1e30 4\n", "1e30 m at cell (col 0, row 1)"),
+        (
+            "void.asc",
+            head(2, 2) + "-9999 -9999\n-9999 -9999\n",
+            "0 valid cells",
+        ),
+        (
+            "lone.asc",
+            head(3, 2) + "-9999 7 -9999\n-9999 -9999 -9999\n",
+            "1 valid cells",
+        ),
+        (
+            "spike.asc",
+            head(2, 2) + "1 2\n1e30 4\n",
+            "1e30 m at cell (col 0, row 1)",
+        ),
     ] {
         let p = write_tmp(d.path(), name, text.as_bytes());
         assert!(read_dem(&p, &ReadOptions::default()).is_ok(), "{name}");

@@ -349,7 +349,12 @@ fn gltf_buffers_outside_the_folder_are_refused() {
             "symlink"
         );
     }
-    for uri in ["inside.bin", "./inside.bin", "sub/deeper.bin", "sub%2Fdeeper.bin"] {
+    for uri in [
+        "inside.bin",
+        "./inside.bin",
+        "sub/deeper.bin",
+        "sub%2Fdeeper.bin",
+    ] {
         let p = write(&inner, "m.gltf", gltf_with_buffer(uri).as_bytes());
         assert_eq!(read(&p).unwrap().triangle_count(), 1, "{uri}");
     }

@@ -43,9 +43,7 @@ pub enum TerrainError {
         hi: f64,
     },
     /// A terrain with fewer than 2x2 cells: slopes, normals and flow need neighbours.
-    #[error(
-        "a {width}x{height} grid is too small for a terrain: at least 2x2 cells are needed"
-    )]
+    #[error("a {width}x{height} grid is too small for a terrain: at least 2x2 cells are needed")]
     TerrainTooSmall { width: usize, height: usize },
     /// A terrain without a single 2x2 block of cells of which at least three are valid, so
     /// there is no surface (all nodata, or isolated valid cells).

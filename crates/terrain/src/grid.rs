@@ -190,7 +190,7 @@ impl Grid {
             });
         }
         for (i, &v) in self.data.iter().enumerate() {
-            if self.mask.is_valid(i) && !(v.abs() <= MAX_ABS_ALTITUDE_M) {
+            if self.mask.is_valid(i) && (v.is_nan() || v.abs() > MAX_ABS_ALTITUDE_M) {
                 let (col, row) = self.geometry.col_row(i);
                 return Err(TerrainError::AltitudeOutOfRange {
                     col,
@@ -205,9 +205,8 @@ impl Grid {
         };
         let valid = |c: usize, r: usize| usize::from(!invalid[r * w + c]);
         let has_surface = (0..h - 1).any(|r| {
-            (0..w - 1).any(|c| {
-                valid(c, r) + valid(c + 1, r) + valid(c, r + 1) + valid(c + 1, r + 1) >= 3
-            })
+            (0..w - 1)
+                .any(|c| valid(c, r) + valid(c + 1, r) + valid(c, r + 1) + valid(c + 1, r + 1) >= 3)
         });
         if has_surface {
             Ok(())
@@ -392,14 +391,24 @@ mod tests {
         let mut one = vec![true; 9];
         one[4] = false;
         let e = terrain(3, 3, vec![5.0; 9], Some(one)).check_terrain();
-        assert!(matches!(e, Err(TerrainError::NoTerrainSurface { valid: 1, .. })));
+        assert!(matches!(
+            e,
+            Err(TerrainError::NoTerrainSurface { valid: 1, .. })
+        ));
         // A chequerboard has valid cells everywhere but no block with three of them.
         let chequer: Vec<bool> = (0..16).map(|i| (i % 4 + i / 4) % 2 == 0).collect();
         let e = terrain(4, 4, vec![5.0; 16], Some(chequer)).check_terrain();
-        assert!(matches!(e, Err(TerrainError::NoTerrainSurface { valid: 8, .. })));
+        assert!(matches!(
+            e,
+            Err(TerrainError::NoTerrainSurface { valid: 8, .. })
+        ));
         // Three valid corners make a triangle with a slope.
         let three = vec![false, false, false, true];
-        assert!(terrain(2, 2, vec![1.0; 4], Some(three)).check_terrain().is_ok());
+        assert!(
+            terrain(2, 2, vec![1.0; 4], Some(three))
+                .check_terrain()
+                .is_ok()
+        );
     }
 
     #[test]
@@ -417,7 +426,10 @@ mod tests {
             }
         );
         let text = e.to_string();
-        assert!(text.contains("1e30") && text.contains("col 3, row 1"), "{text}");
+        assert!(
+            text.contains("1e30") && text.contains("col 3, row 1"),
+            "{text}"
+        );
         let mut d = vec![0.0; 4];
         d[0] = -1.5e5;
         let e = terrain(2, 2, d, None).check_terrain().unwrap_err();
