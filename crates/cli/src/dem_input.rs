@@ -2,7 +2,7 @@
 
 use anyhow::{Context, bail};
 use clap::Args;
-use snowscape_io::{RasterFormat, ReadOptions, read_dem};
+use snowscape_io::{RasterFormat, ReadOptions, read_dem, read_terrain};
 use snowscape_terrain::{Crs, Grid};
 use std::path::Path;
 
@@ -59,8 +59,15 @@ impl DemInputArgs {
         Ok(o)
     }
 
-    /// Reads and validates a terrain raster.
+    /// Reads a terrain raster and checks it is one ([`read_terrain`]: at least 2x2 cells, a
+    /// surface of valid cells, altitudes within +-1e5 m), before any work or output.
     pub fn read(&self, path: &Path) -> anyhow::Result<Grid> {
+        let opts = self.read_options()?;
+        Ok(read_terrain(path, &opts)?)
+    }
+
+    /// Reads any raster (`info`, `convert`): checked as a file, not as a terrain.
+    pub fn read_raster(&self, path: &Path) -> anyhow::Result<Grid> {
         let opts = self.read_options()?;
         let grid = read_dem(path, &opts)?;
         grid.check_finite(&path.display().to_string())?;

@@ -190,7 +190,16 @@ fn demo_is_bit_identical_across_thread_counts() {
 fn info_and_render_work_on_every_real_dem() {
     let d = tempfile::tempdir().unwrap();
     for (k, dem) in real_dems().iter().enumerate() {
-        let o = run(&["info", "--json", dem.to_str().unwrap()]);
+        // The Jacksboro grid is in degrees but has no CRS: only a geographic CRS makes
+        // degrees (issue 19 item 6), so it is given as a user would.
+        let crs: &[&str] = if dem.to_string_lossy().contains("_deg") {
+            &["--crs", "EPSG:4326"]
+        } else {
+            &[]
+        };
+        let mut args = vec!["info", "--json", dem.to_str().unwrap()];
+        args.extend_from_slice(crs);
+        let o = run(&args);
         assert!(o.status.success(), "info {}: {}", dem.display(), stderr(&o));
         let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         let cx = info["cell_size_x"].as_f64().unwrap();

@@ -11,7 +11,7 @@
 
 use crate::brush::PaintMaps;
 use crate::session::Session;
-use snowscape_io::{ReadOptions, read_dem, write_bytes_atomic, write_geotiff};
+use snowscape_io::{ReadOptions, read_dem, read_terrain, write_bytes_atomic, write_geotiff};
 use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::Winter;
 use snowscape_terrain::LayeredTerrain;
@@ -225,8 +225,8 @@ impl ProjectDir {
             reason: e,
         };
         let p = file("bedrock.tif")?;
-        let bedrock =
-            read_dem(&p, &ReadOptions::default()).map_err(|e| bad("terrain", &p, e.to_string()))?;
+        let bedrock = read_terrain(&p, &ReadOptions::default())
+            .map_err(|e| bad("terrain", &p, e.to_string()))?;
         let p = file("scenario.toml")?;
         let text = std::fs::read_to_string(&p).map_err(io_err(&p))?;
         let scenario = Scenario::from_toml(&text, &p.display().to_string())

@@ -21,6 +21,7 @@ use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cell_size, check_cells};
 use crate::crs_sidecar::sidecar_crs;
 use crate::error::{RasterError, Result, geometry_err, io_err, write_err};
+use crate::input::open_regular;
 use crate::write_atomic;
 use snowscape_terrain::{Crs, GeoTransform, Grid, GridGeometry};
 use std::io::{BufRead, BufReader, Write};
@@ -210,6 +211,17 @@ fn read_values<R: BufRead>(
                 line: lines.line,
                 token: lossy(token),
             })?;
+            if !(v as f32).is_finite() && !sink.is_nodata(v) {
+                // Quoted as written: `1e999` parses to infinity, which says nothing.
+                let i = sink.len();
+                return Err(RasterError::AscValue {
+                    path: path.to_path_buf(),
+                    line: lines.line,
+                    col: i % lay.ncols,
+                    row: i / lay.ncols,
+                    token: lossy(token),
+                });
+            }
             sink.push_f64(v)?;
             last_line = lines.line;
         }
@@ -230,8 +242,7 @@ fn read_values<R: BufRead>(
 
 /// Reads an ESRI ASCII grid.
 pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
-    let file = std::fs::File::open(path).map_err(io_err(path))?;
-    let file_len = file.metadata().map_err(io_err(path))?.len();
+    let (file, file_len) = open_regular(path)?;
     let mut lines = Lines {
         reader: BufReader::with_capacity(1 << 16, file),
         buf: Vec::new(),

@@ -77,6 +77,12 @@ impl<'p> CellSink<'p> {
         }
     }
 
+    /// Whether `v` is nodata under the file's rule (the declared value, or NaN where NaN
+    /// means nodata).
+    pub fn is_nodata(&self, v: f64) -> bool {
+        self.rule.declared.is_some_and(|d| d == v) || (v.is_nan() && self.rule.nan_is_nodata)
+    }
+
     /// Number of cells pushed so far.
     pub fn len(&self) -> usize {
         self.data.len()
@@ -107,7 +113,7 @@ impl<'p> CellSink<'p> {
     /// Adds a value decoded as f64 (text, f64 or integer samples).
     #[inline]
     pub fn push_f64(&mut self, v: f64) -> Result<()> {
-        if self.rule.declared.is_some_and(|d| d == v) || (v.is_nan() && self.rule.nan_is_nodata) {
+        if self.is_nodata(v) {
             self.push_nodata();
             Ok(())
         } else {

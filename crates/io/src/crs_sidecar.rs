@@ -8,7 +8,7 @@
 //! A WKT whose root ends with `AUTHORITY["EPSG","n"]` (WKT1) or `ID["EPSG",n]` (WKT2) becomes
 //! `Crs::Epsg(n)`, so GeoTIFF output can carry a proper EPSG GeoKey; other WKT is kept as is.
 
-use crate::error::{Result, io_err};
+use crate::error::Result;
 use snowscape_terrain::Crs;
 use std::path::{Path, PathBuf};
 
@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 pub(crate) fn sidecar_crs(path: &Path) -> Result<Option<Crs>> {
     for candidate in sidecar_candidates(path) {
         if candidate.is_file() {
-            let text = std::fs::read_to_string(&candidate).map_err(io_err(&candidate))?;
+            let text = crate::input::read_regular_text(&candidate)?;
             if let Some(crs) = parse_crs_text(&text) {
                 return Ok(Some(crs));
             }

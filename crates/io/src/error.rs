@@ -2,6 +2,7 @@
 //! value, and where it was found (line, cell, TIFF tag...), so a user can fix the input.
 
 use crate::AtomicWriteError;
+use crate::input::InputError;
 use snowscape_terrain::TerrainError;
 use std::path::PathBuf;
 use thiserror::Error;
@@ -16,6 +17,9 @@ pub enum RasterError {
         #[source]
         source: std::io::Error,
     },
+    /// The input is not a regular file, or too large to read whole.
+    #[error(transparent)]
+    Input(InputError),
     /// The output could not be written (nothing is left at the target path).
     #[error(transparent)]
     Write(#[from] AtomicWriteError),
@@ -98,6 +102,19 @@ pub enum RasterError {
         line: usize,
         token: String,
     },
+    /// A data value that is not a finite f32 height and not nodata (`1e999`, `inf`, `1e39`),
+    /// quoted as written in the file.
+    #[error(
+        "{path}:{line}: value {token:?} at cell (col {col}, row {row}) is not a finite height \
+         and not the NODATA_value"
+    )]
+    AscValue {
+        path: PathBuf,
+        line: usize,
+        col: usize,
+        row: usize,
+        token: String,
+    },
     /// The number of values does not match ncols x nrows.
     #[error(
         "{path}: the header promises {ncols}x{nrows} = {expected} values but the file holds \
@@ -118,6 +135,12 @@ pub enum RasterError {
         #[source]
         source: tiff::TiffError,
     },
+    /// The TIFF ends before the data its directory points to (a cut download or copy).
+    #[error(
+        "{path}: truncated TIFF: the file ends after {bytes} bytes, before the data its \
+         image directory points to"
+    )]
+    TiffTruncated { path: PathBuf, bytes: u64 },
     /// A TIFF sample layout this reader does not handle.
     #[error("{path}: unsupported TIFF layout: {what}")]
     TiffUnsupported { path: PathBuf, what: String },
@@ -176,9 +199,26 @@ pub enum RasterError {
         #[source]
         source: TerrainError,
     },
+    /// The raster was read but cannot be a terrain (too small, no surface, altitude spike).
+    #[error("{path}: not a usable terrain: {source}")]
+    Terrain {
+        path: PathBuf,
+        #[source]
+        source: TerrainError,
+    },
     /// A sidecar file (JSON scale, CRS) that cannot be read or written.
     #[error("{path}: sidecar error: {reason}")]
     Sidecar { path: PathBuf, reason: String },
+}
+
+impl From<InputError> for RasterError {
+    /// An I/O failure stays [`RasterError::Io`]; a refused file is [`RasterError::Input`].
+    fn from(e: InputError) -> Self {
+        match e {
+            InputError::Io { path, source } => RasterError::Io { path, source },
+            other => RasterError::Input(other),
+        }
+    }
 }
 
 /// Shorthand used by every module.
@@ -201,10 +241,20 @@ pub(crate) fn geometry_err(
     }
 }
 
+/// A TIFF decoder error; an unexpected end of file becomes [`RasterError::TiffTruncated`]
+/// (said once, instead of the decoder's "failed to fill whole buffer").
 pub(crate) fn tiff_err(path: &std::path::Path) -> impl FnOnce(tiff::TiffError) -> RasterError + '_ {
-    move |source| RasterError::Tiff {
-        path: path.to_path_buf(),
-        source,
+    move |source| match source {
+        tiff::TiffError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            RasterError::TiffTruncated {
+                path: path.to_path_buf(),
+                bytes: std::fs::metadata(path).map_or(0, |m| m.len()),
+            }
+        }
+        source => RasterError::Tiff {
+            path: path.to_path_buf(),
+            source,
+        },
     }
 }
 

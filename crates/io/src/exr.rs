@@ -178,6 +178,7 @@ fn geometry_of(
 
 /// Reads one channel of the first layer as a DEM.
 pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
+    crate::input::check_regular(path)?;
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(exr_err(path))?;
     let header = meta
         .headers

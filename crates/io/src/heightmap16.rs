@@ -167,7 +167,7 @@ pub(crate) fn read_sidecar(path: &Path) -> Result<Option<Sidecar>> {
         path: sc.clone(),
         reason,
     };
-    let text = std::fs::read_to_string(&sc).map_err(|e| err(e.to_string()))?;
+    let text = crate::input::read_regular_text(&sc).map_err(|e| err(e.to_string()))?;
     let s: Sidecar = serde_json::from_str(&text).map_err(|e| err(e.to_string()))?;
     if s.format != SIDECAR_FORMAT {
         return Err(err(format!(

@@ -1,7 +1,8 @@
 //! # snowscape-io: raster input and output
 //!
-//! [`read_dem`] reads a terrain raster into a [`Grid`] (format from the extension, or
-//! [`ReadOptions::format`]); [`write_raster`] writes a grid in any format (for
+//! [`read_dem`] reads a raster into a [`Grid`] (format from the extension, or
+//! [`ReadOptions::format`]); [`read_terrain`] reads one that is to be a terrain and checks it
+//! ([`Grid::check_terrain`]); [`write_raster`] writes a grid in any format (for
 //! `snowscape convert`); [`write_geotiff`], [`write_geotiff_bands`], [`write_exr`],
 //! [`write_png16`] and [`write_splat`] write simulation outputs.
 //!
@@ -21,9 +22,11 @@
 //! - nodata follows one rule ([`cells`]): a declared nodata value is nodata; NaN is nodata only
 //!   in binary float files without a nodata declaration (NPY, EXR, float GeoTIFF without
 //!   `GDAL_NODATA`), an error elsewhere; infinity is always an error naming the cell;
-//! - [`ReadOptions::crs`] overrides whatever CRS the file declares; a geographic CRS (or a
-//!   grid whose extent and pixel size can only be degrees) gets metric cell sizes from
-//!   [`GridGeometry::from_transform`]; a geographic CRS on a grid whose extent is not in
+//! - every input is opened through [`input::open_regular`]: devices, FIFOs and directories are
+//!   refused before anything is opened or read, and the file length bounds what is allocated;
+//! - [`ReadOptions::crs`] overrides whatever CRS the file declares; only a geographic CRS
+//!   makes coordinates degrees (metric cell sizes from [`GridGeometry::from_transform`]); a
+//!   grid without a CRS is metres whatever its cell size (a warning names cells <= 1 mm); a geographic CRS on a grid whose extent is not in
 //!   degrees (a mislabelled file) is dropped with a warning naming both, and the coordinates
 //!   are taken as metres (`--crs` sets the right CRS);
 //! - every error is a [`RasterError`] naming the file and the offending value.
@@ -42,6 +45,7 @@ pub mod exr;
 pub mod format;
 pub mod geotiff;
 pub mod heightmap16;
+pub mod input;
 pub mod npy;
 pub mod png16;
 pub mod raw16;
@@ -53,6 +57,7 @@ pub use exr::write_exr;
 pub use format::{DEFAULT_MAX_CELLS, ParseFormatError, RasterFormat, ReadOptions};
 pub use geotiff::{GEOTIFF_NODATA, write_geotiff, write_geotiff_bands};
 pub use heightmap16::Png16Scale;
+pub use input::{InputError, open_regular};
 pub use png16::write_png16;
 pub use splat::write_splat;
 
@@ -91,6 +96,7 @@ fn impossible_geographic_extent(g: &GridGeometry) -> bool {
 /// dropped, with a warning naming the file, the CRS and the extent; `--crs` sets the right one.
 pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
     let grid = read_any(path, opts)?;
+    warn_tiny_cells_without_crs(path, grid.geometry());
     if !impossible_geographic_extent(grid.geometry()) {
         return Ok(grid);
     }
@@ -116,6 +122,36 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
         path: path.to_path_buf(),
         source: e,
     })
+}
+
+/// Reads a DEM that is to be a terrain: [`read_dem`], then [`Grid::check_terrain`] (at least
+/// 2x2 cells, a 2x2 block with three valid cells, altitudes finite and within +-1e5 m). Every
+/// front end (`snowscape run`, `avalanche`, `transport`, `cover`, `render`, `serve`, the
+/// editor's projects) loads its terrain here, so a bad DEM is refused before any work or
+/// output.
+pub fn read_terrain(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
+    let grid = read_dem(path, opts)?;
+    grid.check_terrain()
+        .map_err(|source| RasterError::Terrain {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    Ok(grid)
+}
+
+/// Warns when a grid without a CRS has cells of at most 1 mm inside the range of degrees: it
+/// is read as metres (only a geographic CRS makes degrees), which is right for a finely
+/// voxelised mesh and wrong for a DEM in degrees that lost its CRS.
+fn warn_tiny_cells_without_crs(path: &Path, g: &GridGeometry) {
+    let t = g.transform();
+    if g.crs().is_none() && t.pixel_width.min(t.pixel_height) <= 1e-3 {
+        tracing::warn!(
+            "{}: cells of {} x {} with no CRS are taken as metres; if they are degrees, pass --crs EPSG:4326",
+            path.display(),
+            t.pixel_width,
+            t.pixel_height
+        );
+    }
 }
 
 fn read_any(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {

@@ -15,6 +15,7 @@
 use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cell_size, check_cells};
 use crate::error::{RasterError, Result, geometry_err, io_err, write_err};
+use crate::input::{check_regular, open_regular};
 use crate::write_atomic;
 use npyz::{DType, NpyFile, NpyHeader, Order, TypeChar, WriterBuilder};
 use snowscape_terrain::{Grid, GridGeometry};
@@ -31,7 +32,7 @@ fn npy_err(path: &Path, reason: impl std::fmt::Display) -> RasterError {
 
 /// Reads the header text after checking the magic and that its length fits in the file.
 fn header_text(path: &Path, file_len: u64) -> Result<String> {
-    let mut f = File::open(path).map_err(io_err(path))?;
+    let (mut f, _) = open_regular(path)?;
     let mut pre = [0u8; 12];
     f.read_exact(&mut pre).map_err(|_| {
         npy_err(
@@ -170,7 +171,7 @@ fn read_typed(
 
 /// Parses the header with `npyz` (after the pre-checks) and checks shape and data length.
 fn open(path: &Path, max_cells: usize) -> Result<(NpyFile<BufReader<File>>, usize, usize)> {
-    let file_len = std::fs::metadata(path).map_err(io_err(path))?.len();
+    let file_len = check_regular(path)?;
     let text = header_text(path, file_len)?;
     let product = unquoted_int_product(&text)
         .ok_or_else(|| npy_err(path, format!("shape in header {text:?} overflows")))?;
@@ -182,7 +183,7 @@ fn open(path: &Path, max_cells: usize) -> Result<(NpyFile<BufReader<File>>, usiz
             ),
         ));
     }
-    let mut reader = BufReader::new(File::open(path).map_err(io_err(path))?);
+    let mut reader = BufReader::new(open_regular(path)?.0);
     let header = NpyHeader::from_reader(&mut reader).map_err(|e| npy_err(path, e))?;
     let &[h, w] = header.shape() else {
         return Err(npy_err(

@@ -9,7 +9,7 @@
 
 use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cells};
-use crate::error::{RasterError, Result, io_err};
+use crate::error::{RasterError, Result};
 use crate::heightmap16::{
     Png16Scale, read_sidecar, resolve_geometry, resolve_scale, write_sidecar,
 };
@@ -32,7 +32,7 @@ fn png_err(path: &Path) -> impl FnOnce(image::ImageError) -> RasterError + '_ {
 /// Decodes the grayscale codes and their top code (65535 or 255), checking the cell count
 /// before the pixels are decoded.
 fn decode_codes(path: &Path, max_cells: usize) -> Result<(usize, usize, Vec<u16>, u16)> {
-    let file = std::fs::File::open(path).map_err(io_err(path))?;
+    let (file, _) = crate::input::open_regular(path)?;
     let mut reader = ImageReader::with_format(BufReader::new(file), ImageFormat::Png);
     reader.no_limits();
     let decoder = reader.into_decoder().map_err(png_err(path))?;

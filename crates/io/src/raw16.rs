@@ -8,7 +8,7 @@
 
 use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cells};
-use crate::error::{RasterError, Result, io_err, write_err};
+use crate::error::{RasterError, Result, write_err};
 use crate::heightmap16::{
     Png16Scale, read_sidecar, resolve_geometry, resolve_scale, write_sidecar,
 };
@@ -46,7 +46,7 @@ fn raw_size(
 
 /// Reads a RAW16 heightmap.
 pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
-    let bytes = std::fs::metadata(path).map_err(io_err(path))?.len();
+    let bytes = crate::input::check_regular(path)?;
     let sidecar = read_sidecar(path)?;
     let (w, h) = raw_size(
         path,
@@ -64,7 +64,7 @@ pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
     }
     let scale = resolve_scale(path, "RAW16", opts, sidecar.as_ref())?;
     let geometry = resolve_geometry(path, "RAW16", (w, h), opts, sidecar.as_ref())?;
-    let data = std::fs::read(path).map_err(io_err(path))?;
+    let data = crate::input::read_regular(path, 2 * n as u64)?;
     let mut sink = CellSink::new(path, w, h, NodataRule::declared(None));
     for pair in data.chunks_exact(2).take(n) {
         let code = u16::from_le_bytes([pair[0], pair[1]]);

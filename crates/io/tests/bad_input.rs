@@ -39,8 +39,17 @@ fn truncated_geotiff_is_a_tiff_error() {
     let bytes = std::fs::read(&full).unwrap();
     let p = write_tmp(d.path(), "half.tif", &bytes[..bytes.len() / 2]);
     let e = read(&p);
-    assert!(matches!(e, RasterError::Tiff { .. }), "{e:?}");
+    assert!(matches!(e, RasterError::TiffTruncated { .. }), "{e:?}");
     assert_names(&e, &p, "half.tif");
+    // Said once, in words, with no decoder jargon in the message or its causes.
+    let mut said = e.to_string();
+    let mut cause = std::error::Error::source(&e);
+    while let Some(c) = cause {
+        said.push_str(&c.to_string());
+        cause = c.source();
+    }
+    assert_eq!(said.matches("truncated").count(), 1, "{said}");
+    assert!(!said.contains("failed to fill"), "{said}");
     // A file whose IFD comes first and whose data is cut: the decoder fails on the strips.
     let t = HandTiff {
         w: 40,
@@ -58,7 +67,13 @@ fn truncated_geotiff_is_a_tiff_error() {
         ..Default::default()
     };
     let e = read_dem(&p, &o).unwrap_err();
-    assert!(matches!(e, RasterError::Tiff { .. }), "{e:?}");
+    assert!(
+        matches!(
+            e,
+            RasterError::TiffTruncated { .. } | RasterError::Tiff { .. }
+        ),
+        "{e:?}"
+    );
     assert_names(&e, &p, "cut.tif");
 }
 
@@ -73,6 +88,7 @@ fn garbage_after_a_valid_header_is_a_tiff_error() {
         matches!(
             e,
             RasterError::Tiff { .. }
+                | RasterError::TiffTruncated { .. }
                 | RasterError::TiffUnsupported { .. }
                 | RasterError::TooManyCells { .. }
         ),
@@ -141,15 +157,24 @@ fn asc_header_claiming_ten_billion_cells_fails_before_allocating() {
 #[test]
 fn nan_and_infinite_heights_name_their_cell() {
     let d = tempfile::tempdir().unwrap();
-    for (tok, shown) in [("nan", "NaN"), ("inf", "inf"), ("-Infinity", "-inf")] {
+    // Quoted as written in the file: `1e999` once showed as `inf`, `1e39` as 40 digits.
+    for tok in ["nan", "inf", "-Infinity", "1e999", "-1e39"] {
         let text = format!("{HEADER}1 2 3 4\n5 6 {tok} 8\n9 10 11 12\n");
         let p = write_tmp(d.path(), "nan.asc", text.as_bytes());
         let e = read(&p);
         assert!(
-            matches!(e, RasterError::NonFinite { col: 2, row: 1, .. }),
+            matches!(
+                e,
+                RasterError::AscValue {
+                    col: 2,
+                    row: 1,
+                    line: 8,
+                    ..
+                }
+            ),
             "{tok}: {e:?}"
         );
-        assert_names(&e, &p, shown);
+        assert_names(&e, &p, &format!("{tok:?}"));
         assert_names(&e, &p, "col 2, row 1");
     }
     // NaN declared as the nodata value is nodata.
@@ -311,4 +336,74 @@ fn corrupt_sidecar_and_npy_headers() {
     let e = read_dem(&q, &o).unwrap_err();
     assert!(matches!(e, RasterError::Npy { .. }), "{e:?}");
     assert_names(&e, &q, "needs 144 data bytes");
+}
+
+/// Every reader refuses devices and FIFOs before reading (a FIFO must not block the open,
+/// `/dev/zero` must not be read without end).
+#[test]
+fn devices_and_fifos_are_refused_by_every_reader() {
+    let d = tempfile::tempdir().unwrap();
+    for f in RasterFormat::ALL {
+        let o = ReadOptions {
+            format: Some(f),
+            cell_size: Some(1.0),
+            height_range: Some((0.0, 1.0)),
+            ..Default::default()
+        };
+        let e = read_dem(Path::new("/dev/zero"), &o).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                RasterError::Input(snowscape_io::InputError::NotRegular { .. })
+            ),
+            "{f}: {e:?}"
+        );
+        assert!(e.to_string().contains("character device"), "{f}: {e}");
+        let fifo = d.path().join(format!("pipe.{}", f.extension()));
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success());
+        if made {
+            let e = read_dem(&fifo, &o).unwrap_err();
+            assert!(e.to_string().contains("FIFO"), "{f}: {e}");
+        }
+        let e = read_dem(d.path(), &o).unwrap_err();
+        assert!(e.to_string().contains("a directory"), "{f}: {e}");
+    }
+}
+
+/// A raster that reads but cannot be a terrain is refused by `read_terrain` (issue 19 item 6).
+#[test]
+fn read_terrain_refuses_what_cannot_be_a_terrain() {
+    let d = tempfile::tempdir().unwrap();
+    let head = |w: usize, h: usize| {
+        format!("ncols {w}\nnrows {h}\nxllcorner 0\nyllcorner 0\ncellsize 10\nNODATA_value -9999\n")
+    };
+    for (name, text, needle) in [
+        ("one.asc", head(1, 1) + "5\n", "1x1"),
+        ("row.asc", head(5, 1) + "1 2 3 4 5\n", "5x1"),
+        ("col.asc", head(1, 3) + "1\n2\n3\n", "1x3"),
+        (
+            "void.asc",
+            head(2, 2) + "-9999 -9999\n-9999 -9999\n",
+            "0 valid cells",
+        ),
+        (
+            "lone.asc",
+            head(3, 2) + "-9999 7 -9999\n-9999 -9999 -9999\n",
+            "1 valid cells",
+        ),
+        (
+            "spike.asc",
+            head(2, 2) + "1 2\n1e30 4\n",
+            "1e30 m at cell (col 0, row 1)",
+        ),
+    ] {
+        let p = write_tmp(d.path(), name, text.as_bytes());
+        assert!(read_dem(&p, &ReadOptions::default()).is_ok(), "{name}");
+        let e = snowscape_io::read_terrain(&p, &ReadOptions::default()).unwrap_err();
+        assert!(matches!(e, RasterError::Terrain { .. }), "{name}: {e:?}");
+        assert_names(&e, &p, needle);
+    }
 }

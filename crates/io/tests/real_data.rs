@@ -183,17 +183,19 @@ fn synthetic_planes_and_idaho() {
 }
 
 #[test]
-fn jacksboro_degrees_get_metric_cells() {
-    check(&Expect {
-        rel: "matplotlib_jacksboro/jacksboro_fault_dem_deg.asc",
-        cols: 403,
-        rows: 344,
-        cell: (74.0, 93.0),
-        z: Some((236.0, 1076.0)),
-        crs: None,
-        nodata_share: (0.0, 0.0),
-    });
-    let g = read("matplotlib_jacksboro/jacksboro_fault_dem_deg.asc");
+fn jacksboro_degrees_get_metric_cells_from_a_geographic_crs() {
+    // The file has no CRS: its 1/1200 cells are metres unless a geographic CRS says degrees
+    // (a tiny cell size alone once made any grid degrees, a 1 cm voxel mesh 1112 m cells).
+    let rel = "matplotlib_jacksboro/jacksboro_fault_dem_deg.asc";
+    let as_is = read(rel);
+    assert!(!as_is.geometry().is_geographic());
+    assert!((as_is.geometry().cell_size_x() - 1.0 / 1200.0).abs() < 1e-9);
+    let opts = ReadOptions {
+        crs: Some(Crs::Epsg(4326)),
+        ..Default::default()
+    };
+    let g = read_dem(&path(rel), &opts).unwrap();
+    assert_eq!((g.geometry().width(), g.geometry().height()), (403, 344));
     assert!(g.geometry().is_geographic());
     assert!((g.geometry().cell_size_x() - 74.5).abs() < 1.0);
     assert!((g.geometry().cell_size_y() - 92.5).abs() < 1.0);

@@ -16,6 +16,21 @@ pub enum MeshError {
         #[source]
         source: std::io::Error,
     },
+    /// The file is not a regular file (device, FIFO, directory) or too large to read.
+    #[error(transparent)]
+    Input(snowscape_io::InputError),
+    /// A glTF buffer URI that points outside the glTF file's folder (`../x.bin`, an absolute
+    /// path, another scheme): a mesh may not read arbitrary files as vertex data.
+    #[error(
+        "{path}: buffer {buffer} has uri {uri:?}, which is outside the folder of the glTF \
+         file ({reason}); buffers must lie in that folder or below it"
+    )]
+    BufferOutsideFolder {
+        path: PathBuf,
+        buffer: usize,
+        uri: String,
+        reason: &'static str,
+    },
     /// The format could not be told from the file name.
     #[error(
         "cannot tell the mesh format of {path} from its extension {extension:?}; \
@@ -75,6 +90,16 @@ pub enum MeshError {
     /// The output could not be encoded (glTF JSON, PNG...).
     #[error("cannot encode {path}: {message}")]
     Encode { path: PathBuf, message: String },
+}
+
+impl From<snowscape_io::InputError> for MeshError {
+    /// An I/O failure stays [`MeshError::Io`]; a refused file is [`MeshError::Input`].
+    fn from(e: snowscape_io::InputError) -> Self {
+        match e {
+            snowscape_io::InputError::Io { path, source } => MeshError::Io { path, source },
+            other => MeshError::Input(other),
+        }
+    }
 }
 
 impl MeshError {

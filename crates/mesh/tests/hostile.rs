@@ -294,3 +294,93 @@ fn missing_files_and_unknown_formats() {
     let p = write(d.path(), "mesh.stl", b"solid x");
     assert!(matches!(read(&p), Err(MeshError::UnknownFormat { .. })));
 }
+
+/// A minimal glTF whose one buffer (one triangle, 36 bytes) is at `uri`.
+fn gltf_with_buffer(uri: &str) -> String {
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+      "nodes":[{{"mesh":0}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+      "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3",
+                    "min":[0,0,0],"max":[1,1,0]}}],
+      "bufferViews":[{{"buffer":0,"byteLength":36}}],
+      "buffers":[{{"byteLength":36,"uri":"{uri}"}}]}}"#
+    )
+}
+
+/// Buffer URIs may not leave the glTF file's folder (issue 19 item 7: `../../etc/passwd` was
+/// read as vertex data).
+#[test]
+fn gltf_buffers_outside_the_folder_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let inner = d.path().join("scene");
+    std::fs::create_dir(&inner).unwrap();
+    let bin = [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        .as_flattened()
+        .iter()
+        .flat_map(|c| c.to_le_bytes())
+        .collect::<Vec<u8>>();
+    write(d.path(), "outside.bin", &bin);
+    write(&inner, "inside.bin", &bin);
+    std::fs::create_dir(inner.join("sub")).unwrap();
+    write(&inner.join("sub"), "deeper.bin", &bin);
+    for uri in [
+        "../outside.bin",
+        "../../etc/passwd",
+        "sub/../../outside.bin",
+        "%2e%2e/outside.bin",
+        "/etc/passwd",
+        "file:///etc/passwd",
+        "C:/x.bin",
+    ] {
+        let p = write(&inner, "m.gltf", gltf_with_buffer(uri).as_bytes());
+        match read(&p) {
+            Err(e @ MeshError::BufferOutsideFolder { buffer: 0, .. }) => {
+                assert!(e.to_string().contains(uri), "{uri}: {e}")
+            }
+            other => panic!("{uri}: {other:?}"),
+        }
+    }
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(d.path().join("outside.bin"), inner.join("link.bin")).unwrap();
+        let p = write(&inner, "m.gltf", gltf_with_buffer("link.bin").as_bytes());
+        assert!(
+            matches!(read(&p), Err(MeshError::BufferOutsideFolder { .. })),
+            "symlink"
+        );
+    }
+    for uri in [
+        "inside.bin",
+        "./inside.bin",
+        "sub/deeper.bin",
+        "sub%2Fdeeper.bin",
+    ] {
+        let p = write(&inner, "m.gltf", gltf_with_buffer(uri).as_bytes());
+        assert_eq!(read(&p).unwrap().triangle_count(), 1, "{uri}");
+    }
+}
+
+/// Devices and FIFOs are refused by every mesh reader before anything is read or opened.
+#[test]
+fn devices_and_fifos_are_not_meshes() {
+    let d = tempfile::tempdir().unwrap();
+    for ext in ["obj", "ply", "gltf", "glb"] {
+        let zero = d.path().join(format!("zero.{ext}"));
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+        match read(&zero) {
+            Err(e @ MeshError::Input(_)) => {
+                assert!(e.to_string().contains("character device"), "{ext}: {e}")
+            }
+            other => panic!("{ext}: {other:?}"),
+        }
+        let fifo = d.path().join(format!("pipe.{ext}"));
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success());
+        if made {
+            let e = read(&fifo).unwrap_err();
+            assert!(e.to_string().contains("FIFO"), "{ext}: {e}");
+        }
+    }
+}

@@ -42,7 +42,42 @@ pub enum TerrainError {
         lo: f64,
         hi: f64,
     },
+    /// A terrain with fewer than 2x2 cells: slopes, normals and flow need neighbours.
+    #[error("a {width}x{height} grid is too small for a terrain: at least 2x2 cells are needed")]
+    TerrainTooSmall { width: usize, height: usize },
+    /// A terrain without a single 2x2 block of cells of which at least three are valid, so
+    /// there is no surface (all nodata, or isolated valid cells).
+    #[error(
+        "the {width}x{height} terrain has {valid} valid cells but no 2x2 block with at least 3 \
+         valid cells: there is no surface to simulate on"
+    )]
+    NoTerrainSurface {
+        width: usize,
+        height: usize,
+        valid: usize,
+    },
+    /// A valid cell whose altitude is not finite or beyond the altitude limit.
+    #[error(
+        "altitude {} m at cell (col {col}, row {row}) is beyond the limit of +-{limit} m \
+         (a spike or a wrong unit or nodata value?)",
+        altitude_text(*value)
+    )]
+    AltitudeOutOfRange {
+        col: usize,
+        row: usize,
+        value: f32,
+        limit: f32,
+    },
     /// Two grids that must share a geometry do not.
     #[error("geometry mismatch: {0}")]
     GeometryMismatch(String),
+}
+
+/// An altitude as a user reads it: plain below a million, in exponent form above (`1e30`).
+fn altitude_text(v: f32) -> String {
+    if v.is_finite() && v.abs() < 1e6 {
+        v.to_string()
+    } else {
+        format!("{v:e}")
+    }
 }

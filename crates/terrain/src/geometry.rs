@@ -159,9 +159,8 @@ impl GridGeometry {
     }
 
     /// A georeferenced grid. The metric cell size is the pixel size, unless the CRS is
-    /// geographic (or, without a CRS, the extent fits in degrees and the pixels are smaller
-    /// than 0.1, which only a grid in degrees has), in which case it is derived from the
-    /// latitude of the grid's centre.
+    /// geographic, in which case it is derived from the latitude of the grid's centre. Without
+    /// a CRS the pixel size is metres, however small.
     pub fn from_transform(
         width: usize,
         height: usize,
@@ -195,24 +194,11 @@ impl GridGeometry {
         Ok(g)
     }
 
-    /// Whether positions are in degrees: a geographic CRS, or no CRS with an extent inside
-    /// [-180, 360] x [-90, 90] and pixels below 0.1 units (no metric DEM has 10 cm cells that
-    /// far south-west of its false origin).
+    /// Whether positions are in degrees: only when the CRS is geographic. A grid without a
+    /// CRS is metric whatever its cell size (a mesh voxelised at 1 cm is not in degrees); a
+    /// DEM in degrees without a CRS needs one given (`--crs EPSG:4326`).
     pub fn is_geographic(&self) -> bool {
-        match &self.crs {
-            Some(c) => c.is_geographic(),
-            None => {
-                let t = &self.transform;
-                let (x0, x1) = (t.origin_x, t.origin_x + self.width as f64 * t.pixel_width);
-                let (y1, y0) = (t.origin_y, t.origin_y - self.height as f64 * t.pixel_height);
-                t.pixel_width < 0.1
-                    && t.pixel_height < 0.1
-                    && x0 >= -180.0
-                    && x1 <= 360.0
-                    && y0 >= -90.0
-                    && y1 <= 90.0
-            }
-        }
+        self.crs.as_ref().is_some_and(Crs::is_geographic)
     }
 
     /// Latitude of the grid centre in degrees, when the grid is in degrees.
@@ -412,12 +398,29 @@ mod tests {
                 pixel_width: 1.0 / 1200.0,
                 pixel_height: 1.0 / 1200.0,
             },
-            None,
+            Some(Crs::Epsg(4326)),
         )
         .unwrap();
         assert!(g.is_geographic());
         assert!((g.cell_size_y() - 92.5).abs() < 0.5, "{}", g.cell_size_y());
         assert!((g.cell_size_x() - 74.5).abs() < 0.5, "{}", g.cell_size_x());
+    }
+
+    #[test]
+    fn tiny_cells_without_a_crs_stay_metres() {
+        // A mesh voxelised at 1 cm near the origin: once read as degrees (1112 m cells).
+        let t = GeoTransform {
+            origin_x: 0.0,
+            origin_y: 0.64,
+            pixel_width: 0.01,
+            pixel_height: 0.01,
+        };
+        let g = GridGeometry::from_transform(64, 64, t, None).unwrap();
+        assert!(!g.is_geographic());
+        assert_eq!((g.cell_size_x(), g.cell_size_y()), (0.01, 0.01));
+        assert_eq!(g.centre_latitude_deg(), None);
+        let g = GridGeometry::from_transform(64, 64, t, Some(Crs::Epsg(4326))).unwrap();
+        assert!(g.is_geographic() && g.cell_size_y() > 1000.0);
     }
 
     #[test]

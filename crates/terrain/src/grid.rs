@@ -2,6 +2,10 @@
 
 use crate::{GridGeometry, TerrainError};
 
+/// The largest altitude magnitude a terrain may hold, metres. Earth's relief spans -11 km to
+/// +9 km; the limit leaves room for synthetic scenes but refuses spikes (1e30) and wrong units.
+pub const MAX_ABS_ALTITUDE_M: f32 = 1e5;
+
 /// Which cells hold data. Nodata cells (outside a real DEM's footprint) carry no snow and are
 /// skipped by every kernel; their stored value is kept finite (0) so it can never spread a NaN.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -173,6 +177,48 @@ impl Grid {
         Ok(())
     }
 
+    /// Checks that the grid can be a terrain, before any work is done on it: at least 2x2
+    /// cells, every valid altitude finite and within +-[`MAX_ABS_ALTITUDE_M`], and at least
+    /// one 2x2 block of cells of which three or more are valid (a surface with a slope).
+    /// The error names the size, the cell and the value.
+    pub fn check_terrain(&self) -> Result<(), TerrainError> {
+        let (w, h) = (self.geometry.width(), self.geometry.height());
+        if w < 2 || h < 2 {
+            return Err(TerrainError::TerrainTooSmall {
+                width: w,
+                height: h,
+            });
+        }
+        for (i, &v) in self.data.iter().enumerate() {
+            if self.mask.is_valid(i) && (v.is_nan() || v.abs() > MAX_ABS_ALTITUDE_M) {
+                let (col, row) = self.geometry.col_row(i);
+                return Err(TerrainError::AltitudeOutOfRange {
+                    col,
+                    row,
+                    value: v,
+                    limit: MAX_ABS_ALTITUDE_M,
+                });
+            }
+        }
+        let Some(invalid) = self.mask.invalid_cells() else {
+            return Ok(());
+        };
+        let valid = |c: usize, r: usize| usize::from(!invalid[r * w + c]);
+        let has_surface = (0..h - 1).any(|r| {
+            (0..w - 1)
+                .any(|c| valid(c, r) + valid(c + 1, r) + valid(c, r + 1) + valid(c + 1, r + 1) >= 3)
+        });
+        if has_surface {
+            Ok(())
+        } else {
+            Err(TerrainError::NoTerrainSurface {
+                width: w,
+                height: h,
+                valid: self.geometry.len() - self.mask.count_nodata(),
+            })
+        }
+    }
+
     /// Minimum and maximum over valid cells (`None` if every cell is nodata).
     pub fn value_range(&self) -> Option<(f32, f32)> {
         let mut range: Option<(f32, f32)> = None;
@@ -311,6 +357,89 @@ mod tests {
                 value: f32::INFINITY
             }
         );
+    }
+
+    fn terrain(w: usize, h: usize, data: Vec<f32>, invalid: Option<Vec<bool>>) -> Grid {
+        let geo = GridGeometry::square(w, h, 10.0).unwrap();
+        let mask = invalid.map_or_else(NodataMask::all_valid, NodataMask::from_invalid);
+        Grid::new(geo, data, mask).unwrap()
+    }
+
+    #[test]
+    fn terrain_needs_two_by_two_cells() {
+        for (w, h) in [(1, 1), (1, 7), (7, 1)] {
+            let e = terrain(w, h, vec![100.0; w * h], None)
+                .check_terrain()
+                .unwrap_err();
+            assert_eq!(
+                e,
+                TerrainError::TerrainTooSmall {
+                    width: w,
+                    height: h
+                }
+            );
+            assert!(e.to_string().contains(&format!("{w}x{h}")), "{e}");
+        }
+        assert!(terrain(2, 2, vec![1.0; 4], None).check_terrain().is_ok());
+    }
+
+    #[test]
+    fn terrain_needs_a_surface_of_valid_cells() {
+        let all_nodata = terrain(3, 3, vec![0.0; 9], Some(vec![true; 9]));
+        let e = all_nodata.check_terrain().unwrap_err();
+        assert!(matches!(e, TerrainError::NoTerrainSurface { valid: 0, .. }));
+        let mut one = vec![true; 9];
+        one[4] = false;
+        let e = terrain(3, 3, vec![5.0; 9], Some(one)).check_terrain();
+        assert!(matches!(
+            e,
+            Err(TerrainError::NoTerrainSurface { valid: 1, .. })
+        ));
+        // A chequerboard has valid cells everywhere but no block with three of them.
+        let chequer: Vec<bool> = (0..16).map(|i| (i % 4 + i / 4) % 2 == 0).collect();
+        let e = terrain(4, 4, vec![5.0; 16], Some(chequer)).check_terrain();
+        assert!(matches!(
+            e,
+            Err(TerrainError::NoTerrainSurface { valid: 8, .. })
+        ));
+        // Three valid corners make a triangle with a slope.
+        let three = vec![false, false, false, true];
+        assert!(
+            terrain(2, 2, vec![1.0; 4], Some(three))
+                .check_terrain()
+                .is_ok()
+        );
+    }
+
+    #[test]
+    fn altitudes_beyond_the_limit_name_the_cell_and_value() {
+        let mut d = vec![1500.0; 12];
+        d[7] = 1e30;
+        let e = terrain(4, 3, d, None).check_terrain().unwrap_err();
+        assert_eq!(
+            e,
+            TerrainError::AltitudeOutOfRange {
+                col: 3,
+                row: 1,
+                value: 1e30,
+                limit: MAX_ABS_ALTITUDE_M
+            }
+        );
+        let text = e.to_string();
+        assert!(
+            text.contains("1e30") && text.contains("col 3, row 1"),
+            "{text}"
+        );
+        let mut d = vec![0.0; 4];
+        d[0] = -1.5e5;
+        let e = terrain(2, 2, d, None).check_terrain().unwrap_err();
+        assert!(e.to_string().contains("-150000"), "{e}");
+        let mut d = vec![0.0; 4];
+        d[1] = f32::NAN;
+        assert!(terrain(2, 2, d, None).check_terrain().is_err());
+        let mut d = vec![0.0; 4];
+        d[2] = -1e5;
+        assert!(terrain(2, 2, d, None).check_terrain().is_ok());
     }
 
     #[test]

@@ -28,5 +28,5 @@ pub mod surface;
 
 pub use error::TerrainError;
 pub use geometry::{Crs, GeoTransform, GridGeometry};
-pub use grid::{Grid, NodataMask};
+pub use grid::{Grid, MAX_ABS_ALTITUDE_M, NodataMask};
 pub use layers::{LayeredTerrain, SnowLayer};

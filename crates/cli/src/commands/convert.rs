@@ -20,7 +20,7 @@ pub fn run(args: &ConvertArgs) -> Result<(), Failure> {
             })
             .bad_input()?,
     };
-    let grid = args.dem.read(&args.input).bad_input()?;
+    let grid = args.dem.read_raster(&args.input).bad_input()?;
     write_raster(&args.output, &grid, format).job_failed()?;
     Ok(())
 }

@@ -5,7 +5,7 @@ use crate::failure::{ExitCodeExt, Failure};
 use crate::report::InputSummary;
 
 pub fn run(args: &InfoArgs) -> Result<(), Failure> {
-    let grid = args.dem.read(&args.file).bad_input()?;
+    let grid = args.dem.read_raster(&args.file).bad_input()?;
     let s = InputSummary::of(&args.file.display().to_string(), &grid);
     if args.json {
         let text = serde_json::to_string_pretty(&s).job_failed()?;

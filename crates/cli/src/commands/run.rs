@@ -15,7 +15,7 @@ use std::path::Path;
 const RESOLVED_SCENARIO: &str = "scenario.toml";
 
 fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
-    let text = std::fs::read_to_string(path)
+    let text = snowscape_io::input::read_regular_text(path)
         .with_context(|| format!("cannot read scenario {}", path.display()))?;
     Ok(Scenario::from_toml(&text, &path.display().to_string())?)
 }

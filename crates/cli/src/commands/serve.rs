@@ -33,7 +33,7 @@ fn export(winter: &Winter, dir: &Path) -> Result<Vec<String>, String> {
 pub fn run(args: &ServeArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let mut scenario = match &args.scenario {
         Some(p) => {
-            let text = std::fs::read_to_string(p)
+            let text = snowscape_io::input::read_regular_text(p)
                 .with_context(|| format!("cannot read scenario {}", p.display()))
                 .bad_input()?;
             Scenario::from_toml(&text, &p.display().to_string()).bad_input()?

@@ -41,7 +41,7 @@ fn load_scenario(text: Option<&str>) -> anyhow::Result<(Scenario, bool)> {
     };
     let path = Path::new(text);
     let (source, name) = if path.exists() {
-        let s = std::fs::read_to_string(path)
+        let s = snowscape_io::input::read_regular_text(path)
             .with_context(|| format!("cannot read scenario {}", path.display()))?;
         (s, path.display().to_string())
     } else if let Some(s) = shipped_scenario(text) {

@@ -4,7 +4,8 @@ use super::geokeys::{self, GeoKeys, RASTER_PIXEL_IS_POINT};
 use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cell_size, check_cells};
 use crate::crs_sidecar::sidecar_crs;
-use crate::error::{RasterError, Result, geometry_err, io_err, tiff_err};
+use crate::error::{RasterError, Result, geometry_err, tiff_err};
+use crate::input::open_regular;
 use snowscape_terrain::{GeoTransform, Grid, GridGeometry};
 use std::fs::File;
 use std::io::{BufReader, Read, Seek};
@@ -231,7 +232,7 @@ fn push_band1(
 
 /// Opens the decoder and checks the cell count before decoding anything.
 fn open(path: &Path, max_cells: usize) -> Result<(Dec, usize, usize)> {
-    let file = File::open(path).map_err(io_err(path))?;
+    let (file, _) = open_regular(path)?;
     let mut dec = Decoder::new(BufReader::new(file)).map_err(tiff_err(path))?;
     let (w, h) = dec.dimensions().map_err(tiff_err(path))?;
     let n = check_cells(path, u64::from(w), u64::from(h), max_cells)?;

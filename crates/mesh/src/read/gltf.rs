@@ -108,7 +108,7 @@ fn load_buffers(path: &Path, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, MeshErro
                     .map_err(|e| bad(format!("buffer {}: {e}", buffer.index())))?
             }
             gltf::buffer::Source::Uri(uri) => {
-                let file = path.parent().unwrap_or(Path::new(".")).join(uri);
+                let file = buffer_file(path, buffer.index(), uri)?;
                 crate::read::read_bytes(&file)?
             }
         };
@@ -123,6 +123,63 @@ fn load_buffers(path: &Path, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, MeshErro
         out.push(data);
     }
     Ok(out)
+}
+
+/// Decodes the `%XX` escapes of a URI path (`%20` is a space, `%2e%2e` is `..`); `None` for
+/// a malformed escape or a result that is not UTF-8.
+fn percent_decode(uri: &str) -> Option<String> {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' {
+            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+/// The file a relative buffer URI names, which must lie in the glTF file's folder or below
+/// it: no scheme, no absolute path, no `..`, and (symbolic links followed) still inside.
+fn buffer_file(path: &Path, buffer: usize, uri: &str) -> Result<std::path::PathBuf, MeshError> {
+    let outside = |reason| MeshError::BufferOutsideFolder {
+        path: path.to_path_buf(),
+        buffer,
+        uri: uri.to_string(),
+        reason,
+    };
+    let decoded = percent_decode(uri).ok_or_else(|| outside("a malformed %-escape"))?;
+    let rel = Path::new(&decoded);
+    if decoded.split('/').next().is_some_and(|s| s.contains(':')) {
+        return Err(outside("a URI scheme or drive"));
+    }
+    if decoded.contains('\\') {
+        return Err(outside("a backslash"));
+    }
+    for c in rel.components() {
+        match c {
+            std::path::Component::Normal(_) | std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => return Err(outside("a '..' step")),
+            _ => return Err(outside("an absolute path")),
+        }
+    }
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let file = folder.join(rel);
+    // A symbolic link inside the folder may still point out of it.
+    if let (Ok(real_folder), Ok(real_file)) = (folder.canonicalize(), file.canonicalize())
+        && !real_file.starts_with(&real_folder)
+    {
+        return Err(outside("a symbolic link leading out of the folder"));
+    }
+    Ok(file)
 }
 
 /// Checks that `accessor` lies inside its buffer view and buffer, with the expected shape.

@@ -57,10 +57,11 @@ pub fn read_scene(path: &Path, frame: &SourceFrame) -> Result<(Scene, MeshReport
     check_objects(path, raws, frame)
 }
 
-/// Reads a whole file, naming it in the error.
+/// The largest mesh file (or glTF buffer) read: 4 GiB.
+pub const MAX_MESH_BYTES: u64 = 1 << 32;
+
+/// Reads a whole regular file of at most [`MAX_MESH_BYTES`] (devices and FIFOs are refused
+/// before anything is opened, see [`snowscape_io::input`]), naming it in the error.
 pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, MeshError> {
-    std::fs::read(path).map_err(|source| MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    Ok(snowscape_io::input::read_regular(path, MAX_MESH_BYTES)?)
 }
