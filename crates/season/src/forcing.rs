@@ -232,10 +232,18 @@ pub fn from_path(
     path: &Path,
     station_altitude_override: Option<f64>,
 ) -> Result<StationForcing, ForcingError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ForcingError::Io {
+    let io = |source| ForcingError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    // A device or a FIFO is refused before it is opened (reading one would not end, or block).
+    if !std::fs::metadata(path).map_err(io)?.is_file() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a device, FIFO or folder)",
+        )));
+    }
+    let text = std::fs::read_to_string(path).map_err(io)?;
     StationForcing::from_text(&text, path, station_altitude_override)
 }
 

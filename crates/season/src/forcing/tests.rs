@@ -361,3 +361,12 @@ fn a_missing_file_is_an_io_error_naming_it() {
     assert!(matches!(e, ForcingError::Io { .. }));
     assert!(e.to_string().contains("/nonexistent/forcing.csv"), "{e}");
 }
+
+#[test]
+fn devices_and_folders_are_refused_before_reading() {
+    for p in ["/dev/zero", "/tmp"] {
+        let e = from_path(Path::new(p), None).unwrap_err();
+        assert!(matches!(e, ForcingError::Io { .. }), "{p}: {e}");
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+    }
+}
