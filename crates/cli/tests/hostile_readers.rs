@@ -33,19 +33,7 @@ fn snowscape_within(args: &[&str]) -> Output {
 
 /// Checks exit 2, the needles in the message and an empty `out` (when given).
 fn refused(args: &[&str], out: Option<&Path>, needles: &[&str]) -> String {
-    let o = snowscape_within(args);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
-    for n in needles {
-        assert!(err.contains(n), "{args:?}: expected {n:?} in: {err}");
-    }
-    if let Some(out) = out {
-        assert!(
-            !out.exists() || std::fs::read_dir(out).unwrap().next().is_none(),
-            "{args:?}: outputs were written before the refusal"
-        );
-    }
-    err
+    common::assert_refused(&snowscape_within(args), args, out, needles)
 }
 
 #[test]

@@ -83,25 +83,7 @@ fn refused(args: &[&str], out: Option<&Path>, needles: &[&str]) {
     if let Some(o) = &out_s {
         all.extend_from_slice(&["--out", o]);
     }
-    let t = std::time::Instant::now();
-    let o = snowscape(&all);
-    let err = stderr(&o);
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "{args:?}: expected exit 2, got {:?} after {:.1} s: {err}",
-        o.status.code(),
-        t.elapsed().as_secs_f64()
-    );
-    for n in needles {
-        assert!(err.contains(n), "{args:?}: expected {n:?} in: {err}");
-    }
-    if let Some(out) = out {
-        assert!(
-            !out.exists() || std::fs::read_dir(out).unwrap().next().is_none(),
-            "{args:?}: outputs were written before the refusal"
-        );
-    }
+    common::assert_refused(&snowscape(&all), args, out, needles);
 }
 
 #[test]

@@ -258,6 +258,11 @@ impl Job {
     }
 }
 
+/// The server's project folder, or the refusal a server without one gives.
+fn project_folder(project: Option<&ProjectDir>) -> Result<&ProjectDir, Refusal> {
+    project.ok_or((ErrorCode::Failed, "no project folder".to_string()))
+}
+
 fn text(m: &ServerMessage) -> Outgoing {
     Outgoing::Text(m.to_json())
 }
@@ -359,9 +364,7 @@ impl Session {
         name: String,
         project: Option<&ProjectDir>,
     ) -> Result<(Job, Vec<Out>), Refusal> {
-        let project = project
-            .ok_or((ErrorCode::Failed, "no project folder".to_string()))?
-            .clone();
+        let project = project_folder(project)?.clone();
         let message = format!("loading project {name}");
         Ok(self.new_job(JobKind::Load, 1.0, message, Work::Load { project, name }))
     }
@@ -373,7 +376,7 @@ impl Session {
         project: Option<&ProjectDir>,
         export: Option<&Arc<Exporter>>,
     ) -> Result<(Job, Vec<Out>), Refusal> {
-        let p = project.ok_or((ErrorCode::Failed, "no project folder".to_string()))?;
+        let p = project_folder(project)?;
         let export = export
             .ok_or((
                 ErrorCode::Failed,
@@ -400,9 +403,7 @@ impl Session {
         name: String,
         project: Option<&ProjectDir>,
     ) -> Result<(Job, Vec<Out>), Refusal> {
-        let project = project
-            .ok_or((ErrorCode::Failed, "no project folder".to_string()))?
-            .clone();
+        let project = project_folder(project)?.clone();
         crate::protocol::check_name(&name).map_err(|e| (ErrorCode::BadPath, e.to_string()))?;
         let contents = Box::new(ProjectContents::of(self));
         let message = format!("saving project {name}");

@@ -42,3 +42,21 @@ pub fn tiff_size(path: &Path) -> (u32, u32) {
     let mut d = tiff::decoder::Decoder::new(std::io::BufReader::new(f)).unwrap();
     d.dimensions().unwrap()
 }
+
+/// Checks that `o` (the run of `args`) was refused as a usage error: exit 2, each needle in
+/// its message, and nothing in `out` (when given). Returns the message.
+#[allow(dead_code)]
+pub fn assert_refused(o: &Output, args: &[&str], out: Option<&Path>, needles: &[&str]) -> String {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: expected exit 2: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{args:?}: expected {n:?} in: {err}");
+    }
+    if let Some(out) = out {
+        assert!(
+            !out.exists() || std::fs::read_dir(out).unwrap().next().is_none(),
+            "{args:?}: outputs were written before the refusal"
+        );
+    }
+    err
+}
