@@ -303,6 +303,9 @@ pub struct SheddingScratch {
     generation: u32,
     /// The holding table and the parameters it was built for.
     holding: Option<(SheddingParams, HoldingTable)>,
+    /// The depths receiving cells keep at each neighbour distance (for the holding table
+    /// above), and the `1 / distance` they were built for.
+    retained: Option<([u32; 3], [RetainedTable; 3])>,
     queue: BinaryHeap<u64>,
     /// One bit per rank: the cells the sweep has still to visit (over their holding depth,
     /// or received snow ahead of the sweep).
@@ -502,6 +505,7 @@ pub fn step(
     let tan_min = params.min_slope_deg.to_radians().tan() as f32;
     if scratch.holding.as_ref().is_none_or(|(p, _)| p != params) {
         scratch.holding = Some((params.clone(), HoldingTable::new(params)));
+        scratch.retained = None;
     }
     let holding = match scratch.holding.take() {
         Some((_, table)) => table,
@@ -534,6 +538,12 @@ pub fn step(
     }
     scratch.pending.clear();
     scratch.pending.resize(n.div_ceil(64), 0);
+    let inv_l = distance_inv_l(&geometry);
+    let key = inv_l.map(f32::to_bits);
+    let retained = match scratch.retained.take() {
+        Some((k, tables)) if k == key => tables,
+        _ => inv_l.map(|l| RetainedTable::new(&holding, l)),
+    };
     // What the neighbours above expect a cell to keep: its surface less its own excess.
     for &(i, tan, excess) in &active {
         let i = i as usize;
@@ -545,9 +555,10 @@ pub fn step(
         scratch.pending[p / 64] |= 1 << (p % 64);
     }
     let report = with_validity!(mask, |valid| cascade::sweep(
-        params, &holding, terrain, scratch, &geometry, valid, tan_min
+        params, &holding, &retained, terrain, scratch, &geometry, valid, tan_min
     ));
     scratch.holding = Some((params.clone(), holding));
+    scratch.retained = Some((key, retained));
     Ok(report)
 }
 
@@ -639,6 +650,13 @@ fn neighbours(geometry: &GridGeometry) -> [Neighbour; 8] {
         n(1, 1, d),
         n(-1, 1, d),
     ]
+}
+
+/// `1 / distance` of the neighbours east-west, north-south and diagonal (the groups of
+/// `cascade::distance_group`).
+fn distance_inv_l(geometry: &GridGeometry) -> [f32; 3] {
+    let (dx, dy) = (geometry.cell_size_x(), geometry.cell_size_y());
+    [dx, dy, dx.hypot(dy)].map(|l| (1.0 / l) as f32)
 }
 
 /// What lies in the direction of a neighbour.
@@ -790,6 +808,8 @@ impl HoldingTable {
 }
 
 mod cascade;
+mod retained;
+use retained::RetainedTable;
 
 #[cfg(test)]
 mod tests;

@@ -3,16 +3,11 @@
 
 use super::*;
 
-/// Most iterations of the root finding in [`Cascade::retained`].
-const RETAINED_ITERATIONS: usize = 40;
-
-/// Depth within which [`Cascade::retained`] settles, m: a tenth of a millimetre.
-const RETAINED_TOLERANCE_M: f32 = 1e-4;
-
 /// The sequential sweep in the cached order, with the queue of passed receivers.
 pub(super) fn sweep<V: Validity>(
     params: &SheddingParams,
     holding: &HoldingTable,
+    retained: &[RetainedTable; 3],
     terrain: &mut LayeredTerrain,
     scratch: &mut SheddingScratch,
     geometry: &GridGeometry,
@@ -37,6 +32,7 @@ pub(super) fn sweep<V: Validity>(
     let budget = 16 * order.len() + 1024;
     let mut c = Cascade {
         holding,
+        retained,
         geometry,
         valid,
         nb: neighbours(geometry),
@@ -113,6 +109,7 @@ fn queue_key(surface: f32, j: usize) -> u64 {
 /// State of the sweep.
 struct Cascade<'a, V> {
     holding: &'a HoldingTable,
+    retained: &'a [RetainedTable; 3],
     geometry: &'a GridGeometry,
     valid: &'a V,
     nb: [Neighbour; 8],
@@ -188,67 +185,27 @@ impl<V: Validity> Cascade<'_, V> {
     /// Depth a cell that received snow keeps, m: the `d` in `[0, depth]` that equals its
     /// (dynamic) holding depth on the slope its surface would then have, the descent from
     /// `base + d` (`base` the bedrock under the column) to its neighbours' surfaces as seen
-    /// ([`Self::seen`]), or past the border the bed's. `d − D_hold(d)` increases with `d`;
-    /// Illinois regula falsi (Dowell & Jarratt 1971) keeps a bracket of the root and stops
-    /// within 0.1 mm (of depth, or of the root's residual), returning the held end.
+    /// ([`Self::seen`]), or past the border the bed's: the smallest of the roots for the
+    /// highest rise `base − seen` at each neighbour distance (east-west, north-south,
+    /// diagonal), tabulated, and of the holding depth on the border's slope (see
+    /// [`super::retained`]).
     fn retained(&self, i: usize, base: f32, depth: f32) -> f32 {
         let mut fixed = 0.0f32;
-        // The highest rise `base − seen` over the neighbours at each distance (east-west,
-        // north-south, diagonal) and that distance's `1 / L`: for a given `1 / L`, `(c + d) / L`
-        // grows with `c` (in f32 too, rounding being monotone), so the steepest descent is the
-        // largest of three terms instead of eight, with the same bits.
-        let mut rises = [(f32::NEG_INFINITY, 1.0f32); 3];
+        let mut rises = [f32::NEG_INFINITY; 3];
         for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| match a {
             Around::Cell(j) => {
                 let g = &mut rises[distance_group(n)];
-                g.0 = g.0.max(base - self.seen(j));
-                g.1 = n.inv_l;
+                *g = g.max(base - self.seen(j));
             }
             Around::Ghost(o) => fixed = fixed.max((self.bed[o] - self.bed[i]) * n.inv_l),
         });
-        let hold = |d: f32| {
-            let slope = rises
-                .iter()
-                .fold(fixed, |s, &(c, inv_l)| s.max((c + d) * inv_l));
-            self.holding.hold(slope, true)
-        };
-        let at_depth = hold(depth);
-        if depth <= at_depth {
-            return depth;
-        }
-        let at_zero = hold(0.0);
-        if at_zero == at_depth {
-            return at_depth;
-        }
-        // Illinois regula falsi on g(d) = d − D_hold(d), negative at 0 and positive at
-        // `depth`; the bracket `[lo, hi]` always holds the root, `lo` is held.
-        let (mut lo, mut hi) = (0.0f32, depth);
-        let (mut g_lo, mut g_hi) = (-at_zero, depth - at_depth);
-        let mut side = 0i8;
-        for _ in 0..RETAINED_ITERATIONS {
-            if hi - lo <= RETAINED_TOLERANCE_M || g_lo >= 0.0 {
-                break;
-            }
-            let x = (hi - g_hi * (hi - lo) / (g_hi - g_lo)).clamp(lo, hi);
-            let g = x - hold(x);
-            if g > 0.0 {
-                (hi, g_hi) = (x, g);
-                if side == 1 {
-                    g_lo *= 0.5;
-                }
-                side = 1;
-            } else {
-                (lo, g_lo) = (x, g);
-                if side == -1 {
-                    g_hi *= 0.5;
-                }
-                side = -1;
-                if g > -RETAINED_TOLERANCE_M {
-                    break;
-                }
+        let mut keep = depth.min(self.holding.hold(fixed, true));
+        for (table, &rise) in self.retained.iter().zip(&rises) {
+            if rise > f32::NEG_INFINITY {
+                keep = keep.min(table.keep(self.holding, rise));
             }
         }
-        lo
+        keep
     }
 
     /// Sheds cell `i`'s excess, if any. A round cut short by a receiver it would overtake is
