@@ -281,25 +281,12 @@ pub struct SheddingScratch {
     key_mask: Option<Vec<bool>>,
     /// Valid cells, each after the neighbours above it (`upslope_first_order`).
     order: Vec<u32>,
-    /// Position of each cell in `order` (`u32::MAX` for nodata).
-    rank: Vec<u32>,
     /// Steepest descent of the bedrock alone to the valid neighbours (tan; infinite for cells
     /// on the border or beside nodata): with the compacted snow on a cell, a bound on the
     /// slope of its bed that spares the cells far from `min_slope_deg` a full evaluation.
     bedrock_descent: Vec<f32>,
-    /// Bedrock plus compacted snow.
-    bed: Vec<f32>,
-    /// Snow surface at the start of the step, less the excess each cell is to shed: what a
-    /// cell the sweep has not reached is expected to keep.
-    surface0: Vec<f32>,
-    /// Snow surface during the sweep.
-    surface: Vec<f32>,
-    /// Slope of a cell that has not received snow (tan; see the module documentation).
-    tan_slope: Vec<f32>,
-    flags: Vec<u8>,
-    /// The step in which each cell's `bed`, `surface0`, `surface` and `flags` were set up
-    /// (equal to `generation`: in this one).
-    stamp: Vec<u32>,
+    /// Each cell's rank in `order` and its state in the sweep.
+    cells: Vec<CellState>,
     generation: u32,
     /// The holding table and the parameters it was built for.
     holding: Option<(SheddingParams, HoldingTable)>,
@@ -332,30 +319,63 @@ const LEVEL_M: f32 = 1e-3;
 /// limited it, and a cell has 8 neighbours).
 const ROUNDS: usize = 9;
 
-/// Sets up cell `i`'s bed, surface at the start and surface of the sweep (`surfaces`) and its
-/// flags from the snow it has, unless `stamp` says this step (`generation`) already did: the
-/// same sums as `LayeredTerrain::surface`.
+/// One cell's state in the sweep, kept together so that a visit's 3×3 block of cells lies in
+/// a few cache lines (as separate arrays it spread over a dozen times as many).
+#[derive(Debug, Clone, Copy)]
+struct CellState {
+    /// Bedrock plus compacted snow, m.
+    bed: f32,
+    /// Snow surface at the start of the step, less the excess the cell is to shed: what a cell
+    /// the sweep has not reached is expected to keep, m.
+    surface0: f32,
+    /// Snow surface during the sweep, m.
+    surface: f32,
+    /// Slope of a cell that has not received snow (tan; see the module documentation).
+    tan_slope: f32,
+    /// Position of the cell in the cached order (`u32::MAX` for nodata); kept between steps.
+    rank: u32,
+    /// The step in which `bed`, `surface0`, `surface` and `flags` were set up (equal to the
+    /// scratch's `generation`: in this one).
+    stamp: u32,
+    flags: u8,
+}
+
+impl Default for CellState {
+    fn default() -> Self {
+        Self {
+            bed: 0.0,
+            surface0: 0.0,
+            surface: 0.0,
+            tan_slope: 0.0,
+            rank: u32::MAX,
+            stamp: 0,
+            flags: 0,
+        }
+    }
+}
+
+/// Sets up cell `i`'s bed, surface at the start and surface of the sweep and its flags from
+/// the snow it has, unless its stamp says this step (`generation`) already did: the same sums
+/// as `LayeredTerrain::surface`.
 #[inline]
 fn set_up(
     i: usize,
     generation: u32,
     bedrock: &[f32],
     snow: &[Vec<f32>; 4],
-    surfaces: [&mut [f32]; 3],
-    stamp: &mut [u32],
-    flags: &mut [u8],
+    cells: &mut [CellState],
 ) {
-    if stamp[i] == generation {
+    let cell = &mut cells[i];
+    if cell.stamp == generation {
         return;
     }
-    stamp[i] = generation;
+    cell.stamp = generation;
     let [c, st, u, pw] = snow;
-    let [bed, surface0, surface] = surfaces;
     let b = bedrock[i];
-    bed[i] = b + c[i];
-    surface0[i] = b + (c[i] + st[i] + u[i] + pw[i]);
-    surface[i] = surface0[i];
-    flags[i] = 0;
+    cell.bed = b + c[i];
+    cell.surface0 = b + (c[i] + st[i] + u[i] + pw[i]);
+    cell.surface = cell.surface0;
+    cell.flags = 0;
 }
 
 impl SheddingScratch {
@@ -363,15 +383,7 @@ impl SheddingScratch {
     /// step looks at it (the same sums as `LayeredTerrain::surface`).
     #[inline]
     fn touch(&mut self, bedrock: &[f32], snow: &[Vec<f32>; 4], i: usize) {
-        set_up(
-            i,
-            self.generation,
-            bedrock,
-            snow,
-            [&mut self.bed, &mut self.surface0, &mut self.surface],
-            &mut self.stamp,
-            &mut self.flags,
-        );
+        set_up(i, self.generation, bedrock, snow, &mut self.cells);
     }
 
     /// Rebuilds the bedrock order if the bedrock or the mask changed.
@@ -393,9 +405,9 @@ impl SheddingScratch {
             geometry,
             valid
         ));
-        self.rank = vec![u32::MAX; terrain.bedrock.len()];
+        self.cells = vec![CellState::default(); terrain.bedrock.len()];
         for (p, &i) in self.order.iter().enumerate() {
-            self.rank[i as usize] = p as u32;
+            self.cells[i as usize].rank = p as u32;
         }
         self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
         self.key_mask = mask.map(<[bool]>::to_vec);
@@ -521,19 +533,9 @@ pub fn step(
     // The bed, the surface at the start and the surface of the sweep are set up lazily, the
     // first time the sweep looks at a cell in this step (a cell it has not looked at still has
     // the snow it had at the start): a step costs what its cascade touches, not the grid.
-    for v in [
-        &mut scratch.bed,
-        &mut scratch.surface0,
-        &mut scratch.surface,
-        &mut scratch.tan_slope,
-    ] {
-        v.resize(n, 0.0);
-    }
-    scratch.flags.resize(n, 0);
-    scratch.stamp.resize(n, 0);
     scratch.generation = scratch.generation.wrapping_add(1);
     if scratch.generation == 0 {
-        scratch.stamp.fill(0);
+        scratch.cells.iter_mut().for_each(|c| c.stamp = 0);
         scratch.generation = 1;
     }
     scratch.pending.clear();
@@ -548,14 +550,15 @@ pub fn step(
     for &(i, tan, excess) in &active {
         let i = i as usize;
         scratch.touch(&terrain.bedrock, &terrain.snow, i);
-        scratch.flags[i] = ACTIVE;
-        scratch.tan_slope[i] = tan;
-        scratch.surface0[i] -= excess;
-        let p = scratch.rank[i] as usize;
+        let cell = &mut scratch.cells[i];
+        cell.flags = ACTIVE;
+        cell.tan_slope = tan;
+        cell.surface0 -= excess;
+        let p = cell.rank as usize;
         scratch.pending[p / 64] |= 1 << (p % 64);
     }
     let report = with_validity!(mask, |valid| cascade::sweep(
-        params, &holding, &retained, terrain, scratch, &geometry, valid, tan_min
+        params, &holding, &retained, terrain, scratch, &geometry, valid
     ));
     scratch.holding = Some((params.clone(), holding));
     scratch.retained = Some((key, retained));

@@ -12,17 +12,11 @@ pub(super) fn sweep<V: Validity>(
     scratch: &mut SheddingScratch,
     geometry: &GridGeometry,
     valid: &V,
-    tan_min: f32,
 ) -> SheddingReport {
+    let tan_min = params.min_slope_deg.to_radians().tan() as f32;
     let SheddingScratch {
         order,
-        rank,
-        bed,
-        surface0,
-        surface,
-        tan_slope,
-        flags,
-        stamp,
+        cells,
         generation,
         queue,
         pending,
@@ -38,15 +32,9 @@ pub(super) fn sweep<V: Validity>(
         nb: neighbours(geometry),
         bedrock: &terrain.bedrock,
         snow: &mut terrain.snow,
-        stamp,
         generation: *generation,
-        bed,
-        surface0,
-        surface,
-        tan_slope,
+        cells,
         tan_min,
-        flags,
-        rank,
         queue,
         pending,
         sweep: 0,
@@ -77,10 +65,11 @@ pub(super) fn sweep<V: Validity>(
             let j = !(entry as u32) as usize;
             // Current while the cell is queued with this surface; older entries of a cell that
             // received snow again since are skipped.
-            if c.flags[j] & QUEUED == 0 || entry != queue_key(c.surface[j], j) {
+            let cell = &mut c.cells[j];
+            if cell.flags & QUEUED == 0 || entry != queue_key(cell.surface, j) {
                 continue;
             }
-            c.flags[j] &= !QUEUED;
+            cell.flags &= !QUEUED;
             if revisits >= budget {
                 unsettled += 1;
                 continue;
@@ -116,15 +105,9 @@ struct Cascade<'a, V> {
     bedrock: &'a [f32],
     snow: &'a mut [Vec<f32>; 4],
     /// See [`SheddingScratch::touch`].
-    stamp: &'a mut [u32],
     generation: u32,
-    bed: &'a mut [f32],
-    surface0: &'a mut [f32],
-    surface: &'a mut [f32],
-    tan_slope: &'a [f32],
+    cells: &'a mut [CellState],
     tan_min: f32,
-    flags: &'a mut [u8],
-    rank: &'a [u32],
     queue: &'a mut BinaryHeap<u64>,
     pending: &'a mut [u64],
     /// Rank of the sweep's cell.
@@ -142,15 +125,7 @@ impl<V: Validity> Cascade<'_, V> {
     /// Sets up cell `j` the first time the step looks at it (as [`SheddingScratch::touch`]).
     #[inline]
     fn touch(&mut self, j: usize) {
-        set_up(
-            j,
-            self.generation,
-            self.bedrock,
-            self.snow,
-            [self.bed, self.surface0, self.surface],
-            self.stamp,
-            self.flags,
-        );
+        set_up(j, self.generation, self.bedrock, self.snow, self.cells);
     }
 
     /// Sets up cell `i` and its valid neighbours: everything a visit of `i` reads.
@@ -175,10 +150,11 @@ impl<V: Validity> Cascade<'_, V> {
     /// start of the step less its own excess; its receipts are in transit).
     #[inline]
     fn seen(&self, j: usize) -> f32 {
-        if self.rank[j] > self.sweep {
-            self.surface0[j]
+        let cell = &self.cells[j];
+        if cell.rank > self.sweep {
+            cell.surface0
         } else {
-            self.surface[j]
+            cell.surface
         }
     }
 
@@ -197,7 +173,9 @@ impl<V: Validity> Cascade<'_, V> {
                 let g = &mut rises[distance_group(n)];
                 *g = g.max(base - self.seen(j));
             }
-            Around::Ghost(o) => fixed = fixed.max((self.bed[o] - self.bed[i]) * n.inv_l),
+            Around::Ghost(o) => {
+                fixed = fixed.max((self.cells[o].bed - self.cells[i].bed) * n.inv_l)
+            }
         });
         let mut keep = depth.min(self.holding.hold(fixed, true));
         for (table, &rise) in self.retained.iter().zip(&rises) {
@@ -214,13 +192,14 @@ impl<V: Validity> Cascade<'_, V> {
         self.touch_around(i);
         let s = &self.snow;
         let depth = s[0][i] + s[1][i] + s[2][i] + s[3][i];
-        let keep = if self.flags[i] & RECEIVED != 0 {
-            self.retained(i, self.surface[i] - depth, depth)
+        let cell = self.cells[i];
+        let keep = if cell.flags & RECEIVED != 0 {
+            self.retained(i, cell.surface - depth, depth)
         } else {
-            if self.tan_slope[i] < self.tan_min {
+            if cell.tan_slope < self.tan_min {
                 return;
             }
-            self.holding.hold(self.tan_slope[i], false)
+            self.holding.hold(cell.tan_slope, false)
         };
         let mut left = depth - keep;
         for _ in 0..ROUNDS {
@@ -238,7 +217,8 @@ impl<V: Validity> Cascade<'_, V> {
     /// One round: sends up to `excess` to the lower neighbours; returns the depth removed and
     /// whether the no-overtaking limit cut it.
     fn shed_round(&mut self, i: usize, excess: f32) -> (f32, bool) {
-        let a_i = self.surface[i];
+        let a_i = self.cells[i].surface;
+        let bed_i = self.cells[i].bed;
         // The directions: drops from the surface the sender will have once its excess is
         // gone, so that snow in transit over a slope runs down it rather than spilling
         // sideways onto the neighbours that already shed; from its current surface if none is
@@ -252,11 +232,15 @@ impl<V: Validity> Cascade<'_, V> {
         let mut m = 0;
         for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| {
             seen_around[m] = match a {
-                Around::Cell(j) if self.rank[j] > self.sweep => {
-                    (a, self.surface0[j], false, n.inv_l)
+                Around::Cell(j) => {
+                    let cell = &self.cells[j];
+                    if cell.rank > self.sweep {
+                        (a, cell.surface0, false, n.inv_l)
+                    } else {
+                        (a, cell.surface, true, n.inv_l)
+                    }
                 }
-                Around::Cell(j) => (a, self.surface[j], true, n.inv_l),
-                Around::Ghost(o) => (a, a_i - (self.bed[o] - self.bed[i]), false, n.inv_l),
+                Around::Ghost(o) => (a, a_i - (self.cells[o].bed - bed_i), false, n.inv_l),
             };
             m += 1;
         });
@@ -297,10 +281,11 @@ impl<V: Validity> Cascade<'_, V> {
             return (0.0, false);
         }
         let removed = take(self.snow, i, amount);
-        self.surface[i] -= removed;
+        let cell = &mut self.cells[i];
+        cell.surface -= removed;
         self.moved += f64::from(removed);
-        if self.flags[i] & SHED == 0 {
-            self.flags[i] |= SHED;
+        if cell.flags & SHED == 0 {
+            cell.flags |= SHED;
             self.cells_shed += 1;
         }
         // Shares in neighbour order, the last one taking the rest, so they sum to `removed`.
@@ -319,18 +304,19 @@ impl<V: Validity> Cascade<'_, V> {
                 Around::Ghost(_) => self.border += f64::from(share),
                 Around::Cell(j) => {
                     self.snow[self.deposit][j] += share;
-                    self.surface[j] += share;
+                    let cell = &mut self.cells[j];
+                    cell.surface += share;
                     self.received += f64::from(share);
                     // A receiver the sweep has passed is queued with its new surface (an older
                     // entry goes stale); the sweep reaches the others.
-                    if self.rank[j] > self.sweep && self.flags[j] & (ACTIVE | RECEIVED) == 0 {
-                        let p = self.rank[j] as usize;
+                    if cell.rank > self.sweep && cell.flags & (ACTIVE | RECEIVED) == 0 {
+                        let p = cell.rank as usize;
                         self.pending[p / 64] |= 1 << (p % 64);
                     }
-                    self.flags[j] |= RECEIVED;
-                    if self.rank[j] <= self.sweep {
-                        self.flags[j] |= QUEUED;
-                        self.queue.push(queue_key(self.surface[j], j));
+                    cell.flags |= RECEIVED;
+                    if cell.rank <= self.sweep {
+                        cell.flags |= QUEUED;
+                        self.queue.push(queue_key(cell.surface, j));
                     }
                 }
             }
