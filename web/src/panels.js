@@ -1,7 +1,7 @@
 // The side panel: timeline (play, pause, step, scrub), weather-timeline editor, parameter
-// panel (every numeric and boolean field of the scenario's `parameters`, Table 2 of
-// Cordonnier et al. 2018), undo/redo, save/load/export, and cancel for the running job or live
-// event.
+// panel (every field of the scenario's `parameters`, grouped by phenomenon, each with the help,
+// range and choices the server generates from the Rust parameter types: GET /api/parameters),
+// undo/redo, save/load/export, and cancel for the running job or live event.
 const $ = (id) => document.getElementById(id);
 const WEATHER = ['from_day', 'sea_level_temperature_c', 'wind_from_deg', 'wind_speed_m_s', 'rain_snow_altitude_m', 'snowfall_per_week'];
 
@@ -10,6 +10,13 @@ export function setupPanels(app, send) {
   let waiting = false;
   let weather = [];
   let paramsShownFor = null;
+  // path -> { help, doc, kind, min, max, choices } from the server (empty until it answers).
+  let catalogue = new Map();
+  fetch('/api/parameters').then((r) => (r.ok ? r.json() : [])).then((list) => {
+    catalogue = new Map(list.map((p) => [p.path, p]));
+    paramsShownFor = null;
+    if (app.state) { paramsShownFor = JSON.stringify(app.state.scenario); renderParams(app.state.scenario.parameters); }
+  }).catch(() => {});
 
   $('undo').onclick = () => send({ type: 'undo' });
   $('redo').onclick = () => send({ type: 'redo' });
@@ -51,40 +58,90 @@ export function setupPanels(app, send) {
     renderWeather();
   };
   $('weather-apply').onclick = () => {
+    if (!window.confirm('Apply the weather timeline and restart the season from day 0?')) return;
     const sc = structuredClone(app.state.scenario);
     sc.weather = weather.map((w) => ({ ...w }));
     send({ type: 'set_scenario', scenario: sc });
   };
 
-  // Parameter form: one input per number or boolean of scenario.parameters.
+  // A bound as shown: the closest double to an open bound at 0 (e.g. 5e-324 for "> 0") is 0.
+  const shown = (v) => (v === null || v === undefined ? null : Math.abs(v) < 1e-300 ? 0 : Number(v.toPrecision(6)));
+  const open = (v) => v !== null && v !== 0 && Math.abs(v) < 1e-300;
+  const rangeText = (info) => {
+    const lo = info.min === null ? '(−∞' : `${open(info.min) ? '(' : '['}${shown(info.min)}`;
+    const hi = info.max === null ? '∞)' : `${shown(info.max)}${open(info.max) ? ')' : ']'}`;
+    return `${lo}, ${hi}`;
+  };
+
+  // Parameter form: one input per number, boolean or choice of scenario.parameters, each
+  // phenomenon a collapsible section.
   function renderParams(params) {
     const root = $('params');
     root.innerHTML = '';
+    const field = (k, v, p) => {
+      const path = p.join('.');
+      const info = catalogue.get(path);
+      const lab = document.createElement('label');
+      lab.className = 'param';
+      let inp;
+      if (info && info.kind === 'choice' && info.choices.length) {
+        inp = document.createElement('select');
+        for (const c of info.choices) {
+          const o = document.createElement('option'); o.value = c; o.textContent = c; inp.appendChild(o);
+        }
+        inp.value = v;
+      } else if (typeof v === 'boolean') {
+        inp = document.createElement('input'); inp.type = 'checkbox'; inp.checked = v;
+      } else if (typeof v === 'number') {
+        inp = document.createElement('input'); inp.type = 'number'; inp.step = info && info.kind === 'integer' ? '1' : 'any'; inp.value = v;
+        if (info && shown(info.min) !== null) inp.min = String(info.min);
+        if (info && shown(info.max) !== null) inp.max = String(info.max);
+      } else {
+        return null;
+      }
+      inp.dataset.path = path;
+      lab.append(`${k} `, inp);
+      if (info) {
+        lab.title = info.doc;
+        const help = document.createElement('span');
+        help.className = 'help';
+        help.textContent = info.kind === 'number' || info.kind === 'integer' ? `${info.help} ${rangeText(info)}` : info.help;
+        lab.appendChild(help);
+      }
+      return lab;
+    };
     const walk = (obj, path, parent) => {
       for (const [k, v] of Object.entries(obj)) {
         const p = [...path, k];
         if (v && typeof v === 'object' && !Array.isArray(v)) {
-          const fs = document.createElement('fieldset');
-          const lg = document.createElement('legend'); lg.textContent = k; fs.appendChild(lg);
-          walk(v, p, fs); parent.appendChild(fs);
-        } else if (typeof v === 'number' || typeof v === 'boolean') {
-          const lab = document.createElement('label');
-          const inp = document.createElement('input');
-          inp.dataset.path = p.join('.');
-          if (typeof v === 'boolean') { inp.type = 'checkbox'; inp.checked = v; } else { inp.type = 'number'; inp.step = 'any'; inp.value = v; }
-          lab.append(`${k} `, inp); parent.appendChild(lab);
+          let box;
+          if (path.length === 0) {
+            box = document.createElement('details');
+            box.className = 'section';
+            const sm = document.createElement('summary'); sm.textContent = k; box.appendChild(sm);
+          } else {
+            box = document.createElement('fieldset');
+            const lg = document.createElement('legend'); lg.textContent = k; box.appendChild(lg);
+          }
+          walk(v, p, box); parent.appendChild(box);
+        } else {
+          const lab = field(k, v, p);
+          if (lab) parent.appendChild(lab);
         }
       }
     };
     walk(params, [], root);
   }
   $('params-apply').onclick = () => {
+    if (!window.confirm('Apply the parameters and restart the season from day 0?')) return;
     const sc = structuredClone(app.state.scenario);
-    for (const inp of $('params').querySelectorAll('input')) {
+    for (const inp of $('params').querySelectorAll('input, select')) {
       const path = inp.dataset.path.split('.');
       let o = sc.parameters;
       for (const k of path.slice(0, -1)) o = o[k];
-      o[path[path.length - 1]] = inp.type === 'checkbox' ? inp.checked : Number(inp.value);
+      const last = path[path.length - 1];
+      if (inp.tagName === 'SELECT') o[last] = inp.value;
+      else o[last] = inp.type === 'checkbox' ? inp.checked : Number(inp.value);
     }
     send({ type: 'set_scenario', scenario: sc });
   };

@@ -6,7 +6,8 @@
 // replies without breaking the session, requests from other origins or with other Host
 // names are refused, a long step runs on a worker (another tab is answered meanwhile) and
 // the cancel button stops it, a hover readout that matches the server's cell, Ctrl+Z / Ctrl+Y undo and redo, the home and top views and a camera
-// that a step keeps, and (with SNOWSCAPE_TOKEN_URL, a server bound to 0.0.0.0) the
+// that a step keeps, the parameter panel (help, ranges and choices from the server, a
+// confirmation before the restart), and (with SNOWSCAPE_TOKEN_URL, a server bound to 0.0.0.0) the
 // page needs its access token and then runs on the cookie. Writes screenshots to
 // SNOWSCAPE_SHOTS (default /tmp).
 import { launchChromium, steepestCellInPage } from './common.mjs';
@@ -176,6 +177,37 @@ await check('the timeline steps a day', async () => {
   const srv = await (await fetch(`${base}/api/state`)).json();
   assert.equal(srv.day, s.day);
   await page.screenshot({ path: `${shots}/editor_day1.png` });
+});
+
+await check('the parameter panel: sections with help, ranges and choices from the server; apply asks first', async () => {
+  await page.click('#params-box > summary');
+  const sel = '#params [data-path="slope_shedding.min_slope_deg"]';
+  await page.waitForSelector(sel, { state: 'attached', timeout: 20000 });
+  await page.click('#params details.section:has(> summary:text-is("slope_shedding")) > summary');
+  await page.waitForSelector(sel, { timeout: 5000 });
+  const f = await page.evaluate((sel) => {
+    const inp = document.querySelector(sel);
+    return { min: inp.min, max: inp.max, help: inp.parentElement.querySelector('.help').textContent,
+      title: inp.parentElement.title, sections: document.querySelectorAll('#params details.section').length,
+      law: [...document.querySelector('#params [data-path="slope_shedding.law"]').options].map((o) => o.value) };
+  }, sel);
+  assert.equal(f.min, '0'); assert.equal(f.max, '90');
+  assert.match(f.help, /^Slope below which a cell does not shed its own snow.*\[0, 90\]$/);
+  assert.match(f.title, /FSM2oshd/);
+  assert.ok(f.sections >= 10, `${f.sections} sections`);
+  assert.deepEqual(f.law, ['exponential', 'power_law']);
+  // Dismissing the confirmation changes nothing; accepting restarts with the new value.
+  const day = await page.evaluate(() => window.snowscape.state.day);
+  await page.fill(sel, '55');
+  page.once('dialog', (d) => d.dismiss());
+  await page.click('#params-apply');
+  await page.waitForTimeout(500);
+  assert.equal(await page.evaluate(() => window.snowscape.state.day), day);
+  page.once('dialog', (d) => d.accept());
+  await page.click('#params-apply');
+  await page.waitForFunction(() => window.snowscape.state.scenario.parameters.slope_shedding.min_slope_deg === 55, null, { timeout: 60000 });
+  assert.equal(await page.evaluate(() => window.snowscape.state.day), 0);
+  await page.screenshot({ path: `${shots}/editor_parameters.png` });
 });
 
 await check('a long step runs on a worker: another tab is answered meanwhile, and cancel stops it', async () => {

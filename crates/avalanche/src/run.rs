@@ -29,7 +29,7 @@ use crate::flow::{
 use serde::{Deserialize, Serialize};
 
 /// When an avalanche run records and stops.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct RunOptions {
     /// Longest simulated time, s. Default 600 (chosen here: large avalanche paths run out in
@@ -53,7 +53,9 @@ pub struct RunOptions {
 }
 
 /// How records and flow sub-steps meet.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum RecordTiming {
     /// Sub-steps as long as the CFL condition allows; a record follows the first sub-step

@@ -6,7 +6,9 @@
 //! - `GET /ws`: the WebSocket. On connect the tab gets the state and every channel in full;
 //!   then every change, as JSON text ([`crate::protocol`]) and binary tile frames
 //!   ([`crate::wire`]). Every tab sees the same state: changes are broadcast to all.
-//! - `GET /api/state`: the state summary; `GET /api/cell?col=C&row=R`: values at a cell.
+//! - `GET /api/state`: the state summary; `GET /api/cell?col=C&row=R`: values at a cell;
+//!   `GET /api/parameters`: every scenario parameter with its help, range and choices
+//!   ([`snowscape_season::parameter_catalogue`], generated from the parameter types).
 //! - `GET /files/<path>`: a file of the project folder (exports), read-only.
 //!
 //! **Who may talk to it** ([`crate::access`]): every request must name the served address in
@@ -420,6 +422,7 @@ fn router(config: ServeConfig, gate: Arc<Gate>) -> Router {
         .route("/ws", get(ws_handler))
         .route("/api/state", get(state_handler))
         .route("/api/cell", get(cell_handler))
+        .route("/api/parameters", get(parameters_handler))
         .route("/files/{*path}", get(file_handler))
         .fallback(get(asset_handler))
         .with_state(state)
@@ -451,6 +454,10 @@ async fn state_handler(State(s): State<AppState>) -> Response {
         Some(st) => axum::Json(st).into_response(),
         None => StatusCode::SERVICE_UNAVAILABLE.into_response(),
     }
+}
+
+async fn parameters_handler() -> Response {
+    axum::Json(snowscape_season::parameter_catalogue::parameter_catalogue()).into_response()
 }
 
 #[derive(serde::Deserialize)]

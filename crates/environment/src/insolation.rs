@@ -36,7 +36,7 @@ pub const SOLAR_CONSTANT_W_M2: f64 = 1367.0;
 pub const PRESSURE_SCALE_HEIGHT_M: f64 = 8434.5;
 
 /// Clear-sky radiation parameters.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ClearSkyParams {
     /// Clear-sky atmospheric transmissivity ψa, dimensionless in (0, 1]. Default 0.75: Hock

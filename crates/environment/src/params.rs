@@ -18,7 +18,7 @@ use crate::{DeclinationModel, EnvironmentError};
 use serde::{Deserialize, Serialize};
 
 /// Direct sunlight (Cordonnier 2018, Section 4.1, `I_sun = k_sun Σ_h s_h n·i_h`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SunParams {
     /// Latitude, degrees north (negative south), in [-90, 90]. Default 45: between the paper's
@@ -57,7 +57,7 @@ impl Default for SunParams {
 }
 
 /// Ambient (sky) light (Cordonnier 2018, Section 4.1, `I_sky = k_sky π/N Σ cos² φ_i`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SkyParams {
     /// Number of horizon directions N (4..=360), evenly spaced clockwise from north.
@@ -78,7 +78,7 @@ impl Default for SkyParams {
 }
 
 /// One indirect bounce of sunlight (Cordonnier 2018, Section 4.1, `I_ind`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct BounceParams {
     /// Amount of indirect illumination, dimensionless (0..=1: the senders' albedo). Default
@@ -112,7 +112,7 @@ impl Default for BounceParams {
 }
 
 /// Temperature (Cordonnier 2018, Section 4.1, `T = T0 + kt·A + ki·I`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct TemperatureParams {
     /// Sea-level temperature T0, °C. Default 0 °C: user-set in the paper (Table 2 gives none).
@@ -135,7 +135,7 @@ impl Default for TemperatureParams {
 }
 
 /// Wind (Cordonnier 2018, Section 4.2).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct WindParams {
     /// Direction the dominant wind blows FROM, degrees clockwise from north (meteorological
@@ -199,7 +199,7 @@ impl Default for WindParams {
 }
 
 /// All parameters of the environment precompute.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct EnvironmentParams {
     /// Direct sunlight and the sampling schedule.

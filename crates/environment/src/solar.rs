@@ -22,7 +22,9 @@
 use serde::{Deserialize, Serialize};
 
 /// Which declination formula to use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum DeclinationModel {
     /// Spencer 1971 Fourier series (error < 0.0006 rad).

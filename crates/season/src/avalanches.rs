@@ -58,7 +58,7 @@ pub enum AvalancheParametersError {
 }
 
 /// When and how season avalanches happen.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct AvalancheParameters {
     /// Whether avalanches start by themselves. Default true.

@@ -32,7 +32,9 @@ use serde::{Deserialize, Serialize};
 use snowscape_environment::ClearSkyParams;
 
 /// Which default weather a scenario without `[[weather]]` gets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum DefaultWinter {
     /// From latitude and dates with the standard lapse rate (module docs). The default.
@@ -43,7 +45,7 @@ pub enum DefaultWinter {
 }
 
 /// Parameters of the air (`[parameters.climate]`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ClimateParams {
     /// The default weather when the scenario gives none.

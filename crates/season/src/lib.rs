@@ -17,6 +17,7 @@ pub mod checkpoint;
 pub mod climate;
 pub mod forcing;
 pub mod melt;
+pub mod parameter_catalogue;
 pub mod phenomenon;
 pub mod powder_diffusion;
 pub mod scenario;

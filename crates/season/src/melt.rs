@@ -22,7 +22,9 @@ pub mod enhanced;
 pub use enhanced::{EnhancedMeltParams, MeltForcing, MeltHour, MeltReport, SnowpackState};
 
 /// Which melt law a season uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum MeltModel {
     /// Enhanced temperature index with the hour-by-hour sun, albedo, cold content and
@@ -35,7 +37,7 @@ pub enum MeltModel {
 }
 
 /// Parameters of melt.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct MeltParams {
     /// The melt law (`enhanced_ti` or `cordonnier`).

@@ -48,7 +48,9 @@ use snowscape_terrain::{LayeredTerrain, SnowLayer};
 pub const MAX_RELAXATION_PER_SUBSTEP: f64 = 0.25;
 
 /// What happens to powder at the grid border.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum DiffusionBorder {
     /// Powder leaves where the bedrock descends out of the grid steeper than the rest slope;
@@ -60,7 +62,7 @@ pub enum DiffusionBorder {
 }
 
 /// Parameters of powder diffusion.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct DiffusionParams {
     /// Rest slope `s_d0` (rise over run, dimensionless) below which powder does not move.

@@ -115,7 +115,7 @@ pub struct UserAvalanche {
 }
 
 /// Every phenomenon's parameters.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct Parameters {
     pub environment: EnvironmentParams,

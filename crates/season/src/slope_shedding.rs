@@ -104,7 +104,9 @@ use snowscape_terrain::{GridGeometry, LayeredTerrain, SnowLayer};
 use std::collections::BinaryHeap;
 
 /// The holding-depth formula (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum HoldingLaw {
     /// `c · exp(−a · s)` (OGGM Snowslide's form of Bernhardt & Schulz 2010).
@@ -115,7 +117,7 @@ pub enum HoldingLaw {
 }
 
 /// Parameters of slope shedding.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SheddingParams {
     /// Whether a season sheds (after each melt-and-state event). Default true; false keeps

@@ -29,7 +29,9 @@ use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
 
 /// Which snowfall law a season uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum SnowfallModel {
     /// Precipitation with an orographic gradient and a temperature phase ([`add_precipitation`]).
@@ -40,7 +42,7 @@ pub enum SnowfallModel {
 }
 
 /// Parameters of snowfall.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SnowfallParams {
     /// The snowfall law (`orographic` or `cordonnier`).

@@ -29,7 +29,7 @@ use snowscape_transport::step::{SceneMaps, SnowState, StepScratch, step};
 use snowscape_transport::{Phenomena, TransportParams, Weather};
 
 /// Parameters of the physical wind transport in a season.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SnowTranParams {
     /// Density of the erodible snow (powder and unstable), kg m⁻³. Chosen here: 150, between

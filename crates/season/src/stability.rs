@@ -38,7 +38,7 @@ use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
 
 /// Parameters of the snow state changes.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct StabilityParams {
     /// Temperature at and above which snow destabilises at the full rate `k_warm`, °C.

@@ -58,7 +58,9 @@ pub use stencils::{
 };
 
 /// Which physics moves snow with the wind in a season.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum WindModel {
     /// Cordonnier 2018 Section 5.4: curvature erosion, deposit downwind, wind shadows.
@@ -70,7 +72,7 @@ pub enum WindModel {
 }
 
 /// Parameters of wind transport.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct WindTransportParams {
     /// The physics of the wind events (the scenario switch). Default: Cordonnier's.

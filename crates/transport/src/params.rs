@@ -13,7 +13,7 @@ use crate::error::{TransportError, check_positive, check_range};
 use serde::{Deserialize, Serialize};
 
 /// Which phenomena of Eq. 5.16 take part, so the ablations of Figs. 7.6-7.8 can be run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct Phenomena {
     /// Snowfall `ρw P` (Eq. 5.16).
@@ -47,7 +47,7 @@ impl Default for Phenomena {
 }
 
 /// Static parameters of a transport run (Table 6.I and the constants of Section 5.5).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct TransportParams {
     /// Height above the ground at which the wind is measured, `z_r`, m. Table 6.I: 5 m.

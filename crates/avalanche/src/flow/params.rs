@@ -3,7 +3,9 @@
 use super::*;
 
 /// What happens at the edge of the grid.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Border {
     /// Snow leaves the grid (counted in [`AvalancheReport::border_outflow`]).
@@ -14,7 +16,9 @@ pub enum Border {
 }
 
 /// The basal friction law of the flow.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum FrictionLaw {
     /// The paper's: Coulomb friction `g·tanθc` weighted by α, and a viscous term
@@ -35,7 +39,7 @@ pub enum FrictionLaw {
 
 /// The samosAT law's coefficients (AvaFrame com1DFA; its `samosATSmall` set, for small
 /// avalanches, has μ = 0.22, `samosATMedium` μ = 0.17, the others equal).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SamosAtParams {
     /// Dry-friction coefficient μ = tanδ. Default 0.155 (AvaFrame `musamosat`).
@@ -73,7 +77,7 @@ impl SamosAtParams {
 }
 
 /// Parameters of the avalanche flow (Cordonnier et al. 2018, Table 2 via DESIGN.md §4).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct AvalancheParams {
     /// Snow density ρ, kg/m³. Default 500 (Table 2). It cancels out of every acceleration

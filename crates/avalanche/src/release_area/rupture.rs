@@ -3,7 +3,7 @@
 use super::*;
 
 /// Parameters of the rupture at a point (module docs, *Rupture at a point*).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct RuptureParams {
     /// Reach of the fracture per metre of unstable snow at the rupture point, m/m: `R = k·U0`.

@@ -44,7 +44,7 @@ use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, NodataMask};
 
 /// Parameters of the maximum upwind slope `Sx` (Winstral et al. 2002).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ShelteringParams {
     /// Search distance upwind, metres (> 0). Default 100 m: Winstral et al. 2002's choice for

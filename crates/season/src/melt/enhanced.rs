@@ -54,7 +54,7 @@ pub const SPECIFIC_HEAT_WATER: f64 = 4186.0;
 pub const WATER_DENSITY: f64 = 1000.0;
 
 /// Parameters of the enhanced temperature-index melt.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct EnhancedMeltParams {
     /// Temperature factor f_T, mm w.e. per hour per °C. Pellicciotti et al. 2005, Table 2: 0.05.

@@ -39,7 +39,7 @@ use snowscape_terrain::{LayeredTerrain, SnowLayer};
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 /// Parameters of the Sx-driven redistribution.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SxParams {
     /// Whether the term runs when an `Sx` map is given. Default true.
