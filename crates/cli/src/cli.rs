@@ -61,6 +61,9 @@ pub enum Command {
     Run(RunArgs),
     /// Describe a terrain file: grid size, cell size, CRS, value range, nodata share.
     Info(InfoArgs),
+    /// List the scenario parameters (`[parameters]` keys of a scenario file): help, default,
+    /// accepted range and choices, as the CLI, scenario files and the editor check them.
+    Parameters(ParametersArgs),
     /// Render a shaded-relief preview of a terrain file to PNG.
     Render(RenderArgs),
     /// Convert a raster between formats (format from the output extension or --to).
@@ -210,6 +213,16 @@ pub struct InfoArgs {
     pub file: PathBuf,
     #[command(flatten)]
     pub dem: DemInputArgs,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct ParametersArgs {
+    /// Only the parameters whose dotted path starts with this (e.g. `melt` or
+    /// `slope_shedding.min_slope_deg`).
+    pub prefix: Option<String>,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,

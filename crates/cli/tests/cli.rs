@@ -521,3 +521,36 @@ fn malformed_scenario_names_the_key_and_line() {
         "{e}"
     );
 }
+
+#[test]
+fn parameters_lists_help_defaults_ranges_and_choices() {
+    let o = run(&["parameters", "slope_shedding", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let list: Vec<serde_json::Value> = serde_json::from_slice(&o.stdout).unwrap();
+    let find = |path: &str| {
+        list.iter()
+            .find(|p| p["path"] == path)
+            .unwrap_or_else(|| panic!("no {path}"))
+    };
+    let p = find("slope_shedding.min_slope_deg");
+    assert_eq!(
+        (p["min"].as_f64(), p["max"].as_f64()),
+        (Some(0.0), Some(90.0))
+    );
+    assert_eq!(p["default"], 60.0);
+    assert!(p["help"].as_str().unwrap().starts_with("Slope below which"));
+    assert_eq!(
+        find("slope_shedding.law")["choices"],
+        serde_json::json!(["exponential", "power_law"])
+    );
+    assert!(
+        list.iter()
+            .all(|p| p["path"].as_str().unwrap().starts_with("slope_shedding"))
+    );
+    let text = run(&["parameters", "melt.enhanced"]);
+    assert!(text.status.success());
+    assert!(String::from_utf8_lossy(&text.stdout).contains("melt.enhanced.min_window_hours = 24"));
+    let bad = run(&["parameters", "no_such_section"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("no scenario parameter starts with"));
+}

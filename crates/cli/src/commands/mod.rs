@@ -7,6 +7,7 @@ mod convert;
 pub mod cover;
 mod demo;
 mod info;
+mod parameters;
 mod render;
 mod run;
 mod season;
@@ -24,6 +25,7 @@ pub fn dispatch(cli: Cli) -> Result<(), Failure> {
         Command::Demo(a) => demo::run(a, g),
         Command::Run(a) => run::run(a, g),
         Command::Info(a) => info::run(a),
+        Command::Parameters(a) => parameters::run(a),
         Command::Render(a) => render::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Bench(a) => bench::run(a, g),
