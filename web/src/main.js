@@ -5,7 +5,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { applyFrame } from './wire.js';
-import { colourOf } from './shade.js';
+import { colourOf, LEGENDS, rampColour } from './shade.js';
 import { setupPanels } from './panels.js';
 
 const $ = (id) => document.getElementById(id);
@@ -255,6 +255,7 @@ function onFrame(buf) {
   app.frames++;
   if (f.channel === 'bedrock' && app.state) { buildMesh(app.state); dirtyAll(); return; }
   for (const [tx, ty] of f.tiles) dirty.add(`${tx},${ty},${f.tile}`);
+  if (f.channel === 'wind' && $('shade').value === 'wind') updateArrows();
 }
 
 function onState(m) {
@@ -262,6 +263,7 @@ function onState(m) {
   app.state = m;
   if (first && grids.bedrock) { buildMesh(m); dirtyAll(); }
   panels.onState(m);
+  if ($('shade').value === 'wind') updateArrows();
 }
 
 function showSkiers(m) {
@@ -410,7 +412,94 @@ function showHover(at) {
 }
 window.addEventListener('pointerup', () => { painting = false; pending = null; });
 $('tool').addEventListener('change', () => { controls.enabled = $('tool').value === 'orbit'; });
-$('shade').addEventListener('change', dirtyAll);
+$('shade').addEventListener('change', () => { dirtyAll(); renderLegend(); });
+
+// ---------- legend and wind arrows ----------
+// The legend of the shading mode (fixed physical ranges, LEGENDS in shade.js), top left of the
+// view; with the wind, arrows over the terrain in the direction the current weather period's
+// wind blows, their length the local speed (the channel carries the speed; the direction is the
+// period's, which the terrain deflects locally).
+const legend = document.createElement('div');
+legend.id = 'legend';
+document.getElementById('view').appendChild(legend);
+const css = (rgb) => `rgb(${rgb.map((v) => Math.round(255 * Math.min(1, Math.max(0, v)))).join(',')})`;
+function renderLegend() {
+  const mode = $('shade').value;
+  const l = LEGENDS[mode];
+  legend.innerHTML = '';
+  if (!l) return;
+  const title = document.createElement('div');
+  title.className = 'legend-title';
+  title.textContent = l.unit ? `${l.title}, ${l.unit}` : l.title;
+  legend.appendChild(title);
+  if (l.classes) {
+    for (const [name, rgb] of l.classes) {
+      const row = document.createElement('div');
+      row.className = 'legend-class';
+      const sw = document.createElement('span'); sw.className = 'swatch'; sw.style.background = css(rgb);
+      row.append(sw, name);
+      legend.appendChild(row);
+    }
+  } else {
+    const stops = [];
+    const rgb = [0, 0, 0];
+    for (let i = 0; i <= 20; i++) { rampColour(mode, l.lo + (l.hi - l.lo) * i / 20, rgb); stops.push(`${css(rgb)} ${i * 5}%`); }
+    const bar = document.createElement('div'); bar.className = 'legend-bar'; bar.style.background = `linear-gradient(to right, ${stops.join(', ')})`;
+    const ticks = document.createElement('div'); ticks.className = 'legend-ticks';
+    for (const t of l.ticks) {
+      const sp = document.createElement('span'); sp.textContent = `${t}`; sp.style.left = `${100 * (t - l.lo) / (l.hi - l.lo)}%`;
+      ticks.appendChild(sp);
+    }
+    legend.append(bar, ticks);
+  }
+  app.legend = { mode, text: legend.textContent };
+  updateArrows();
+}
+
+const arrows = new THREE.Group();
+scene.add(arrows);
+// The wind period in effect on the current day.
+function windNow(s) {
+  let w = null;
+  for (const p of s.weather || []) if (p.from_day <= s.day + 1e-9) w = p;
+  return w || (s.weather || [])[0] || null;
+}
+function updateArrows() {
+  for (const c of [...arrows.children]) { arrows.remove(c); c.geometry.dispose(); }
+  const s = app.state;
+  const w = s && windNow(s);
+  const speed = grids.wind, b = grids.bedrock;
+  app.windArrows = 0;
+  if ($('shade').value !== 'wind' || !w || !speed || !b) { redraw = true; return; }
+  const cs = s.cell_size_m;
+  const n = 14;
+  const spacing = Math.max(s.width, s.height) * cs / n;
+  // Blowing towards (east, north) = −(sin, cos) of the direction it comes from; north is −z.
+  const from = w.wind_from_deg * Math.PI / 180;
+  const dir = new THREE.Vector3(-Math.sin(from), 0, Math.cos(from));
+  const side = new THREE.Vector3(-dir.z, 0, dir.x);
+  const pts = [];
+  for (let j = 0; j < n; j++) {
+    for (let i = 0; i < n; i++) {
+      const c = Math.min(s.width - 1, Math.round((i + 0.5) * s.width / n));
+      const r = Math.min(s.height - 1, Math.round((j + 0.5) * s.height / n));
+      const k = r * s.width + c;
+      if (!Number.isFinite(b[k]) || !Number.isFinite(speed[k])) continue;
+      let depth = 0;
+      for (const l of ['compacted', 'stable', 'unstable', 'powder']) depth += grids[l] ? grids[l][k] : 0;
+      const len = 0.8 * spacing * Math.min(1, speed[k] / LEGENDS.wind.hi);
+      const tail = new THREE.Vector3(c * cs, b[k] + depth + 0.02 * spacing, r * cs).addScaledVector(dir, -len / 2);
+      const head = tail.clone().addScaledVector(dir, len);
+      const barb = (sgn) => head.clone().addScaledVector(dir, -0.3 * len).addScaledVector(side, sgn * 0.15 * len);
+      pts.push(tail, head, head, barb(1), head, barb(-1));
+      app.windArrows++;
+    }
+  }
+  const g = new THREE.BufferGeometry().setFromPoints(pts);
+  arrows.add(new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: 0xffffff, depthTest: false })));
+  redraw = true;
+}
+renderLegend();
 
 const panels = setupPanels(app, send);
 

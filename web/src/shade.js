@@ -4,7 +4,22 @@
 const ROCK = [0.45, 0.42, 0.38];
 const LAYER = { compacted: [0.55, 0.62, 0.72], stable: [0.96, 0.97, 1.0], unstable: [0.95, 0.45, 0.3], powder: [0.75, 0.92, 1.0] };
 const VIRIDIS = [[0.267, 0.005, 0.329], [0.229, 0.322, 0.546], [0.128, 0.567, 0.551], [0.369, 0.789, 0.383], [0.993, 0.906, 0.144]];
-const ranges = {};
+const BLUE = [0.18, 0.38, 0.85], PURPLE = [0.6, 0.2, 0.72], BLACK = [0, 0, 0], RED = [0.85, 0.1, 0.1];
+
+// The legend of each shading mode, with a fixed physical range (the same colours mean the same
+// values in every tab, at every step and on every terrain): a ramp from `lo` to `hi` (values
+// beyond are clamped), or classes.
+export const LEGENDS = {
+  depth: { title: 'snow depth', unit: 'm', lo: 0, hi: 4, ticks: [0, 0.3, 1, 2, 4] },
+  layers: { title: 'snow layers (mixed by thickness)', classes: [['rock', ROCK], ['compacted', LAYER.compacted], ['stable', LAYER.stable], ['unstable', LAYER.unstable], ['powder', LAYER.powder]] },
+  stability: { title: 'stability map (Fig. 11)', classes: [['no snow', BLACK], ['stable or compacted on top', BLUE], ['unstable snow or powder on top', PURPLE]] },
+  temperature: { title: 'air temperature', unit: '°C', lo: -20, hi: 15, ticks: [-20, -10, 0, 10, 15] },
+  sun: { title: 'direct sun', unit: 'h/day', lo: 0, hi: 12, ticks: [0, 3, 6, 9, 12] },
+  wind: { title: 'wind speed (arrows: where it blows)', unit: 'm/s', lo: 0, hi: 20, ticks: [0, 5, 10, 15, 20] },
+  avalanche_probability: { title: 'painted release probability', unit: 'per day', lo: 0, hi: 1, ticks: [0, 0.5, 1] },
+  ski_area: { title: 'painted skier area', unit: 'share', lo: 0, hi: 1, ticks: [0, 0.5, 1] },
+};
+export const FLOW_COLOUR = RED;
 
 function viridis(t, out) {
   t = Number.isFinite(t) ? Math.min(1, Math.max(0, t)) : 0;
@@ -14,17 +29,26 @@ function viridis(t, out) {
   for (let c = 0; c < 3; c++) out[c] = VIRIDIS[i][c] * (1 - f) + VIRIDIS[i + 1][c] * f;
 }
 
-function range(name, g) {
-  const r = ranges[name];
-  if (r && r.g === g && r.n === g.length) return r;
-  let lo = Infinity, hi = -Infinity;
-  for (let i = 0; i < g.length; i++) { const v = g[i]; if (v < lo) lo = v; if (v > hi) hi = v; }
-  return (ranges[name] = { g, n: g.length, lo, hi: hi > lo ? hi : lo + 1 });
+// The colour of `value` on the ramp of `mode` (a ramp mode of LEGENDS).
+export function rampColour(mode, value, out) {
+  if (mode === 'depth') { depthColour(value, out); return; }
+  const r = LEGENDS[mode];
+  viridis((value - r.lo) / (r.hi - r.lo), out);
+}
+
+// Snow depth: rock to white at 30 cm, deep snow bluish (4 m and more).
+function depthColour(depth, out) {
+  const snowShare = Math.min(1, Math.max(0, depth) / 0.3);
+  const deep = Math.min(1, Math.max(0, depth) / 4);
+  for (let c = 0; c < 3; c++) {
+    const snow = [1 - 0.25 * deep, 1 - 0.12 * deep, 1][c];
+    out[c] = ROCK[c] * (1 - snowShare) + snow * snowShare;
+  }
 }
 
 export function colourOf(mode, grids, k, depth, flow, out) {
   const snowShare = Math.min(1, depth / 0.3);
-  if (flow > 0.01) { out[0] = 0.85; out[1] = 0.1; out[2] = 0.1; return; }
+  if (flow > 0.01) { out[0] = RED[0]; out[1] = RED[1]; out[2] = RED[2]; return; }
   switch (mode) {
     case 'layers': {
       if (depth <= 0) { out[0] = ROCK[0]; out[1] = ROCK[1]; out[2] = ROCK[2]; return; }
@@ -39,23 +63,16 @@ export function colourOf(mode, grids, k, depth, flow, out) {
     case 'stability': {
       const top = (grids.unstable ? grids.unstable[k] : 0) + (grids.powder ? grids.powder[k] : 0);
       const on = Math.min(1, top / 0.02), present = Math.min(1, depth / 0.02);
-      const blue = [0.18, 0.38, 0.85], purple = [0.6, 0.2, 0.72];
-      for (let c = 0; c < 3; c++) out[c] = present * (blue[c] * (1 - on) + purple[c] * on);
+      for (let c = 0; c < 3; c++) out[c] = present * (BLUE[c] * (1 - on) + PURPLE[c] * on);
       return;
     }
     case 'temperature': case 'sun': case 'wind': case 'avalanche_probability': case 'ski_area': {
       const g = grids[mode];
       if (!g) break;
-      const r = mode === 'avalanche_probability' || mode === 'ski_area' ? { lo: 0, hi: 1 } : range(mode, g);
-      viridis((g[k] - r.lo) / (r.hi - r.lo), out);
+      rampColour(mode, g[k], out);
       return;
     }
     default: break;
   }
-  // Snow depth: rock to white, deep snow bluish.
-  const deep = Math.min(1, depth / 4);
-  for (let c = 0; c < 3; c++) {
-    const snow = [1 - 0.25 * deep, 1 - 0.12 * deep, 1][c];
-    out[c] = ROCK[c] * (1 - snowShare) + snow * snowShare;
-  }
+  depthColour(depth, out);
 }

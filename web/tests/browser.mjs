@@ -179,6 +179,33 @@ await check('the timeline steps a day', async () => {
   await page.screenshot({ path: `${shots}/editor_day1.png` });
 });
 
+await check('every shading has a legend with its unit and fixed range; the wind has arrows', async () => {
+  const legendOf = async (mode) => {
+    await page.selectOption('#shade', mode);
+    await page.waitForTimeout(200);
+    return page.evaluate(() => ({ text: document.getElementById('legend').textContent, arrows: window.snowscape.windArrows }));
+  };
+  const t = await legendOf('temperature');
+  assert.match(t.text, /air temperature, °C/); assert.match(t.text, /-20/); assert.match(t.text, /15/);
+  assert.equal(t.arrows, 0);
+  const w = await legendOf('wind');
+  assert.match(w.text, /wind speed.*m\/s/); assert.match(w.text, /20/);
+  assert.ok(w.arrows > 20, `${w.arrows} wind arrows`);
+  await page.screenshot({ path: `${shots}/editor_wind_legend.png` });
+  assert.match((await legendOf('sun')).text, /direct sun, h\/day/);
+  assert.match((await legendOf('stability')).text, /unstable snow or powder on top/);
+  assert.match((await legendOf('layers')).text, /compacted.*stable.*unstable.*powder/);
+  const d = await legendOf('depth');
+  assert.match(d.text, /snow depth, m/); assert.equal(d.arrows, 0);
+  // A second tab shows the same legend for the same mode (fixed ranges).
+  const other = await context.newPage();
+  await other.goto(url);
+  await other.waitForFunction(() => window.snowscape && window.snowscape.state, null, { timeout: 60000 });
+  await other.selectOption('#shade', 'depth');
+  assert.equal(await other.evaluate(() => document.getElementById('legend').textContent), d.text);
+  await other.close();
+});
+
 await check('the parameter panel: sections with help, ranges and choices from the server; apply asks first', async () => {
   await page.click('#params-box > summary');
   const sel = '#params [data-path="slope_shedding.min_slope_deg"]';
