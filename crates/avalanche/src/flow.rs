@@ -23,7 +23,13 @@
 //! paper, where the flow is null or the force would reverse it, the velocity is set to zero
 //! (static friction): snow at rest holds while `|∇A| ≤ tanθc`, the same criterion in every
 //! direction, and a sheet on a plane of slope `tanθ > tanθc` accelerates at `g·(tanθ − tanθc)`
-//! (tests/validation.rs). The fourth is the viscous term `−kv·U·φ` of the paper written for the velocity (`h_face` = mean depth of the two
+//! (tests/validation.rs). With [`SlopeGravity::Projected`] (Savage & Hutter 1989; Mangeney et
+//! al. 2000; see its docs) gravity acts as Savage-Hutter's projected on the horizontal grid:
+//! the first term becomes `−g c² ((B_j − B_i) + c² (h_j − h_i))/L`, the trial gradient
+//! `c² (∇B + c² ∇h)` and the yield `c²·g·tanθc`, with `c² = cos²θ = 1/(1 + |∇B|²)` the mean
+//! of the pipe's two cells (central differences of the bed), and the Voellmy and samosAT drags
+//! are divided by `c²`; a sheet on a plane then accelerates at `g cos²θ (tanθ − tanθc)`
+//! (tests/avaframe_analytic.rs). The fourth is the viscous term `−kv·U·φ` of the paper written for the velocity (`h_face` = mean depth of the two
 //! cells), applied implicitly. `α ∈ [0, 1]` mixes dry (Coulomb) and wet (viscous) snow.
 //!
 //! **Mass (per cell).** The volume through a pipe in a sub-step is `F = w · h_up · u · δt`, with
@@ -84,6 +90,7 @@ mod walk;
 
 pub use params::{
     AvalancheError, AvalancheParams, AvalancheReport, Border, FrictionLaw, SamosAtParams,
+    SlopeGravity,
 };
 use pipes::*;
 use substep::substep;
@@ -144,7 +151,7 @@ const BLOCK: usize = 16;
 /// first row (the volumes after a copy of the block's last row).
 #[derive(Default)]
 struct BlockRows {
-    vel: [Vec<f64>; 6],
+    vel: [Vec<f64>; 7],
     np: [Vec<f64>; 4],
     fl: [Vec<f64>; 4],
 }
@@ -189,14 +196,17 @@ pub struct AvalancheState {
 }
 
 /// The per-cell quantities of a sub-step the pipes read, one array each: velocity (vx, vy)
-/// reconstructed from the 8 pipes, discharge (h·vx, h·vy) and surface gradient (∂A/∂x, ∂A/∂y;
-/// NaN on the ghost ring and nodata cells).
+/// reconstructed from the 8 pipes, discharge (h·vx, h·vy), the gradient gravity acts on
+/// (∂A/∂x, ∂A/∂y; with [`SlopeGravity::Projected`] `cos²θ (∇B + cos²θ ∇h)`; NaN on the ghost
+/// ring and nodata cells) and the bed's `cos²θ` (1 with [`SlopeGravity::Shallow`]; NaN where
+/// the gradient is). Seven arrays (a named constant as the array length trips the compiler).
 const VX: usize = 0;
 const VY: usize = 1;
 const QX: usize = 2;
 const QY: usize = 3;
 const GX: usize = 4;
 const GY: usize = 5;
+const C2: usize = 6;
 
 /// Reusable work buffers for [`step`] (allocated on first use).
 #[derive(Debug, Clone, Default)]
@@ -447,6 +457,8 @@ struct Consts {
     /// The samosAT law's constants (`None`: another law).
     samos: Option<Samos>,
     adv: bool,
+    /// [`SlopeGravity::Projected`].
+    projected: bool,
     closed: bool,
     alpha: f64,
     pw: usize,
@@ -499,6 +511,7 @@ impl Consts {
             },
             samos,
             adv: params.momentum_advection,
+            projected: params.slope_gravity == SlopeGravity::Projected,
             closed: params.border == Border::Closed,
             alpha,
             pw,
@@ -556,7 +569,7 @@ struct Inputs<'a> {
     near_wall: &'a [bool],
     pipes: [&'a [f64]; 4],
     /// Velocities, discharges and gradients of the padded cells from index `vbase` on.
-    vel: [&'a [f64]; 6],
+    vel: [&'a [f64]; 7],
     vbase: usize,
     new_pipes: [&'a [f64]; 4],
     /// Raw volumes of the padded cells from index `fbase` on (0 outside the pipe pass).
@@ -636,7 +649,7 @@ lanes_dispatch!(
         inp: &Inputs,
         segs: &[[u32; 2]],
         r: usize,
-        out: &mut [&mut [f64]; 6],
+        out: &mut [&mut [f64]; 7],
     ) -> ()
 );
 lanes_dispatch!(
@@ -722,10 +735,16 @@ mod tests {
                 })
                 .collect();
             s.set_thickness(&depth).unwrap();
+            // The shallow form, and the projected one on the first two cases.
             let params = AvalancheParams {
                 border,
                 alpha,
                 k_viscous: 0.02,
+                slope_gravity: if case < 2 {
+                    SlopeGravity::Projected
+                } else {
+                    SlopeGravity::Shallow
+                },
                 ..AvalancheParams::default()
             };
             let run = |scalar: bool| {

@@ -24,7 +24,7 @@ pub mod validation;
 pub use convert::{deposit, release, release_cells};
 pub use flow::{
     AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, BedSource,
-    Border, FrictionLaw, SamosAtParams, cfl_dt, step, step_at_least, step_on,
+    Border, FrictionLaw, SamosAtParams, SlopeGravity, cfl_dt, step, step_at_least, step_on,
 };
 pub use release_area::{
     MapExtent, RasterRelease, ReleaseAreaError, ReleaseMask, Rupture, RuptureCells, RuptureParams,

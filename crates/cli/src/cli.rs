@@ -248,6 +248,15 @@ pub enum FrictionArg {
     SamosAtSmall,
 }
 
+/// How gravity acts on a sloping bed in `snowscape avalanche`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SlopeGravityArg {
+    /// The paper's shallow-slope form: gravity g whatever the slope.
+    Shallow,
+    /// Savage-Hutter projected on the horizontal grid (gravity g·cos²θ of the bed).
+    Projected,
+}
+
 /// Colouring of a rendered preview.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum RenderMode {
@@ -335,6 +344,11 @@ pub struct AvalancheArgs {
     /// samosat / samosat-small (--mu overrides their μ).
     #[arg(long, value_enum, default_value_t = FrictionArg::Coulomb)]
     pub friction_model: FrictionArg,
+    /// How gravity acts on the sloping bed: shallow (the paper's, gravity g) or projected
+    /// (Savage & Hutter 1989 on the horizontal grid: driving, pressure and dry friction
+    /// scaled by the bed's cos²θ; matches AvaFrame's analytic tests within 6 %).
+    #[arg(long, value_enum, default_value_t = SlopeGravityArg::Shallow)]
+    pub slope_gravity: SlopeGravityArg,
     /// Voellmy dry-friction coefficient μ (default 0.155, AvaFrame com1DFA).
     #[arg(long)]
     pub mu: Option<f64>,

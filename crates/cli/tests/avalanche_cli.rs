@@ -209,6 +209,43 @@ fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
     for f in ["comparison.png", "comparison_profile.csv"] {
         assert!(dir.join(f).is_file(), "{f} missing");
     }
+    // Savage-Hutter's projected gravity (measured 2026-12-04: Jaccard 0.729 against the
+    // shallow form's 0.675, runout −35 m against −29 m of 1583 m).
+    let pdir = out.path().join("kot_projected");
+    let o = snowscape(&[
+        "--quiet",
+        "avalanche",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--release",
+        rel.to_str().unwrap(),
+        "--friction-model",
+        "samosat-small",
+        "--thickness-measured",
+        "slope-normal",
+        "--slope-gravity",
+        "projected",
+        "--compare",
+        reference.to_str().unwrap(),
+        "--path",
+        d.join("LINES/path_aimec.shp").to_str().unwrap(),
+        "--out",
+        pdir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(pdir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["parameters"]["flow"]["slope_gravity"], "projected");
+    let c = &r["comparison"];
+    let (ours, theirs) = (
+        c["runout_s_m"].as_f64().unwrap(),
+        c["reference_runout_s_m"].as_f64().unwrap(),
+    );
+    assert!(
+        (ours - theirs).abs() < 0.05 * theirs,
+        "projected: runout {ours} m vs {theirs} m"
+    );
+    assert!(c["jaccard"].as_f64().unwrap() >= 0.7, "projected: {c}");
     let o = snowscape(&[
         "avalanche",
         "--dem",

@@ -570,8 +570,14 @@ wind_transport = 3.0
 k_snow = 2e-4
 [parameters.environment.sky]
 directions = 8
+[parameters.avalanche.flow]
+slope_gravity = "projected"
 "#;
         let s = Scenario::from_toml(text, "test.toml").unwrap();
+        assert_eq!(
+            s.parameters.avalanche.flow.slope_gravity,
+            snowscape_avalanche::SlopeGravity::Projected
+        );
         assert_eq!(s.seed, 7);
         assert_eq!(s.weather.len(), 2);
         assert_eq!(s.parameters.snowfall.k_snow, 2e-4);
@@ -590,6 +596,13 @@ directions = 8
             m.contains("s.toml") && m.contains("k_mlet") && m.contains("line 3"),
             "{m}"
         );
+        let e = Scenario::from_toml(
+            "[parameters.avalanche.flow]\nslope_gravity = \"steep\"\n",
+            "s.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("slope_gravity") || e.contains("steep"), "{e}");
         let e = Scenario::from_toml("days = \"ten\"\n", "s.toml")
             .unwrap_err()
             .to_string();

@@ -10,7 +10,7 @@ pub(super) fn vel_row_lanes<V: Lanes>(
     inp: &Inputs,
     segs: &[[u32; 2]],
     r: usize,
-    out: &mut [&mut [f64]; 6],
+    out: &mut [&mut [f64]; 7],
 ) {
     let pw = k.pw;
     let (lo, hi) = if r >= 1 && r + 2 <= k.ph {
@@ -54,7 +54,7 @@ unsafe fn cell_flow_lanes<V: Lanes>(
     k: &Consts,
     inp: &Inputs,
     kk: usize,
-    out: &mut [&mut [f64]; 6],
+    out: &mut [&mut [f64]; 7],
     c: usize,
 ) {
     // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
@@ -71,8 +71,19 @@ unsafe fn cell_flow_lanes<V: Lanes>(
         let vx = half * (p0 + vx_d);
         let vy = half * (p1 + vy_d);
         let a = |i: usize| ld::<V>(inp.bed, i) + ld::<V>(inp.h, i);
-        let gx = (a(kk + 1) - a(kk - 1)) / V::splat(k.two_dx);
-        let gy = (a(kk + pw) - a(kk - pw)) / V::splat(k.two_dy);
+        let (two_dx, two_dy) = (V::splat(k.two_dx), V::splat(k.two_dy));
+        let mut gx = (a(kk + 1) - a(kk - 1)) / two_dx;
+        let mut gy = (a(kk + pw) - a(kk - pw)) / two_dy;
+        let mut c2 = V::splat(1.0);
+        if k.projected {
+            // [`projected_gradient`] in lanes.
+            let b = |i: usize| ld::<V>(inp.bed, i);
+            let bx = (b(kk + 1) - b(kk - 1)) / two_dx;
+            let by = (b(kk + pw) - b(kk - pw)) / two_dy;
+            c2 = V::splat(1.0) / (V::splat(1.0) + (bx * bx + by * by));
+            gx = c2 * (bx + c2 * (gx - bx));
+            gy = c2 * (by + c2 * (gy - by));
+        }
         let hk = ld::<V>(inp.h, kk);
         vx.store(out[VX], c);
         vy.store(out[VY], c);
@@ -80,6 +91,7 @@ unsafe fn cell_flow_lanes<V: Lanes>(
         (hk * vy).store(out[QY], c);
         gx.store(out[GX], c);
         gy.store(out[GY], c);
+        c2.store(out[C2], c);
     }
 }
 
@@ -90,7 +102,7 @@ pub(super) fn cell_flow_border(
     inp: &Inputs,
     c: usize,
     r: usize,
-) -> [f64; 6] {
+) -> [f64; 7] {
     let kk = r * k.pw + c;
     let mut p = [0.0; 4];
     for (d, pd) in p.iter_mut().enumerate() {
@@ -103,10 +115,25 @@ pub(super) fn cell_flow_border(
     let vx_d = (p[2] - p[3]) / k.den_x;
     let vy_d = (p[2] + p[3]) / k.den_y;
     let (vx, vy) = (0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d));
-    let [gx, gy] =
-        surface_gradient(pg, inp.h, inp.bed, inp.nodata, k.pw, kk).unwrap_or([f64::NAN, f64::NAN]);
+    let [gx, gy, c2] = match surface_gradient(pg, inp.h, inp.bed, inp.nodata, k.pw, kk) {
+        None => [f64::NAN; 3],
+        Some([gx, gy]) if k.projected => {
+            let [bx, by] = bed_gradient(pg, inp.bed, inp.nodata, k.pw, kk)
+                .expect("defined where the surface's is");
+            projected_gradient(gx, gy, bx, by)
+        }
+        Some([gx, gy]) => [gx, gy, 1.0],
+    };
     let hk = inp.h[kk];
-    [vx, vy, hk * vx, hk * vy, gx, gy]
+    [vx, vy, hk * vx, hk * vy, gx, gy, c2]
+}
+
+/// The gradient gravity acts on with [`SlopeGravity::Projected`], `cos²θ (∇B + cos²θ ∇h)`, and
+/// `cos²θ = 1/(1 + |∇B|²)`, from the surface gradient `(gx, gy)` and the bed's `(bx, by)`.
+#[inline(always)]
+pub(super) fn projected_gradient(gx: f64, gy: f64, bx: f64, by: f64) -> [f64; 3] {
+    let c2 = 1.0 / (1.0 + (bx * bx + by * by));
+    [c2 * (bx + c2 * (gx - bx)), c2 * (by + c2 * (gy - by)), c2]
 }
 
 /// Pipes of pass 1 on one row.
@@ -260,17 +287,19 @@ unsafe fn pipe_lanes<V: Lanes>(
             let rs0 = V::splat(s.rs0);
             let one = V::splat(1.0);
             let y = V::splat(s.mu_g_dt) * (one + rs0 / (rs0 + start2 / (V::splat(G) * depth)));
-            let mut logs = [0.0; 8];
+            let mut logs = [0.0; 7];
             for (i, l) in logs.iter_mut().enumerate().take(V::N) {
                 *l = (depth.lane(i) * s.inv_r).max(1.0).ln();
             }
             let div = V::load_ptr(logs.as_ptr()) * V::splat(s.inv_kappa) + V::splat(s.b);
             (y, V::splat(k.dt) / (depth * div * div))
         });
+        let c2 = half * (lv(C2, kk) + lv(C2, j));
         let yield_dt = match samos {
             None => V::splat(k.yield_dt),
             Some((y, _)) => y,
         };
+        let yield_dt = if k.projected { yield_dt * c2 } else { yield_dt };
         let dead = if k.coulomb {
             V::or(dead, tnorm.le(yield_dt))
         } else {
@@ -280,9 +309,14 @@ unsafe fn pipe_lanes<V: Lanes>(
             return (zero, zero);
         }
         let u0 = ld::<V>(inp.pipes[d], kk);
-        let ak = ld::<V>(inp.bed, kk) + hk;
-        let aj = ld::<V>(inp.bed, j) + hj;
-        let a = V::splat(-G) * (aj - ak) / V::splat(k.len[d]);
+        let a = if k.projected {
+            let db = ld::<V>(inp.bed, j) - ld::<V>(inp.bed, kk);
+            V::splat(-G) * (c2 * (db + c2 * (hj - hk))) / V::splat(k.len[d])
+        } else {
+            let ak = ld::<V>(inp.bed, kk) + hk;
+            let aj = ld::<V>(inp.bed, j) + hj;
+            V::splat(-G) * (aj - ak) / V::splat(k.len[d])
+        };
         let mut u = u0 + V::splat(k.dt) * a;
         if k.adv {
             u = u + advection_lanes::<V>(k, inp, d, kk, j, hk, hj, u0);
@@ -303,11 +337,13 @@ unsafe fn pipe_lanes<V: Lanes>(
         }
         if k.turb != 0.0 {
             let speed = V::select(tnorm.gt(yield_dt), tnorm - yield_dt, zero);
+            let depth = if k.projected { depth * c2 } else { depth };
             u = u / (V::splat(1.0) + V::splat(k.turb) * speed / depth);
         }
         if let Some((_, drag)) = samos {
             let speed = V::select(tnorm.gt(yield_dt), tnorm - yield_dt, zero);
-            u = u / (V::splat(1.0) + drag * speed);
+            let drag = drag * speed;
+            u = u / (V::splat(1.0) + if k.projected { drag / c2 } else { drag });
         }
         let hup = V::select(u.gt(zero), hk, hj);
         let dead = V::or(dead, hup.le(V::splat(DRY)));

@@ -43,7 +43,7 @@ pub(super) fn substep(
         nodata: &state.nodata,
         near_wall: &state.near_wall,
         pipes: [empty; 4],
-        vel: [empty; 6],
+        vel: [empty; 7],
         vbase: 0,
         new_pipes: [empty; 4],
         flux: [empty; 4],
@@ -96,7 +96,7 @@ pub(super) fn substep(
                         a.resize(2 * pw, 0.0);
                     }
                 }
-                let vel_of = |x: usize, vel: &mut [Vec<f64>; 6]| {
+                let vel_of = |x: usize, vel: &mut [Vec<f64>; 7]| {
                     let lr = (x - v0) * pw;
                     let mut row = vel.each_mut().map(|a| &mut a[lr..lr + pw]);
                     vel_row(simd, &k, pg, &inp1, seg3.row(x), x, &mut row);
@@ -177,7 +177,7 @@ pub(super) fn substep(
             nodata: &[],
             near_wall: &[],
             pipes: [empty; 4],
-            vel: [empty; 6],
+            vel: [empty; 7],
             vbase: 0,
             new_pipes: new_pipes.each_ref().map(|v| v.as_slice()),
             flux: flux.each_ref().map(|v| v.as_slice()),

@@ -417,7 +417,19 @@ pub(super) fn pipe_update(
         return (0.0, 0.0);
     }
     let u0 = inp.pipes[d][kk];
-    let a = -G * ((bed[j] + hj) - (bed[kk] + hi)) / pg.len[d];
+    // The pipe's `cos²θ`: the mean of its cells' (one cell's where the other has none).
+    let pipe_mean = |a: usize| match (vel[a][kk - vb].is_nan(), vel[a][j - vb].is_nan()) {
+        (false, false) => 0.5 * (vel[a][kk - vb] + vel[a][j - vb]),
+        (false, true) => vel[a][kk - vb],
+        (true, false) => vel[a][j - vb],
+        (true, true) => 1.0,
+    };
+    let c2 = pipe_mean(C2);
+    let a = if k.projected {
+        -G * (c2 * ((bed[j] - bed[kk]) + c2 * (hj - hi))) / pg.len[d]
+    } else {
+        -G * ((bed[j] + hj) - (bed[kk] + hi)) / pg.len[d]
+    };
     let vp = [
         0.5 * (vel[VX][kk - vb] + vel[VX][j - vb]),
         0.5 * (vel[VY][kk - vb] + vel[VY][j - vb]),
@@ -444,7 +456,7 @@ pub(super) fn pipe_update(
     };
     let trial = [vp[0] - k.dtg * grad[0], vp[1] - k.dtg * grad[1]];
     let tnorm = (trial[0] * trial[0] + trial[1] * trial[1]).sqrt();
-    let yield_dt = match &k.samos {
+    let mut yield_dt = match &k.samos {
         None => k.yield_dt,
         // Rs from the speed at the start of the sub-step (at rest: twice μ, exactly).
         Some(s) => s.yield_dt(
@@ -452,6 +464,11 @@ pub(super) fn pipe_update(
             turbulent_depth(hi, hj),
         ),
     };
+    if k.projected {
+        // The normal load, and the dry friction with it, is `g cosθ`; its horizontal share
+        // `cosθ` more.
+        yield_dt *= c2;
+    }
     let proj = if tnorm > 0.0 {
         ((pg.e[d][0] * trial[0] + pg.e[d][1] * trial[1]) / tnorm).abs()
     } else {
@@ -469,11 +486,18 @@ pub(super) fn pipe_update(
         // The drag `g·|v|·v/(ξ·h)` along the pipe: its speed is the flow's (the trial
         // velocity's norm after the dry friction), not the pipe's component, or diagonal
         // pipes would escape it.
-        u /= 1.0 + k.turb * (tnorm - yield_dt).max(0.0) / turbulent_depth(hi, hj);
+        // (Projected: `g u_s²/(ξ h_n)` along the slope is `g u²/(ξ h cos²θ)` on the grid.)
+        let depth = if k.projected {
+            turbulent_depth(hi, hj) * c2
+        } else {
+            turbulent_depth(hi, hj)
+        };
+        u /= 1.0 + k.turb * (tnorm - yield_dt).max(0.0) / depth;
     }
     if let Some(s) = &k.samos {
         let depth = turbulent_depth(hi, hj);
-        u /= 1.0 + s.drag(dt, depth) * (tnorm - yield_dt).max(0.0);
+        let drag = s.drag(dt, depth) * (tnorm - yield_dt).max(0.0);
+        u /= 1.0 + if k.projected { drag / c2 } else { drag };
     }
     let hup = if u > 0.0 { hi } else { hj };
     if hup <= DRY {
@@ -492,11 +516,34 @@ pub(super) fn surface_gradient(
     pw: usize,
     k: usize,
 ) -> Option<[f64; 2]> {
+    gradient(pg, |i| bed[i] + h[i], nodata, pw, k)
+}
+
+/// Central-difference gradient of the bed at padded cell `k`, as [`surface_gradient`].
+pub(super) fn bed_gradient(
+    pg: &PipeGeometry,
+    bed: &[f64],
+    nodata: &[bool],
+    pw: usize,
+    k: usize,
+) -> Option<[f64; 2]> {
+    gradient(pg, |i| bed[i], nodata, pw, k)
+}
+
+/// Central-difference gradient of the field `a` at padded cell `k` (one-sided next to nodata
+/// cells); `None` on the ghost ring.
+#[inline(always)]
+fn gradient(
+    pg: &PipeGeometry,
+    a: impl Fn(usize) -> f64,
+    nodata: &[bool],
+    pw: usize,
+    k: usize,
+) -> Option<[f64; 2]> {
     let (r, c) = (k / pw, k % pw);
     if r == 0 || c == 0 || r + 1 >= pg.ph || c + 1 >= pw || nodata[k] {
         return None;
     }
-    let a = |i: usize| bed[i] + h[i];
     let ak = a(k);
     let side = |i: usize| if nodata[i] { ak } else { a(i) };
     let gx = (side(k + 1) - side(k - 1)) / (2.0 * pg.dx);

@@ -11,7 +11,8 @@
 //!   polygons `REL/relKot.shp` and their thickness, from `../shared/data` (the benchmark
 //!   fails when the data is missing).
 //!
-//! `avalanche/substep`: one CFL sub-step of a release of `size/5` square cells (200x200 at
+//! `avalanche/substep` (`_projected`: with Savage-Hutter's projected gravity; `_voellmy`,
+//! `_samosat`: under those laws): one CFL sub-step of a release of `size/5` square cells (200x200 at
 //! 1024², the footprint) sliding down a 35° plane of 2 m cells, two seconds after the
 //! release. The state keeps flowing from call to call (a real avalanche's successive
 //! sub-steps); cells = the active box after the warm-up. 560 B per active cell: the five passes of a sub-step
@@ -21,7 +22,7 @@
 use crate::kernel::{Kernel, KernelError};
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, AvalancheWorkspace,
-    FrictionLaw, RunOptions, cfl_dt, release_from_shapefile, step,
+    FrictionLaw, RunOptions, SlopeGravity, cfl_dt, release_from_shapefile, step,
 };
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 
@@ -30,6 +31,14 @@ use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLaye
 pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
     let mut kernels = vec![
         substep_kernel("avalanche/substep", AvalancheParams::default(), size)?,
+        substep_kernel(
+            "avalanche/substep_projected",
+            AvalancheParams {
+                slope_gravity: SlopeGravity::Projected,
+                ..AvalancheParams::default()
+            },
+            size,
+        )?,
         substep_kernel(
             "avalanche/substep_voellmy",
             AvalancheParams {

@@ -2,7 +2,7 @@
 //! terrain, with the maps practitioners compare (peak thickness and velocity, deposit,
 //! footprint), playback frames and a report.
 
-use crate::cli::{AvalancheArgs, FrictionArg, GlobalArgs, ThicknessArg};
+use crate::cli::{AvalancheArgs, FrictionArg, GlobalArgs, SlopeGravityArg, ThicknessArg};
 use crate::commands::render::preview_options;
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::{Written, earlier_outputs, prepare_dir, write_png, write_report};
@@ -18,7 +18,7 @@ use snowscape_avalanche::release_area::{
 use snowscape_avalanche::validation::ThicknessConvention;
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, RestOutcome,
-    RunOptions, SamosAtParams,
+    RunOptions, SamosAtParams, SlopeGravity,
 };
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
@@ -75,6 +75,10 @@ fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
             p.samos_at = SamosAtParams::small();
             FrictionLaw::SamosAt
         }
+    };
+    p.slope_gravity = match args.slope_gravity {
+        SlopeGravityArg::Shallow => SlopeGravity::Shallow,
+        SlopeGravityArg::Projected => SlopeGravity::Projected,
     };
     if p.friction == FrictionLaw::Coulomb && (args.mu.is_some() || args.xi.is_some()) {
         bail!("--mu and --xi are the Voellmy law's: add --friction-model voellmy");
