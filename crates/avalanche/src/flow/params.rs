@@ -39,7 +39,9 @@ pub enum FrictionLaw {
 
 /// How gravity acts on the flow of the horizontal grid (vertical thickness `h`, horizontal
 /// velocity `u`, bed slope θ with `cos²θ = 1/(1 + |∇B|²)`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum SlopeGravity {
     /// Savage-Hutter's depth-averaged equations (Savage & Hutter 1989, J. Fluid Mech. 199;

@@ -63,8 +63,16 @@ impl RetainedTable {
         }
         let c_hi = (hi / inv_l - h_min).max(c_lo + 1e-3);
         let h = (c_hi - c_lo) / SEGMENTS as f64;
+        // ψ decreases by at most the step in the rise (1-Lipschitz): each root lies within
+        // `h` below the previous one, so a short bisection in that bracket finds it.
+        let mut prev = h_max;
         let depth = (0..=SEGMENTS)
-            .map(|m| root(&hold, c_lo + m as f64 * h, inv_l, h_min, h_max) as f32)
+            .map(|m| {
+                let c = c_lo + m as f64 * h;
+                let lo = (prev - h - 1e-9).max(h_min);
+                prev = root(&hold, c, inv_l, lo, (prev + 1e-9).min(h_max));
+                prev as f32
+            })
             .collect();
         Self {
             c_lo: c_lo as f32,
@@ -93,10 +101,12 @@ impl RetainedTable {
     }
 }
 
-/// The root of `d = H((c + d) λ)` by bisection in `[h_min, h_max]` (the depths `H` takes).
-fn root(hold: &impl Fn(f64) -> f64, c: f64, inv_l: f64, h_min: f64, h_max: f64) -> f64 {
-    let (mut lo, mut hi) = (h_min, h_max);
-    for _ in 0..60 {
+/// The root of `d = H((c + d) λ)` by bisection in `[lo, hi]`, which holds it, to 1e-9 of
+/// the bracket's width or below.
+fn root(hold: &impl Fn(f64) -> f64, c: f64, inv_l: f64, lo: f64, hi: f64) -> f64 {
+    let (mut lo, mut hi) = (lo, hi.max(lo));
+    let iterations = ((hi - lo) / 1e-10).max(1.0).log2().ceil() as usize;
+    for _ in 0..iterations.min(64) {
         let mid = 0.5 * (lo + hi);
         if mid - hold((c + mid) * inv_l) > 0.0 {
             hi = mid;
