@@ -546,7 +546,16 @@ pub fn step(
     let key = inv_l.map(f32::to_bits);
     let retained = match scratch.retained.take() {
         Some((k, tables)) if k == key => tables,
-        _ => inv_l.map(|l| RetainedTable::new(&holding, l)),
+        _ => {
+            // Square cells: the east-west and north-south tables are the same.
+            let ew = RetainedTable::new(&holding, inv_l[0]);
+            let ns = if inv_l[1] == inv_l[0] {
+                ew.clone()
+            } else {
+                RetainedTable::new(&holding, inv_l[1])
+            };
+            [ew, ns, RetainedTable::new(&holding, inv_l[2])]
+        }
     };
     // What the neighbours above expect a cell to keep: its surface less its own excess.
     for &(i, tan, excess) in &active {
