@@ -30,7 +30,30 @@ export function setupPanels(app, send) {
     if (playing && !waiting) { waiting = true; send({ type: 'step', days: 1 }); }
   };
   $('scrub').oninput = () => send({ type: 'seek', index: Number($('scrub').value) });
-  $('save').onclick = () => send({ type: 'save', name: $('name').value });
+  // The saved projects (GET /api/projects): offered in the name field, and a save over one of
+  // them asks first.
+  let projects = [];
+  const refreshProjects = () => fetch('/api/projects').then((r) => (r.ok ? r.json() : [])).then((list) => {
+    projects = list;
+    const dl = $('projects');
+    dl.innerHTML = '';
+    for (const p of list) {
+      const o = document.createElement('option');
+      o.value = p.name;
+      o.label = p.day === null ? p.name : `${p.name} (day ${p.day.toFixed(1)})`;
+      dl.appendChild(o);
+    }
+    return list;
+  }).catch(() => projects);
+  refreshProjects();
+  $('name').addEventListener('focus', refreshProjects);
+  app.refreshProjects = refreshProjects;
+  $('save').onclick = async () => {
+    const name = $('name').value;
+    const list = await refreshProjects();
+    if (list.some((p) => p.name === name) && !window.confirm(`Project ${name} exists: overwrite it?`)) return;
+    send({ type: 'save', name });
+  };
   $('load').onclick = () => send({ type: 'load', name: $('name').value });
   $('export').onclick = () => send({ type: 'export', name: $('name').value });
 

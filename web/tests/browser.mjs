@@ -301,10 +301,25 @@ await check('malformed messages get error replies and the session goes on', asyn
   assert.ok(open, 'the session still answers');
 });
 
-await check('save and export from the page; exported files download', async () => {
+await check('save and export from the page; exported files download; the project list, and a save over a project asks first', async () => {
   await page.fill('#name', 'e2e');
   await page.click('#save');
   await page.waitForFunction(() => window.snowscape.messages.includes('done'), null, { timeout: 60000 });
+  const list = await (await fetch(`${base}/api/projects`)).json();
+  assert.ok(list.some((p) => p.name === 'e2e' && typeof p.day === 'number'), JSON.stringify(list));
+  const options = await page.evaluate(async () => { await window.snowscape.refreshProjects(); return [...document.querySelectorAll('#projects option')].map((o) => o.value); });
+  assert.ok(options.includes('e2e'), options.join(', '));
+  const dones = () => page.evaluate(() => window.snowscape.messages.filter((m) => m === 'done').length);
+  let asked = null;
+  page.once('dialog', (d) => { asked = d.message(); d.dismiss(); });
+  const before = await dones();
+  await page.click('#save');
+  await page.waitForTimeout(800);
+  assert.match(asked || '', /e2e exists: overwrite/);
+  assert.equal(await dones(), before, 'a dismissed overwrite saves nothing');
+  page.once('dialog', (d) => d.accept());
+  await page.click('#save');
+  await page.waitForFunction((n) => window.snowscape.messages.filter((m) => m === 'done').length > n, before, { timeout: 60000 });
   await page.click('#export');
   await page.waitForSelector('#files a', { timeout: 120000 });
   const links = await page.$$eval('#files a', (as) => as.map((a) => a.getAttribute('href')));

@@ -47,6 +47,14 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ProjectError + '_ {
     }
 }
 
+/// A saved project, as listed for the page.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SavedProject {
+    pub name: String,
+    /// The season day it was saved at.
+    pub day: Option<f64>,
+}
+
 /// The project folder.
 #[derive(Debug, Clone)]
 pub struct ProjectDir {
@@ -151,6 +159,35 @@ impl ProjectDir {
             });
         }
         std::fs::read(&canon).map_err(io_err(&canon))
+    }
+
+    /// The saved projects (folders under `projects/` holding a checkpoint), by name, each with
+    /// the day it was saved at (from its history, when readable).
+    pub fn list(&self) -> Vec<SavedProject> {
+        let Ok(dir) = self.resolve("projects") else {
+            return Vec::new();
+        };
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            return Vec::new();
+        };
+        let mut out: Vec<SavedProject> = entries
+            .filter_map(Result::ok)
+            .filter_map(|e| {
+                let name = e.file_name().into_string().ok()?;
+                crate::protocol::check_name(&name).ok()?;
+                let path = e.path();
+                path.join("checkpoint.bin").is_file().then(|| {
+                    let day = self
+                        .read(&format!("projects/{name}/history.json"), 1 << 24)
+                        .ok()
+                        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+                        .and_then(|h| h.get("day").and_then(serde_json::Value::as_f64));
+                    SavedProject { name, day }
+                })
+            })
+            .collect();
+        out.sort_by(|a, b| a.name.cmp(&b.name));
+        out
     }
 
     /// Saves the session as project `name`; returns the written files (relative).

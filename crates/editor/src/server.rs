@@ -8,7 +8,8 @@
 //!   ([`crate::wire`]). Every tab sees the same state: changes are broadcast to all.
 //! - `GET /api/state`: the state summary; `GET /api/cell?col=C&row=R`: values at a cell;
 //!   `GET /api/parameters`: every scenario parameter with its help, range and choices
-//!   ([`snowscape_season::parameter_catalogue`], generated from the parameter types).
+//!   ([`snowscape_season::parameter_catalogue`], generated from the parameter types);
+//!   `GET /api/projects`: the saved projects (name, day).
 //! - `GET /files/<path>`: a file of the project folder (exports), read-only.
 //!
 //! **Who may talk to it** ([`crate::access`]): every request must name the served address in
@@ -423,6 +424,7 @@ fn router(config: ServeConfig, gate: Arc<Gate>) -> Router {
         .route("/api/state", get(state_handler))
         .route("/api/cell", get(cell_handler))
         .route("/api/parameters", get(parameters_handler))
+        .route("/api/projects", get(projects_handler))
         .route("/files/{*path}", get(file_handler))
         .fallback(get(asset_handler))
         .with_state(state)
@@ -453,6 +455,14 @@ async fn state_handler(State(s): State<AppState>) -> Response {
     match ask(&s, Command::State).await {
         Some(st) => axum::Json(st).into_response(),
         None => StatusCode::SERVICE_UNAVAILABLE.into_response(),
+    }
+}
+
+async fn projects_handler(State(s): State<AppState>) -> Response {
+    let project = s.project.clone();
+    match tokio::task::spawn_blocking(move || project.list()).await {
+        Ok(list) => axum::Json(list).into_response(),
+        Err(_) => StatusCode::INTERNAL_SERVER_ERROR.into_response(),
     }
 }
 
