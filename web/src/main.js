@@ -414,6 +414,20 @@ window.addEventListener('pointerup', () => { painting = false; pending = null; }
 $('tool').addEventListener('change', () => { controls.enabled = $('tool').value === 'orbit'; });
 $('shade').addEventListener('change', () => { dirtyAll(); renderLegend(); });
 
+// ---------- screenshot ----------
+// The 3D view as a PNG download, named after the project and the day.
+$('screenshot').addEventListener('click', () => {
+  renderer.render(scene, camera);
+  const a = document.createElement('a');
+  const day = app.state ? app.state.day.toFixed(1) : '0';
+  a.download = `${$('name').value || 'snowscape'}_day${day}.png`;
+  a.href = renderer.domElement.toDataURL('image/png');
+  document.body.appendChild(a);
+  a.click();
+  a.remove();
+  app.screenshots = (app.screenshots || 0) + 1;
+});
+
 // ---------- legend and wind arrows ----------
 // The legend of the shading mode (fixed physical ranges, LEGENDS in shade.js), top left of the
 // view; with the wind, arrows over the terrain in the direction the current weather period's

@@ -301,7 +301,7 @@ await check('malformed messages get error replies and the session goes on', asyn
   assert.ok(open, 'the session still answers');
 });
 
-await check('save and export from the page; exported files download; the project list, and a save over a project asks first', async () => {
+await check('save and export from the page; exported files download; the project list, and a save over a project asks first; the screenshot button', async () => {
   await page.fill('#name', 'e2e');
   await page.click('#save');
   await page.waitForFunction(() => window.snowscape.messages.includes('done'), null, { timeout: 60000 });
@@ -329,6 +329,12 @@ await check('save and export from the page; exported files download; the project
   const glb = await fetch(base + links.find((l) => l.endsWith('terrain.glb')));
   assert.equal(glb.status, 200);
   assert.equal(Buffer.from(await glb.arrayBuffer()).subarray(0, 4).toString(), 'glTF');
+  // The screenshot button downloads the 3D view as a PNG.
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#screenshot')]);
+  assert.match(download.suggestedFilename(), /^e2e_day[0-9.]+\.png$/);
+  const png = await download.path().then((p) => import('node:fs').then((fs) => fs.readFileSync(p)));
+  assert.equal(png.subarray(1, 4).toString(), 'PNG');
+  assert.ok(png.length > 10000, `${png.length} bytes`);
   const escape = await fetch(`${base}/files/..%2F..%2Fetc%2Fpasswd`);
   assert.notEqual(escape.status, 200);
 });
