@@ -191,6 +191,14 @@ export function setupPanels(app, send) {
     showFiles(files) {
       const ul = $('files');
       ul.innerHTML = '';
+      // The whole export as one zip (GET /api/export/<name>).
+      const name = files.length ? files[0].split('/')[1] : null;
+      if (name) {
+        const li = document.createElement('li');
+        const a = document.createElement('a');
+        a.href = `/api/export/${encodeURIComponent(name)}`; a.textContent = `all (${name}.zip)`; a.download = `${name}.zip`; a.id = 'export-zip';
+        li.appendChild(a); ul.appendChild(li);
+      }
       for (const f of files) {
         const li = document.createElement('li');
         const a = document.createElement('a');

@@ -301,7 +301,7 @@ await check('malformed messages get error replies and the session goes on', asyn
   assert.ok(open, 'the session still answers');
 });
 
-await check('save and export from the page; exported files download; the project list, and a save over a project asks first; the screenshot button', async () => {
+await check('save and export from the page; exported files download; the project list, and a save over a project asks first; the screenshot button; the export as one zip', async () => {
   await page.fill('#name', 'e2e');
   await page.click('#save');
   await page.waitForFunction(() => window.snowscape.messages.includes('done'), null, { timeout: 60000 });
@@ -322,10 +322,17 @@ await check('save and export from the page; exported files download; the project
   await page.waitForFunction((n) => window.snowscape.messages.filter((m) => m === 'done').length > n, before, { timeout: 60000 });
   await page.click('#export');
   await page.waitForSelector('#files a', { timeout: 120000 });
-  const links = await page.$$eval('#files a', (as) => as.map((a) => a.getAttribute('href')));
+  const links = await page.$$eval('#files a', (as) => as.map((a) => a.getAttribute('href')).filter((h) => h.startsWith('/files/')));
   for (const f of ['depth.tif', 'layers.exr', 'splat.png', 'terrain.glb', 'preview.png']) {
     assert.ok(links.some((l) => l.endsWith(`/${f}`)), `${f} missing from ${links.join(', ')}`);
   }
+  // The whole export as one zip.
+  const zipHref = await page.getAttribute('#export-zip', 'href');
+  const zip = Buffer.from(await (await fetch(base + zipHref)).arrayBuffer());
+  assert.equal(zip.subarray(0, 2).toString(), 'PK');
+  for (const f of ['depth.tif', 'terrain.glb', 'preview.png']) assert.ok(zip.includes(Buffer.from(`/${f}`)), `${f} missing from the zip`);
+  assert.equal((await fetch(`${base}/api/export/no_such_export`)).status, 404);
+  assert.notEqual((await fetch(`${base}/api/export/..%2F..%2Fetc`)).status, 200);
   const glb = await fetch(base + links.find((l) => l.endsWith('terrain.glb')));
   assert.equal(glb.status, 200);
   assert.equal(Buffer.from(await glb.arrayBuffer()).subarray(0, 4).toString(), 'glTF');

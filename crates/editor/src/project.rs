@@ -190,6 +190,43 @@ impl ProjectDir {
         out
     }
 
+    /// Export `name` (`exports/<name>/`) as one zip archive in memory: its regular files,
+    /// deflated, each read through [`Self::read`] (so the folder's limits hold); at most
+    /// `max` bytes of files in all.
+    pub fn export_zip(&self, name: &str, max: u64) -> Result<Vec<u8>, ProjectError> {
+        use std::io::Write;
+        crate::protocol::check_name(name).map_err(|e| ProjectError::BadPath(e.to_string()))?;
+        let rel = format!("exports/{name}");
+        let dir = self.resolve(&rel)?;
+        if !dir.is_dir() {
+            return Err(ProjectError::NotFound(name.into()));
+        }
+        let mut files: Vec<String> = std::fs::read_dir(&dir)
+            .map_err(io_err(&dir))?
+            .filter_map(Result::ok)
+            .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+            .filter_map(|e| e.file_name().into_string().ok())
+            .collect();
+        files.sort();
+        let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let options = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated);
+        let zip_err = |e: zip::result::ZipError| ProjectError::Content {
+            what: "zip",
+            path: dir.display().to_string(),
+            reason: e.to_string(),
+        };
+        let mut total = 0u64;
+        for f in files {
+            let bytes = self.read(&format!("{rel}/{f}"), max.saturating_sub(total))?;
+            total += bytes.len() as u64;
+            zip.start_file(format!("{name}/{f}"), options)
+                .map_err(zip_err)?;
+            zip.write_all(&bytes).map_err(io_err(&dir))?;
+        }
+        Ok(zip.finish().map_err(zip_err)?.into_inner())
+    }
+
     /// Saves the session as project `name`; returns the written files (relative).
     pub fn save(&self, name: &str, s: &ProjectContents) -> Result<Vec<String>, ProjectError> {
         crate::protocol::check_name(name).map_err(|e| ProjectError::BadPath(e.to_string()))?;

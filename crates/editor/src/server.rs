@@ -9,7 +9,8 @@
 //! - `GET /api/state`: the state summary; `GET /api/cell?col=C&row=R`: values at a cell;
 //!   `GET /api/parameters`: every scenario parameter with its help, range and choices
 //!   ([`snowscape_season::parameter_catalogue`], generated from the parameter types);
-//!   `GET /api/projects`: the saved projects (name, day).
+//!   `GET /api/projects`: the saved projects (name, day); `GET /api/export/<name>`: an export's
+//!   files as one zip.
 //! - `GET /files/<path>`: a file of the project folder (exports), read-only.
 //!
 //! **Who may talk to it** ([`crate::access`]): every request must name the served address in
@@ -425,6 +426,7 @@ fn router(config: ServeConfig, gate: Arc<Gate>) -> Router {
         .route("/api/cell", get(cell_handler))
         .route("/api/parameters", get(parameters_handler))
         .route("/api/projects", get(projects_handler))
+        .route("/api/export/{name}", get(export_zip_handler))
         .route("/files/{*path}", get(file_handler))
         .fallback(get(asset_handler))
         .with_state(state)
@@ -462,6 +464,33 @@ async fn projects_handler(State(s): State<AppState>) -> Response {
     let project = s.project.clone();
     match tokio::task::spawn_blocking(move || project.list()).await {
         Ok(list) => axum::Json(list).into_response(),
+        Err(_) => StatusCode::INTERNAL_SERVER_ERROR.into_response(),
+    }
+}
+
+/// An export's files as one zip (`GET /api/export/<name>`, named `<name>.zip`).
+async fn export_zip_handler(
+    State(s): State<AppState>,
+    axum::extract::Path(name): axum::extract::Path<String>,
+) -> Response {
+    let project = s.project.clone();
+    let n = name.clone();
+    match tokio::task::spawn_blocking(move || project.export_zip(&n, MAX_DOWNLOAD)).await {
+        Ok(Ok(bytes)) => (
+            [
+                (header::CONTENT_TYPE, "application/zip".to_string()),
+                (
+                    header::CONTENT_DISPOSITION,
+                    format!("attachment; filename=\"{name}.zip\""),
+                ),
+            ],
+            bytes,
+        )
+            .into_response(),
+        Ok(Err(ProjectError::NotFound(n))) => {
+            (StatusCode::NOT_FOUND, format!("no export {n:?}\n")).into_response()
+        }
+        Ok(Err(e)) => (StatusCode::BAD_REQUEST, format!("{e}\n")).into_response(),
         Err(_) => StatusCode::INTERNAL_SERVER_ERROR.into_response(),
     }
 }
