@@ -10,7 +10,7 @@ const BLUE = [0.18, 0.38, 0.85], PURPLE = [0.6, 0.2, 0.72], BLACK = [0, 0, 0], R
 // values in every tab, at every step and on every terrain): a ramp from `lo` to `hi` (values
 // beyond are clamped), or classes.
 export const LEGENDS = {
-  depth: { title: 'snow depth', unit: 'm', lo: 0, hi: 4, ticks: [0, 0.3, 1, 2, 4] },
+  depth: { title: 'snow depth', unit: 'm', lo: 0, hi: 4, ticks: [0, 1, 2, 3, 4] },
   layers: { title: 'snow layers (mixed by thickness)', classes: [['rock', ROCK], ['compacted', LAYER.compacted], ['stable', LAYER.stable], ['unstable', LAYER.unstable], ['powder', LAYER.powder]] },
   stability: { title: 'stability map (Fig. 11)', classes: [['no snow', BLACK], ['stable or compacted on top', BLUE], ['unstable snow or powder on top', PURPLE]] },
   temperature: { title: 'air temperature', unit: '°C', lo: -20, hi: 15, ticks: [-20, -10, 0, 10, 15] },
