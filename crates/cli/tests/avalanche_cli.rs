@@ -162,28 +162,42 @@ fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
         "AvaFrame's avaKot reference is missing"
     );
     let out = tempfile::tempdir().unwrap();
-    let dir = out.path().join("kot");
-    let o = snowscape(&[
-        "--quiet",
-        "avalanche",
-        "--dem",
-        dem.to_str().unwrap(),
-        "--release",
-        rel.to_str().unwrap(),
-        "--friction-model",
-        "samosat-small",
-        "--thickness-measured",
-        "slope-normal",
-        "--compare",
-        reference.to_str().unwrap(),
-        "--path",
-        d.join("LINES/path_aimec.shp").to_str().unwrap(),
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    // One run like AvaFrame's (samosATSmall, slope-normal release, compared along its path),
+    // with `extra` options; its report.
+    let run_kot = |name: &str, extra: &[&str]| {
+        let dir = out.path().join(name);
+        let (dem, rel, reference, path) = (
+            dem.to_str().unwrap(),
+            rel.to_str().unwrap(),
+            reference.to_str().unwrap(),
+            d.join("LINES/path_aimec.shp"),
+        );
+        let mut args = vec![
+            "--quiet",
+            "avalanche",
+            "--dem",
+            dem,
+            "--release",
+            rel,
+            "--friction-model",
+            "samosat-small",
+            "--thickness-measured",
+            "slope-normal",
+            "--compare",
+            reference,
+            "--path",
+            path.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = snowscape(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+        (dir, r)
+    };
+    let (dir, r) = run_kot("kot", &[]);
     let v = r["released_volume_m3"].as_f64().unwrap();
     let avaframe = 4_328_073.727009 / 200.0;
     assert!(
@@ -211,30 +225,7 @@ fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
     }
     // Savage-Hutter's projected gravity (measured 2026-12-04: Jaccard 0.729 against the
     // shallow form's 0.675, runout −35 m against −29 m of 1583 m).
-    let pdir = out.path().join("kot_projected");
-    let o = snowscape(&[
-        "--quiet",
-        "avalanche",
-        "--dem",
-        dem.to_str().unwrap(),
-        "--release",
-        rel.to_str().unwrap(),
-        "--friction-model",
-        "samosat-small",
-        "--thickness-measured",
-        "slope-normal",
-        "--slope-gravity",
-        "projected",
-        "--compare",
-        reference.to_str().unwrap(),
-        "--path",
-        d.join("LINES/path_aimec.shp").to_str().unwrap(),
-        "--out",
-        pdir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(pdir.join("report.json")).unwrap()).unwrap();
+    let (_, r) = run_kot("kot_projected", &["--slope-gravity", "projected"]);
     assert_eq!(r["parameters"]["flow"]["slope_gravity"], "projected");
     let c = &r["comparison"];
     let (ours, theirs) = (
