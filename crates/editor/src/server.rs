@@ -495,8 +495,15 @@ async fn export_zip_handler(
     }
 }
 
+/// The parameter catalogue (built once, on first use, off the async workers: its ranges are
+/// found by a few thousand validations).
 async fn parameters_handler() -> Response {
-    axum::Json(snowscape_season::parameter_catalogue::parameter_catalogue()).into_response()
+    match tokio::task::spawn_blocking(snowscape_season::parameter_catalogue::parameter_catalogue)
+        .await
+    {
+        Ok(list) => axum::Json(list).into_response(),
+        Err(_) => StatusCode::INTERNAL_SERVER_ERROR.into_response(),
+    }
 }
 
 #[derive(serde::Deserialize)]
