@@ -22,5 +22,5 @@ if [ ! -f "$web/dist/index.html" ] ||
     -newer "$web/dist/index.html" -print 2>/dev/null | head -n1)" ]; then
   (cd "$web" && npm run build)
 fi
-cargo build --release --quiet --manifest-path "$root/Cargo.toml" -p snowscape
+cargo build --release --quiet --manifest-path "$root/Cargo.toml" -p snowscape-cli
 exec "${CARGO_TARGET_DIR:-$root/target}/release/snowscape" serve --web-dir "$web/dist" "$@"

@@ -24,6 +24,16 @@ bin=target/release/snowscape
 "$bin" --quiet bench --size 256 --repeats 2 --out "$scratch/bench.json"
 "$bin" --quiet demo --size 128 --days 5 --frames 3 --out "$scratch/demo"
 test -s "$scratch/demo/report.json"
+# The library's examples (a winter from code, an avalanche, a mesh cover, a transport run), so
+# none rots.
+target/release/examples/winter procedural 5 "$scratch/ex_winter" > /dev/null
+test -s "$scratch/ex_winter/depth.tif"
+target/release/examples/avalanche ../shared/data "$scratch/ex_avalanche" > /dev/null
+test -s "$scratch/ex_avalanche/peak_thickness.tif"
+target/release/examples/mesh_cover ../shared/data/meshes/spider.obj "$scratch/ex_cover" > /dev/null
+test -s "$scratch/ex_cover/diffusion_snow.glb"
+target/release/examples/transport 1 "$scratch/ex_transport" > /dev/null
+test -s "$scratch/ex_transport/depth.tif"
 # The season's phase timings and the shedding timing at a reduced size (so the example never rots).
 target/release/examples/season_phases 128 > /dev/null
 target/release/examples/season_phases 128 shed > /dev/null

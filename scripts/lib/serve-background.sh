@@ -15,7 +15,7 @@ start_server() {
   local target="${CARGO_TARGET_DIR:-target}"
   if [ -z "$scratch" ]; then
     (cd web && npm ci --no-audit --no-fund && npm run build)
-    cargo build --release -p snowscape
+    cargo build --release -p snowscape-cli
     scratch=$(mktemp -d)
     trap stop_servers EXIT
   fi

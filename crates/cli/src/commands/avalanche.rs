@@ -276,9 +276,11 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
                 if r.time() + 1e-9 >= next_frame || r.stop_reason().is_some() {
                     let tf = Instant::now();
                     let name = format!("frames/frame_{:04}.png", frames.len());
-                    match render_frame(&relief, r)
-                        .and_then(|img| write_png(&args.out.join(&name), &img).map(|_| img))
-                    {
+                    match render_frame(&relief, r).and_then(|img| {
+                        write_png(&args.out.join(&name), &img)
+                            .map(|_| img)
+                            .map_err(Into::into)
+                    }) {
                         Ok(img) => {
                             out.files.push(name);
                             frames.push(img);

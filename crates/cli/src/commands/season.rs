@@ -4,7 +4,7 @@
 
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::{
-    Written, earlier_outputs, prepare_dir, remove_stale, stale_outputs, write_all, write_png,
+    Written, earlier_outputs, prepare_dir, remove_stale, stale_outputs, write_all_staged, write_png,
 };
 use crate::progress::Stages;
 use crate::report::{InputSummary, MassBudget, Report, timings_object};
@@ -238,7 +238,7 @@ pub fn run_season(job: SeasonJob) -> Result<(), Failure> {
     let frames: Vec<RgbaImage> = frames.into_iter().flatten().collect();
     out.files.extend((0..frames.len()).map(frame_name));
     stop_if_interrupted()?;
-    write_all(&mut out, &winter.terrain, &frames, &job.view, &mut stages).job_failed()?;
+    write_all_staged(&mut out, &winter.terrain, &frames, &job.view, &mut stages).job_failed()?;
     stop_if_interrupted()?;
     stages
         .run("write_environment", || {

@@ -5,7 +5,6 @@
 use crate::cli::{GlobalArgs, ServeArgs, ViewArgs};
 use crate::commands::render::preview_options;
 use crate::failure::{ExitCodeExt, Failure};
-use crate::outputs::{Written, write_glb, write_previews, write_rasters};
 use anyhow::{Context, anyhow};
 use snowscape_editor::{Assets, BUILD_HINT, ProjectDir, ServeConfig, Session, serve_blocking};
 use snowscape_render::ColourMode;
@@ -21,13 +20,7 @@ use std::sync::Arc;
 fn export(winter: &Winter, dir: &Path) -> Result<Vec<String>, String> {
     let view =
         preview_options(&ViewArgs::default(), ColourMode::Snow).map_err(|e| e.to_string())?;
-    let mut out = Written::new(dir);
-    let t = &winter.terrain;
-    write_rasters(&mut out, t)
-        .and_then(|()| write_previews(&mut out, t, &view))
-        .and_then(|()| write_glb(&mut out, t))
-        .map_err(|e| format!("{e:#}"))?;
-    Ok(out.files)
+    snowscape::outputs::write_state(dir, &winter.terrain, &view).map_err(|e| e.to_string())
 }
 
 pub fn run(args: &ServeArgs, global: &GlobalArgs) -> Result<(), Failure> {

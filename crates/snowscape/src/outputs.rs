@@ -1,0 +1,348 @@
+//! The output layer of a snow-covered terrain: every file format a season writes (GeoTIFF per
+//! layer, multi-channel EXR, 16-bit PNG, splat map, previews, glTF, time-lapse GIF), each file
+//! written atomically (a synced temporary sibling renamed over the name), and the output
+//! folder's bookkeeping (unfinished temporary files of an interrupted run, stale outputs of an
+//! earlier one, `report.json`). Every front end (the CLI's `run` and `demo`, the editor's
+//! export, the Python package) writes through these functions, so the same state gives the
+//! same bytes whichever wrote it.
+
+use image::RgbaImage;
+use snowscape_io::{AtomicWriteError, RasterError};
+use snowscape_io::{write_bytes_atomic, write_exr, write_geotiff, write_png16, write_splat};
+use snowscape_render::RenderError;
+use snowscape_render::{
+    ColourMode, GlbOptions, PreviewOptions, encode_gif, encode_png, render_preview, terrain_glb,
+};
+use snowscape_terrain::TerrainError;
+use snowscape_terrain::{LayeredTerrain, SnowLayer};
+use std::path::{Path, PathBuf};
+
+/// Why an output could not be written (nothing half-written is left under its name).
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// The output folder cannot be created.
+    #[error("cannot create output folder {path}: {source}")]
+    CreateFolder {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The output folder exists but cannot be written into.
+    #[error("output folder {path} is not writable: {source}")]
+    NotWritable {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+    #[error(transparent)]
+    Raster(#[from] RasterError),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error(transparent)]
+    Terrain(#[from] TerrainError),
+    /// `report.json` could not be encoded.
+    #[error("cannot encode report.json: {0}")]
+    Report(#[source] serde_json::Error),
+}
+
+/// The result of an output.
+pub type Result<T> = std::result::Result<T, OutputError>;
+
+/// Creates the output folder (and parents), checks it can be written into, and removes the
+/// temporary files (`.snowscape-*.partial`) that an interrupted write left in it or in its
+/// subfolders.
+pub fn prepare_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| OutputError::CreateFolder {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let probe = tempfile::Builder::new()
+        .prefix(".snowscape-probe")
+        .tempfile_in(dir)
+        .map_err(|source| OutputError::NotWritable {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+    drop(probe);
+    let removed = remove_partial_leftovers(dir);
+    if removed > 0 {
+        tracing::info!(
+            "removed {removed} unfinished temporary file(s) of an earlier run from {}",
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Whether `name` is one of the atomic writer's temporary files.
+fn is_partial(name: &str) -> bool {
+    (name.starts_with(".snowscape-") && name.ends_with(".partial"))
+        || name.starts_with(".snowscape-probe")
+}
+
+/// Removes temporary files of interrupted writes from `dir` and its direct subfolders;
+/// returns how many were removed.
+fn remove_partial_leftovers(dir: &Path) -> usize {
+    let mut removed = 0;
+    let mut folders = vec![dir.to_path_buf()];
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        folders.extend(
+            entries
+                .flatten()
+                .filter(|e| e.file_type().is_ok_and(|t| t.is_dir()))
+                .map(|e| e.path()),
+        );
+    }
+    for folder in folders {
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let is_file = e.file_type().is_ok_and(|t| t.is_file());
+            if is_file
+                && e.file_name().to_str().is_some_and(is_partial)
+                && std::fs::remove_file(e.path()).is_ok()
+            {
+                removed += 1;
+            }
+        }
+    }
+    removed
+}
+
+/// The outputs an earlier run listed in `dir/report.json`, plus any time-lapse frames in
+/// `dir/frames` (an interrupted run writes frames before any report): the files this
+/// program owns in the folder. Read it before a new run overwrites the report.
+pub fn earlier_outputs(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read(dir.join("report.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .and_then(|v| {
+            v.get("outputs")?.as_array().map(|a| {
+                a.iter()
+                    .filter_map(|s| s.as_str().map(String::from))
+                    .collect()
+            })
+        })
+        .unwrap_or_default();
+    if let Ok(entries) = std::fs::read_dir(dir.join("frames")) {
+        for e in entries.flatten() {
+            if let Some(n) = e.file_name().to_str()
+                && n.starts_with("frame_")
+                && n.ends_with(".png")
+            {
+                names.push(format!("frames/{n}"));
+            }
+        }
+    }
+    names.sort();
+    names.dedup();
+    names
+}
+
+/// The earlier outputs this run did not write again (stale: they describe another run).
+pub fn stale_outputs(earlier: &[String], written: &[String]) -> Vec<String> {
+    let now: std::collections::HashSet<&str> = written.iter().map(String::as_str).collect();
+    earlier
+        .iter()
+        .filter(|n| !now.contains(n.as_str()) && n.as_str() != "report.json")
+        .cloned()
+        .collect()
+}
+
+/// Writes `report` (a JSON object with an `outputs` list) to `dir/report.json`, listing and
+/// then removing the `earlier` outputs this run did not write again.
+pub fn write_report(dir: &Path, earlier: &[String], mut report: serde_json::Value) -> Result<()> {
+    let written: Vec<String> = report["outputs"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|s| s.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default();
+    let stale = stale_outputs(earlier, &written);
+    if !stale.is_empty() {
+        report["removed_stale"] = serde_json::json!(stale);
+    }
+    let text = serde_json::to_string_pretty(&report).map_err(OutputError::Report)?;
+    write_bytes_atomic(&dir.join("report.json"), text.as_bytes())?;
+    remove_stale(dir, &stale);
+    Ok(())
+}
+
+/// Removes the `stale` files from `dir`: only plain relative names inside the folder (never
+/// `..` or an absolute path), and only files (a link is removed, not followed).
+pub fn remove_stale(dir: &Path, stale: &[String]) {
+    for name in stale {
+        let p = Path::new(name);
+        let inside = p
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
+        let path = dir.join(p);
+        let is_file = std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_dir());
+        if inside && is_file {
+            match std::fs::remove_file(&path) {
+                Ok(()) => tracing::info!("removed stale output {}", path.display()),
+                Err(e) => tracing::warn!("cannot remove stale output {}: {e}", path.display()),
+            }
+        }
+    }
+}
+
+/// Collects written file names relative to the output folder.
+pub struct Written {
+    /// The output folder.
+    pub dir: PathBuf,
+    /// The files written so far, relative to the folder, in order.
+    pub files: Vec<String>,
+}
+
+impl Written {
+    /// Nothing written yet into `dir`.
+    pub fn new(dir: &Path) -> Self {
+        Self {
+            dir: dir.to_path_buf(),
+            files: Vec::new(),
+        }
+    }
+    /// Full path of `name` inside the output folder, recorded as written.
+    pub fn path(&mut self, name: &str) -> PathBuf {
+        self.files.push(name.to_string());
+        self.dir.join(name)
+    }
+}
+
+/// Writes a PNG atomically.
+pub fn write_png(path: &Path, img: &RgbaImage) -> Result<()> {
+    let bytes = encode_png(img)?;
+    write_bytes_atomic(path, &bytes)?;
+    Ok(())
+}
+
+/// Writes the rasters (GeoTIFF per layer, multi-channel EXR, 16-bit PNG, splat map).
+pub fn write_rasters(out: &mut Written, terrain: &LayeredTerrain) -> Result<()> {
+    let depth = terrain.to_grid(terrain.total_depth())?;
+    write_geotiff(&out.path("depth.tif"), &depth)?;
+    write_geotiff(
+        &out.path("bedrock.tif"),
+        &terrain.to_grid(terrain.bedrock.clone())?,
+    )?;
+    for layer in SnowLayer::ALL {
+        let grid = terrain.to_grid(terrain.layer(layer).to_vec())?;
+        write_geotiff(&out.path(&format!("layers_{}.tif", layer.name())), &grid)?;
+    }
+    let total = depth.data();
+    let mut channels: Vec<(&str, &[f32])> = vec![("bedrock", &terrain.bedrock), ("depth", total)];
+    for layer in SnowLayer::ALL {
+        channels.push((layer.name(), terrain.layer(layer)));
+    }
+    write_exr(&out.path("layers.exr"), terrain.geometry(), &channels)?;
+    write_png16(&out.path("depth.png"), &depth)?;
+    out.files.push("depth.png.json".into());
+    write_splat(&out.path("splat.png"), terrain)?;
+    Ok(())
+}
+
+/// Writes the previews: snow (`preview.png`), layer tint (`layers.png`), stability map
+/// (`stability.png`, Cordonnier 2018 Fig. 11).
+pub fn write_previews(
+    out: &mut Written,
+    terrain: &LayeredTerrain,
+    view: &PreviewOptions,
+) -> Result<()> {
+    for (name, mode) in [
+        ("preview.png", ColourMode::Snow),
+        ("layers.png", ColourMode::Layers),
+        ("stability.png", ColourMode::Stability),
+    ] {
+        let opts = PreviewOptions {
+            mode,
+            ..view.clone()
+        };
+        let img = render_preview(terrain, &opts)?;
+        write_png(&out.path(name), &img)?;
+    }
+    Ok(())
+}
+
+/// Writes `terrain.glb`: terrain and snow surface meshes with normals.
+pub fn write_glb(out: &mut Written, terrain: &LayeredTerrain) -> Result<()> {
+    let bytes = terrain_glb(terrain, &GlbOptions::default())?;
+    write_bytes_atomic(&out.path("terrain.glb"), &bytes)?;
+    Ok(())
+}
+
+/// Writes `timelapse.gif` from the frames (written as `frames/` while the run went on).
+pub fn write_timelapse(out: &mut Written, frames: &[RgbaImage], delay_ms: u32) -> Result<()> {
+    if frames.is_empty() {
+        return Ok(());
+    }
+    let gif = encode_gif(frames, delay_ms)?;
+    write_bytes_atomic(&out.path("timelapse.gif"), &gif)?;
+    Ok(())
+}
+
+/// Every output of a snow-covered terrain, each stage timed. The four writers are
+/// independent (different files) and run at the same time; their files are listed in a fixed
+/// order, and the first error (in that order) is returned once all have finished. Returns the
+/// seconds of each stage (`write_rasters`, `render_previews`, `write_glb`, `write_timelapse`).
+pub fn write_all(
+    out: &mut Written,
+    terrain: &LayeredTerrain,
+    frames: &[RgbaImage],
+    view: &PreviewOptions,
+) -> Result<Vec<(&'static str, f64)>> {
+    let dir = out.dir.clone();
+    let timed = |write: &(dyn Fn(&mut Written) -> Result<()> + Sync)| {
+        let mut files = Written::new(&dir);
+        let t0 = std::time::Instant::now();
+        let result = write(&mut files);
+        (files, t0.elapsed().as_secs_f64(), result)
+    };
+    let ((rasters, previews), (glb, timelapse)) = rayon::join(
+        || {
+            rayon::join(
+                || timed(&|w| write_rasters(w, terrain)),
+                || timed(&|w| write_previews(w, terrain, view)),
+            )
+        },
+        || {
+            rayon::join(
+                || timed(&|w| write_glb(w, terrain)),
+                || timed(&|w| write_timelapse(w, frames, 400)),
+            )
+        },
+    );
+    let mut first_error = None;
+    let mut stages = Vec::new();
+    for (name, (files, seconds, result)) in [
+        ("write_rasters", rasters),
+        ("render_previews", previews),
+        ("write_glb", glb),
+        ("write_timelapse", timelapse),
+    ] {
+        stages.push((name, seconds));
+        out.files.extend(files.files);
+        if let Err(e) = result {
+            first_error.get_or_insert(e);
+        }
+    }
+    first_error.map_or(Ok(stages), Err)
+}
+
+/// Writes the state outputs of a season (rasters, previews and the glb, as `snowscape run`
+/// does, without the time-lapse) into `dir`; returns the files written.
+pub fn write_state(
+    dir: &Path,
+    terrain: &LayeredTerrain,
+    view: &PreviewOptions,
+) -> Result<Vec<String>> {
+    let mut out = Written::new(dir);
+    write_rasters(&mut out, terrain)?;
+    write_previews(&mut out, terrain, view)?;
+    write_glb(&mut out, terrain)?;
+    Ok(out.files)
+}
