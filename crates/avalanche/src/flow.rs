@@ -103,8 +103,7 @@ use lanes::{Lanes, ld};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, NodataMask};
-use std::cell::RefCell;
-use std::sync::atomic::AtomicBool;
+use std::sync::Mutex;
 use thiserror::Error;
 use tiles::{Segments, TILE, TileSet};
 
@@ -146,9 +145,9 @@ const PARALLEL_MIN_CELLS: usize = 8192;
 /// Rows per block of the pipe pass.
 const BLOCK: usize = 16;
 
-/// Per worker thread, the rows of the block of the pipe pass it works on: velocities,
-/// discharges and gradients ([`VX`]..[`GY`]), and the pipes and volumes of the next block's
-/// first row (the volumes after a copy of the block's last row).
+/// The rows of the block of the pipe pass a worker works on: velocities, discharges and
+/// gradients ([`VX`]..[`GY`]), and the pipes and volumes of the next block's first row (the
+/// volumes after a copy of the block's last row).
 #[derive(Default)]
 struct BlockRows {
     vel: [Vec<f64>; 7],
@@ -156,12 +155,42 @@ struct BlockRows {
     fl: [Vec<f64>; 4],
 }
 
-thread_local! {
-    static BLOCK_ROWS: RefCell<BlockRows> = RefCell::new(Default::default());
+/// One [`BlockRows`] per worker thread of the pool running the step, owned by the scratch: a
+/// block takes its worker's (a block never waits on other work while it holds it, so the
+/// lock is never contended within a pool).
+#[derive(Default)]
+struct BlockRowsPool(Vec<Mutex<BlockRows>>);
+
+impl BlockRowsPool {
+    /// Makes room for every worker of the current pool.
+    fn reserve_workers(&mut self) {
+        let n = rayon::current_num_threads().max(1);
+        if self.0.len() < n {
+            self.0.resize_with(n, Default::default);
+        }
+    }
+
+    /// The rows of the calling worker (the first when called outside a pool).
+    fn of_this_worker(&self) -> std::sync::MutexGuard<'_, BlockRows> {
+        let i = rayon::current_thread_index().unwrap_or(0) % self.0.len().max(1);
+        // A panic in another block poisons nothing we rely on: the rows are overwritten
+        // before they are read.
+        self.0[i].lock().unwrap_or_else(|e| e.into_inner())
+    }
 }
 
-/// Forces the one-lane kernels (a test compares them with the four-lane ones).
-pub(crate) static FORCE_SCALAR: AtomicBool = AtomicBool::new(false);
+impl Clone for BlockRowsPool {
+    /// Work buffers are not state: a clone starts empty.
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl std::fmt::Debug for BlockRowsPool {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "BlockRowsPool({} workers)", self.0.len())
+    }
+}
 
 /// Flowing snow over a grid: thickness per cell, velocity per pipe, the fixed bed.
 #[derive(Debug, Clone, PartialEq)]
@@ -221,6 +250,19 @@ pub struct AvalancheScratch {
     /// The active tiles grown by 3 cells (velocities, pipes) and by 2 cells (thickness).
     seg3: Segments,
     seg2: Segments,
+    /// The pipe pass's rows, per worker.
+    block_rows: BlockRowsPool,
+    /// Run the one-lane kernels even where the CPU has the four-lane ones (same bits; for
+    /// the test and the benchmark that compare them).
+    scalar_kernels: bool,
+}
+
+impl AvalancheScratch {
+    /// Runs the one-lane kernels even where the CPU has AVX (`true`), or the fastest the CPU
+    /// has (`false`, the default). Both give the same bits.
+    pub fn set_scalar_kernels(&mut self, scalar: bool) {
+        self.scalar_kernels = scalar;
+    }
 }
 
 /// Pipe geometry: length, width and unit vector (x east, y south) per owned direction.
@@ -698,7 +740,6 @@ lanes_dispatch!(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::atomic::Ordering;
 
     /// The four-lane kernels give the bits of the one-lane (scalar) ones: random bed and
     /// depths, nodata cells, both borders, dry, wet and mixed snow, square and oblong cells.
@@ -748,13 +789,12 @@ mod tests {
                 ..AvalancheParams::default()
             };
             let run = |scalar: bool| {
-                FORCE_SCALAR.store(scalar, Ordering::Relaxed);
                 let mut st = s.clone();
                 let mut scratch = AvalancheScratch::default();
+                scratch.set_scalar_kernels(scalar);
                 let reports: Vec<AvalancheReport> = (0..12)
                     .map(|_| step(&params, &mut st, &mut scratch, 0.3).unwrap())
                     .collect();
-                FORCE_SCALAR.store(false, Ordering::Relaxed);
                 (st, reports)
             };
             let (a, ra) = run(true);

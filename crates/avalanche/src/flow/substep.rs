@@ -19,7 +19,7 @@ pub(super) fn substep(
 ) -> SubReport {
     let (pw, ph) = (state.pw, state.ph);
     let k = Consts::new(params, pg, pw, ph, dt);
-    let simd = lanes::simd_available();
+    let simd = lanes::simd_available() && !scratch.scalar_kernels;
     scratch.seg3.build(&state.tiles, 3, pw, ph);
     scratch.seg2.build(&state.tiles, 2, pw, ph);
     let AvalancheScratch {
@@ -29,7 +29,11 @@ pub(super) fn substep(
         row_tiles,
         seg3,
         seg2,
+        block_rows,
+        scalar_kernels: _,
     } = scratch;
+    block_rows.reserve_workers();
+    let block_rows = &*block_rows;
     let (seg3, seg2) = (&*seg3, &*seg2);
     // A small flow runs on the calling thread: below this many cells the fork and join of
     // the two passes cost more than the second core saves.
@@ -80,12 +84,13 @@ pub(super) fn substep(
             let v0 = b0.saturating_sub(1);
             let v1 = (b1 + 1 + halo as usize).min(ph - 1);
             let len = (v1 - v0 + 1) * pw;
-            BLOCK_ROWS.with_borrow_mut(|bb| {
+            {
+                let mut rows_of_worker = block_rows.of_this_worker();
                 let BlockRows {
                     vel,
                     np: np_h,
                     fl: fl_h,
-                } = bb;
+                } = &mut *rows_of_worker;
                 for a in vel.iter_mut() {
                     if a.len() < len {
                         a.resize(len, 0.0);
@@ -150,7 +155,7 @@ pub(super) fn substep(
                         factor_row(simd, &k, &inp, segs, r, &mut fac[lr]);
                     }
                 }
-            });
+            }
         };
         if parallel {
             np.par_iter_mut()
