@@ -3,8 +3,8 @@
 //! [`run`] measures the machine's copy bandwidth ([`measure_copy_bandwidth`]), then every
 //! kernel of the [`registry`] on a procedural alpine terrain of `size`² cells: the median time
 //! per call after one warm-up, cells per second, and the memory traffic implied by each
-//! kernel's bytes-per-cell model, in GB/s and as a fraction of the copy bandwidth (DESIGN.md
-//! §5: that fraction says how close to the hardware limit a kernel is). The
+//! kernel's bytes-per-cell model, in GB/s and as a fraction of the copy bandwidth (`docs/architecture.md#performance-and-benchmarks`:
+//! that fraction says how close to the hardware limit a kernel is). The
 //! [`BenchReport`] serialises to JSON (`snowscape bench` writes it as `bench.json`).
 //!
 //! The same registry runs under criterion: `cargo bench -p snowscape-bench` (grid side from
@@ -35,7 +35,7 @@ pub const COPY_BYTES: usize = 256 << 20;
 #[serde(default)]
 pub struct BenchConfig {
     /// Cells per side of the benchmark terrain; clamped to 16..=16384. Default 1024 (the
-    /// interactive size of DESIGN.md §1).
+    /// interactive size the project targets).
     pub size: usize,
     /// Timed calls per kernel after the warm-up; at least 1. Default 5.
     pub repeats: usize,

@@ -16,7 +16,7 @@
 //! - depth ratios within 200 m elevation bands, simulated and observed: north/south,
 //!   steep/moderate, lee/windward, with the cell counts per class ([`classes`]);
 //! - ρ of each depth with altitude (measured snow is far less tied to altitude than a
-//!   temperature-driven model: see DESIGN.md §7).
+//!   temperature-driven model: see `docs/model.md#sources-and-the-reading-of-table-2`).
 //!
 //! [`figures`] draws the side-by-side maps and the density scatter; [`summary`] prints the
 //! table.
