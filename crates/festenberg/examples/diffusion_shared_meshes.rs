@@ -1,6 +1,6 @@
 //! Covers the shared real meshes (../shared/data/meshes) with the default parameters and
 //! prints what the kernel did: `cargo run --release -p snowscape-festenberg --example
-//! shared_meshes [OUT_DIR]` (with OUT_DIR, also writes `<mesh>.glb` and `<mesh>.png` there).
+//! diffusion_shared_meshes [OUT_DIR]` (with OUT_DIR, also writes `<mesh>.glb` and `<mesh>.png` there).
 
 use snowscape_festenberg::{CoverParams, cover};
 use snowscape_mesh::preview::{PreviewOptions, write_preview};
