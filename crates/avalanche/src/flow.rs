@@ -106,8 +106,8 @@ use std::sync::Mutex;
 use thiserror::Error;
 use tiles::{Segments, TILE, TileSet};
 
-/// Gravitational acceleration, m/s² (the paper's `g = 9.81`).
-pub const G: f64 = 9.81;
+/// Gravitational acceleration, m/s²: the paper's `g = 9.81`, the model's one value.
+pub const G: f64 = snowscape_terrain::materials::GRAVITY_M_S2;
 
 /// A depth below which a cell is treated as dry for the upwind face cross-section, m.
 const DRY: f64 = 1e-12;

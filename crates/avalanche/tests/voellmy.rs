@@ -9,7 +9,7 @@ use snowscape_avalanche::{
 };
 use snowscape_terrain::{GridGeometry, NodataMask};
 
-const G: f64 = 9.81;
+const G: f64 = snowscape_avalanche::flow::G;
 
 /// Speed at the layer's centre after `t` s of a `h`-metre layer on a `slope_deg` plane.
 fn centre_speed(params: &AvalancheParams, slope_deg: f64, h: f64, t: f64) -> (f64, f64) {

@@ -7,8 +7,8 @@
 use crate::tracer::{Hit, Tag, Tracer};
 use std::collections::HashMap;
 
-/// Gravity, m/s².
-pub const G: f64 = 9.81;
+/// Gravity, m/s²: the model's one value, 9.81.
+pub const G: f64 = snowscape_terrain::materials::GRAVITY_M_S2;
 
 /// Where a particle came to rest.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -52,7 +52,7 @@ pub struct SnowTranParams {
 impl Default for SnowTranParams {
     fn default() -> Self {
         Self {
-            erodible_density: 150.0,
+            erodible_density: snowscape_terrain::SnowLayer::Powder.default_density_kg_m3(),
             relative_humidity_pct: 70.0,
             cloud_cover_pct: 15.0,
             max_substep_s: 3600.0,

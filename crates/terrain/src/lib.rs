@@ -22,6 +22,7 @@ pub mod error;
 pub mod geometry;
 pub mod grid;
 pub mod layers;
+pub mod materials;
 pub mod procedural;
 pub mod random;
 pub mod surface;

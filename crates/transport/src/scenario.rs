@@ -98,7 +98,7 @@ impl Default for Scenario {
             wind: WindParams::default(),
             flakes: FlakeParams::default(),
             initial_depth_m: 0.0,
-            initial_density: 150.0,
+            initial_density: snowscape_terrain::SnowLayer::Powder.default_density_kg_m3(),
             weather: vec![Weather::default()],
         }
     }

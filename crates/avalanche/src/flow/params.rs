@@ -149,7 +149,7 @@ pub struct AvalancheParams {
 impl Default for AvalancheParams {
     fn default() -> Self {
         Self {
-            density: 500.0,
+            density: snowscape_terrain::SnowLayer::Compacted.default_density_kg_m3(),
             rest_angle_deg: 30.0,
             k_viscous: 5e-4,
             alpha: 1.0,

@@ -44,14 +44,11 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
 
-/// Latent heat of fusion of ice, J/kg.
-pub const LATENT_HEAT_FUSION: f64 = 334_000.0;
-/// Specific heat of ice, J/(kg K).
-pub const SPECIFIC_HEAT_ICE: f64 = 2102.0;
-/// Specific heat of water, J/(kg K).
-pub const SPECIFIC_HEAT_WATER: f64 = 4186.0;
-/// Density of water, kg/m³.
-pub const WATER_DENSITY: f64 = 1000.0;
+use snowscape_terrain::materials::{
+    LATENT_HEAT_FUSION_J_KG as LATENT_HEAT_FUSION, LAYER_DENSITY_KG_M3,
+    SPECIFIC_HEAT_ICE_J_KG_K as SPECIFIC_HEAT_ICE,
+    SPECIFIC_HEAT_WATER_J_KG_K as SPECIFIC_HEAT_WATER, WATER_DENSITY_KG_M3 as WATER_DENSITY,
+};
 
 /// Parameters of the enhanced temperature-index melt.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -89,9 +86,10 @@ pub struct EnhancedMeltParams {
     /// (and half the cost of the paper's twice-daily events). 0 integrates every event.
     pub min_window_hours: f64,
     /// Density of each layer (compacted, stable, unstable, powder), kg/m³, to turn melt water
-    /// into snow depth. Compacted: Cordonnier 2018 Table 2's ρ = 500; stable: 300
-    /// (the 0.6 ratio of [`crate::stability`]); unstable 250 and powder 150: our choice
-    /// (Cuffey & Paterson 2010 Table 2.1: new snow 50-200, settled 200-300).
+    /// into snow depth. Default: the shared layer densities
+    /// ([`snowscape_terrain::materials::LAYER_DENSITY_KG_M3`]: compacted 500, Cordonnier 2018
+    /// Table 2's ρ; stable 300, the 0.6 ratio of [`crate::stability`]; unstable 250 and powder
+    /// 150, our choice within Cuffey & Paterson 2010 Table 2.1).
     pub layer_density_kg_m3: [f64; 4],
 }
 
@@ -109,7 +107,7 @@ impl Default for EnhancedMeltParams {
             melt_decay: 0.82,
             reset_swe_m: 0.001,
             min_window_hours: 24.0,
-            layer_density_kg_m3: [500.0, 300.0, 250.0, 150.0],
+            layer_density_kg_m3: LAYER_DENSITY_KG_M3,
         }
     }
 }

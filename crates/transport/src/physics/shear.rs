@@ -198,22 +198,22 @@ mod tests {
     #[test]
     fn newton_raphson_matches_hand_solution() {
         // u_r = 10 m/s at z_r = 5 m. Fixed-point iteration of u* = 4 / ln(5 / (0.12 u*² / 2g))
-        // converges to u* = 0.492451, z0 = 0.12 · 0.492451² / 19.6133 = 1.48374e-3 m;
-        // check: 4 / ln(5 / 1.48374e-3) = 4 / 8.12263 = 0.492451.
+        // converges to u* = 0.492424, z0 = 0.12 · 0.492424² / 19.62 = 1.48307e-3 m;
+        // check: 4 / ln(5 / 1.48307e-3) = 4 / 8.12308 = 0.492424.
         let (u, z0) = saltating_friction_velocity(10.0, 5.0, 0.001).unwrap();
-        assert!((u - 0.492_451).abs() < 1e-6, "{u}");
-        assert!((z0 - 1.483_74e-3).abs() < 1e-8, "{z0}");
+        assert!((u - 0.492_424).abs() < 1e-6, "{u}");
+        assert!((z0 - 1.483_07e-3).abs() < 1e-8, "{z0}");
         // Both equations hold at the solution, for other winds too.
         for ur in [2.0, 5.0, 20.0, 30.0] {
             let (u, z0) = saltating_friction_velocity(ur, 5.0, 0.001).unwrap();
             assert!((u - log_profile_friction_velocity(ur, 5.0, z0)).abs() < 1e-10);
             assert!((z0 - saltation_roughness(u)).abs() < 1e-14);
         }
-        // u_r = 5: u* = 0.201900, u_r = 20: u* = 1.291514 (same fixed point).
+        // u_r = 5: u* = 0.201892, u_r = 20: u* = 1.291409 (same fixed point).
         let u5 = saltating_friction_velocity(5.0, 5.0, 0.001).unwrap().0;
-        assert!((u5 - 0.201_900).abs() < 1e-6);
+        assert!((u5 - 0.201_892).abs() < 1e-6);
         let u20 = saltating_friction_velocity(20.0, 5.0, 0.001).unwrap().0;
-        assert!((u20 - 1.291_514).abs() < 1e-6);
+        assert!((u20 - 1.291_409).abs() < 1e-6);
         assert_eq!(
             saltating_friction_velocity(0.0, 5.0, 0.001),
             Some((0.0, 0.0))
@@ -244,7 +244,7 @@ mod tests {
         let s = surface_shear(&site, 10.0, 1.0, 1.7, us);
         assert!(!s.saltating);
         assert!((s.u_star - 0.469_638).abs() < 1e-6);
-        // h* = 1.6 u*² / 2g: u* = 0.5 → 1.6 · 0.25 / 19.6133 = 0.020394324 m.
-        assert!((saltation_height(0.5) - 0.020_394_324).abs() < 1e-9);
+        // h* = 1.6 u*² / 2g: u* = 0.5 → 1.6 · 0.25 / 19.62 = 0.020387360 m.
+        assert!((saltation_height(0.5) - 0.020_387_360).abs() < 1e-9);
     }
 }

@@ -33,7 +33,7 @@ const GAS_CONSTANT: f64 = 8313.0;
 /// Thermal conductivity of the atmosphere `λt`, J m⁻¹ s⁻¹ K⁻¹ (Eq. I.6).
 const THERMAL_CONDUCTIVITY: f64 = 0.024;
 /// Latent heat of sublimation `h_s`, J kg⁻¹ (Eq. I.6).
-const LATENT_HEAT: f64 = 2.838e6;
+const LATENT_HEAT: f64 = snowscape_terrain::materials::LATENT_HEAT_SUBLIMATION_J_KG;
 /// Gas constant of dry air `R_d`, J K⁻¹ kg⁻¹ (Eq. I.8).
 const DRY_AIR_GAS_CONSTANT: f64 = 287.0;
 /// Kinematic viscosity of air `ν`, m² s⁻¹ (Eq. I.15; Liston & Sturm 1998: 1.3e-5).

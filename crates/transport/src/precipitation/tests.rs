@@ -16,10 +16,10 @@ fn uniform_wind(grid: &VoxelGrid, u: f32) -> Velocity {
 #[test]
 fn terminal_speed_matches_hand_value() {
     // k = 3 · 1.225 · 0.47 / (4 · 0.002 · 22) = 1.727250 / 0.176 = 9.81392 m⁻¹;
-    // v_t = √(9.80665 / 9.81392) = 0.999630 m/s.
+    // v_t = √(9.81 / 9.81392) = 0.999800 m/s.
     let p = FlakeParams::default();
     assert!((p.drag_constant() - 9.813_92).abs() < 1e-4);
-    assert!((p.terminal_speed() - 0.999_630).abs() < 1e-5);
+    assert!((p.terminal_speed() - 0.999_800).abs() < 1e-5);
 }
 
 #[test]
