@@ -1,12 +1,12 @@
 //! The files of a transport run (issue 6, item 7): `depth.tif`, `density.tif`,
 //! `q_salt.tif`, `q_susp.tif`, `q_subl.tif`, `precipitation.tif`, `wind2d.tif` (2 bands:
-//! east, north m s⁻¹), `wind3d.bin` (the mean 3D wind, [`crate::wind3d::write_mean_wind`]),
+//! east, north m s⁻¹), `wind3d.bin` (the mean 3D wind, [`crate::wind3d::mean_wind_bytes`]),
 //! `preview.png` (shaded relief with the snow) and `report.json` (scenario, wind and flake
-//! statistics, the mass budget with its closure error, timings). Every file is written to
-//! a temporary name and renamed.
+//! statistics, the mass budget with its closure error, timings). Every file is written
+//! atomically through `snowscape-io` (a synced temporary sibling renamed over the name).
 
 use crate::scenario::{RunOutputs, Scenario};
-use crate::wind3d::write_mean_wind;
+use crate::wind3d::mean_wind_bytes;
 use serde_json::json;
 use snowscape_io::{write_bytes_atomic, write_geotiff_bands};
 use snowscape_render::{PreviewOptions, encode_png, render_preview};
@@ -72,7 +72,8 @@ pub fn write_outputs(
         written.push(path);
     }
     let path = dir.join("wind3d.bin");
-    write_mean_wind(&path, &out.voxels, &out.mean_wind).map_err(|e| fail(&path, e))?;
+    snowscape_io::write_bytes_atomic(&path, &mean_wind_bytes(&out.voxels, &out.mean_wind))
+        .map_err(|e| fail(&path, e))?;
     written.push(path);
     let path = dir.join("preview.png");
     let bedrock =

@@ -357,17 +357,16 @@ impl WindSolver {
         (u, v)
     }
 
-    /// Writes the mean wind to `path` (see [`write_mean_wind`]).
-    pub fn write_mean_wind(&self, path: &std::path::Path) -> std::io::Result<()> {
-        write_mean_wind(path, &self.grid, &self.mean_velocity())
+    /// The mean wind encoded as `wind3d.bin` (see [`mean_wind_bytes`]).
+    pub fn mean_wind_bytes(&self) -> Vec<u8> {
+        mean_wind_bytes(&self.grid, &self.mean_velocity())
     }
 }
 
-/// Writes a mean wind `m` on `g` at the voxel centres to `path` as a compact little-endian
-/// binary file: the 8 bytes `SNOWWIND`, `nx ny nz` (u32), voxel size and base altitude
-/// (f64), then `u`, `v`, `w` (f32, index `(k ny + j) nx + i`). Written to a temporary name
-/// and renamed, so an interrupted write leaves no partial file.
-pub fn write_mean_wind(path: &std::path::Path, g: &VoxelGrid, m: &Velocity) -> std::io::Result<()> {
+/// A mean wind `m` on `g` at the voxel centres encoded as a compact little-endian binary file
+/// (`wind3d.bin`, written by the output layer): the 8 bytes `SNOWWIND`, `nx ny nz` (u32),
+/// voxel size and base altitude (f64), then `u`, `v`, `w` (f32, index `(k ny + j) nx + i`).
+pub fn mean_wind_bytes(g: &VoxelGrid, m: &Velocity) -> Vec<u8> {
     let mut bytes = Vec::with_capacity(40 + 12 * g.len());
     bytes.extend_from_slice(b"SNOWWIND");
     for d in [g.nx, g.ny, g.nz] {
@@ -389,9 +388,7 @@ pub fn write_mean_wind(path: &std::path::Path, g: &VoxelGrid, m: &Velocity) -> s
             }
         }
     }
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, &bytes)?;
-    std::fs::rename(&tmp, path)
+    bytes
 }
 
 #[cfg(test)]
