@@ -232,3 +232,99 @@ fn outputs_are_the_same_bytes_whatever_the_thread_count() {
         assert!(a == b, "{f} differs between 1 and 2 threads");
     }
 }
+
+#[test]
+fn a_parameter_file_sets_both_methods_and_a_bad_one_is_refused_before_any_output() {
+    let spider = shared("meshes/spider.obj");
+    let out = tempfile::tempdir().unwrap();
+    let file = out.path().join("cover.toml");
+    std::fs::write(
+        &file,
+        "[diffusion]\nradius_m = 0.9\nbridge_m = 0\n\n[fearing]\ndepth_m = 0.25\npasses = 1\n\
+         target_sites = 1500\n[fearing.material]\naor_deg = 40.0\n",
+    )
+    .unwrap();
+    let f = file.to_str().unwrap();
+    let dir = out.path().join("d");
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        spider.to_str().unwrap(),
+        "--parameters",
+        f,
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = report(&dir);
+    assert_eq!(
+        r["parameters"]["radius_m"].as_f64(),
+        Some(0.9),
+        "{}",
+        r["parameters"]
+    );
+    assert_eq!(r["parameters"]["bridge_m"].as_f64(), Some(0.0));
+    assert_eq!(r["input"]["parameters_file"].as_str(), Some(f));
+    // A flag overrides the file.
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        spider.to_str().unwrap(),
+        "--parameters",
+        f,
+        "--radius",
+        "1.1",
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(report(&dir)["parameters"]["radius_m"].as_f64(), Some(1.1));
+    let dir = out.path().join("f");
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        spider.to_str().unwrap(),
+        "--method",
+        "fearing",
+        "--parameters",
+        f,
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let p = &report(&dir)["params"];
+    assert_eq!(p["depth_m"].as_f64(), Some(0.25), "{p}");
+    assert_eq!(p["passes"].as_u64(), Some(1));
+    assert_eq!(p["material"]["aor_deg"].as_f64(), Some(40.0));
+    // Bad files: an unknown key, a value out of range, not TOML; exit 2 naming the file
+    // and the key, nothing written.
+    for (text, needle) in [
+        ("[diffusion]\nradius = 1\n", "radius"),
+        ("[fearing]\npasses = 0\n", "passes"),
+        ("[fearing.material]\naor_deg = 95\n", "95"),
+        ("[diffusion\n", "line 1"),
+    ] {
+        std::fs::write(&file, text).unwrap();
+        let dir = out.path().join("bad");
+        let args = [
+            "cover",
+            "--mesh",
+            spider.to_str().unwrap(),
+            "--parameters",
+            f,
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        let o = snowscape(&args);
+        assert_eq!(o.status.code(), Some(2), "{text}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("cover.toml") && e.contains(needle),
+            "{text}: {e}"
+        );
+        assert!(!dir.exists(), "{text}: outputs written");
+    }
+}

@@ -5,10 +5,11 @@
 //! parameterised importance weighting"); where it gives none, the default is ours and says so.
 
 use crate::error::{FearingError, invalid};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// A granular material: its angle of repose and the width of its transition curve (Section 4.1).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Material {
     /// Name of the preset (or "custom").
     pub name: String,
@@ -23,6 +24,13 @@ pub struct Material {
     pub flutter_m: f64,
     /// Fall speed, m/s, which turns a wind speed into a path slope (Section 6); ours.
     pub fall_speed_m_s: f64,
+}
+
+impl Default for Material {
+    /// Fresh snow ([`Material::snow`]).
+    fn default() -> Self {
+        Self::snow()
+    }
 }
 
 impl Material {
@@ -82,7 +90,8 @@ impl Material {
 
 /// Sky weights ("snow writing", Fig. 8): a grid of non-negative multipliers of the sky's mass
 /// over the scene's horizontal bounds (row 0 at the north, +y, like an image).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SkyWeight {
     pub width: usize,
     pub height: usize,
@@ -111,7 +120,8 @@ impl SkyWeight {
 }
 
 /// Stability phase settings (Section 4).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct StabilityParams {
     /// Most passes through the unresolved list per stability phase (Section 4.4; ours: 400). A
     /// phase that the time budget ends instead says so (`stopped_by_time`): its result then
@@ -150,7 +160,8 @@ impl Default for StabilityParams {
 }
 
 /// Everything [`crate::cover`] needs.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct FearingParams {
     /// Depth of fresh material on open flat ground, metres (the "arbitrary amount of snow" of
     /// Section 3.1); > 0.
@@ -342,7 +353,10 @@ impl FearingParams {
             pos("sky bucket size (m)", b)?;
         }
         if let Some(w) = &self.sky_weight {
-            if w.width == 0 || w.height == 0 || w.values.len() != w.width * w.height {
+            if w.width == 0
+                || w.height == 0
+                || w.width.checked_mul(w.height) != Some(w.values.len())
+            {
                 return Err(FearingError::SkyWeight {
                     what: format!("has {} values for {}x{}", w.values.len(), w.width, w.height),
                 });

@@ -12,7 +12,7 @@
 //!   83 to 300 columns across).
 
 use crate::error::{FestenbergError, invalid};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Most columns one kernel cylinder may hold (the cost per site is proportional to it).
 pub const MAX_KERNEL_COLUMNS: usize = 200_000;
@@ -27,7 +27,8 @@ pub const DEPTH_SHARE: f64 = 0.02;
 pub const COLUMNS_ALONG: f64 = 256.0;
 
 /// What the user asks for; `None` lengths are resolved from the scene diameter.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct CoverParams {
     /// Initial snow height `h0`, metres (Section 5.2).
     pub depth_m: Option<f64>,
@@ -65,6 +66,39 @@ pub struct Resolved {
 }
 
 impl CoverParams {
+    /// Checks the values the user set, before any scene is read: lengths finite and > 0 (a
+    /// bridge length >= 0), an extent finite with its minimum below its maximum.
+    pub fn validate(&self) -> Result<(), FestenbergError> {
+        for (name, v) in [
+            ("depth (h0)", self.depth_m),
+            ("kernel radius (R)", self.radius_m),
+            ("overhang length", self.overhang_m),
+            ("resolution", self.resolution_m),
+            ("mask scale", self.mask_scale_m),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
+                return Err(invalid(name, v, "a finite length > 0 m"));
+            }
+        }
+        if let Some(b) = self.bridge_m
+            && !(b.is_finite() && b >= 0.0)
+        {
+            return Err(invalid("bridge length (bmax)", b, "a finite length >= 0 m"));
+        }
+        if let Some(e) = self.extent_m
+            && !(e.iter().all(|v| v.is_finite()) && e[0] < e[2] && e[1] < e[3])
+        {
+            return Err(FestenbergError::InvalidParameter {
+                name: "extent",
+                value: format!("{e:?}"),
+                expected: "[x_min, y_min, x_max, y_max], finite, min < max",
+            });
+        }
+        Ok(())
+    }
+
     /// Fixes every length for a scene whose footprint is `size_x` by `size_y` metres.
     pub fn resolve(&self, size_x: f64, size_y: f64) -> Result<Resolved, FestenbergError> {
         if !(size_x.is_finite() && size_y.is_finite() && size_x.max(size_y) > 0.0) {

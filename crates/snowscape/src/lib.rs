@@ -22,6 +22,7 @@
 //! | [`festenberg`], [`fearing`], [`mesh`] | snow on meshes (diffusion, flakes), mesh input and output |
 //! | [`render`] | previews, glTF, GIF/PNG encoding |
 //! | [`outputs`] | the output layer of a season (every file of `snowscape run`) |
+//! | [`cover`] | both mesh covers' parameters from a TOML file |
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
 //! parameters a struct whose fields carry units and cite their source, its errors a typed
@@ -50,6 +51,7 @@
 //! The examples in `crates/snowscape/examples` run a season on a DEM and write every output,
 //! an avalanche to rest, a mesh cover and a transport run.
 
+pub mod cover;
 pub mod outputs;
 
 pub use snowscape_avalanche as avalanche;

@@ -14,6 +14,7 @@ use crate::report::{InputSummary, timings_object};
 use anyhow::{Context, anyhow, bail};
 use clap::{Args, ValueEnum};
 use serde_json::json;
+use snowscape::cover::CoverParameters;
 use snowscape_festenberg::{CoverParams, FestenbergError, GrowthParams, cover, grow_cover};
 use snowscape_mesh::preview::{PreviewOptions, write_preview};
 use snowscape_mesh::terrain::{grid_object, place_on_grid};
@@ -55,6 +56,11 @@ pub struct CoverArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out/cover")]
     pub out: PathBuf,
+    /// Parameters of both methods from a TOML file (`[diffusion]`: every field of the
+    /// diffusion cover; `[fearing]`, `[fearing.material]`, `[fearing.stability]`: of the
+    /// Fearing cover); the flags below override it.
+    #[arg(long, value_name = "FILE.toml")]
+    pub parameters: Option<PathBuf>,
     /// Snow depth on open flat ground, metres (diffusion: the initial height h0; default 2 %
     /// of the scene's horizontal diameter).
     #[arg(long, allow_negative_numbers = true)]
@@ -89,12 +95,13 @@ pub struct CoverArgs {
     /// Constant wind X,Y (east, north), m/s (fearing).
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
     pub wind: Option<String>,
-    /// Material preset (fearing): snow, flour, sand or water.
-    #[arg(long, default_value = "snow")]
-    pub material: String,
-    /// Random seed (fearing).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Material preset (fearing): snow, flour, sand or water (default: the --parameters
+    /// file's material, or snow).
+    #[arg(long)]
+    pub material: Option<String>,
+    /// Random seed (fearing; default 1).
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Launch sites aimed at (fearing; every upward triangle gets at least one).
     #[arg(long)]
     pub sites: Option<usize>,
@@ -125,11 +132,18 @@ pub struct CoverInput {
 /// Runs `snowscape cover`.
 pub fn run(args: &CoverArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let t0 = Instant::now();
+    let file = match &args.parameters {
+        Some(p) => CoverParameters::read(p).bad_input()?,
+        None => CoverParameters::default(),
+    };
     let input = read_input(args).bad_input()?;
     prepare_dir(&args.out).job_failed()?;
     match args.method {
-        CoverMethod::Diffusion => cover_diffusion(args, global, &input, t0),
-        CoverMethod::Fearing => cover_fearing(args, global, &input, t0),
+        CoverMethod::Diffusion => cover_diffusion(args, global, &input, file.diffusion, t0),
+        CoverMethod::Fearing => {
+            let depth_set = file.fearing_depth_set;
+            cover_fearing(args, global, &input, file.fearing, depth_set, t0)
+        }
     }
 }
 
@@ -258,16 +272,18 @@ fn cover_diffusion(
     args: &CoverArgs,
     global: &GlobalArgs,
     input: &CoverInput,
+    file: CoverParams,
     t0: Instant,
 ) -> Result<(), Failure> {
+    // The file's values, each flag given overriding its own; a DEM fixes the extent.
     let params = CoverParams {
-        depth_m: args.depth,
-        radius_m: args.radius,
-        bridge_m: args.bridge,
-        overhang: args.overhang,
-        resolution_m: args.resolution,
-        extent_m: input.extent_m,
-        ..CoverParams::default()
+        depth_m: args.depth.or(file.depth_m),
+        radius_m: args.radius.or(file.radius_m),
+        bridge_m: args.bridge.or(file.bridge_m),
+        overhang: args.overhang || file.overhang,
+        resolution_m: args.resolution.or(file.resolution_m),
+        extent_m: input.extent_m.or(file.extent_m),
+        ..file
     };
     if args.growth.is_some_and(|n| n == 0 || n > 10_000) {
         return Err(anyhow!(
@@ -373,6 +389,7 @@ fn cover_diffusion(
             "open_edges": input.mesh_report.open_edges(),
             "bounds_m": scene.bounds(),
             "dem": input.dem,
+            "parameters_file": args.parameters.as_ref().map(|p| p.display().to_string()),
         },
         "parameters": c.resolved,
         "sites": {
@@ -430,17 +447,23 @@ fn cover_fearing(
     args: &CoverArgs,
     global: &GlobalArgs,
     input: &CoverInput,
+    file: snowscape_fearing::FearingParams,
+    depth_set: bool,
     t0: Instant,
 ) -> Result<(), Failure> {
-    use snowscape_fearing::{FearingError, FearingParams, Material};
+    use snowscape_fearing::{FearingError, Material};
     let scene = &input.scene;
-    let material = Material::preset(&args.material).bad_input()?;
-    let mut params = FearingParams::with_material(material);
+    // The file's values, each flag given overriding its own.
+    let mut params = file;
+    if let Some(m) = &args.material {
+        params.material = Material::preset(m).bad_input()?;
+    }
     if let Some(a) = args.aor {
         params.material.aor_deg = a;
     }
     params.depth_m = match args.depth {
         Some(d) => d,
+        None if depth_set => params.depth_m,
         None => {
             let b = scene
                 .bounds()
@@ -457,7 +480,9 @@ fn cover_fearing(
         let (x, y) = crate::pairs::parse_xy("--wind", w).bad_input()?;
         params.wind_m_s = [x, y];
     }
-    params.seed = args.seed;
+    if let Some(seed) = args.seed {
+        params.seed = seed;
+    }
     if let Some(n) = args.sites {
         params.target_sites = n;
     }
@@ -480,6 +505,7 @@ fn cover_fearing(
         "non_manifold_edges": input.mesh_report.non_manifold_edges(),
         "bounds_m": scene.bounds(),
         "dem": input.dem,
+        "parameters_file": args.parameters.as_ref().map(|p| p.display().to_string()),
         "read_s": input.read_s,
         "wall_s": t0.elapsed().as_secs_f64(),
     });

@@ -1,0 +1,176 @@
+//! The parameters of the two mesh covers read from a TOML file (`snowscape cover --parameters
+//! FILE`, the library, the Python package), like a season's scenario:
+//!
+//! ```toml
+//! [diffusion]          # von Festenberg & Gumhold 2011 (snowscape::festenberg::CoverParams)
+//! depth_m = 0.4        # initial snow height h0, m (default: 2 % of the scene's diameter)
+//! radius_m = 2.0       # kernel radius R, m (default: 5 %, Section 5.2)
+//! overhang = true
+//!
+//! [fearing]            # Fearing 2000 (snowscape::fearing::FearingParams)
+//! depth_m = 0.3
+//! passes = 3
+//! [fearing.material]   # the material's angle of repose, transition, flutter, fall speed
+//! aor_deg = 45.0
+//! [fearing.stability]
+//! max_passes = 200
+//! ```
+//!
+//! Every key is one of the parameter structs' fields (unknown keys are refused with their
+//! name), every value is range-checked before any mesh is read.
+
+use serde::{Deserialize, Serialize};
+use snowscape_fearing::{FearingError, FearingParams};
+use snowscape_festenberg::{CoverParams, FestenbergError};
+use std::path::Path;
+
+/// Both covers' parameters.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CoverParameters {
+    /// The diffusion cover (von Festenberg & Gumhold 2011).
+    pub diffusion: CoverParams,
+    /// The flake cover (Fearing 2000).
+    pub fearing: FearingParams,
+    /// Whether the file set `[fearing] depth_m` (the command line's default depth is 2 % of
+    /// the scene's diameter, not the struct's fixed default).
+    #[serde(skip)]
+    pub fearing_depth_set: bool,
+}
+
+/// Why a cover parameter file was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum CoverParameterError {
+    #[error("cannot read cover parameters {path}: {source}")]
+    Read {
+        path: String,
+        #[source]
+        source: snowscape_io::InputError,
+    },
+    /// Not TOML, or a key or value the parameters do not have (the message names the line,
+    /// the column and the key).
+    #[error("cover parameters {source_name}: {message}")]
+    Parse {
+        source_name: String,
+        message: String,
+    },
+    #[error("cover parameters {source_name}: [diffusion] {source}")]
+    Diffusion {
+        source_name: String,
+        #[source]
+        source: FestenbergError,
+    },
+    #[error("cover parameters {source_name}: [fearing] {source}")]
+    Fearing {
+        source_name: String,
+        #[source]
+        source: FearingError,
+    },
+}
+
+impl CoverParameters {
+    /// Parses and checks a parameter file's text; `source_name` names it in errors.
+    pub fn from_toml(text: &str, source_name: &str) -> Result<Self, CoverParameterError> {
+        let parse_error = |e: toml::de::Error| CoverParameterError::Parse {
+            source_name: source_name.to_string(),
+            message: e.to_string(),
+        };
+        let mut p: Self = toml::from_str(text).map_err(parse_error)?;
+        let table: toml::Table = toml::from_str(text).map_err(parse_error)?;
+        p.fearing_depth_set = table
+            .get("fearing")
+            .and_then(|f| f.get("depth_m"))
+            .is_some();
+        p.validate(source_name)?;
+        Ok(p)
+    }
+
+    /// Reads a parameter file (a regular file of bounded size) and checks it.
+    pub fn read(path: &Path) -> Result<Self, CoverParameterError> {
+        let name = path.display().to_string();
+        let text = snowscape_io::input::read_regular_text(path).map_err(|source| {
+            CoverParameterError::Read {
+                path: name.clone(),
+                source,
+            }
+        })?;
+        Self::from_toml(&text, &name)
+    }
+
+    /// Checks both covers' values.
+    pub fn validate(&self, source_name: &str) -> Result<(), CoverParameterError> {
+        self.diffusion
+            .validate()
+            .map_err(|source| CoverParameterError::Diffusion {
+                source_name: source_name.to_string(),
+                source,
+            })?;
+        self.fearing
+            .validate()
+            .map_err(|source| CoverParameterError::Fearing {
+                source_name: source_name.to_string(),
+                source,
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_sets_both_covers_and_keeps_the_other_defaults() {
+        let p = CoverParameters::from_toml(
+            "[diffusion]\ndepth_m = 0.4\noverhang = true\n\
+             [fearing]\npasses = 3\n[fearing.material]\naor_deg = 45.0\n",
+            "test",
+        )
+        .unwrap();
+        assert_eq!(p.diffusion.depth_m, Some(0.4));
+        assert!(p.diffusion.overhang);
+        assert_eq!(p.diffusion.radius_m, None);
+        assert_eq!(p.fearing.passes, 3);
+        assert_eq!(p.fearing.material.aor_deg, 45.0);
+        // The rest of the material is the snow preset's.
+        assert_eq!(p.fearing.material.flutter_m, 0.05);
+        assert_eq!(p.fearing.seed, FearingParams::default().seed);
+        assert!(!p.fearing_depth_set);
+        let p = CoverParameters::from_toml("[fearing]\ndepth_m = 0.3\n", "t").unwrap();
+        assert!(p.fearing_depth_set);
+        assert_eq!(
+            CoverParameters::from_toml("", "empty").unwrap(),
+            CoverParameters::default()
+        );
+    }
+
+    #[test]
+    fn bad_keys_and_values_are_named() {
+        let e = CoverParameters::from_toml("[diffusion]\nradius = 2.0\n", "f.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("f.toml") && e.contains("radius"), "{e}");
+        let e = CoverParameters::from_toml("[diffusion]\nradius_m = -2.0\n", "f.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("-2") && e.contains("radius"), "{e}");
+        let e = CoverParameters::from_toml("[fearing]\npasses = 0\n", "f.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("passes") && e.contains('0'), "{e}");
+        let e = CoverParameters::from_toml("[fearing.material]\naor_deg = nan\n", "f.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("NaN") || e.contains("nan"), "{e}");
+        let e = CoverParameters::from_toml(
+            "[fearing.sky_weight]\nwidth = 4294967296\nheight = 4294967296\nvalues = []\n",
+            "f.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("sky"), "{e}");
+        let e = CoverParameters::from_toml("[fearing]\ndepth_m = \"deep\"\n", "f.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("depth_m") && e.contains("line"), "{e}");
+    }
+}
