@@ -22,6 +22,8 @@
 //! | [`festenberg`], [`fearing`], [`mesh`] | snow on meshes (diffusion, flakes), mesh input and output |
 //! | [`render`] | previews, glTF, GIF/PNG encoding |
 //! | [`outputs`] | the output layer of a season (every file of `snowscape run`) |
+//! | [`season_run`] | one season run to its end with snapshots, checkpoints, resume and every output (the path of `snowscape run` and `demo`) |
+//! | [`report`] | the typed `report.json` of every job |
 //! | [`cover`] | both mesh covers' parameters from a TOML file |
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
@@ -53,6 +55,8 @@
 
 pub mod cover;
 pub mod outputs;
+pub mod report;
+pub mod season_run;
 
 pub use snowscape_avalanche as avalanche;
 pub use snowscape_environment as environment;

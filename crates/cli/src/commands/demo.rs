@@ -57,26 +57,28 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .validate("the command line")
         .context("--latitude/--days")
         .bad_input()?;
-    run_season(SeasonJob {
-        command: "demo",
-        source: "procedural alpine terrain".into(),
-        bedrock,
-        scenario,
-        extra_parameters: json!({
-            "terrain": {
-                "size": params.size,
-                "seed": params.seed,
-                "cell_size_m": params.cell_size,
-                "relief_m": params.relief,
-                "base_altitude_m": params.base_altitude,
-                "generation_seconds": terrain_seconds,
-            }
-        }),
-        out: args.out.clone(),
-        resume: None,
-        forcing: None,
-        stop_at: None,
-        view,
-        quiet: global.quiet,
-    })
+    run_season(
+        SeasonJob {
+            command: "demo".into(),
+            source: "procedural alpine terrain".into(),
+            bedrock,
+            scenario,
+            extra_parameters: json!({
+                "terrain": {
+                    "size": params.size,
+                    "seed": params.seed,
+                    "cell_size_m": params.cell_size,
+                    "relief_m": params.relief,
+                    "base_altitude_m": params.base_altitude,
+                    "generation_seconds": terrain_seconds,
+                }
+            }),
+            out: args.out.clone(),
+            resume: None,
+            forcing: None,
+            stop_at: None,
+            view,
+        },
+        global.quiet,
+    )
 }

@@ -127,19 +127,21 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
         write_bytes_atomic(&out.join(RESOLVED_SCENARIO), text.as_bytes()).job_failed()?;
     }
     let view = preview_options(&args.view, ColourMode::Snow).bad_input()?;
-    run_season(SeasonJob {
-        command: "run",
-        source: args.dem.display().to_string(),
-        bedrock,
-        scenario,
-        extra_parameters: json!({
-            "scenario_file": scenario_path.map(|p| p.display().to_string()),
-        }),
-        out,
-        resume: args.resume.clone(),
-        stop_at: args.stop_at,
-        forcing,
-        view,
-        quiet: global.quiet,
-    })
+    run_season(
+        SeasonJob {
+            command: "run".into(),
+            source: args.dem.display().to_string(),
+            bedrock,
+            scenario,
+            extra_parameters: json!({
+                "scenario_file": scenario_path.map(|p| p.display().to_string()),
+            }),
+            out,
+            resume: args.resume.clone(),
+            stop_at: args.stop_at,
+            forcing,
+            view,
+        },
+        global.quiet,
+    )
 }

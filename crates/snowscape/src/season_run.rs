@@ -1,0 +1,551 @@
+//! One season run to its end and written: the path `snowscape run` and `snowscape demo` take
+//! (and the Python package will), so that the same terrain, scenario and seed give the same
+//! bytes from each front end.
+//!
+//! The season runs in chunks of at most [`CHUNK_DAYS`] between its milestones: at each
+//! snapshot day a preview frame is written (`frames/frame_NNNN.png`), at each checkpoint day
+//! and at `stop_at` the whole state (`checkpoint.bin`, from which [`SeasonJob::resume`]
+//! continues bit-identically). An interrupt flag set from outside (Ctrl-C) stops the season
+//! between two events, where its state is consistent, and writes a checkpoint. At the end every
+//! output of [`crate::outputs::write_all`] is written, then the environment maps, the
+//! avalanche scour and deposit, the ski tracks, the final checkpoint and `report.json`; an
+//! earlier run's outputs that this one did not write again are removed.
+
+use crate::outputs::{
+    OutputError, Written, earlier_outputs, prepare_dir, remove_stale, stale_outputs, write_all,
+    write_png,
+};
+use crate::report::{InputSummary, MassBudget, Report, timings_object};
+use image::RgbaImage;
+use serde_json::json;
+use snowscape_io::{AtomicWriteError, write_atomic, write_bytes_atomic, write_geotiff};
+use snowscape_render::{PreviewOptions, render_preview};
+use snowscape_season::scenario::Scenario;
+use snowscape_season::winter::{LatitudeSource, SeasonError, Winter, phenomenon_name};
+use snowscape_terrain::{Grid, LayeredTerrain};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// Name of the checkpoint file inside the output folder.
+pub const CHECKPOINT: &str = "checkpoint.bin";
+
+/// Longest stretch of simulated days between two checks of the interrupt flag.
+pub const CHUNK_DAYS: f64 = 0.25;
+
+/// One season to run and write.
+pub struct SeasonJob {
+    /// The front end's name for the job (`run`, `demo`), for the report.
+    pub command: String,
+    /// Where the terrain came from, for the report.
+    pub source: String,
+    pub bedrock: Grid,
+    pub scenario: Scenario,
+    /// Extra parameters for the report (terrain generator, scenario file...).
+    pub extra_parameters: serde_json::Value,
+    /// The output folder (created if missing).
+    pub out: PathBuf,
+    /// Resume from the checkpoint in this folder.
+    pub resume: Option<PathBuf>,
+    /// Stop at this day with a checkpoint, before the season ends.
+    pub stop_at: Option<f64>,
+    /// Station forcing driving the season.
+    pub forcing: Option<snowscape_season::forcing::StationForcing>,
+    /// How the previews and frames are drawn.
+    pub view: PreviewOptions,
+}
+
+/// What a front end hears while a season runs (all optional).
+pub trait SeasonProgress {
+    /// A stage (`environment`, `season`, `write_rasters`, ...) finished in `seconds`.
+    fn stage(&mut self, _name: &str, _seconds: f64) {}
+    /// The season has reached `day`.
+    fn day(&mut self, _day: f64) {}
+}
+
+/// Hears nothing.
+pub struct Silent;
+
+impl SeasonProgress for Silent {}
+
+/// How a season job ended.
+#[derive(Debug)]
+pub enum SeasonOutcome {
+    /// The season ran to its end and every output and `report.json` were written.
+    Finished(Box<Report>),
+    /// It stopped at `stop_at` as asked, with a checkpoint.
+    Stopped { day: f64 },
+    /// The interrupt flag stopped it at `day` with a checkpoint; `outputs_pending`: the season
+    /// was complete and only its outputs were still to write.
+    Interrupted { day: f64, outputs_pending: bool },
+}
+
+/// Why a season job failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SeasonJobError {
+    /// The output folder cannot be created or written into (bad input: nothing was run).
+    #[error(transparent)]
+    OutputFolder(OutputError),
+    #[error("cannot read checkpoint {path}: {source}")]
+    ReadCheckpoint {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot resume from {path}: {source}")]
+    Resume {
+        path: PathBuf,
+        #[source]
+        source: Box<SeasonError>,
+    },
+    #[error("cannot read the earlier frame {path}: {source}")]
+    EarlierFrame {
+        path: PathBuf,
+        #[source]
+        source: image::ImageError,
+    },
+    #[error("cannot write checkpoint {path}: {source}")]
+    WriteCheckpoint {
+        path: PathBuf,
+        #[source]
+        source: Box<SeasonError>,
+    },
+    #[error(transparent)]
+    Season(Box<SeasonError>),
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error("environment map {0} is missing")]
+    MissingMap(&'static str),
+    #[error(transparent)]
+    Skiers(#[from] snowscape_skiers::SkiError),
+}
+
+impl SeasonJobError {
+    /// Whether the job was refused for its input (a folder, a checkpoint, a frame of the run
+    /// to resume) rather than failing while it ran.
+    pub fn is_bad_input(&self) -> bool {
+        matches!(
+            self,
+            Self::OutputFolder(_)
+                | Self::ReadCheckpoint { .. }
+                | Self::Resume { .. }
+                | Self::EarlierFrame { .. }
+        )
+    }
+}
+
+impl From<SeasonError> for SeasonJobError {
+    fn from(e: SeasonError) -> Self {
+        Self::Season(Box::new(e))
+    }
+}
+
+impl From<AtomicWriteError> for SeasonJobError {
+    fn from(e: AtomicWriteError) -> Self {
+        Self::Output(OutputError::Write(e))
+    }
+}
+
+impl From<snowscape_io::RasterError> for SeasonJobError {
+    fn from(e: snowscape_io::RasterError) -> Self {
+        Self::Output(OutputError::Raster(e))
+    }
+}
+
+impl From<snowscape_render::RenderError> for SeasonJobError {
+    fn from(e: snowscape_render::RenderError) -> Self {
+        Self::Output(OutputError::Render(e))
+    }
+}
+
+impl From<snowscape_terrain::TerrainError> for SeasonJobError {
+    fn from(e: snowscape_terrain::TerrainError) -> Self {
+        Self::Output(OutputError::Terrain(e))
+    }
+}
+
+/// The days at which snapshots are taken: every `every` days and the explicit ones, within
+/// the season, sorted, plus the last day.
+pub fn snapshot_days(s: &Scenario) -> Vec<f64> {
+    let mut days: Vec<f64> = s
+        .snapshot_days
+        .iter()
+        .copied()
+        .filter(|&d| d > 0.0 && d <= s.days)
+        .collect();
+    if s.snapshot_every_days > 0.0 {
+        let n = (s.days / s.snapshot_every_days).floor() as usize;
+        days.extend((1..=n).map(|k| k as f64 * s.snapshot_every_days));
+    }
+    days.push(s.days);
+    days.sort_by(f64::total_cmp);
+    days.dedup();
+    days
+}
+
+fn checkpoint_days(s: &Scenario) -> Vec<f64> {
+    if s.checkpoint_every_days <= 0.0 {
+        return Vec::new();
+    }
+    let n = (s.days / s.checkpoint_every_days).floor() as usize;
+    (1..=n)
+        .map(|k| k as f64 * s.checkpoint_every_days)
+        .filter(|&d| d < s.days)
+        .collect()
+}
+
+fn frame_name(k: usize) -> String {
+    format!("frames/frame_{k:04}.png")
+}
+
+/// Writes `checkpoint.bin` into `dir`, atomically.
+pub fn write_checkpoint(dir: &Path, winter: &Winter) -> Result<(), SeasonJobError> {
+    let path = dir.join(CHECKPOINT);
+    write_atomic(&path, |w| {
+        winter
+            .write_checkpoint(w)
+            .map_err(|source| SeasonJobError::WriteCheckpoint {
+                path: path.clone(),
+                source: Box::new(source),
+            })
+    })
+}
+
+/// Stage timings, also told to the caller.
+struct Stages<'a> {
+    timings: Vec<(String, f64)>,
+    progress: &'a mut dyn SeasonProgress,
+}
+
+impl Stages<'_> {
+    fn record(&mut self, name: &str, seconds: f64) {
+        match self.timings.iter_mut().find(|(n, _)| n == name) {
+            Some((_, s)) => *s += seconds,
+            None => self.timings.push((name.to_string(), seconds)),
+        }
+        self.progress.stage(name, seconds);
+    }
+
+    fn run<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let t0 = Instant::now();
+        let out = f();
+        self.record(name, t0.elapsed().as_secs_f64());
+        out
+    }
+}
+
+/// Runs the season of `job` and writes every output (module docs). `interrupted`, when set
+/// from outside, stops the job with a checkpoint at the next chance.
+pub fn run_season(
+    job: SeasonJob,
+    interrupted: &AtomicBool,
+    progress: &mut dyn SeasonProgress,
+) -> Result<SeasonOutcome, SeasonJobError> {
+    let earlier = earlier_outputs(&job.out);
+    prepare_dir(&job.out).map_err(SeasonJobError::OutputFolder)?;
+    let frames_dir = job.out.join("frames");
+    std::fs::create_dir_all(&frames_dir).map_err(|source| {
+        SeasonJobError::Output(OutputError::CreateFolder {
+            path: frames_dir,
+            source,
+        })
+    })?;
+    let input = InputSummary::of(&job.source, &job.bedrock);
+    let mut stages = Stages {
+        timings: Vec::new(),
+        progress,
+    };
+    let terrain = LayeredTerrain::from_bedrock(job.bedrock);
+    let mut winter = stages.run("environment", || -> Result<Winter, SeasonJobError> {
+        match &job.resume {
+            None => Ok(Winter::with_forcing(
+                job.scenario.clone(),
+                terrain,
+                job.forcing.clone(),
+            )?),
+            Some(dir) => {
+                let path = dir.join(CHECKPOINT);
+                let bytes =
+                    std::fs::read(&path).map_err(|source| SeasonJobError::ReadCheckpoint {
+                        path: path.clone(),
+                        source,
+                    })?;
+                Winter::resume_with_forcing(
+                    job.scenario.clone(),
+                    terrain,
+                    job.forcing.clone(),
+                    &mut bytes.as_slice(),
+                )
+                .map_err(|source| SeasonJobError::Resume {
+                    path,
+                    source: Box::new(source),
+                })
+            }
+        }
+    })?;
+    for w in season_warnings(&winter) {
+        tracing::warn!("{w}");
+    }
+
+    let snaps = snapshot_days(winter.scenario());
+    let checkpoints = checkpoint_days(winter.scenario());
+    let mut frames: Vec<Option<RgbaImage>> = vec![None; snaps.len()];
+    if let Some(dir) = &job.resume {
+        for (k, &d) in snaps.iter().enumerate() {
+            if d <= winter.day() {
+                let path = dir.join(frame_name(k));
+                let img = image::open(&path)
+                    .map_err(|source| SeasonJobError::EarlierFrame { path, source })?;
+                frames[k] = Some(img.to_rgba8());
+            }
+        }
+    }
+    let frame_view = PreviewOptions {
+        max_size: Some(512),
+        ..job.view.clone()
+    };
+    let days = winter.scenario().days;
+    let t_season = Instant::now();
+    let stop_at = job.stop_at.filter(|&d| d < days);
+    let mut milestones: Vec<f64> = snaps
+        .iter()
+        .chain(checkpoints.iter())
+        .chain(stop_at.iter())
+        .copied()
+        .collect();
+    milestones.sort_by(f64::total_cmp);
+    milestones.dedup();
+    let start_day = winter.day();
+    for &m in milestones.iter().filter(|&&m| m > start_day) {
+        while winter.day() < m {
+            let next = (winter.day() + CHUNK_DAYS).min(m);
+            winter.run_until_unless(next, interrupted)?;
+            stages.progress.day(winter.day());
+            if interrupted.load(Ordering::SeqCst) {
+                // A chunk that reached a snapshot day writes its frame before the checkpoint:
+                // a resume reads every frame up to the checkpoint's day.
+                if winter.day() >= m
+                    && let Some(k) = snaps.iter().position(|&d| d == m)
+                {
+                    let img = render_preview(&winter.terrain, &frame_view)?;
+                    write_png(&job.out.join(frame_name(k)), &img)?;
+                }
+                write_checkpoint(&job.out, &winter)?;
+                return Ok(SeasonOutcome::Interrupted {
+                    day: winter.day(),
+                    outputs_pending: false,
+                });
+            }
+            if winter.finished() {
+                break;
+            }
+        }
+        if let Some(k) = snaps.iter().position(|&d| d == m) {
+            let img = render_preview(&winter.terrain, &frame_view)?;
+            write_png(&job.out.join(frame_name(k)), &img)?;
+            frames[k] = Some(img);
+        }
+        if checkpoints.contains(&m) {
+            write_checkpoint(&job.out, &winter)?;
+        }
+        if stop_at == Some(m) {
+            write_checkpoint(&job.out, &winter)?;
+            return Ok(SeasonOutcome::Stopped { day: winter.day() });
+        }
+    }
+    stages.record("season", t_season.elapsed().as_secs_f64());
+    winter.terrain.check_invariants()?;
+
+    // An interrupt while the outputs are written stops between two of them (each file is
+    // written whole or not at all); the final checkpoint lets a resume write them again.
+    let stop_if_interrupted = || -> Result<Option<SeasonOutcome>, SeasonJobError> {
+        if !interrupted.load(Ordering::SeqCst) {
+            return Ok(None);
+        }
+        write_checkpoint(&job.out, &winter)?;
+        Ok(Some(SeasonOutcome::Interrupted {
+            day: winter.day(),
+            outputs_pending: true,
+        }))
+    };
+    let mut out = Written::new(&job.out);
+    let frames: Vec<RgbaImage> = frames.into_iter().flatten().collect();
+    out.files.extend((0..frames.len()).map(frame_name));
+    if let Some(o) = stop_if_interrupted()? {
+        return Ok(o);
+    }
+    for (name, seconds) in write_all(&mut out, &winter.terrain, &frames, &job.view)? {
+        stages.record(name, seconds);
+    }
+    if let Some(o) = stop_if_interrupted()? {
+        return Ok(o);
+    }
+    stages.run("write_environment", || {
+        write_environment(&mut out, &winter.terrain)
+    })?;
+    if let Some(o) = stop_if_interrupted()? {
+        return Ok(o);
+    }
+    stages.run("write_avalanches", || {
+        write_avalanche_maps(&mut out, &winter)
+    })?;
+    if let Some(o) = stop_if_interrupted()? {
+        return Ok(o);
+    }
+    stages.run("write_ski_tracks", || write_ski_tracks(&mut out, &winter))?;
+    write_checkpoint(&job.out, &winter)?;
+    out.files.push(CHECKPOINT.into());
+
+    let mut report = season_report(
+        &job.command,
+        &job.extra_parameters,
+        input,
+        &winter,
+        stages.timings,
+        out.files,
+    );
+    report.removed_stale = stale_outputs(&earlier, &report.outputs);
+    let text = serde_json::to_vec_pretty(&report).map_err(OutputError::Report)?;
+    write_bytes_atomic(&job.out.join("report.json"), &text)?;
+    remove_stale(&job.out, &report.removed_stale);
+    Ok(SeasonOutcome::Finished(Box::new(report)))
+}
+
+/// Writes the environment maps: `sun.tif`, `sky.tif`, `irradiance.tif`, `temperature.tif`,
+/// `wind.tif` (2 bands: east and north components, m/s) and `wind_shadow.tif`.
+fn write_environment(out: &mut Written, terrain: &LayeredTerrain) -> Result<(), SeasonJobError> {
+    use snowscape_environment::map_names as m;
+    let map = |name: &'static str| {
+        terrain
+            .maps
+            .get(name)
+            .ok_or(SeasonJobError::MissingMap(name))
+    };
+    for (name, file) in [
+        (m::SUN, "sun.tif"),
+        (m::SKY, "sky.tif"),
+        (m::IRRADIANCE, "irradiance.tif"),
+        (m::TEMPERATURE, "temperature.tif"),
+        (m::WIND_SHADOW, "wind_shadow.tif"),
+    ] {
+        write_geotiff(&out.path(file), &terrain.to_grid(map(name)?.clone())?)?;
+    }
+    snowscape_io::write_geotiff_bands(
+        &out.path("wind.tif"),
+        terrain.geometry(),
+        terrain.mask(),
+        &[map(m::WIND_U)?, map(m::WIND_V)?],
+    )?;
+    Ok(())
+}
+
+/// Writes `avalanche_scour.tif` and `avalanche_deposit.tif`: snow thickness the season's
+/// avalanches took away and laid down, m.
+fn write_avalanche_maps(out: &mut Written, winter: &Winter) -> Result<(), SeasonJobError> {
+    let m = winter.avalanche_maps();
+    let t = &winter.terrain;
+    write_geotiff(
+        &out.path("avalanche_scour.tif"),
+        &t.to_grid(m.scour.clone())?,
+    )?;
+    write_geotiff(
+        &out.path("avalanche_deposit.tif"),
+        &t.to_grid(m.deposit.clone())?,
+    )?;
+    Ok(())
+}
+
+/// Writes `ski_tracks.png` (16-bit track texture, finer than the grid, with a JSON sidecar
+/// and a world file) and `ski_tracks.geojson` (polylines in the DEM's CRS) when skiers came.
+fn write_ski_tracks(out: &mut Written, winter: &Winter) -> Result<(), SeasonJobError> {
+    let Some(area) = winter.ski_area() else {
+        return Ok(());
+    };
+    snowscape_skiers::write_track_png(
+        &out.path("ski_tracks.png"),
+        area.texture(),
+        winter.terrain.geometry(),
+        snowscape_skiers::PngDepth::Sixteen,
+    )?;
+    out.files.push("ski_tracks.png.json".into());
+    out.files.push("ski_tracks.pgw".into());
+    snowscape_skiers::write_tracks_geojson(&out.path("ski_tracks.geojson"), area)?;
+    Ok(())
+}
+
+/// The season's `report.json`.
+fn season_report(
+    command: &str,
+    extra_parameters: &serde_json::Value,
+    input: InputSummary,
+    winter: &Winter,
+    timings: Vec<(String, f64)>,
+    outputs: Vec<String>,
+) -> Report {
+    let b = winter.budget();
+    let mut budget = MassBudget {
+        initial_store: b.initial_store,
+        final_store: winter.terrain.snow_volume(),
+        ..MassBudget::default()
+    };
+    budget.inputs.insert("snowfall".into(), b.snowfall);
+    budget.inputs.insert("refreeze".into(), b.refreeze);
+    budget.outputs.insert("melt".into(), b.melt);
+    budget
+        .outputs
+        .insert("wind_sublimation".into(), b.wind_sublimation);
+    budget
+        .outputs
+        .insert("densification".into(), b.densification);
+    budget.outputs.insert(
+        "border_outflow".into(),
+        b.diffusion_outflow + b.wind_outflow + b.avalanche_outflow + b.shedding_outflow,
+    );
+    let mut timings_json = timings_object(&timings);
+    let phenomena: serde_json::Map<String, serde_json::Value> = winter
+        .wall_seconds
+        .iter()
+        .map(|(k, v)| (k.to_string(), json!((v * 1e6).round() / 1e6)))
+        .collect();
+    timings_json.insert("phenomena".into(), serde_json::Value::Object(phenomena));
+    let counts: serde_json::Map<String, serde_json::Value> = winter
+        .event_counts()
+        .iter()
+        .map(|(k, v)| (phenomenon_name(*k).to_string(), json!(v)))
+        .collect();
+    Report {
+        snowscape_version: env!("CARGO_PKG_VERSION"),
+        command: command.into(),
+        input,
+        parameters: json!({
+            "scenario": winter.scenario(),
+            "weather": winter.weather(),
+            "latitude_deg": winter.latitude_deg(),
+            "latitude_source": winter.latitude_source(),
+            "extra": extra_parameters,
+        }),
+        seed: winter.scenario().seed,
+        threads: rayon::current_num_threads(),
+        timings: timings_json,
+        event_counts: Some(counts),
+        avalanches: Some(winter.avalanches().to_vec()),
+        skiers: Some(winter.ski_stats().clone()),
+        mass_budget: budget.close(),
+        water_budget: Some(b.water.clone()),
+        warnings: season_warnings(winter),
+        outputs,
+        removed_stale: Vec::new(),
+    }
+}
+
+/// What a user must be told about a season: an assumed latitude names the flag that sets it.
+pub fn season_warnings(winter: &Winter) -> Vec<String> {
+    let mut w = Vec::new();
+    if winter.latitude_source() == LatitudeSource::Assumed {
+        w.push(format!(
+            "the DEM's georeferencing gives no latitude: the sun and the climatology assume {:.1}° N; set it with --latitude DEG (or latitude_deg in the scenario)",
+            winter.latitude_deg()
+        ));
+    }
+    w
+}
