@@ -80,8 +80,7 @@
 //! sizes of the two parts.
 
 use crate::flow::{AvalancheError, AvalancheState};
-use shapefile::Shape;
-use shapefile::dbase::FieldValue;
+use snowscape_io::vector::VectorError;
 use snowscape_io::{RasterError, ReadOptions};
 use snowscape_terrain::{Crs, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 use std::collections::VecDeque;
@@ -89,14 +88,13 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
-mod crs;
 mod polygons;
 mod rupture;
 
-use crs::*;
 pub use polygons::release_from_shapefile;
 use polygons::*;
 pub use rupture::{Rupture, RuptureCells, RuptureParams, release_at_point, rupture_at_point};
+use snowscape_terrain::crs_facts::same_crs;
 
 /// An axis-aligned extent in map coordinates (CRS units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -170,43 +168,9 @@ impl fmt::Display for MapExtent {
 /// offending values.
 #[derive(Debug, Error)]
 pub enum ReleaseAreaError {
-    /// The shapefile (`.shp`/`.shx`) cannot be read.
-    #[error("cannot read release shapefile {path}: {source}")]
-    Shapefile {
-        /// The `.shp` path.
-        path: PathBuf,
-        /// The reader's error.
-        #[source]
-        source: shapefile::Error,
-    },
-    /// The attribute table (`.dbf`) cannot be read.
-    #[error("cannot read the attribute table {path} of the release shapefile: {source}")]
-    Dbf {
-        /// The `.dbf` path.
-        path: PathBuf,
-        /// The reader's error.
-        #[source]
-        source: shapefile::dbase::Error,
-    },
-    /// The attribute table has another number of records than the shapefile.
-    #[error("{path}: {records} attribute records for {shapes} shapes")]
-    DbfRecordCount {
-        /// The `.dbf` path.
-        path: PathBuf,
-        /// Records in the `.dbf`.
-        records: usize,
-        /// Shapes in the `.shp`.
-        shapes: usize,
-    },
-    /// The `.prj` sidecar cannot be read.
-    #[error("cannot read the projection file {path}: {source}")]
-    Prj {
-        /// The `.prj` path.
-        path: PathBuf,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
-    },
+    /// The shapefile, its attribute table or its `.prj` cannot be read.
+    #[error(transparent)]
+    Vector(#[from] VectorError),
     /// A record is not a polygon.
     #[error(
         "{path}: record {record} is a {shape_type}, a release area must be a Polygon, PolygonZ or PolygonM"
@@ -652,34 +616,6 @@ pub fn release_from_raster(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn wkt_root_authority_and_names() {
-        let wkt = r#"PROJCS["MGI / Austria Lambert",GEOGCS["MGI",AUTHORITY["EPSG","4312"]],UNIT["metre",1],AUTHORITY["EPSG","31287"]]"#;
-        assert_eq!(wkt_facts(wkt).code, Some(31287));
-        let esri =
-            r#"PROJCS["MGI_Austria_Lambert",GEOGCS["GCS_MGI",DATUM["D_MGI"]],UNIT["Meter",1.0]]"#;
-        let f = wkt_facts(esri);
-        assert_eq!(f.code, Some(31287));
-        assert!(!f.geographic);
-        assert_eq!(
-            same_crs(&Crs::Wkt(esri.into()), &Crs::Epsg(31287)),
-            Some(true)
-        );
-        assert_eq!(
-            same_crs(&Crs::Wkt(esri.into()), &Crs::Epsg(32632)),
-            Some(false)
-        );
-        let utm = r#"PROJCS["WGS_1984_UTM_Zone_32N",GEOGCS["GCS_WGS_1984"]]"#;
-        assert_eq!(wkt_facts(utm).code, Some(32632));
-        let unknown = r#"PROJCS["My_Local_Grid",GEOGCS["GCS_WGS_1984"]]"#;
-        assert_eq!(same_crs(&Crs::Wkt(unknown.into()), &Crs::Epsg(31287)), None);
-        let geo = r#"GEOGCS["Some datum",DATUM["x"]]"#;
-        assert_eq!(
-            same_crs(&Crs::Wkt(geo.into()), &Crs::Wkt(unknown.into())),
-            Some(false)
-        );
-    }
 
     #[test]
     fn rasterise_even_odd_with_hole() {

@@ -385,23 +385,10 @@ pub fn read_polyline(path: &Path) -> Result<Vec<(f64, f64)>, ValidationError> {
         path: path.to_path_buf(),
         what,
     };
-    let shapes = shapefile::read_shapes(path).map_err(|e| err(e.to_string()))?;
-    let first = shapes.first().ok_or_else(|| err("no record".into()))?;
-    let line: Vec<(f64, f64)> = match first {
-        shapefile::Shape::Polyline(l) => l.parts().iter().flatten().map(|q| (q.x, q.y)).collect(),
-        shapefile::Shape::PolylineZ(l) => l.parts().iter().flatten().map(|q| (q.x, q.y)).collect(),
-        shapefile::Shape::PolylineM(l) => l.parts().iter().flatten().map(|q| (q.x, q.y)).collect(),
-        other => {
-            return Err(err(format!(
-                "record 0 is not a polyline: {}",
-                other.shapetype()
-            )));
-        }
-    };
-    if line.len() < 2 {
-        return Err(err(format!("{} vertices, a line needs 2", line.len())));
-    }
-    Ok(line)
+    snowscape_io::vector::read_first_polyline(path).map_err(|e| match e {
+        snowscape_io::vector::VectorError::NotALine { what, .. } => err(what),
+        other => err(other.to_string()),
+    })
 }
 
 /// Horizontal distance from `(x, y)` to a polyline, and the distance along the line (from its

@@ -206,7 +206,13 @@ fn bad_shapefiles_are_named() {
     // Missing file.
     let missing = dir.path().join("nothing.shp");
     let e = release_from_shapefile(&missing, &g, &all).unwrap_err();
-    assert!(matches!(e, ReleaseAreaError::Shapefile { .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            ReleaseAreaError::Vector(snowscape_io::vector::VectorError::Shapefile { .. })
+        ),
+        "{e}"
+    );
     assert!(e.to_string().contains("nothing.shp"), "{e}");
     // Not a shapefile at all.
     let junk = dir.path().join("junk.shp");

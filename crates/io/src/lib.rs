@@ -51,6 +51,8 @@ pub mod png16;
 pub mod raw16;
 pub mod splat;
 
+pub mod vector;
+
 pub use atomic::{AtomicWriteError, write_atomic, write_bytes_atomic};
 pub use error::RasterError;
 pub use exr::write_exr;

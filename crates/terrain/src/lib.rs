@@ -17,6 +17,7 @@
 //! - [`surface`]: slopes and normals by central differences, shared by the renderer, the mesh
 //!   exporter and the phenomena.
 
+pub mod crs_facts;
 pub mod crs_latitude;
 pub mod error;
 pub mod geometry;

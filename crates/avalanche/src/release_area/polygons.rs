@@ -1,30 +1,15 @@
-//! Release polygons from an ESRI shapefile (with its `.prj` and `.dbf` thickness field),
-//! rasterised onto the grid.
+//! Release polygons from an ESRI shapefile (read by `snowscape-io`: rings, the `.dbf`
+//! thickness field, the `.prj` CRS), rasterised onto the grid.
 
 use super::*;
-
-/// One record's rings as (x, y) vertex lists.
-pub(super) type Rings = Vec<Vec<(f64, f64)>>;
-
-pub(super) fn rings_of(shape: &Shape) -> Option<Rings> {
-    fn xy<P>(rings: &[shapefile::PolygonRing<P>], f: impl Fn(&P) -> (f64, f64)) -> Rings {
-        rings
-            .iter()
-            .map(|r| r.points().iter().map(&f).collect())
-            .collect()
-    }
-    match shape {
-        Shape::Polygon(p) => Some(xy(p.rings(), |q| (q.x, q.y))),
-        Shape::PolygonM(p) => Some(xy(p.rings(), |q| (q.x, q.y))),
-        Shape::PolygonZ(p) => Some(xy(p.rings(), |q| (q.x, q.y))),
-        _ => None,
-    }
-}
+use snowscape_io::vector::{
+    ColumnLookup, PolygonRecord, Ring, read_numeric_column, read_polygon_records, read_prj,
+};
 
 /// Marks the cells of `geometry` whose centres lie inside `rings` (even-odd rule); returns the
 /// number of cell centres inside.
 pub(super) fn rasterise(
-    rings: &Rings,
+    rings: &[Ring],
     geometry: &GridGeometry,
     mut mark: impl FnMut(usize),
 ) -> usize {
@@ -78,76 +63,35 @@ pub(super) fn rasterise(
     count
 }
 
-/// A release thickness attribute (`thickness` or `d0`, any case) of one record.
-pub(super) fn thickness_field_name(names: &[String]) -> Option<String> {
-    for want in ["thickness", "d0"] {
-        if let Some(n) = names.iter().find(|n| n.eq_ignore_ascii_case(want)) {
-            return Some(n.clone());
-        }
-    }
-    None
-}
-
-pub(super) fn field_number(v: &FieldValue) -> Result<f64, String> {
-    match v {
-        FieldValue::Numeric(Some(x)) | FieldValue::Double(x) | FieldValue::Currency(x) => Ok(*x),
-        FieldValue::Float(Some(x)) => Ok(*x as f64),
-        FieldValue::Integer(x) => Ok(*x as f64),
-        FieldValue::Character(Some(s)) => s.trim().parse().map_err(|_| format!("{s:?}")),
-        FieldValue::Numeric(None) | FieldValue::Float(None) | FieldValue::Character(None) => {
-            Err("empty".into())
-        }
-        other => Err(format!("{other:?}")),
-    }
-}
-
-/// Per-record release thickness from the `.dbf` beside `shp`, `None` when it has no thickness
-/// field (or there is no `.dbf`).
-pub(super) fn read_thickness(
+/// Per-record release thickness from the `thickness` (or `d0`) field of the `.dbf` beside
+/// `shp`, `None` when it has no such field (or there is no `.dbf`); each value a finite
+/// number > 0 m.
+fn read_thickness(
     shp: &Path,
     records: usize,
     warnings: &mut Vec<String>,
 ) -> Result<Option<Vec<f64>>, ReleaseAreaError> {
-    let dbf = shp.with_extension("dbf");
-    if !dbf.is_file() {
-        warnings.push(format!(
-            "{}: no attribute table {}: release thickness left to the caller",
-            shp.display(),
-            dbf.display()
-        ));
-        return Ok(None);
-    }
-    let dbf_err = |source| ReleaseAreaError::Dbf {
-        path: dbf.clone(),
-        source,
+    let column = match read_numeric_column(shp, &["thickness", "d0"], records)? {
+        ColumnLookup::NoTable(dbf) => {
+            warnings.push(format!(
+                "{}: no attribute table {}: release thickness left to the caller",
+                shp.display(),
+                dbf.display()
+            ));
+            return Ok(None);
+        }
+        ColumnLookup::NoField => return Ok(None),
+        ColumnLookup::Found(c) => c,
     };
-    let mut reader = shapefile::dbase::Reader::from_path(&dbf).map_err(dbf_err)?;
-    let names: Vec<String> = reader
-        .fields()
-        .iter()
-        .map(|f| f.name().to_string())
-        .collect();
-    let Some(field) = thickness_field_name(&names) else {
-        return Ok(None);
-    };
-    let rows = reader.read().map_err(dbf_err)?;
-    if rows.len() != records {
-        return Err(ReleaseAreaError::DbfRecordCount {
-            path: dbf,
-            records: rows.len(),
-            shapes: records,
-        });
-    }
-    let mut out = Vec::with_capacity(rows.len());
-    for (k, rec) in rows.iter().enumerate() {
+    let mut out = Vec::with_capacity(column.values.len());
+    for (k, v) in column.values.iter().enumerate() {
         let bad = |value: String| ReleaseAreaError::BadThickness {
-            path: dbf.clone(),
+            path: column.path.clone(),
             record: k,
-            field: field.clone(),
+            field: column.field.clone(),
             value,
         };
-        let v = rec.get(&field).ok_or_else(|| bad("missing".into()))?;
-        let x = field_number(v).map_err(bad)?;
+        let x = v.clone().map_err(bad)?;
         if !(x.is_finite() && x > 0.0) {
             return Err(bad(x.to_string()));
         }
@@ -156,24 +100,39 @@ pub(super) fn read_thickness(
     Ok(Some(out))
 }
 
-/// The CRS of the `.prj` beside `path`, if there is one: its WKT, or the EPSG code at its root.
-pub(super) fn read_prj(path: &Path) -> Result<Option<Crs>, ReleaseAreaError> {
-    let prj = path.with_extension("prj");
-    if !prj.is_file() {
-        return Ok(None);
+/// Compares the input's CRS with the DEM's: an error when clearly different, a warning when
+/// undecidable.
+pub(super) fn check_crs(
+    path: &Path,
+    file_crs: Option<&Crs>,
+    dem_crs: Option<&Crs>,
+    warnings: &mut Vec<String>,
+) -> Result<(), ReleaseAreaError> {
+    match (file_crs, dem_crs) {
+        (Some(f), Some(d)) => match same_crs(f, d) {
+            Some(true) => Ok(()),
+            Some(false) => Err(ReleaseAreaError::CrsMismatch {
+                path: path.to_path_buf(),
+                file_crs: f.to_string(),
+                dem_crs: d.to_string(),
+            }),
+            None => {
+                warnings.push(format!(
+                    "{}: cannot tell whether its CRS ({f}) is the DEM's ({d}); assuming it is",
+                    path.display()
+                ));
+                Ok(())
+            }
+        },
+        (Some(f), None) => {
+            warnings.push(format!(
+                "{}: the release area is in {f}, the DEM declares no CRS; assuming they agree",
+                path.display()
+            ));
+            Ok(())
+        }
+        _ => Ok(()),
     }
-    let text = std::fs::read_to_string(&prj).map_err(|source| ReleaseAreaError::Prj {
-        path: prj.clone(),
-        source,
-    })?;
-    let t = text.trim().trim_start_matches('\u{feff}');
-    if t.is_empty() {
-        return Ok(None);
-    }
-    Ok(Crs::parse(t).map(|c| match &c {
-        Crs::Wkt(w) => wkt_facts(w).code.map_or(c.clone(), Crs::Epsg),
-        Crs::Epsg(_) => c,
-    }))
 }
 
 /// Rasterises the polygons of an ESRI shapefile into the DEM's grid (see the module docs: cell
@@ -184,13 +143,7 @@ pub fn release_from_shapefile(
     geometry: &GridGeometry,
     mask: &NodataMask,
 ) -> Result<ReleaseMask, ReleaseAreaError> {
-    let shp_err = |source| ReleaseAreaError::Shapefile {
-        path: path.to_path_buf(),
-        source,
-    };
-    let shapes = shapefile::ShapeReader::from_path(path)
-        .and_then(|r| r.read())
-        .map_err(shp_err)?;
+    let shapes = read_polygon_records(path)?;
     let mut warnings = Vec::new();
     check_crs(
         path,
@@ -205,18 +158,23 @@ pub fn release_from_shapefile(
     let mut th = thickness.as_ref().map(|_| vec![0.0f64; n]);
     let mut polygons = 0;
     for (k, shape) in shapes.iter().enumerate() {
-        if matches!(shape, Shape::NullShape) {
-            warnings.push(format!(
-                "{}: record {k} is a null shape, skipped",
-                path.display()
-            ));
-            continue;
-        }
-        let rings = rings_of(shape).ok_or_else(|| ReleaseAreaError::NotPolygons {
-            path: path.to_path_buf(),
-            record: k,
-            shape_type: shape.shapetype().to_string(),
-        })?;
+        let rings = match shape {
+            PolygonRecord::Null => {
+                warnings.push(format!(
+                    "{}: record {k} is a null shape, skipped",
+                    path.display()
+                ));
+                continue;
+            }
+            PolygonRecord::Other(shape_type) => {
+                return Err(ReleaseAreaError::NotPolygons {
+                    path: path.to_path_buf(),
+                    record: k,
+                    shape_type: shape_type.clone(),
+                });
+            }
+            PolygonRecord::Polygon(rings) => rings,
+        };
         let Some(ext) = MapExtent::of_points(rings.iter().flatten().copied()) else {
             warnings.push(format!(
                 "{}: record {k} has no vertex, skipped",
@@ -240,7 +198,7 @@ pub fn release_from_shapefile(
             ));
         }
         let value = thickness.as_ref().map(|t| t[k]);
-        let inside = rasterise(&rings, geometry, |i| {
+        let inside = rasterise(rings, geometry, |i| {
             cells[i] = true;
             if let (Some(t), Some(v)) = (th.as_mut(), value) {
                 t[i] = t[i].max(v);

@@ -1,17 +1,22 @@
-//! Whether a release file and the DEM share a coordinate reference system: EPSG codes and
-//! WKT names compared loosely (see the parent module).
+//! What a coordinate reference system says about itself, and whether two are the same: EPSG
+//! codes (given, at the WKT root as WKT1 `AUTHORITY` or WKT2 `ID`, or recognised from the name
+//! of the CRSs avalanche practitioners use) and normalised WKT names compared loosely. Used
+//! wherever two georeferenced inputs meet (a release shapefile's `.prj` and its DEM).
 
-use super::*;
+use crate::Crs;
 
 /// What a CRS says about itself: an EPSG code (given or recognised from the name), a
 /// normalised name, and whether it is geographic.
-pub(super) struct CrsFacts {
-    pub(super) code: Option<u32>,
-    pub(super) name: Option<String>,
-    pub(super) geographic: bool,
+pub struct CrsFacts {
+    /// The EPSG code, when given or recognised.
+    pub code: Option<u32>,
+    /// The root name, lower-case alphanumerics only.
+    pub name: Option<String>,
+    /// Whether it is a geographic (latitude-longitude) CRS.
+    pub geographic: bool,
 }
 
-pub(super) fn normalise_name(s: &str) -> String {
+fn normalise_name(s: &str) -> String {
     s.chars()
         .filter(|c| c.is_ascii_alphanumeric())
         .map(|c| c.to_ascii_lowercase())
@@ -20,7 +25,7 @@ pub(super) fn normalise_name(s: &str) -> String {
 
 /// EPSG codes of a few CRS names as EPSG and ESRI spell them (normalised: lower-case
 /// alphanumerics), for the grids avalanche practitioners use.
-pub(super) fn code_of_name(n: &str) -> Option<u32> {
+fn code_of_name(n: &str) -> Option<u32> {
     let fixed: &[(&str, u32)] = &[
         ("mgiaustrialambert", 31287),
         ("mgiaustriagkwest", 31254),
@@ -67,7 +72,7 @@ pub(super) fn code_of_name(n: &str) -> Option<u32> {
 
 /// The root keyword, root name and root EPSG authority of a WKT string (WKT1 `AUTHORITY`,
 /// WKT2 `ID`, at bracket depth 1).
-pub(super) fn wkt_facts(wkt: &str) -> CrsFacts {
+pub fn wkt_facts(wkt: &str) -> CrsFacts {
     let t = wkt.trim();
     let open = t.find(['[', '(']);
     let head = open.map_or(t, |o| &t[..o]).trim().to_ascii_uppercase();
@@ -122,7 +127,8 @@ pub(super) fn wkt_facts(wkt: &str) -> CrsFacts {
     }
 }
 
-pub(super) fn crs_facts(crs: &Crs) -> CrsFacts {
+/// What `crs` says about itself.
+pub fn crs_facts(crs: &Crs) -> CrsFacts {
     match crs {
         Crs::Epsg(c) => CrsFacts {
             code: Some(*c),
@@ -134,7 +140,7 @@ pub(super) fn crs_facts(crs: &Crs) -> CrsFacts {
 }
 
 /// `Some(true)`: the same CRS; `Some(false)`: clearly different; `None`: cannot tell.
-pub(super) fn same_crs(a: &Crs, b: &Crs) -> Option<bool> {
+pub fn same_crs(a: &Crs, b: &Crs) -> Option<bool> {
     let (fa, fb) = (crs_facts(a), crs_facts(b));
     if let (Some(ca), Some(cb)) = (fa.code, fb.code) {
         return Some(ca == cb);
@@ -148,39 +154,35 @@ pub(super) fn same_crs(a: &Crs, b: &Crs) -> Option<bool> {
     }
 }
 
-/// Compares the input's CRS with the DEM's: an error when clearly different, a warning when
-/// undecidable.
-pub(super) fn check_crs(
-    path: &Path,
-    file_crs: Option<&Crs>,
-    dem_crs: Option<&Crs>,
-    warnings: &mut Vec<String>,
-) -> Result<(), ReleaseAreaError> {
-    match (file_crs, dem_crs) {
-        (Some(f), Some(d)) => match same_crs(f, d) {
-            Some(true) => Ok(()),
-            Some(false) => Err(ReleaseAreaError::CrsMismatch {
-                path: path.to_path_buf(),
-                file_crs: f.to_string(),
-                dem_crs: d.to_string(),
-            }),
-            None => {
-                warnings.push(format!(
-                    "{}: cannot tell whether its CRS ({f}) is the DEM's ({d}); assuming it is",
-                    path.display()
-                ));
-                Ok(())
-            }
-        },
-        (Some(f), None) => {
-            warnings.push(format!(
-                "{}: the release area is in {f}, the DEM declares no CRS; assuming they agree",
-                path.display()
-            ));
-            Ok(())
-        }
-        _ => Ok(()),
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wkt_root_authority_and_names() {
+        let wkt = r#"PROJCS["MGI / Austria Lambert",GEOGCS["MGI",AUTHORITY["EPSG","4312"]],UNIT["metre",1],AUTHORITY["EPSG","31287"]]"#;
+        assert_eq!(wkt_facts(wkt).code, Some(31287));
+        let esri =
+            r#"PROJCS["MGI_Austria_Lambert",GEOGCS["GCS_MGI",DATUM["D_MGI"]],UNIT["Meter",1.0]]"#;
+        let f = wkt_facts(esri);
+        assert_eq!(f.code, Some(31287));
+        assert!(!f.geographic);
+        assert_eq!(
+            same_crs(&Crs::Wkt(esri.into()), &Crs::Epsg(31287)),
+            Some(true)
+        );
+        assert_eq!(
+            same_crs(&Crs::Wkt(esri.into()), &Crs::Epsg(32632)),
+            Some(false)
+        );
+        let utm = r#"PROJCS["WGS_1984_UTM_Zone_32N",GEOGCS["GCS_WGS_1984"]]"#;
+        assert_eq!(wkt_facts(utm).code, Some(32632));
+        let unknown = r#"PROJCS["My_Local_Grid",GEOGCS["GCS_WGS_1984"]]"#;
+        assert_eq!(same_crs(&Crs::Wkt(unknown.into()), &Crs::Epsg(31287)), None);
+        let geo = r#"GEOGCS["Some datum",DATUM["x"]]"#;
+        assert_eq!(
+            same_crs(&Crs::Wkt(geo.into()), &Crs::Wkt(unknown.into())),
+            Some(false)
+        );
     }
 }
-
-// ---------------------------------------------------------------------------------------------
