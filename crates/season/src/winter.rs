@@ -10,17 +10,17 @@
 use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, Trigger};
 use crate::checkpoint::{CheckpointError, bedrock_fingerprint};
 use crate::forcing::StationForcing;
-use crate::melt::{self, MeltModel, SnowpackState};
+use crate::melt::{MeltModel, SnowpackState};
 use crate::phenomenon::PhenomenonError;
-use crate::powder_diffusion::{self, DiffusionScratch};
+use crate::powder_diffusion::DiffusionScratch;
 use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
 use crate::scheduler::{Event, EventKind, SECONDS_PER_DAY, Scheduler};
 use crate::skiing::SkiStats;
-use crate::snowfall::{self, SnowfallModel, SnowfallScratch};
-use crate::snowtran_transport::{self, SnowTranForcing, SnowTranScratch};
-use crate::stability::{self, StabilityScratch};
+use crate::snowfall::SnowfallScratch;
+use crate::snowtran_transport::SnowTranScratch;
+use crate::stability::StabilityScratch;
 use crate::weather::{Air, AirSource};
-use crate::wind_transport::{self, WindMaps, WindModel, WindScratch};
+use crate::wind_transport::WindScratch;
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::AvalancheWorkspace;
 use snowscape_avalanche::release_area::rupture_at_point;
@@ -82,6 +82,8 @@ pub enum SeasonError {
 }
 
 mod budget;
+mod phenomena;
+use phenomena::PHENOMENA;
 mod resume;
 mod skier_runs;
 mod snowpack;
@@ -617,157 +619,21 @@ impl Winter {
             EventKind::SkierStart => phenomenon_name(EventKind::SkierStep),
             kind => phenomenon_name(kind),
         };
-        let err = |source| SeasonError::Phenomenon {
-            phenomenon: name,
-            day,
-            source,
-        };
         let depth_before = (self.ski_area.is_some()
             && matches!(
                 event.kind,
                 EventKind::SnowfallStep | EventKind::WindTransportStep
             ))
         .then(|| self.terrain.total_depth());
-        let p = &self.scenario.parameters;
-        let temperature = &self.environment.temperature;
-        let b = &mut self.state.budget;
-        match event.kind {
-            EventKind::SnowfallStep if p.snowfall.model == SnowfallModel::Orographic => {
-                self.orographic_snowfall(day, event.dt_days).map_err(err)?;
-            }
-            EventKind::MeltAndStateStep if p.melt.model == MeltModel::EnhancedTi => {
-                self.enhanced_melt(day).map_err(err)?;
-                let p = &self.scenario.parameters;
-                let r = stability::step(
-                    &p.stability,
-                    &mut self.terrain,
-                    &self.environment.temperature,
-                    &mut self.stability_scratch,
-                    event.dt_days,
-                )
-                .map_err(err)?;
-                self.state.budget.densification += r.densification;
-            }
-            EventKind::SnowfallStep => {
-                let mut params = p.snowfall.clone();
-                params.a0_precip = self.weather[self.state.weather_index].rain_snow_altitude_m;
-                let v = snowfall::step(
-                    &params,
-                    &mut self.terrain,
-                    temperature,
-                    &mut self.snowfall_scratch,
-                    event.dt_days,
-                )
-                .map_err(err)?;
-                b.snowfall += v.added;
-            }
-            EventKind::MeltAndStateStep => {
-                let v = melt::step(&p.melt, &mut self.terrain, temperature, event.dt_days)
-                    .map_err(err)?;
-                b.melt += v.removed;
-                let r = stability::step(
-                    &p.stability,
-                    &mut self.terrain,
-                    temperature,
-                    &mut self.stability_scratch,
-                    event.dt_days,
-                )
-                .map_err(err)?;
-                b.densification += r.densification;
-            }
-            EventKind::PowderDiffusionStep => {
-                let r = powder_diffusion::step(
-                    &p.powder_diffusion,
-                    &mut self.terrain,
-                    &mut self.diffusion_scratch,
-                    event.dt_days,
-                )
-                .map_err(err)?;
-                b.diffusion_outflow += r.border_outflow;
-            }
-            EventKind::WindTransportStep if p.wind_transport.model == WindModel::Snowtran => {
-                let e = &self.environment;
-                let sun = &self.base_environment.sun;
-                let forcing = SnowTranForcing {
-                    wind_u: &e.wind_u,
-                    wind_v: &e.wind_v,
-                    temperature,
-                    latitude_deg: sun.latitude_deg,
-                    day_of_year: f64::from(sun.start_day) + day,
-                    start_day: day,
-                };
-                let r = snowtran_transport::step_season(
-                    &p.snowtran,
-                    &mut self.terrain,
-                    &forcing,
-                    &mut self.snowtran_scratch,
-                    event.dt_days,
-                )
-                .map_err(err)?;
-                b.wind_outflow += r.border_net_outflow;
-                b.wind_sublimation += r.sublimated;
-            }
-            EventKind::WindTransportStep => {
-                let e = &self.environment;
-                let maps = WindMaps {
-                    u: &e.wind_u,
-                    v: &e.wind_v,
-                    shadow: &e.wind_shadow,
-                    effect_surface: &e.wind_effect_surface,
-                    sx: (!self.sx.is_empty()).then_some(self.sx.as_slice()),
-                };
-                let r = wind_transport::step(
-                    &p.wind_transport,
-                    &mut self.terrain,
-                    &maps,
-                    &mut self.wind_scratch,
-                    event.dt_days,
-                )
-                .map_err(err)?;
-                b.wind_outflow += r.border_outflow;
-            }
-            EventKind::AvalancheStart => {
-                let u = snowscape_terrain::random::uniform(
-                    self.scenario.seed,
-                    STREAM_AVALANCHE_CELL,
-                    event.index,
-                );
-                // A fresh hazard map if the snow may have moved since it was computed.
-                if self.hazard_stale {
-                    self.update_avalanche_rate();
-                }
-                if let Some(cell) = self.hazard.pick(u) {
-                    match self.start_avalanche(cell, Trigger::Natural) {
-                        Ok(_) | Err(SeasonError::AvalanchePosition { .. }) => {}
-                        Err(e) => return Err(e),
-                    }
-                }
-            }
-            EventKind::SkierStart => self.run_skier(day)?,
-            // Period starts are handled by the scheduler; skier and avalanche steps run inside
-            // their start events.
-            _ => {}
-        }
-        if event.kind == EventKind::MeltAndStateStep
-            && self.scenario.parameters.slope_shedding.enabled
-        {
-            let shed_t = Instant::now();
-            let r = crate::slope_shedding::step(
-                &self.scenario.parameters.slope_shedding,
-                &mut self.terrain,
-                &mut self.shedding_scratch,
-                event.dt_days,
-            )
-            .map_err(|source| SeasonError::Phenomenon {
-                phenomenon: "slope_shedding",
-                day,
-                source,
-            })?;
-            self.state.budget.shedding_outflow += r.border_outflow_m3;
-            self.state.budget.shedding_moved += r.moved_m3;
-            let shed_s = shed_t.elapsed().as_secs_f64();
-            *self.wall_seconds.entry("slope_shedding").or_default() += shed_s;
-            *self.wall_seconds.entry(name).or_default() -= shed_s;
+        // Each step of the event, timed under its own name (the rest of the event's upkeep
+        // under the event's).
+        let mut steps_s = 0.0;
+        for &(_, step_name, step) in PHENOMENA.iter().filter(|p| p.0 == event.kind) {
+            let ts = Instant::now();
+            step(self, &event)?;
+            let s = ts.elapsed().as_secs_f64();
+            *self.wall_seconds.entry(step_name).or_default() += s;
+            steps_s += s;
         }
         self.fade_tracks(depth_before)?;
         if matches!(
@@ -801,7 +667,7 @@ impl Winter {
                     source,
                 })?;
         }
-        *self.wall_seconds.entry(name).or_default() += t.elapsed().as_secs_f64();
+        *self.wall_seconds.entry(name).or_default() += t.elapsed().as_secs_f64() - steps_s;
         Ok(())
     }
 }
