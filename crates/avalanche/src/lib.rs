@@ -15,6 +15,7 @@
 
 pub mod comparison;
 pub mod convert;
+pub mod entrainment;
 pub mod flow;
 pub mod release_area;
 pub mod rest;
@@ -22,6 +23,7 @@ pub mod run;
 pub mod validation;
 
 pub use convert::{deposit, release, release_cells};
+pub use entrainment::{EntrainmentParams, basal_shear_per_density};
 pub use flow::{
     AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, BedSource,
     Border, FrictionLaw, SamosAtParams, SlopeGravity, cfl_dt, step, step_at_least, step_on,

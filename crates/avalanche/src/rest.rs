@@ -6,7 +6,8 @@
 //! flow until it stops ([`crate::run`]: at rest, the energy criterion, or the duration) and
 //! lays every bit of it down into one layer (or leaves it across an open border). The
 //! returned [`RestOutcome`] holds the run's figures, the volumes of its budget
-//! (`released = deposited + border outflow` to round-off) and the thickness taken and laid
+//! (`released + entrained = deposited + border outflow` to round-off; the flow entrains the
+//! snowpack it runs over, [`crate::entrainment`]) and the thickness taken and laid
 //! down per cell, as sparse lists.
 //!
 //! **Cost.** The workspace keeps one flow state and its buffers through all the avalanches
@@ -31,10 +32,15 @@ pub struct RestOutcome {
     pub summary: RunSummary,
     /// Volume released from the terrain, m³.
     pub released_m3: f64,
+    /// Volume the flow entrained from the snowpack on its way, m³.
+    pub entrained_m3: f64,
     /// Volume laid down on the terrain, m³.
     pub deposited_m3: f64,
     /// Thickness taken from each released cell, (row-major index, m), ascending indices.
     pub released: Vec<(u32, f32)>,
+    /// Thickness entrained per cell (the flow's scour of the snowpack beyond the release),
+    /// (row-major index, m), in the order of the touched tiles.
+    pub entrained: Vec<(u32, f32)>,
     /// Thickness laid down per cell, (row-major index, m), cells with a deposit only, in the
     /// order of the touched tiles.
     pub deposited: Vec<(u32, f32)>,
@@ -123,11 +129,12 @@ impl AvalancheWorkspace {
             .collect();
         let mut run = AvalancheRun::with_buffers(state, buffers);
         let mut records = 0u64;
-        let result = run.run_on::<E>(flow, options, Some(&*terrain), |r| {
+        let result = run.run_over::<E>(flow, options, terrain, |r| {
             records += 1;
             on_record(r)
         });
         let w = terrain.geometry().width();
+        let mut entrained = Vec::new();
         let mut deposited = Vec::new();
         let (mut peak_thickness, mut peak_speed) = (Vec::new(), Vec::new());
         for (r0, r1, c0, c1) in run.touched_cells() {
@@ -138,6 +145,9 @@ impl AvalancheWorkspace {
                     if h > 0.0 {
                         deposited.push((i as u32, h as f32));
                     }
+                    if run.entrained()[i] > 0.0 {
+                        entrained.push((i as u32, run.entrained()[i] as f32));
+                    }
                     if run.peak_thickness()[i] > 0.0 {
                         peak_thickness.push((i as u32, run.peak_thickness()[i]));
                     }
@@ -147,13 +157,16 @@ impl AvalancheWorkspace {
                 }
             }
         }
+        let run_entrained_m3 = run.entrained_volume();
         let deposited_m3 = deposit(terrain, &mut run.state, deposit_layer, false)?;
         self.parts = Some(run.into_parts());
         Ok(RestOutcome {
             summary: result?,
             released_m3,
+            entrained_m3: run_entrained_m3,
             deposited_m3,
             released,
+            entrained,
             deposited,
             peak_thickness,
             peak_speed,

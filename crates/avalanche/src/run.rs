@@ -22,11 +22,13 @@
 //! farthest from it, and the *α angle* the angle from that release top down to that runout
 //! point (the practitioners' "alpha angle").
 
+use crate::entrainment::{EntrainedMaps, entrain};
 use crate::flow::{
     AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, BedSource,
     step_at_least, step_on,
 };
 use serde::{Deserialize, Serialize};
+use snowscape_terrain::LayeredTerrain;
 
 /// When an avalanche run records and stops.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -164,7 +166,10 @@ pub struct RunSummary {
     pub final_volume_m3: f64,
     /// Volume that left the grid across an open border, m³.
     pub border_outflow_m3: f64,
-    /// `|released − final − outflow| / released`.
+    /// Volume the flow entrained from the snowpack on its way, m³ ([`crate::entrainment`]).
+    #[serde(default)]
+    pub entrained_volume_m3: f64,
+    /// `|released + entrained − final − outflow| / (released + entrained)`.
     pub volume_closure_rel: f64,
     /// Simulated time, s.
     pub simulated_s: f64,
@@ -204,7 +209,11 @@ pub struct AvalancheRun {
     scratch: AvalancheScratch,
     peak_thickness: Vec<f64>,
     peak_speed: Vec<f64>,
+    /// Depth entrained per cell in all and of stable snow (grid-sized), m.
+    entrained: Vec<f64>,
+    entrained_stable: Vec<f64>,
     released_volume: f64,
+    entrained_volume: f64,
     border_outflow: f64,
     time: f64,
     substeps: usize,
@@ -222,9 +231,12 @@ pub struct AvalancheRun {
 pub struct RunBuffers {
     /// The flow's work buffers.
     pub scratch: AvalancheScratch,
-    /// Peak fields, all zero between runs (grid-sized; empty until first used).
+    /// Peak fields and entrained depths, all zero between runs (grid-sized; empty until
+    /// first used).
     peak_thickness: Vec<f64>,
     peak_speed: Vec<f64>,
+    entrained: Vec<f64>,
+    entrained_stable: Vec<f64>,
 }
 
 impl AvalancheRun {
@@ -254,8 +266,15 @@ impl AvalancheRun {
             scratch,
             mut peak_thickness,
             mut peak_speed,
+            mut entrained,
+            mut entrained_stable,
         } = buffers;
-        for p in [&mut peak_thickness, &mut peak_speed] {
+        for p in [
+            &mut peak_thickness,
+            &mut peak_speed,
+            &mut entrained,
+            &mut entrained_stable,
+        ] {
             if p.len() != n {
                 *p = vec![0.0; n];
             }
@@ -281,7 +300,10 @@ impl AvalancheRun {
             scratch,
             peak_thickness,
             peak_speed,
+            entrained,
+            entrained_stable,
             released_volume,
+            entrained_volume: 0.0,
             border_outflow: 0.0,
             time: 0.0,
             substeps: 0,
@@ -314,12 +336,16 @@ impl AvalancheRun {
             for r in r0..=r1 {
                 self.peak_thickness[r * w + c0..=r * w + c1].fill(0.0);
                 self.peak_speed[r * w + c0..=r * w + c1].fill(0.0);
+                self.entrained[r * w + c0..=r * w + c1].fill(0.0);
+                self.entrained_stable[r * w + c0..=r * w + c1].fill(0.0);
             }
         }
         let buffers = RunBuffers {
             scratch: self.scratch,
             peak_thickness: self.peak_thickness,
             peak_speed: self.peak_speed,
+            entrained: self.entrained,
+            entrained_stable: self.entrained_stable,
         };
         (self.state, buffers)
     }
@@ -348,6 +374,16 @@ impl AvalancheRun {
     /// Peak speed per grid cell (row-major), m/s.
     pub fn peak_speed(&self) -> &[f64] {
         &self.peak_speed
+    }
+
+    /// Depth the flow entrained per grid cell (row-major), m: its scour of the snowpack.
+    pub fn entrained(&self) -> &[f64] {
+        &self.entrained
+    }
+
+    /// Volume entrained so far, m³.
+    pub fn entrained_volume(&self) -> f64 {
+        self.entrained_volume
     }
 
     /// Kinetic energy per unit density at the last record, m⁵/s².
@@ -409,6 +445,56 @@ impl AvalancheRun {
             None
         };
         Ok(report)
+    }
+
+    /// [`AvalancheRun::advance_on`] over a layered terrain whose snowpack the flow entrains
+    /// ([`crate::entrainment`], when `params.entrainment.enabled`): the run's one way forward
+    /// on a terrain (the season, the editor, the command line).
+    pub fn advance_over(
+        &mut self,
+        params: &AvalancheParams,
+        options: &RunOptions,
+        terrain: &mut LayeredTerrain,
+    ) -> Result<AvalancheReport, AvalancheError> {
+        let report = self.advance_on(params, options, Some(&*terrain))?;
+        if params.entrainment.enabled && report.simulated_s > 0.0 {
+            let n = self.state.geometry.width() * self.state.geometry.height();
+            if terrain.geometry().len() != n {
+                return Err(AvalancheError::LengthMismatch {
+                    what: "terrain cells",
+                    got: terrain.geometry().len(),
+                    expected: n,
+                });
+            }
+            self.entrained_volume += entrain(
+                params,
+                &mut self.state,
+                terrain,
+                EntrainedMaps {
+                    total: &mut self.entrained,
+                    stable: &mut self.entrained_stable,
+                },
+                report.simulated_s,
+            );
+        }
+        Ok(report)
+    }
+
+    /// [`AvalancheRun::run_on`] over a layered terrain whose snowpack the flow entrains
+    /// ([`AvalancheRun::advance_over`]).
+    pub fn run_over<E: From<AvalancheError>>(
+        &mut self,
+        params: &AvalancheParams,
+        options: &RunOptions,
+        terrain: &mut LayeredTerrain,
+        mut on_record: impl FnMut(&AvalancheRun) -> Result<(), E>,
+    ) -> Result<RunSummary, E> {
+        options.validate()?;
+        while self.stop.is_none() {
+            self.advance_over(params, options, terrain)?;
+            on_record(self)?;
+        }
+        Ok(self.summary(options))
     }
 
     /// Advances until the run stops, calling `on_record` after every record interval (frames,
@@ -478,8 +564,9 @@ impl AvalancheRun {
         let g = &self.state.geometry;
         let w = g.width();
         let final_volume = self.state.total_volume();
-        let closure = if self.released_volume > 0.0 {
-            (self.released_volume - final_volume - self.border_outflow).abs() / self.released_volume
+        let input = self.released_volume + self.entrained_volume;
+        let closure = if input > 0.0 {
+            (input - final_volume - self.border_outflow).abs() / input
         } else {
             0.0
         };
@@ -544,6 +631,7 @@ impl AvalancheRun {
             released_volume_m3: self.released_volume,
             final_volume_m3: final_volume,
             border_outflow_m3: self.border_outflow,
+            entrained_volume_m3: self.entrained_volume,
             volume_closure_rel: closure,
             simulated_s: self.time,
             substeps: self.substeps,

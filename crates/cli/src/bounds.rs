@@ -48,6 +48,11 @@ pub fn release_thickness(text: &str) -> Result<f64, String> {
     positive_up_to(text, 50.0, " m")
 }
 
+/// A snow cover laid on a DEM, metres: [0, 50].
+pub fn snow_cover(text: &str) -> Result<f64, String> {
+    number_within(text, 0.0, 50.0, " m")
+}
+
 /// Simulated seconds of one avalanche: (0, 86400].
 pub fn avalanche_seconds(text: &str) -> Result<f64, String> {
     positive_up_to(text, 86_400.0, " s")

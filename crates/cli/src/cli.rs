@@ -368,6 +368,18 @@ pub struct AvalancheArgs {
     /// Half-width of the corridor around the path that --compare counts, metres.
     #[arg(long, default_value_t = 300.0, value_parser = crate::bounds::metres)]
     pub corridor: f64,
+    /// Loose snow lying on every cell outside the release, metres (laid as powder, fully
+    /// entrainable; AvaFrame's entrainment thickness). Default 0: a bare DEM, nothing to
+    /// entrain.
+    #[arg(long, default_value_t = 0.0, value_parser = crate::bounds::snow_cover)]
+    pub snow_cover: f64,
+    /// Turn off entrainment of the snow cover by the flow.
+    #[arg(long)]
+    pub no_entrainment: bool,
+    /// Specific erosion energy of entrainment, J/kg, in [1, 1e7] (default 5000: AvaFrame's
+    /// entEroEnergy). Larger values entrain less.
+    #[arg(long)]
+    pub erosion_energy: Option<f64>,
     /// Longest simulated time, seconds (the run stops earlier once the snow is at rest).
     #[arg(long, default_value_t = 600.0, value_parser = crate::bounds::avalanche_seconds)]
     pub duration: f64,

@@ -78,6 +78,58 @@ fn avalanche_on_avawog_writes_maps_frames_and_report() {
     assert!(r["wall_s"].as_f64().unwrap() > 0.0);
 }
 
+/// `--snow-cover` lays loose snow the flow entrains: the avalanche grows, lays down what it
+/// took, and writes its scour map; `--no-entrainment` leaves the cover where it is.
+#[test]
+fn avalanche_entrains_a_snow_cover_on_avawog() {
+    let (dem, rel) = wog();
+    let out = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let dir = out.path().join(name);
+        let mut a = vec![
+            "avalanche",
+            "--dem",
+            dem.to_str().unwrap(),
+            "--release",
+            rel.to_str().unwrap(),
+            "--duration",
+            "20",
+            "--frame-interval",
+            "10",
+            "--snow-cover",
+            "0.3",
+            "--out",
+            dir.to_str().unwrap(),
+            "-q",
+        ];
+        a.extend(extra);
+        let o = snowscape(&a);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+        (dir, r)
+    };
+    let (dir, r) = run("ent", &[]);
+    let released = r["released_volume_m3"].as_f64().unwrap();
+    let entrained = r["entrained_volume_m3"].as_f64().unwrap();
+    let deposited = r["deposited_volume_m3"].as_f64().unwrap();
+    let outflow = r["border_outflow_m3"].as_f64().unwrap();
+    // (20 s of a large release: its front has scoured 9.8e3 m³ of the 0.3 m cover.)
+    assert!(
+        entrained > 0.03 * released,
+        "entrained {entrained} of {released}"
+    );
+    assert!((released + entrained - deposited - outflow).abs() < 1e-6 * released);
+    assert!(r["volume_closure_rel"].as_f64().unwrap() < 1e-6);
+    assert_eq!(tiff_size(&dir.join("entrained.tif")), (490, 555));
+    let (dir, r) = run("off", &["--no-entrainment"]);
+    assert_eq!(r["entrained_volume_m3"].as_f64().unwrap(), 0.0);
+    assert!(!dir.join("entrained.tif").exists());
+    let deposited = r["deposited_volume_m3"].as_f64().unwrap();
+    let outflow = r["border_outflow_m3"].as_f64().unwrap();
+    assert!((released - deposited - outflow).abs() < 1e-6 * released);
+}
+
 #[test]
 fn avalanche_bad_input_exits_2_and_names_it() {
     let (dem, rel) = wog();
@@ -94,6 +146,23 @@ fn avalanche_bad_input_exits_2_and_names_it() {
         (
             vec!["--release", rel.to_str().unwrap(), "--thickness", "0"],
             "--thickness",
+        ),
+        (
+            vec!["--release", rel.to_str().unwrap(), "--snow-cover", "1e9"],
+            "--snow-cover",
+        ),
+        (
+            vec!["--release", rel.to_str().unwrap(), "--erosion-energy", "0"],
+            "erosion_energy_j_kg",
+        ),
+        (
+            vec![
+                "--release",
+                rel.to_str().unwrap(),
+                "--erosion-energy",
+                "nan",
+            ],
+            "erosion_energy_j_kg",
         ),
     ] {
         let mut a = vec!["avalanche", "--dem", d, "--out", dir.to_str().unwrap()];

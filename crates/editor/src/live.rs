@@ -4,8 +4,8 @@
 //!
 //! An avalanche the user triggers ruptures as the season's do ([`release_at_point`], the
 //! unstable snow and powder released, α from the release's temperature), advances one record
-//! interval at a time ([`AvalancheRun::advance`]) and deposits as stable snow at rest. After each
-//! record the tiles whose quantised flow thickness changed are sent ([`crate::wire`]). Unlike a
+//! interval at a time ([`AvalancheRun::advance_over`], entraining the snowpack on its track)
+//! and deposits as stable snow at rest. After each record the tiles whose quantised flow thickness changed are sent ([`crate::wire`]). Unlike a
 //! season avalanche it is not added to the season's avalanche list or mass budget: like a brush
 //! stroke, it is a user edit of the snow.
 
@@ -37,6 +37,9 @@ pub struct AvalancheProgress {
     pub released_m3: f64,
     /// Snow in motion, m³.
     pub flowing_m3: f64,
+    /// Snowpack entrained along the track so far, m³.
+    #[serde(default)]
+    pub entrained_m3: f64,
     pub max_speed_m_s: f64,
     /// Deposited snow, m³ (at the end).
     pub deposited_m3: f64,
@@ -124,6 +127,7 @@ impl LiveAvalanche {
                 records: 0,
                 released_m3: released,
                 flowing_m3: released,
+                entrained_m3: 0.0,
                 max_speed_m_s: 0.0,
                 deposited_m3: 0.0,
                 stop: None,
@@ -143,9 +147,9 @@ impl LiveAvalanche {
 
     /// Advances one record interval; returns the flow thickness (grid-sized, m) and the tiles
     /// whose quantised thickness changed since the last call.
-    pub fn advance(&mut self) -> Result<(Vec<f32>, Tiles), String> {
+    pub fn advance(&mut self, terrain: &mut LayeredTerrain) -> Result<(Vec<f32>, Tiles), String> {
         self.run
-            .advance(&self.flow, &self.options)
+            .advance_over(&self.flow, &self.options, terrain)
             .map_err(|e| e.to_string())?;
         let h: Vec<f32> = self
             .run
@@ -168,6 +172,7 @@ impl LiveAvalanche {
         p.records += 1;
         p.time_s = self.run.time();
         p.flowing_m3 = self.run.state.flowing_volume();
+        p.entrained_m3 = self.run.entrained_volume();
         p.max_speed_m_s = p.max_speed_m_s.max(self.run.state.max_speed());
         Ok((h, dirty.into_iter().collect()))
     }

@@ -656,7 +656,9 @@ impl Session {
     /// Advances the live avalanche or skiers by one frame.
     pub fn tick(&mut self) -> Result<Vec<Out>, Refusal> {
         if let Some(mut live) = self.avalanche.take() {
-            let (flow, tiles) = live.advance().map_err(|e| (ErrorCode::Failed, e))?;
+            let (flow, tiles) = live
+                .advance(&mut self.winter.terrain)
+                .map_err(|e| (ErrorCode::Failed, e))?;
             let g = self.winter.terrain.geometry();
             let field = Field {
                 channel: Channel::Flow,

@@ -469,6 +469,9 @@ pub struct AvalancheRecord {
     pub map_xy: [f64; 2],
     /// Released volume, m³.
     pub released_m3: f64,
+    /// Entrained from the snowpack along the track, m³ (`snowscape_avalanche::entrainment`).
+    #[serde(default)]
+    pub entrained_m3: f64,
     /// Deposited on the grid, m³.
     pub deposited_m3: f64,
     /// Flowed off the grid, m³.
@@ -502,7 +505,8 @@ pub struct AvalancheMaps {
 /// Releases `cells` (row-major, ascending), runs the avalanche to rest and deposits it as
 /// stable snow ([`AvalancheWorkspace::run_to_rest`]: the cost follows the avalanche's
 /// footprint). With `alpha_from_temperature`, α comes from the mean `temperature` (°C per
-/// cell) of the released cells.
+/// cell) of the released cells. Returns the record and the cells whose snow the flow
+/// entrained (ascending), beside the released ones.
 #[allow(clippy::too_many_arguments)]
 pub fn run_avalanche(
     params: &AvalancheParameters,
@@ -514,7 +518,7 @@ pub fn run_avalanche(
     cell: usize,
     maps: &mut AvalancheMaps,
     workspace: &mut AvalancheWorkspace,
-) -> Result<AvalancheRecord, AvalancheError> {
+) -> Result<(AvalancheRecord, Vec<usize>), AvalancheError> {
     let n = terrain.geometry().len();
     for m in [&mut maps.scour, &mut maps.deposit] {
         if m.len() != n {
@@ -545,7 +549,7 @@ pub fn run_avalanche(
         SnowLayer::Stable,
         |_| Ok(()),
     )?;
-    for &(i, h) in &outcome.released {
+    for &(i, h) in outcome.released.iter().chain(&outcome.entrained) {
         maps.scour[i as usize] += h;
     }
     for &(i, h) in &outcome.deposited {
@@ -555,12 +559,15 @@ pub fn run_avalanche(
     let g = terrain.geometry();
     let (c, r) = g.col_row(cell);
     let (x, y) = g.cell_centre(c, r);
-    Ok(AvalancheRecord {
+    let mut entrained: Vec<usize> = outcome.entrained.iter().map(|&(i, _)| i as usize).collect();
+    entrained.sort_unstable();
+    let record = AvalancheRecord {
         day,
         trigger,
         cell: [c, r],
         map_xy: [x, y],
         released_m3: summary.released_volume_m3,
+        entrained_m3: outcome.entrained_m3,
         deposited_m3: outcome.deposited_m3,
         outflow_m3: summary.border_outflow_m3,
         runout_length_m: summary.runout_length_m,
@@ -571,5 +578,6 @@ pub fn run_avalanche(
         steps: outcome.records,
         release_temperature_c: release_t,
         alpha: flow.alpha,
-    })
+    };
+    Ok((record, entrained))
 }

@@ -542,7 +542,7 @@ impl Winter {
                 });
             }
         };
-        let rec = avalanches::run_avalanche(
+        let (rec, entrained) = avalanches::run_avalanche(
             params,
             &mut self.terrain,
             &self.environment.temperature,
@@ -555,6 +555,7 @@ impl Winter {
         )
         .map_err(err)?;
         self.state.budget.avalanche_outflow += rec.outflow_m3;
+        self.state.budget.avalanche_entrained += rec.entrained_m3;
         self.state
             .scheduler
             .advance_clock(rec.simulated_s / SECONDS_PER_DAY);
@@ -564,14 +565,21 @@ impl Winter {
             .entry(EventKind::AvalancheStep)
             .or_default() += rec.steps;
         self.state.avalanches.push(rec.clone());
-        // Only the released cells' unstable snow changed (the debris is stable snow).
+        // Only the released and entrained cells' unstable snow changed (the debris is stable
+        // snow).
+        let mut changed = cells;
+        if !entrained.is_empty() {
+            changed.extend(entrained);
+            changed.sort_unstable();
+            changed.dedup();
+        }
         let skiers = self.recent_skier_map();
         let total = self.hazard.update_cells(
             &self.scenario.parameters.avalanche,
             &self.terrain,
             &self.slope_deg,
             skiers.as_deref(),
-            &cells,
+            &changed,
         );
         self.state
             .scheduler

@@ -140,7 +140,8 @@ fn a_user_avalanche_clears_the_slope_and_piles_at_its_foot() {
         r.released_m3
     );
     assert!(
-        ((r.deposited_m3 + r.outflow_m3) - r.released_m3).abs() < 1e-4 * r.released_m3,
+        ((r.deposited_m3 + r.outflow_m3) - r.released_m3 - r.entrained_m3).abs()
+            < 1e-4 * r.released_m3,
         "released {} deposited {} outflow {}",
         r.released_m3,
         r.deposited_m3,
@@ -232,11 +233,24 @@ fn avamal_avalanches_clear_steep_slopes_and_pile_at_their_foot() {
     let (scour_z, _) = weighted(&maps.scour, &|i| w.terrain.bedrock[i] as f64);
     let (deposit_z, _) = weighted(&maps.deposit, &|i| w.terrain.bedrock[i] as f64);
     let released: f64 = recs.iter().map(|r| r.released_m3).sum();
+    let entrained: f64 = recs.iter().map(|r| r.entrained_m3).sum();
     eprintln!(
-        "{} avalanches, {released:.0} m³ released; scour {scoured:.0} m³ at {scour_slope:.1}°, {scour_z:.0} m; deposit {deposited:.0} m³ at {deposit_slope:.1}°, {deposit_z:.0} m",
+        "{} avalanches, {released:.0} m³ released, {entrained:.0} m³ entrained; scour {scoured:.0} m³ at {scour_slope:.1}°, {scour_z:.0} m; deposit {deposited:.0} m³ at {deposit_slope:.1}°, {deposit_z:.0} m",
         recs.len()
     );
-    assert!((scoured - released).abs() < 1e-3 * released);
+    // The avalanches scoured their tracks: they entrained more than half again of what they
+    // released (1.55 times on 2026-12-04).
+    assert!(
+        entrained > 0.5 * released,
+        "entrained {entrained} m³ of {released} m³ released"
+    );
+    // The scour map holds the released and the entrained snow.
+    assert!((scoured - released - entrained).abs() < 1e-3 * (released + entrained));
+    assert!(
+        (b.avalanche_entrained - entrained).abs() <= 1e-9 * entrained.max(1.0),
+        "budget {} vs records {entrained}",
+        b.avalanche_entrained
+    );
     assert!(scour_slope > 33.0, "scour slope {scour_slope}");
     assert!(
         deposit_slope < scour_slope - 5.0,

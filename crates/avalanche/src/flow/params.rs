@@ -144,6 +144,10 @@ pub struct AvalancheParams {
     /// paths (avaKot: recall of AvaFrame's footprint 0.81 against 0.965; travel angle on a
     /// plane 32.3° for θc = 30°), so it is not the default yet.
     pub slope_gravity: SlopeGravity,
+    /// Entrainment of the snowpack the flow runs over (`crate::entrainment`: AvaFrame's
+    /// erosion rate `τ_b·|u|/e_b`, powder and unstable snow first, then stable snow up to a
+    /// depth). On by default; it only acts where the terrain carries snow.
+    pub entrainment: crate::entrainment::EntrainmentParams,
 }
 
 impl Default for AvalancheParams {
@@ -162,6 +166,7 @@ impl Default for AvalancheParams {
             voellmy_xi_m_s2: 4000.0,
             samos_at: SamosAtParams::default(),
             slope_gravity: SlopeGravity::Shallow,
+            entrainment: Default::default(),
         }
     }
 }
@@ -245,7 +250,7 @@ impl AvalancheParams {
         if !(1..=MAX_SUBSTEPS).contains(&self.max_substeps) {
             return bad("max_substeps", self.max_substeps as f64, "in 1..=10000000");
         }
-        Ok(())
+        self.entrainment.validate()
     }
 }
 

@@ -93,8 +93,14 @@ fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
     if let Some(x) = args.xi {
         p.voellmy_xi_m_s2 = x;
     }
+    p.entrainment.enabled = !args.no_entrainment;
+    if let Some(e) = args.erosion_energy {
+        p.entrainment.erosion_energy_j_kg = e;
+    }
     p.validate().map_err(|e| {
-        anyhow!(e).context("--friction-angle / --viscosity / --dry-fraction / --mu / --xi")
+        anyhow!(e).context(
+            "--friction-angle / --viscosity / --dry-fraction / --mu / --xi / --erosion-energy",
+        )
     })?;
     Ok(p)
 }
@@ -221,6 +227,21 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         release_terrain(&dem, &spec, args.thickness, convention, &dem_options)
             .with_context(|| format!("--release {}", args.release))
             .bad_input()?;
+    if args.snow_cover > 0.0 {
+        // The cover the flow can entrain, outside the release (whose snow it releases).
+        let released: std::collections::HashSet<usize> = cells.iter().copied().collect();
+        let valid: Vec<bool> = (0..dem.geometry().len())
+            .map(|i| dem.mask().is_valid(i) && !released.contains(&i))
+            .collect();
+        for (v, _) in terrain
+            .layer_mut(SnowLayer::Powder)
+            .iter_mut()
+            .zip(&valid)
+            .filter(|(_, ok)| **ok)
+        {
+            *v = args.snow_cover as f32;
+        }
+    }
     let unstable = terrain.layer(SnowLayer::Unstable);
     if !cells.iter().any(|&i| unstable[i] > 0.0) {
         return Err(anyhow!(
@@ -339,6 +360,17 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
             &dem,
             fp.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect(),
         )?;
+        if params.entrainment.enabled {
+            write_map(
+                &mut out,
+                "entrained.tif",
+                &dem,
+                RestOutcome::dense(&outcome.entrained, n)
+                    .iter()
+                    .map(|&x| x as f32)
+                    .collect(),
+            )?;
+        }
         let gif = encode_gif(&frames, 100)?;
         write_bytes_atomic(&out.path("avalanche.gif"), &gif)?;
         Ok(())
@@ -375,6 +407,8 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         "seed": args.seed,
         "threads": rayon::current_num_threads(),
         "released_volume_m3": summary.released_volume_m3,
+        "entrained_volume_m3": summary.entrained_volume_m3,
+        "snow_cover_m": args.snow_cover,
         "deposited_volume_m3": summary.final_volume_m3,
         "border_outflow_m3": summary.border_outflow_m3,
         "volume_closure_rel": summary.volume_closure_rel,
@@ -391,8 +425,9 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     write_report(&args.out, &earlier, report).job_failed()?;
     if !global.quiet {
         println!(
-            "avalanche: released {:.0} m³, ran {:.1} s ({:?}), runout {:.0} m, travel angle {:.1}°, footprint {:.0} m², {:.2} s wall -> {}",
+            "avalanche: released {:.0} m³, entrained {:.0} m³, ran {:.1} s ({:?}), runout {:.0} m, travel angle {:.1}°, footprint {:.0} m², {:.2} s wall -> {}",
             summary.released_volume_m3,
+            summary.entrained_volume_m3,
             summary.simulated_s,
             summary.stop,
             summary.runout_length_m,

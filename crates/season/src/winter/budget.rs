@@ -23,6 +23,10 @@ pub struct SeasonBudget {
     pub wind_sublimation: f64,
     /// Avalanche snow that flowed out of the grid.
     pub avalanche_outflow: f64,
+    /// Snowpack the avalanches entrained along their tracks and laid down in their debris
+    /// (moved inside the grid; not in the closure).
+    #[serde(default)]
+    pub avalanche_entrained: f64,
     /// Liquid water refrozen into the pack (a source of snow volume).
     #[serde(default)]
     pub refreeze: f64,

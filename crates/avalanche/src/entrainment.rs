@@ -1,0 +1,269 @@
+//! Entrainment: the flow picks up the snowpack it runs over.
+//!
+//! **Erosion rate** (AvaFrame com1DFA, "Entrainment", erosion at the bottom; Sovilla et al.
+//! 2006): the mass eroded per unit bed area and time is
+//!
+//! ```text
+//! q_ero = τ_b · |u| / e_b        (kg m⁻² s⁻¹)
+//! ```
+//!
+//! with `τ_b` the basal shear stress of the flow (Pa), `|u|` its speed (m/s) and `e_b` the
+//! specific erosion energy (J/kg; [`EntrainmentParams::erosion_energy_j_kg`], AvaFrame's
+//! `entEroEnergy` = 5000 J/kg). `τ_b = ρ · (τ_b/ρ)` with `ρ` the flow density
+//! ([`AvalancheParams::density`]) and `τ_b/ρ` from the run's friction law
+//! ([`basal_shear_per_density`]): Coulomb `h (α g tanθc + (1 − α) kv h |u|)`, Voellmy
+//! `g h μ + g |u|²/ξ`, samosAT `g h μ (1 + Rs0/(Rs0 + Rs)) + |u|² / (ln(h/R)/κ + B)²` with
+//! `Rs = |u|²/(g h)` (the shallow forms, whatever `slope_gravity` says).
+//!
+//! **What erodes.** The eroded mass is taken from the top of the column down, each layer at
+//! its own density ([`snowscape_terrain::SnowLayer::default_density_kg_m3`]): powder and
+//! unstable snow in full, then stable snow, at most [`EntrainmentParams::stable_depth_m`] of
+//! it per cell and avalanche (AvaFrame's default entrainable thickness, 0.3 m); the compacted
+//! layer never erodes. Taking stable snow lowers the flow's bed by as much as it raises the
+//! flow, so the surface does not jump; powder and unstable snow lie above the bed, and the flow
+//! ploughs into them. The flowing thickness grows by the depth taken (the volume convention of
+//! [`crate::convert::release`]).
+//!
+//! **Momentum.** The entrained snow starts at rest: the cell's momentum `h·v` is kept, so
+//! the pipes touching it are slowed by `h / (h + Δh)` (a pipe between two entraining cells
+//! by both factors). AvaFrame's extra breaking and deformation resistances
+//! (`entShearResistance`, `entDefResistance`) default to 0 there and are left out here.
+//!
+//! **Numerics and cost.** The erosion is applied after each record interval of the run (an
+//! operator split, explicit in time, with the speed at the end of the interval), over the
+//! cells holding flowing snow only, in row-major order: deterministic, and the cost follows
+//! the flow. Flows thinner than [`EntrainmentParams::min_flow_thickness_m`] do not erode.
+
+use crate::convert::take_from_top;
+use crate::flow::{AvalancheError, AvalancheParams, AvalancheState, FrictionLaw, G};
+use serde::{Deserialize, Serialize};
+use snowscape_terrain::{LayeredTerrain, SnowLayer};
+
+/// Parameters of entrainment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct EntrainmentParams {
+    /// Whether the flow entrains the snowpack it runs over. Default true.
+    pub enabled: bool,
+    /// Specific erosion energy `e_b`, J/kg, in [1, 1e7]. Default 5000: AvaFrame com1DFA's
+    /// `entEroEnergy`.
+    pub erosion_energy_j_kg: f64,
+    /// Deepest stable snow one avalanche erodes from a cell, m, in [0, 100] (powder and unstable
+    /// snow erode in full; compacted snow never). Default 0.3 m: AvaFrame com1DFA's
+    /// entrainment thickness `entThIfMissingInShp`.
+    pub stable_depth_m: f64,
+    /// Thinnest flow that erodes, m, in [0, 100]. Default 0.01 m: AvaFrame's footprint threshold
+    /// (thinner films are the flow's fringe).
+    pub min_flow_thickness_m: f64,
+}
+
+impl Default for EntrainmentParams {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            erosion_energy_j_kg: 5000.0,
+            stable_depth_m: 0.3,
+            min_flow_thickness_m: 0.01,
+        }
+    }
+}
+
+impl EntrainmentParams {
+    /// Checks every field, naming the offending one.
+    pub fn validate(&self) -> Result<(), AvalancheError> {
+        for (name, v, lo, hi, expected) in [
+            (
+                "entrainment.erosion_energy_j_kg",
+                self.erosion_energy_j_kg,
+                1.0,
+                1e7,
+                "in [1, 1e7] J/kg",
+            ),
+            (
+                "entrainment.stable_depth_m",
+                self.stable_depth_m,
+                0.0,
+                100.0,
+                "in [0, 100] m",
+            ),
+            (
+                "entrainment.min_flow_thickness_m",
+                self.min_flow_thickness_m,
+                0.0,
+                100.0,
+                "in [0, 100] m",
+            ),
+        ] {
+            if !(v.is_finite() && v >= lo && v <= hi) {
+                return Err(AvalancheError::InvalidParameter {
+                    name,
+                    value: v,
+                    expected,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Basal shear stress per unit flow density `τ_b/ρ`, m²/s², of a flow `h` metres thick moving
+/// at `speed` m/s under the run's friction law (module documentation).
+pub fn basal_shear_per_density(params: &AvalancheParams, h: f64, speed: f64) -> f64 {
+    let h = h.max(0.0);
+    match params.friction {
+        FrictionLaw::Coulomb => {
+            let tan = params.rest_angle_deg.to_radians().tan();
+            h * (params.alpha * G * tan + (1.0 - params.alpha) * params.k_viscous * h * speed)
+        }
+        FrictionLaw::Voellmy => {
+            G * h * params.voellmy_mu + G * speed * speed / params.voellmy_xi_m_s2
+        }
+        FrictionLaw::SamosAt => {
+            let s = &params.samos_at;
+            let rs = if h > 0.0 {
+                speed * speed / (G * h)
+            } else {
+                f64::INFINITY
+            };
+            let dry = G * h * s.mu * (1.0 + s.rs0 / (s.rs0 + rs));
+            let div = (h / s.roughness_m).max(1.0).ln() / s.kappa + s.b;
+            dry + speed * speed / (div * div)
+        }
+    }
+}
+
+/// Per-cell sums of one run's entrainment (grid-sized, row-major), m.
+pub(crate) struct EntrainedMaps<'a> {
+    /// Depth taken from each cell, all layers.
+    pub(crate) total: &'a mut [f64],
+    /// Of which stable snow (bounded by `stable_depth_m`).
+    pub(crate) stable: &'a mut [f64],
+}
+
+/// Erodes the snowpack under the flowing snow of `state` for `dt` seconds (module
+/// documentation); returns the volume entrained, m³.
+pub(crate) fn entrain(
+    params: &AvalancheParams,
+    state: &mut AvalancheState,
+    terrain: &mut LayeredTerrain,
+    maps: EntrainedMaps,
+    dt: f64,
+) -> f64 {
+    let p = &params.entrainment;
+    if !p.enabled || dt.is_nan() || dt <= 0.0 {
+        return 0.0;
+    }
+    let w = terrain.geometry().width();
+    let area = terrain.geometry().cell_area();
+    let mass_per_shear = params.density * dt / p.erosion_energy_j_kg;
+    let boxes: Vec<_> = state.content_cells().collect();
+    let mut volume = 0.0;
+    for (r0, r1, c0, c1) in boxes {
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                let k = state.pad(c, r);
+                let h = state.h[k];
+                if h.is_nan() || h <= p.min_flow_thickness_m {
+                    continue;
+                }
+                let [vx, vy] = state.velocity_at(c, r);
+                let speed = vx.hypot(vy);
+                if speed.is_nan() || speed <= 0.0 {
+                    continue;
+                }
+                let i = r * w + c;
+                let mut mass = mass_per_shear * basal_shear_per_density(params, h, speed) * speed;
+                let stable_left = (p.stable_depth_m - maps.stable[i]).max(0.0);
+                let taken = take_from_top(terrain, i, |layer, have, _| {
+                    if mass.is_nan() || mass <= 0.0 {
+                        return 0.0;
+                    }
+                    let erodible = match layer {
+                        SnowLayer::Powder | SnowLayer::Unstable => have,
+                        SnowLayer::Stable => have.min(stable_left),
+                        SnowLayer::Compacted => 0.0,
+                    };
+                    let rho = layer.default_density_kg_m3();
+                    let depth = (mass / rho).min(erodible);
+                    mass -= depth * rho;
+                    depth
+                });
+                if taken.total <= 0.0 {
+                    continue;
+                }
+                maps.total[i] += taken.total;
+                maps.stable[i] += taken.from_bed;
+                state.bed[k] -= taken.from_bed;
+                state.h[k] = h + taken.total;
+                slow_pipes(state, k, h / (h + taken.total));
+                state.mark_content(k);
+                volume += taken.total * area;
+            }
+        }
+    }
+    volume
+}
+
+/// Multiplies the 8 pipes touching padded cell `k` by `factor`.
+fn slow_pipes(state: &mut AvalancheState, k: usize, factor: f64) {
+    let pw = state.pw;
+    // Owned: east, south, south-east, south-west; reaching the cell: from the west, north,
+    // north-west and north-east owners.
+    let incoming = [k - 1, k - pw, k - pw - 1, k - pw + 1];
+    for (d, pipes) in state.pipes.iter_mut().enumerate() {
+        pipes[k] *= factor;
+        pipes[incoming[d]] *= factor;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flow::FrictionLaw;
+
+    #[test]
+    fn basal_shear_follows_each_law() {
+        let mut p = AvalancheParams::default();
+        // Coulomb, dry: g h tanθc.
+        let tan30 = 30f64.to_radians().tan();
+        assert!((basal_shear_per_density(&p, 2.0, 10.0) - G * 2.0 * tan30).abs() < 1e-12);
+        p.friction = FrictionLaw::Voellmy;
+        let v = G * 2.0 * 0.155 + G * 100.0 / 4000.0;
+        assert!((basal_shear_per_density(&p, 2.0, 10.0) - v).abs() < 1e-12);
+        p.friction = FrictionLaw::SamosAt;
+        let s = p.samos_at;
+        let rs = 100.0 / (G * 2.0);
+        let div = (2.0f64 / s.roughness_m).ln() / s.kappa + s.b;
+        let v = G * 2.0 * s.mu * (1.0 + s.rs0 / (s.rs0 + rs)) + 100.0 / (div * div);
+        assert!((basal_shear_per_density(&p, 2.0, 10.0) - v).abs() < 1e-12);
+        // A flow at rest on no depth has no shear.
+        assert_eq!(basal_shear_per_density(&p, 0.0, 0.0), 0.0);
+    }
+
+    #[test]
+    fn out_of_range_parameters_are_named() {
+        for (f, name) in [
+            (
+                (|p: &mut EntrainmentParams| p.erosion_energy_j_kg = 0.0)
+                    as fn(&mut EntrainmentParams),
+                "entrainment.erosion_energy_j_kg",
+            ),
+            (
+                |p: &mut EntrainmentParams| p.stable_depth_m = f64::NAN,
+                "entrainment.stable_depth_m",
+            ),
+            (
+                |p: &mut EntrainmentParams| p.min_flow_thickness_m = 1e9,
+                "entrainment.min_flow_thickness_m",
+            ),
+        ] {
+            let mut p = EntrainmentParams::default();
+            f(&mut p);
+            match p.validate() {
+                Err(AvalancheError::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+                other => panic!("{name}: {other:?}"),
+            }
+        }
+        assert!(EntrainmentParams::default().validate().is_ok());
+    }
+}
