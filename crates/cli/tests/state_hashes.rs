@@ -8,6 +8,9 @@
 //! A deliberate change of the physics updates the table: the failure message prints the new
 //! one. The outputs are deterministic by construction (fixed seeds, no time budgets: the
 //! Fearing cover runs a fixed number of passes under a budget it never reaches).
+//!
+//! The demo runs 100 days at 192² (3 avalanches, with entrainment): the earlier 4-day demo
+//! had no snow yet and pinned only the environment (its layers all hashed as zeros).
 
 mod common;
 
@@ -99,16 +102,16 @@ fn job(out: &Path, args: &[&str]) {
 /// deliberate change since: the 3D transport's gravity is the model's one value, 9.81 m/s²,
 /// instead of 9.80665 (its depth, density and saltation maps; `terrain::materials`).
 const RECORDED: &[(&str, &str, u64)] = &[
-    ("demo", "depth.tif", 0x8d8f84e83ab192c5),
-    ("demo", "layers_compacted.tif", 0x8d8f84e83ab192c5),
-    ("demo", "layers_stable.tif", 0x8d8f84e83ab192c5),
-    ("demo", "layers_unstable.tif", 0x8d8f84e83ab192c5),
-    ("demo", "layers_powder.tif", 0x8d8f84e83ab192c5),
-    ("demo", "avalanche_deposit.tif", 0x8d8f84e83ab192c5),
-    ("demo", "avalanche_scour.tif", 0x8d8f84e83ab192c5),
-    ("demo", "sun.tif", 0x8d70e90854271c6e),
-    ("demo", "temperature.tif", 0x94590ec240024283),
-    ("demo", "wind.tif", 0x201442c6e2f4be66),
+    ("demo", "depth.tif", 0x3283fd7b2008ccdf),
+    ("demo", "layers_compacted.tif", 0x14ef696385c4dc66),
+    ("demo", "layers_stable.tif", 0x0b7784efac8d335e),
+    ("demo", "layers_unstable.tif", 0x30bdeff5ca2db040),
+    ("demo", "layers_powder.tif", 0x93964f4cc12860fc),
+    ("demo", "avalanche_deposit.tif", 0xd2ac116bfe6cdd41),
+    ("demo", "avalanche_scour.tif", 0x4593fa9c580992ea),
+    ("demo", "sun.tif", 0xfcb39c4ed645fea0),
+    ("demo", "temperature.tif", 0x5e0d364bf555f80a),
+    ("demo", "wind.tif", 0x3b9f07eae1d5ecd2),
     ("run", "depth.tif", 0xf88dbae4e7cdf17a),
     ("run", "layers_compacted.tif", 0x7d7de715fb80c60c),
     ("run", "layers_stable.tif", 0xdc37f849625f2126),
@@ -145,7 +148,7 @@ fn every_job_reproduces_the_recorded_state() {
     job(
         &dir("demo"),
         &[
-            "demo", "--size", "128", "--days", "4", "--frames", "1", "--seed", "5",
+            "demo", "--size", "192", "--days", "100", "--frames", "1", "--seed", "5",
         ],
     );
     job(
