@@ -43,22 +43,27 @@ fn release() -> Vec<usize> {
         .collect()
 }
 
-fn run(t: &mut LayeredTerrain, entrainment: EntrainmentParams) -> RestOutcome {
+fn try_run(
+    t: &mut LayeredTerrain,
+    entrainment: EntrainmentParams,
+) -> Result<RestOutcome, AvalancheError> {
     let flow = AvalancheParams {
         entrainment,
         ..AvalancheParams::default()
     };
-    AvalancheWorkspace::new()
-        .run_to_rest::<AvalancheError>(
-            t,
-            &release(),
-            None,
-            &flow,
-            &RunOptions::default(),
-            SnowLayer::Stable,
-            |_| Ok(()),
-        )
-        .unwrap()
+    AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
+        t,
+        &release(),
+        None,
+        &flow,
+        &RunOptions::default(),
+        SnowLayer::Stable,
+        |_| Ok(()),
+    )
+}
+
+fn run(t: &mut LayeredTerrain, entrainment: EntrainmentParams) -> RestOutcome {
+    try_run(t, entrainment).unwrap()
 }
 
 #[test]
@@ -158,24 +163,14 @@ fn a_larger_erosion_energy_entrains_less() {
 fn bad_entrainment_parameters_are_refused_before_anything_moves() {
     let mut t = snowy_slope();
     let before = t.layer(SnowLayer::Powder).to_vec();
-    let flow = AvalancheParams {
-        entrainment: EntrainmentParams {
+    let err = try_run(
+        &mut t,
+        EntrainmentParams {
             erosion_energy_j_kg: f64::NAN,
             ..EntrainmentParams::default()
         },
-        ..AvalancheParams::default()
-    };
-    let err = AvalancheWorkspace::new()
-        .run_to_rest::<AvalancheError>(
-            &mut t,
-            &release(),
-            None,
-            &flow,
-            &RunOptions::default(),
-            SnowLayer::Stable,
-            |_| Ok(()),
-        )
-        .unwrap_err();
+    )
+    .unwrap_err();
     assert!(
         err.to_string().contains("entrainment.erosion_energy_j_kg"),
         "{err}"

@@ -24,6 +24,13 @@ fn snowscape(args: &[&str]) -> std::process::Output {
         .expect("the snowscape binary runs")
 }
 
+/// Runs snowscape with `args`, which must succeed, and reads the report.json it wrote in `dir`.
+fn report_of(args: &[&str], dir: &Path) -> serde_json::Value {
+    let o = snowscape(args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+}
+
 /// Width and height of a GeoTIFF written by snowscape.
 fn tiff_size(path: &Path) -> (u32, u32) {
     let f = std::fs::File::open(path).unwrap();
@@ -36,21 +43,23 @@ fn avalanche_on_avawog_writes_maps_frames_and_report() {
     let (dem, rel) = wog();
     let out = tempfile::tempdir().unwrap();
     let dir = out.path().join("wog");
-    let o = snowscape(&[
-        "avalanche",
-        "--dem",
-        dem.to_str().unwrap(),
-        "--release",
-        rel.to_str().unwrap(),
-        "--duration",
-        "15",
-        "--frame-interval",
-        "5",
-        "--out",
-        dir.to_str().unwrap(),
-        "-q",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report_of(
+        &[
+            "avalanche",
+            "--dem",
+            dem.to_str().unwrap(),
+            "--release",
+            rel.to_str().unwrap(),
+            "--duration",
+            "15",
+            "--frame-interval",
+            "5",
+            "--out",
+            dir.to_str().unwrap(),
+            "-q",
+        ],
+        &dir,
+    );
     for f in [
         "peak_thickness.tif",
         "peak_velocity.tif",
@@ -63,8 +72,6 @@ fn avalanche_on_avawog_writes_maps_frames_and_report() {
         assert!(dir.join(f).is_file(), "missing {f}");
     }
     assert_eq!(tiff_size(&dir.join("peak_thickness.tif")), (490, 555));
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     let released = r["released_volume_m3"].as_f64().unwrap();
     let deposited = r["deposited_volume_m3"].as_f64().unwrap();
     let outflow = r["border_outflow_m3"].as_f64().unwrap();
@@ -103,10 +110,7 @@ fn avalanche_entrains_a_snow_cover_on_avawog() {
             "-q",
         ];
         a.extend(extra);
-        let o = snowscape(&a);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+        let r = report_of(&a, &dir);
         (dir, r)
     };
     let (dir, r) = run("ent", &[]);
@@ -182,21 +186,21 @@ fn run_with_skiers_writes_tracks() {
     assert!(dem.is_file(), "missing {}", dem.display());
     let out = tempfile::tempdir().unwrap();
     let dir = out.path().join("ski");
-    let o = snowscape(&[
-        "run",
-        "--dem",
-        dem.to_str().unwrap(),
-        "--days",
-        "25",
-        "--skier-frequency",
-        "6",
-        "--out",
-        dir.to_str().unwrap(),
-        "-q",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let r = report_of(
+        &[
+            "run",
+            "--dem",
+            dem.to_str().unwrap(),
+            "--days",
+            "25",
+            "--skier-frequency",
+            "6",
+            "--out",
+            dir.to_str().unwrap(),
+            "-q",
+        ],
+        &dir,
+    );
     assert!(
         r["skiers"]["runs"].as_u64().unwrap() > 10,
         "{}",
@@ -260,10 +264,7 @@ fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
             dir.to_str().unwrap(),
         ];
         args.extend_from_slice(extra);
-        let o = snowscape(&args);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+        let r = report_of(&args, &dir);
         (dir, r)
     };
     let (dir, r) = run_kot("kot", &[]);

@@ -229,17 +229,11 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
             .bad_input()?;
     if args.snow_cover > 0.0 {
         // The cover the flow can entrain, outside the release (whose snow it releases).
-        let released: std::collections::HashSet<usize> = cells.iter().copied().collect();
-        let valid: Vec<bool> = (0..dem.geometry().len())
-            .map(|i| dem.mask().is_valid(i) && !released.contains(&i))
-            .collect();
-        for (v, _) in terrain
-            .layer_mut(SnowLayer::Powder)
-            .iter_mut()
-            .zip(&valid)
-            .filter(|(_, ok)| **ok)
-        {
-            *v = args.snow_cover as f32;
+        let mask = dem.mask().clone();
+        for (i, v) in terrain.layer_mut(SnowLayer::Powder).iter_mut().enumerate() {
+            if mask.is_valid(i) && !area.cells[i] {
+                *v = args.snow_cover as f32;
+            }
         }
     }
     let unstable = terrain.layer(SnowLayer::Unstable);
