@@ -109,25 +109,56 @@ impl EntrainmentParams {
 /// Basal shear stress per unit flow density `τ_b/ρ`, m²/s², of a flow `h` metres thick moving
 /// at `speed` m/s under the run's friction law (module documentation).
 pub fn basal_shear_per_density(params: &AvalancheParams, h: f64, speed: f64) -> f64 {
-    let h = h.max(0.0);
-    match params.friction {
-        FrictionLaw::Coulomb => {
-            let tan = params.rest_angle_deg.to_radians().tan();
-            h * (params.alpha * G * tan + (1.0 - params.alpha) * params.k_viscous * h * speed)
+    BasalShear::new(params).per_density(h, speed)
+}
+
+/// [`basal_shear_per_density`] with the law's constants worked out once per call of
+/// [`entrain`].
+enum BasalShear {
+    /// `α g tanθc` and `(1 − α) kv`.
+    Coulomb {
+        dry: f64,
+        viscous: f64,
+    },
+    /// `g μ` and `g / ξ`.
+    Voellmy {
+        dry: f64,
+        turbulent: f64,
+    },
+    SamosAt(crate::flow::SamosAtParams),
+}
+
+impl BasalShear {
+    fn new(params: &AvalancheParams) -> Self {
+        match params.friction {
+            FrictionLaw::Coulomb => Self::Coulomb {
+                dry: params.alpha * G * params.rest_angle_deg.to_radians().tan(),
+                viscous: (1.0 - params.alpha) * params.k_viscous,
+            },
+            FrictionLaw::Voellmy => Self::Voellmy {
+                dry: G * params.voellmy_mu,
+                turbulent: G / params.voellmy_xi_m_s2,
+            },
+            FrictionLaw::SamosAt => Self::SamosAt(params.samos_at),
         }
-        FrictionLaw::Voellmy => {
-            G * h * params.voellmy_mu + G * speed * speed / params.voellmy_xi_m_s2
-        }
-        FrictionLaw::SamosAt => {
-            let s = &params.samos_at;
-            let rs = if h > 0.0 {
-                speed * speed / (G * h)
-            } else {
-                f64::INFINITY
-            };
-            let dry = G * h * s.mu * (1.0 + s.rs0 / (s.rs0 + rs));
-            let div = (h / s.roughness_m).max(1.0).ln() / s.kappa + s.b;
-            dry + speed * speed / (div * div)
+    }
+
+    #[inline]
+    fn per_density(&self, h: f64, speed: f64) -> f64 {
+        let h = h.max(0.0);
+        match self {
+            Self::Coulomb { dry, viscous } => h * (dry + viscous * h * speed),
+            Self::Voellmy { dry, turbulent } => dry * h + turbulent * speed * speed,
+            Self::SamosAt(s) => {
+                let rs = if h > 0.0 {
+                    speed * speed / (G * h)
+                } else {
+                    f64::INFINITY
+                };
+                let dry = G * h * s.mu * (1.0 + s.rs0 / (s.rs0 + rs));
+                let div = (h / s.roughness_m).max(1.0).ln() / s.kappa + s.b;
+                dry + speed * speed / (div * div)
+            }
         }
     }
 }
@@ -156,6 +187,7 @@ pub(crate) fn entrain(
     let w = terrain.geometry().width();
     let area = terrain.geometry().cell_area();
     let mass_per_shear = params.density * dt / p.erosion_energy_j_kg;
+    let shear = BasalShear::new(params);
     let boxes: Vec<_> = state.content_cells().collect();
     let mut volume = 0.0;
     for (r0, r1, c0, c1) in boxes {
@@ -172,7 +204,7 @@ pub(crate) fn entrain(
                     continue;
                 }
                 let i = r * w + c;
-                let mut mass = mass_per_shear * basal_shear_per_density(params, h, speed) * speed;
+                let mut mass = mass_per_shear * shear.per_density(h, speed) * speed;
                 let stable_left = (p.stable_depth_m - maps.stable[i]).max(0.0);
                 let taken = take_from_top(terrain, i, |layer, have, _| {
                     if mass.is_nan() || mass <= 0.0 {
@@ -196,7 +228,7 @@ pub(crate) fn entrain(
                 state.bed[k] -= taken.from_bed;
                 state.h[k] = h + taken.total;
                 slow_pipes(state, k, h / (h + taken.total));
-                state.mark_content(k);
+                state.raise_wave_maximum(k);
                 volume += taken.total * area;
             }
         }
