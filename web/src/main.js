@@ -56,6 +56,7 @@ function onText(m) {
     case 'avalanche':
       app.lastAvalanche = m;
       status(`avalanche ${m.phase}: t=${m.time_s.toFixed(1)} s, ${m.flowing_m3.toFixed(0)} m³ moving` +
+        `, ${(m.entrained_m3 ?? 0).toFixed(0)} m³ entrained` +
         (m.phase === 'ended' ? `, ${m.deposited_m3.toFixed(0)} m³ deposited (${m.stop})` : ''));
       if (m.phase === 'ended' && grids.flow) { grids.flow.fill(0); dirtyAll(); }
       break;

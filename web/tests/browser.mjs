@@ -160,7 +160,9 @@ await check('a triggered avalanche moves snow downhill', async () => {
   const av = await page.evaluate(() => window.snowscape.lastAvalanche);
   assert.ok(av.records > 5, `${av.records} flow frames`);
   assert.ok(after < before - 0.5, `snow mean altitude ${before} -> ${after}`);
-  console.log(`     avalanche: ${av.records} frames, ${av.released_m3.toFixed(0)} m³ released, ${av.time_s.toFixed(1)} s simulated`);
+  assert.ok(Number.isFinite(av.entrained_m3) && av.entrained_m3 >= 0, `entrained ${av.entrained_m3}`);
+  assert.match(await page.textContent('#status'), /m³ entrained/);
+  console.log(`     avalanche: ${av.records} frames, ${av.released_m3.toFixed(0)} m³ released, ${av.entrained_m3.toFixed(0)} m³ entrained, ${av.time_s.toFixed(1)} s simulated`);
 });
 
 await check('the timeline steps a day', async () => {
