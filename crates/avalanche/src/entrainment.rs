@@ -198,14 +198,20 @@ pub(crate) fn entrain(
                 if h.is_nan() || h <= p.min_flow_thickness_m {
                     continue;
                 }
+                let i = r * w + c;
+                let stable_left = (p.stable_depth_m - maps.stable[i]).max(0.0);
+                // A bare or already scoured column has nothing to give (most of a flow's wet
+                // cells after its front has passed).
+                let [_, st, u, pw] = &terrain.snow;
+                if pw[i] <= 0.0 && u[i] <= 0.0 && (st[i] <= 0.0 || stable_left <= 0.0) {
+                    continue;
+                }
                 let [vx, vy] = state.velocity_at(c, r);
                 let speed = vx.hypot(vy);
                 if speed.is_nan() || speed <= 0.0 {
                     continue;
                 }
-                let i = r * w + c;
                 let mut mass = mass_per_shear * shear.per_density(h, speed) * speed;
-                let stable_left = (p.stable_depth_m - maps.stable[i]).max(0.0);
                 let taken = take_from_top(terrain, i, |layer, have, _| {
                     if mass.is_nan() || mass <= 0.0 {
                         return 0.0;
