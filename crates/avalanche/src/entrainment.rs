@@ -130,16 +130,26 @@ enum BasalShear {
 
 impl BasalShear {
     fn new(params: &AvalancheParams) -> Self {
+        Self::at_cell(params, None, None)
+    }
+
+    /// The law with a cell's μ and ξ from the friction maps (`None`: the law's own).
+    fn at_cell(params: &AvalancheParams, mu: Option<f64>, xi: Option<f64>) -> Self {
         match params.friction {
             FrictionLaw::Coulomb => Self::Coulomb {
-                dry: params.alpha * G * params.rest_angle_deg.to_radians().tan(),
+                dry: params.alpha
+                    * G
+                    * mu.unwrap_or_else(|| params.rest_angle_deg.to_radians().tan()),
                 viscous: (1.0 - params.alpha) * params.k_viscous,
             },
             FrictionLaw::Voellmy => Self::Voellmy {
-                dry: G * params.voellmy_mu,
-                turbulent: G / params.voellmy_xi_m_s2,
+                dry: G * mu.unwrap_or(params.voellmy_mu),
+                turbulent: G / xi.unwrap_or(params.voellmy_xi_m_s2),
             },
-            FrictionLaw::SamosAt => Self::SamosAt(params.samos_at),
+            FrictionLaw::SamosAt => Self::SamosAt(crate::flow::SamosAtParams {
+                mu: mu.unwrap_or(params.samos_at.mu),
+                ..params.samos_at
+            }),
         }
     }
 
@@ -211,7 +221,13 @@ pub(crate) fn entrain(
                 if speed.is_nan() || speed <= 0.0 {
                     continue;
                 }
-                let mut mass = mass_per_shear * shear.per_density(h, speed) * speed;
+                let tau = if state.has_friction_maps() {
+                    let at = |m: &[f64]| (!m.is_empty()).then(|| m[k]);
+                    BasalShear::at_cell(params, at(&state.mu), at(&state.xi)).per_density(h, speed)
+                } else {
+                    shear.per_density(h, speed)
+                };
+                let mut mass = mass_per_shear * tau * speed;
                 let taken = take_from_top(terrain, i, |layer, have, _| {
                     if mass.is_nan() || mass <= 0.0 {
                         return 0.0;

@@ -98,6 +98,7 @@ use walk::*;
 
 pub use footprint::BedSource;
 
+use crate::friction_maps::FrictionMaps;
 use lanes::{Lanes, ld};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -221,6 +222,10 @@ pub struct AvalancheState {
     pg: PipeGeometry,
     /// The tiles this run touched; whether the bed is read lazily.
     pub(crate) footprint: footprint::Footprint,
+    /// Padded per-cell dry-friction coefficient μ (`crate::friction_maps`; empty: the law's).
+    pub(crate) mu: Vec<f64>,
+    /// Padded per-cell Voellmy ξ, m/s² (empty: the law's).
+    pub(crate) xi: Vec<f64>,
 }
 
 /// The per-cell quantities of a sub-step the pipes read, one array each: velocity (vx, vy)
@@ -468,18 +473,23 @@ struct Samos {
 }
 
 impl Samos {
-    /// The dry friction's speed change over the sub-step at speed `speed` (the sub-step's
-    /// start) on depth `depth`: `μ·g·dt·(1 + Rs0/(Rs0 + u²/(g·h)))`.
+    /// The dry friction's speed change over the sub-step at squared speed `speed2` (the
+    /// sub-step's start) on depth `depth`, for a pipe whose `μ·g·dt` is `mu_g_dt` (the law's
+    /// [`Samos::mu_g_dt`] or, with friction maps, the pipe's):
+    /// `μ·g·dt·(1 + Rs0/(Rs0 + u²/(g·h)))`, computed as `μ·g·dt·(1 + Rs0·g·h/(Rs0·g·h + u²))`
+    /// (one division).
     #[inline(always)]
-    fn yield_dt(&self, speed: f64, depth: f64) -> f64 {
-        self.mu_g_dt * (1.0 + self.rs0 / (self.rs0 + speed * speed / (G * depth)))
+    fn yield_dt(&self, mu_g_dt: f64, speed2: f64, depth: f64) -> f64 {
+        let rgh = self.rs0 * (G * depth);
+        mu_g_dt * (1.0 + rgh / (rgh + speed2))
     }
 
-    /// The turbulent drag's `dt/(h·div²)` with `div = ln(max(h/R, 1))/κ + B`.
+    /// The turbulent drag's `h·div²` with `div = ln(max(h/R, 1))/κ + B`: the drag slows a pipe
+    /// by the factor `1/(1 + dt·|u|/(h·div²))`, applied as `h·div²/(h·div² + dt·|u|)`.
     #[inline(always)]
-    fn drag(&self, dt: f64, depth: f64) -> f64 {
-        let div = (depth * self.inv_r).max(1.0).ln() * self.inv_kappa + self.b;
-        dt / (depth * div * div)
+    fn drag_depth(&self, depth: f64) -> f64 {
+        let div = lanes::ln_at_least_one((depth * self.inv_r).max(1.0)) * self.inv_kappa + self.b;
+        depth * div * div
     }
 }
 
@@ -617,6 +627,9 @@ struct Inputs<'a> {
     flux: [&'a [f64]; 4],
     fbase: usize,
     factor: &'a [f64],
+    /// Padded per-cell μ and ξ (empty: the law's scalars in [`Consts`]).
+    mu: &'a [f64],
+    xi: &'a [f64],
 }
 
 /// Per-row results of the final pass of a sub-step.
@@ -775,32 +788,50 @@ mod tests {
                 })
                 .collect();
             s.set_thickness(&depth).unwrap();
-            // The shallow form, and the projected one on the first two cases.
-            let params = AvalancheParams {
-                border,
-                alpha,
-                k_viscous: 0.02,
-                slope_gravity: if case < 2 {
-                    SlopeGravity::Projected
-                } else {
-                    SlopeGravity::Shallow
-                },
-                ..AvalancheParams::default()
-            };
-            let run = |scalar: bool| {
-                let mut st = s.clone();
-                let mut scratch = AvalancheScratch::default();
-                scratch.set_scalar_kernels(scalar);
-                let reports: Vec<AvalancheReport> = (0..12)
-                    .map(|_| step(&params, &mut st, &mut scratch, 0.3).unwrap())
-                    .collect();
-                (st, reports)
-            };
-            let (a, ra) = run(true);
-            let (b, rb) = run(false);
-            assert!(ra.iter().map(|r| r.substeps).sum::<usize>() > 20);
-            assert_eq!(a, b, "case {case}");
-            assert_eq!(ra, rb, "case {case}");
+            // The shallow form, and the projected one on the first two cases; each friction
+            // law, Voellmy also with per-cell μ and ξ.
+            for (law, maps) in [
+                (FrictionLaw::Coulomb, false),
+                (FrictionLaw::Voellmy, false),
+                (FrictionLaw::Voellmy, true),
+                (FrictionLaw::SamosAt, false),
+            ] {
+                let params = AvalancheParams {
+                    border,
+                    alpha,
+                    k_viscous: 0.02,
+                    friction: law,
+                    slope_gravity: if case < 2 {
+                        SlopeGravity::Projected
+                    } else {
+                        SlopeGravity::Shallow
+                    },
+                    ..AvalancheParams::default()
+                };
+                let mut s = s.clone();
+                if maps {
+                    let mu = (0..w * h).map(|i| 0.1 + 0.3 * hash(i, seed ^ 5)).collect();
+                    let xi = (0..w * h)
+                        .map(|i| 200.0 + 4000.0 * hash(i, seed ^ 9))
+                        .collect();
+                    s.set_friction_maps(&FrictionMaps::new(&g, Some(mu), Some(xi)).unwrap())
+                        .unwrap();
+                }
+                let run = |scalar: bool| {
+                    let mut st = s.clone();
+                    let mut scratch = AvalancheScratch::default();
+                    scratch.set_scalar_kernels(scalar);
+                    let reports: Vec<AvalancheReport> = (0..12)
+                        .map(|_| step(&params, &mut st, &mut scratch, 0.3).unwrap())
+                        .collect();
+                    (st, reports)
+                };
+                let (a, ra) = run(true);
+                let (b, rb) = run(false);
+                assert!(ra.iter().map(|r| r.substeps).sum::<usize>() > 20);
+                assert_eq!(a, b, "case {case} {law:?} maps {maps}");
+                assert_eq!(ra, rb, "case {case} {law:?} maps {maps}");
+            }
         }
     }
 }

@@ -17,6 +17,7 @@ pub mod comparison;
 pub mod convert;
 pub mod entrainment;
 pub mod flow;
+pub mod friction_maps;
 pub mod release_area;
 pub mod rest;
 pub mod run;
@@ -28,6 +29,7 @@ pub use flow::{
     AvalancheError, AvalancheParams, AvalancheReport, AvalancheScratch, AvalancheState, BedSource,
     Border, FrictionLaw, SamosAtParams, SlopeGravity, cfl_dt, step, step_at_least, step_on,
 };
+pub use friction_maps::{FrictionMaps, MapMatch};
 pub use release_area::{
     MapExtent, RasterRelease, ReleaseAreaError, ReleaseMask, Rupture, RuptureCells, RuptureParams,
     release_at_point, release_from_raster, release_from_shapefile, rupture_at_point,

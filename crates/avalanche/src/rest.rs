@@ -22,6 +22,7 @@
 
 use crate::convert::{deposit, release_cells};
 use crate::flow::{AvalancheError, AvalancheParams, AvalancheState};
+use crate::friction_maps::FrictionMaps;
 use crate::run::{AvalancheRun, RunBuffers, RunOptions, RunSummary};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
 
@@ -72,14 +73,21 @@ pub struct AvalancheWorkspace {
     parts: Option<(AvalancheState, RunBuffers)>,
     /// Grid size and nodata flags the state was built for.
     key: Option<(usize, usize, Option<Vec<bool>>)>,
+    /// Per-cell friction of every run (`crate::friction_maps`; empty: the law's scalars).
+    friction: FrictionMaps,
+    /// Whether the kept state has `friction` set.
+    friction_set: bool,
 }
 
-/// A clone is an empty workspace: the kept state is a work buffer (between runs it holds no
+/// A clone is an empty workspace with the same friction maps: the kept state is a work buffer (between runs it holds no
 /// snow and a stale bed), and rebuilding it on the next run gives the same bits. Cloning a
 /// season (the editor's snapshots) thus copies no flow state.
 impl Clone for AvalancheWorkspace {
     fn clone(&self) -> Self {
-        Self::default()
+        Self {
+            friction: self.friction.clone(),
+            ..Self::default()
+        }
     }
 }
 
@@ -87,6 +95,17 @@ impl AvalancheWorkspace {
     /// An empty workspace (the state is built on the first run).
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Per-cell μ and ξ for the runs from now on (empty maps: the law's scalars).
+    pub fn set_friction_maps(&mut self, maps: FrictionMaps) {
+        self.friction = maps;
+        self.friction_set = false;
+    }
+
+    /// The per-cell friction of the runs.
+    pub fn friction_maps(&self) -> &FrictionMaps {
+        &self.friction
     }
 
     /// Releases `cells` (row-major indices; nodata cells are skipped) of `terrain`: with
@@ -106,6 +125,7 @@ impl AvalancheWorkspace {
     ) -> Result<RestOutcome, E> {
         flow.validate()?;
         options.validate()?;
+        self.friction.check_for(terrain.geometry(), flow)?;
         let (mut state, buffers) = self.take_parts(terrain)?;
         let released_m3 = match release_cells(terrain, &mut state, cells, thickness) {
             Ok(v) => v,
@@ -184,10 +204,10 @@ impl AvalancheWorkspace {
         let same = self.key.as_ref().is_some_and(|(w, h, m)| {
             *w == g.width() && *h == g.height() && m.as_deref() == terrain.mask().invalid_cells()
         });
-        match self.parts.take() {
+        let (mut state, buffers) = match self.parts.take() {
             Some((mut state, buffers)) if same => {
                 state.reset_touched();
-                Ok((state, buffers))
+                (state, buffers)
             }
             _ => {
                 self.key = Some((
@@ -195,11 +215,17 @@ impl AvalancheWorkspace {
                     g.height(),
                     terrain.mask().invalid_cells().map(<[bool]>::to_vec),
                 ));
-                Ok((
+                self.friction_set = false;
+                (
                     AvalancheState::on_terrain_lazily(terrain)?,
                     RunBuffers::default(),
-                ))
+                )
             }
+        };
+        if !self.friction_set {
+            state.set_friction_maps(&self.friction)?;
+            self.friction_set = true;
         }
+        Ok((state, buffers))
     }
 }

@@ -355,6 +355,14 @@ pub struct AvalancheArgs {
     /// Voellmy turbulence coefficient ξ, m/s² (default 4000, AvaFrame com1DFA).
     #[arg(long)]
     pub xi: Option<f64>,
+    /// Per-cell dry-friction coefficient μ (GeoTIFF/ASC/any DEM format, matched by map
+    /// coordinates, any cell size): replaces the law's tanθc, --mu or samosAT μ cell by cell,
+    /// in [0, 2]; cells it does not cover keep the scalar (counted in report.json).
+    #[arg(long, value_name = "FILE")]
+    pub mu_raster: Option<std::path::PathBuf>,
+    /// Per-cell Voellmy ξ, m/s², in [10, 100000] (as --mu-raster; --friction-model voellmy only).
+    #[arg(long, value_name = "FILE")]
+    pub xi_raster: Option<std::path::PathBuf>,
     /// Compare with a reference peak-thickness raster (e.g. AvaFrame's `*_pft.asc`, matched
     /// by map coordinates), AIMEC-like along --path: runout difference, true/false
     /// positive/negative areas, profiles (report.json, comparison_profile.csv,

@@ -305,6 +305,37 @@ pub enum AvalancheError {
     /// A state that reads its bed from the terrain was stepped without one.
     #[error("this avalanche state reads its bed from the terrain: step it with `step_on`")]
     BedSourceMissing,
+    /// A friction map (or the raster it is sampled from) holds a value out of range.
+    #[error("{what} at cell {index} (map x {x}, y {y}) is {value}, must be {expected}")]
+    FrictionMapValue {
+        /// Which map.
+        what: &'static str,
+        /// Cell index (row-major).
+        index: usize,
+        /// Map coordinates of the cell's centre.
+        x: f64,
+        y: f64,
+        /// Offending value.
+        value: f64,
+        /// The valid range.
+        expected: &'static str,
+    },
+    /// A friction raster covers none of the DEM's valid cells.
+    #[error("the {what} raster covers none of the DEM's valid cells (check its georeferencing)")]
+    FrictionMapOutside {
+        /// Which map.
+        what: &'static str,
+    },
+    /// A friction map the run's law does not read.
+    #[error(
+        "a {what} was given but the friction law {law:?} has no such coefficient (ξ is Voellmy's)"
+    )]
+    FrictionMapUnused {
+        /// Which map.
+        what: &'static str,
+        /// The run's law.
+        law: FrictionLaw,
+    },
     /// The sub-step limit was reached before the step was done.
     #[error("avalanche step stopped after {done} sub-steps with {remaining} s of {dt} s left")]
     TooManySubsteps {

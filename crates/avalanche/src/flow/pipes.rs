@@ -280,24 +280,27 @@ unsafe fn pipe_lanes<V: Lanes>(
             V::splat(MIN_TURBULENT_DEPTH),
             mean,
         );
+        // The pipe's μ·g from the friction maps (as in [`super::update::pipe_update`]).
+        let mu_g = (!inp.mu.is_empty())
+            .then(|| half * (ld::<V>(inp.mu, kk) + ld::<V>(inp.mu, j)) * V::splat(G));
         // The samosAT law's dry friction and drag factor.
         let samos = k.samos.map(|s| {
-            // [`Samos::yield_dt`] and [`Samos::drag`] in lanes (only the logarithm lane by lane).
+            // [`Samos::yield_dt`] and [`Samos::drag_depth`] in lanes.
             let start2 = v0 * v0 + v1 * v1;
             let rs0 = V::splat(s.rs0);
             let one = V::splat(1.0);
-            let y = V::splat(s.mu_g_dt) * (one + rs0 / (rs0 + start2 / (V::splat(G) * depth)));
-            let mut logs = [0.0; 7];
-            for (i, l) in logs.iter_mut().enumerate().take(V::N) {
-                *l = (depth.lane(i) * s.inv_r).max(1.0).ln();
-            }
-            let div = V::load_ptr(logs.as_ptr()) * V::splat(s.inv_kappa) + V::splat(s.b);
-            (y, V::splat(k.dt) / (depth * div * div))
+            let mu_g_dt = mu_g.map_or(V::splat(s.mu_g_dt), |m| m * V::splat(k.dt));
+            let rgh = rs0 * (V::splat(G) * depth);
+            let y = mu_g_dt * (one + rgh / (rgh + start2));
+            let log = super::lanes::ln_at_least_one((depth * V::splat(s.inv_r)).max(V::splat(1.0)));
+            let div = log * V::splat(s.inv_kappa) + V::splat(s.b);
+            (y, depth * div * div)
         });
         let c2 = half * (lv(C2, kk) + lv(C2, j));
-        let yield_dt = match samos {
-            None => V::splat(k.yield_dt),
-            Some((y, _)) => y,
+        let yield_dt = match (samos, mu_g) {
+            (None, None) => V::splat(k.yield_dt),
+            (None, Some(m)) => V::splat(k.alpha) * m * V::splat(k.dt),
+            (Some((y, _)), _) => y,
         };
         let yield_dt = if k.projected { yield_dt * c2 } else { yield_dt };
         let dead = if k.coulomb {
@@ -338,12 +341,17 @@ unsafe fn pipe_lanes<V: Lanes>(
         if k.turb != 0.0 {
             let speed = V::select(tnorm.gt(yield_dt), tnorm - yield_dt, zero);
             let depth = if k.projected { depth * c2 } else { depth };
-            u = u / (V::splat(1.0) + V::splat(k.turb) * speed / depth);
+            let turb = if inp.xi.is_empty() {
+                V::splat(k.turb)
+            } else {
+                V::splat(k.dtg) / (half * (ld::<V>(inp.xi, kk) + ld::<V>(inp.xi, j)))
+            };
+            u = u / (V::splat(1.0) + turb * speed / depth);
         }
-        if let Some((_, drag)) = samos {
+        if let Some((_, den)) = samos {
             let speed = V::select(tnorm.gt(yield_dt), tnorm - yield_dt, zero);
-            let drag = drag * speed;
-            u = u / (V::splat(1.0) + if k.projected { drag / c2 } else { drag });
+            let den = if k.projected { den * c2 } else { den };
+            u = u * den / (den + V::splat(k.dt) * speed);
         }
         let hup = V::select(u.gt(zero), hk, hj);
         let dead = V::or(dead, hup.le(V::splat(DRY)));

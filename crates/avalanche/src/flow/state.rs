@@ -68,7 +68,46 @@ impl AvalancheState {
             near_wall,
             pg: PipeGeometry::new(geometry, ph),
             footprint: footprint::Footprint::new(pw.div_ceil(TILE) * ph.div_ceil(TILE), false),
+            mu: Vec::new(),
+            xi: Vec::new(),
         })
+    }
+
+    /// Sets the per-cell friction of the flow (`crate::friction_maps`): the maps are padded
+    /// like the bed (the ghost ring repeats the border cells); empty maps restore the law's
+    /// scalars.
+    pub fn set_friction_maps(&mut self, maps: &FrictionMaps) -> Result<(), AvalancheError> {
+        let (w, hgt) = (self.geometry.width(), self.geometry.height());
+        if maps.size() != (w, hgt) && !maps.is_empty() {
+            return Err(AvalancheError::GeometryMismatch {
+                width: w,
+                height: hgt,
+                terrain_width: maps.size().0,
+                terrain_height: maps.size().1,
+            });
+        }
+        let (pw, ph) = (self.pw, self.ph);
+        let pad = |map: Option<&[f64]>| -> Vec<f64> {
+            let Some(map) = map else {
+                return Vec::new();
+            };
+            let mut out = vec![0.0; pw * ph];
+            for r in 0..ph {
+                for c in 0..pw {
+                    let i = (r.clamp(1, hgt) - 1) * w + c.clamp(1, w) - 1;
+                    out[r * pw + c] = map[i];
+                }
+            }
+            out
+        };
+        self.mu = pad(maps.mu());
+        self.xi = pad(maps.xi());
+        Ok(())
+    }
+
+    /// Whether per-cell friction maps are set.
+    pub fn has_friction_maps(&self) -> bool {
+        !self.mu.is_empty() || !self.xi.is_empty()
     }
 
     /// A state on the avalanche bed of a layered terrain: bedrock + compacted + stable snow.

@@ -53,6 +53,8 @@ pub(super) fn substep(
         flux: [empty; 4],
         fbase: 0,
         factor: empty,
+        mu: &state.mu,
+        xi: &state.xi,
     };
 
     // Pass 1: new pipe velocities, raw volumes and outflow factors, by blocks of rows. Row by
@@ -188,6 +190,8 @@ pub(super) fn substep(
             flux: flux.each_ref().map(|v| v.as_slice()),
             fbase: 0,
             factor,
+            mu: empty,
+            xi: empty,
         };
         let (h, pipes) = (&mut state.h, &mut state.pipes);
         let prows = rows_of(pipes.each_mut().map(|v| &mut v[rows.clone()]), pw);

@@ -456,11 +456,16 @@ pub(super) fn pipe_update(
     };
     let trial = [vp[0] - k.dtg * grad[0], vp[1] - k.dtg * grad[1]];
     let tnorm = (trial[0] * trial[0] + trial[1] * trial[1]).sqrt();
-    let mut yield_dt = match &k.samos {
-        None => k.yield_dt,
+    // The pipe's μ·g: the law's, or the mean of its cells' (`crate::friction_maps`; the
+    // products in the order of `Consts::new`, so a map of the law's μ gives the same bits).
+    let mu_g = (!inp.mu.is_empty()).then(|| (0.5 * (inp.mu[kk] + inp.mu[j])) * G);
+    let mut yield_dt = match (&k.samos, mu_g) {
+        (None, None) => k.yield_dt,
+        (None, Some(m)) => k.alpha * m * dt,
         // Rs from the speed at the start of the sub-step (at rest: twice μ, exactly).
-        Some(s) => s.yield_dt(
-            (vp[0] * vp[0] + vp[1] * vp[1]).sqrt(),
+        (Some(s), m) => s.yield_dt(
+            m.map_or(s.mu_g_dt, |m| m * dt),
+            vp[0] * vp[0] + vp[1] * vp[1],
             turbulent_depth(hi, hj),
         ),
     };
@@ -492,12 +497,18 @@ pub(super) fn pipe_update(
         } else {
             turbulent_depth(hi, hj)
         };
-        u /= 1.0 + k.turb * (tnorm - yield_dt).max(0.0) / depth;
+        let turb = if inp.xi.is_empty() {
+            k.turb
+        } else {
+            k.dtg / (0.5 * (inp.xi[kk] + inp.xi[j]))
+        };
+        u /= 1.0 + turb * (tnorm - yield_dt).max(0.0) / depth;
     }
     if let Some(s) = &k.samos {
-        let depth = turbulent_depth(hi, hj);
-        let drag = s.drag(dt, depth) * (tnorm - yield_dt).max(0.0);
-        u /= 1.0 + if k.projected { drag / c2 } else { drag };
+        // (Projected: the drag `dt·|u|/(h·div²)` divided by cos²θ.)
+        let den = s.drag_depth(turbulent_depth(hi, hj));
+        let den = if k.projected { den * c2 } else { den };
+        u = u * den / (den + dt * (tnorm - yield_dt).max(0.0));
     }
     let hup = if u > 0.0 { hi } else { hj };
     if hup <= DRY {

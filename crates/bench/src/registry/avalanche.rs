@@ -22,7 +22,7 @@
 use crate::kernel::{Kernel, KernelError};
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, AvalancheWorkspace,
-    FrictionLaw, RunOptions, SlopeGravity, cfl_dt, release_from_shapefile, step,
+    FrictionLaw, FrictionMaps, RunOptions, SlopeGravity, cfl_dt, release_from_shapefile, step,
 };
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 
@@ -47,6 +47,15 @@ pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
             },
             size,
         )?,
+        substep_kernel_with_maps(
+            "avalanche/substep_voellmy_maps",
+            AvalancheParams {
+                friction: FrictionLaw::Voellmy,
+                ..AvalancheParams::default()
+            },
+            size,
+            true,
+        )?,
         substep_kernel(
             "avalanche/substep_samosat",
             AvalancheParams {
@@ -69,6 +78,17 @@ pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
 
 /// One CFL sub-step per call of a 1 m square release flowing down a 35° plane of 2 m cells.
 fn substep_kernel(name: &str, params: AvalancheParams, size: usize) -> Result<Kernel, KernelError> {
+    substep_kernel_with_maps(name, params, size, false)
+}
+
+/// [`substep_kernel`], with per-cell μ and ξ maps (`maps`: a μ varying ±20 % and a ξ ±50 %
+/// around the law's, in stripes across the flow) to measure what reading them costs.
+fn substep_kernel_with_maps(
+    name: &str,
+    params: AvalancheParams,
+    size: usize,
+    maps: bool,
+) -> Result<Kernel, KernelError> {
     let geometry = GridGeometry::square(size, size, 2.0)?;
     let tan = 35f64.to_radians().tan();
     let bed: Vec<f64> = (0..size * size)
@@ -89,6 +109,16 @@ fn substep_kernel(name: &str, params: AvalancheParams, size: usize) -> Result<Ke
         })
         .collect();
     state.set_thickness(&h)?;
+    if maps {
+        let stripe = |i: usize| ((i % size) / 8 % 5) as f64 / 4.0 - 0.5;
+        let mu = (0..size * size)
+            .map(|i| params.dry_friction() * (1.0 + 0.4 * stripe(i)))
+            .collect();
+        let xi = (0..size * size)
+            .map(|i| params.voellmy_xi_m_s2 * (1.0 + stripe(i)))
+            .collect();
+        state.set_friction_maps(&FrictionMaps::new(&geometry, Some(mu), Some(xi))?)?;
+    }
     let mut scratch = AvalancheScratch::default();
     let warm = step(&params, &mut state, &mut scratch, 2.0)?;
     let cells = warm.active_cells;

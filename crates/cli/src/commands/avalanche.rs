@@ -17,8 +17,8 @@ use snowscape_avalanche::release_area::{
 };
 use snowscape_avalanche::validation::ThicknessConvention;
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, RestOutcome,
-    RunOptions, SamosAtParams, SlopeGravity,
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, FrictionMaps,
+    MapMatch, RestOutcome, RunOptions, SamosAtParams, SlopeGravity,
 };
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
@@ -194,6 +194,59 @@ fn release_terrain(
     Ok((terrain, cells, area))
 }
 
+/// The μ and ξ rasters of `--mu-raster` and `--xi-raster` matched onto the DEM's cells, and
+/// what report.json says of them (`null` without either).
+fn friction_maps(
+    args: &AvalancheArgs,
+    dem: &Grid,
+    params: &AvalancheParams,
+) -> anyhow::Result<(FrictionMaps, serde_json::Value)> {
+    if args.mu_raster.is_none() && args.xi_raster.is_none() {
+        return Ok((FrictionMaps::default(), serde_json::Value::Null));
+    }
+    let read = |flag: &str, path: &Option<std::path::PathBuf>| {
+        path.as_deref()
+            .map(|p| {
+                snowscape_io::read_dem(p, &ReadOptions::default())
+                    .with_context(|| format!("{flag} {}", p.display()))
+            })
+            .transpose()
+    };
+    let mu = read("--mu-raster", &args.mu_raster)?;
+    let xi = read("--xi-raster", &args.xi_raster)?;
+    let (maps, mu_match, xi_match) =
+        FrictionMaps::from_rasters(dem.geometry(), dem.mask(), params, mu.as_ref(), xi.as_ref())
+            .map_err(|e| {
+                let flags = match (&args.mu_raster, &args.xi_raster) {
+                    (Some(m), Some(x)) => {
+                        format!("--mu-raster {}, --xi-raster {}", m.display(), x.display())
+                    }
+                    (Some(m), None) => format!("--mu-raster {}", m.display()),
+                    (None, Some(x)) => format!("--xi-raster {}", x.display()),
+                    (None, None) => String::new(),
+                };
+                anyhow!("{flags}: {e}")
+            })?;
+    for (flag, m) in [("--mu-raster", &mu_match), ("--xi-raster", &xi_match)] {
+        if let Some(m) = m
+            && m.defaulted_cells > 0
+        {
+            tracing::warn!(
+                "{flag}: {} of the DEM's cells lie outside the raster or under its nodata and keep the law's value",
+                m.defaulted_cells
+            );
+        }
+    }
+    let entry = |path: &Option<std::path::PathBuf>, m: Option<MapMatch>| {
+        m.map(|m| json!({ "file": path.as_ref().map(|p| p.display().to_string()), "matched": m }))
+    };
+    let report = json!({
+        "mu": entry(&args.mu_raster, mu_match),
+        "xi": entry(&args.xi_raster, xi_match),
+    });
+    Ok((maps, report))
+}
+
 fn write_map(out: &mut Written, name: &str, dem: &Grid, values: Vec<f32>) -> anyhow::Result<()> {
     let grid = Grid::new(dem.geometry().clone(), values, dem.mask().clone())?;
     write_geotiff(&out.path(name), &grid)?;
@@ -244,6 +297,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         ))
         .bad_input();
     }
+    let (friction_maps, friction_report) = friction_maps(args, &dem, &params).bad_input()?;
     let compare = args
         .compare
         .as_deref()
@@ -258,6 +312,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let relief = ReliefFrames::new(&dem, &view).job_failed()?;
     let t0 = Instant::now();
     let mut workspace = AvalancheWorkspace::new();
+    workspace.set_friction_maps(friction_maps);
     let bar = ProgressBar::new((options.duration_s * 10.0).ceil() as u64);
     if global.quiet {
         bar.set_draw_target(ProgressDrawTarget::hidden());
@@ -397,6 +452,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         "release_cells": area.count(),
         "release_area_m2": area.area_m2(),
         "release_warnings": area.warnings,
+        "friction_maps": friction_report,
         "parameters": { "flow": params, "run": options, "thickness_m": args.thickness, "thickness_measured": args.thickness_measured.to_possible_value().map(|v| v.get_name().to_string()) },
         "seed": args.seed,
         "threads": rayon::current_num_threads(),
