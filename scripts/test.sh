@@ -37,8 +37,15 @@ test -s "$scratch/ex_transport/depth.tif"
 # The season's phase timings and the shedding timing at a reduced size (so the example never rots).
 target/release/examples/season_phases 128 > /dev/null
 target/release/examples/season_phases 128 shed > /dev/null
+# The Python package: built by pip (maturin) into a fresh virtual environment, from the same
+# target folder as the rest, then its tests (the same bytes as `snowscape run`) and example.
+python3 -m venv "$scratch/venv"
+CARGO_TARGET_DIR="$PWD/target" "$scratch/venv/bin/pip" install --quiet "./python[test]"
+"$scratch/venv/bin/python" -m pytest -q python/tests 2>&1 | tee -a "$log"
+"$scratch/venv/bin/python" examples/python/season.py "" 3 "$scratch/py_season" > /dev/null
+test -s "$scratch/py_season/depth.tif"
 bash scripts/browser-tests.sh 2>&1 | tee -a "$log"
 passed=$(grep -Eo '^test result: ok\. [0-9]+ passed' "$log" | awk '{s += $4} END {print s + 0}')
 failed=$(grep -Eo '[0-9]+ failed' "$log" | awk '{s += $1} END {print s + 0}')
-echo "scripts/test.sh: all checks passed (unit, integration, property, real-data, doc tests; benchmarks in test mode; bench and demo at reduced size; editor browser tests)"
+echo "scripts/test.sh: all checks passed (unit, integration, property, real-data, doc tests; benchmarks in test mode; bench and demo at reduced size; Python package tests; editor browser tests)"
 echo "$passed passed, $failed failed"

@@ -24,6 +24,7 @@
 //! | [`outputs`] | the output layer of a season (every file of `snowscape run`) |
 //! | [`season_run`] | one season run to its end with snapshots, checkpoints, resume and every output (the path of `snowscape run` and `demo`) |
 //! | [`report`] | the typed `report.json` of every job |
+//! | [`avalanche_release`] | one avalanche's release on a DEM (file, mask or rupture point), as `snowscape avalanche` and the Python package take it |
 //! | [`cover`] | both mesh covers' parameters from a TOML file |
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
@@ -53,6 +54,7 @@
 //! The examples in `crates/snowscape/examples` run a season on a DEM and write every output,
 //! an avalanche to rest, a mesh cover and a transport run.
 
+pub mod avalanche_release;
 pub mod cover;
 pub mod outputs;
 pub mod report;

@@ -11,10 +11,8 @@ use anyhow::{Context, anyhow, bail};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
-use snowscape_avalanche::release_area::{
-    RasterRelease, ReleaseMask, RuptureParams, release_at_point, release_from_raster,
-    release_from_shapefile,
-};
+pub use snowscape::avalanche_release::ReleaseSpec;
+use snowscape::avalanche_release::release_terrain;
 use snowscape_avalanche::validation::ThicknessConvention;
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, FrictionMaps,
@@ -23,17 +21,8 @@ use snowscape_avalanche::{
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
 use snowscape_render::{ColourMode, ReliefFrames, encode_gif};
-use snowscape_terrain::{Grid, LayeredTerrain, SnowLayer};
+use snowscape_terrain::{Grid, SnowLayer};
 use std::time::Instant;
-
-/// What `--release` names.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ReleaseSpec {
-    /// A map position (CRS units): the rupture point.
-    Point(f64, f64),
-    /// A shapefile polygon or a raster mask in the DEM's grid.
-    File(std::path::PathBuf),
-}
 
 /// Parses `X,Y` as a point, anything else as a file path.
 pub fn parse_release(text: &str) -> anyhow::Result<ReleaseSpec> {
@@ -126,72 +115,6 @@ fn run_options(args: &AvalancheArgs) -> anyhow::Result<RunOptions> {
         bail!("--thickness must be a positive number of metres, got {t}");
     }
     Ok(o)
-}
-
-/// The terrain to release from (the bare DEM carrying the release's unstable snow), the
-/// release cells and their mask.
-///
-/// A file gives the cells (and, from a shapefile's `thickness` field, their thickness;
-/// `--thickness` overrides it, 1 m by default). A point covers the DEM with `--thickness` of
-/// unstable snow and breaks it there (Cordonnier 2018 §6.1 rupture: the unstable snow within a
-/// reach proportional to its thickness, and everything down the fall lines below).
-fn release_terrain(
-    dem: &Grid,
-    spec: &ReleaseSpec,
-    thickness: Option<f64>,
-    convention: ThicknessConvention,
-    dem_options: &ReadOptions,
-) -> anyhow::Result<(LayeredTerrain, Vec<usize>, ReleaseMask)> {
-    let g = dem.geometry();
-    let mut terrain = LayeredTerrain::from_bedrock(dem.clone());
-    let mask = terrain.mask().clone();
-    let area = match spec {
-        ReleaseSpec::Point(x, y) => {
-            let mut h = vec![thickness.unwrap_or(1.0); g.len()];
-            convention.to_vertical(&mut h, dem);
-            for (i, v) in terrain
-                .layer_mut(SnowLayer::Unstable)
-                .iter_mut()
-                .enumerate()
-            {
-                if mask.is_valid(i) {
-                    *v = h[i] as f32;
-                }
-            }
-            release_at_point(&terrain, *x, *y, &RuptureParams::default())?.mask
-        }
-        ReleaseSpec::File(path) => {
-            let is_shp = path
-                .extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| e.eq_ignore_ascii_case("shp"));
-            let mut area = if is_shp {
-                release_from_shapefile(path, g, dem.mask())?
-            } else {
-                release_from_raster(path, g, dem.mask(), dem_options, RasterRelease::Mask)?
-            };
-            for w in &area.warnings {
-                tracing::warn!("{}: {w}", path.display());
-            }
-            if thickness.is_some() {
-                area.thickness = None;
-            }
-            let mut h = area.thickness_field(thickness.unwrap_or(1.0))?;
-            convention.to_vertical(&mut h, dem);
-            for (i, v) in terrain
-                .layer_mut(SnowLayer::Unstable)
-                .iter_mut()
-                .enumerate()
-            {
-                if area.cells[i] && mask.is_valid(i) {
-                    *v = h[i] as f32;
-                }
-            }
-            area
-        }
-    };
-    let cells = (0..area.cells.len()).filter(|&i| area.cells[i]).collect();
-    Ok((terrain, cells, area))
 }
 
 /// The μ and ξ rasters of `--mu-raster` and `--xi-raster` matched onto the DEM's cells, and
@@ -448,6 +371,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         "release": match &spec {
             ReleaseSpec::Point(x, y) => json!({ "point": [x, y] }),
             ReleaseSpec::File(p) => json!({ "file": p.display().to_string() }),
+            ReleaseSpec::Mask(_) => json!({ "mask": true }),
         },
         "release_cells": area.count(),
         "release_area_m2": area.area_m2(),

@@ -1,0 +1,101 @@
+//! One avalanche's release on a DEM, the path `snowscape avalanche` and the Python package's
+//! `snowscape.avalanche` share: what the user names (a file, a mask, a rupture point) becomes
+//! the bare terrain carrying the release's unstable snow and the released cells, which
+//! [`snowscape_avalanche::AvalancheWorkspace::run_to_rest`] then runs to rest.
+
+use snowscape_avalanche::release_area::{
+    RasterRelease, ReleaseAreaError, ReleaseMask, RuptureParams, release_at_point,
+    release_from_raster, release_from_shapefile,
+};
+use snowscape_avalanche::validation::ThicknessConvention;
+use snowscape_io::ReadOptions;
+use snowscape_terrain::{Grid, LayeredTerrain, SnowLayer};
+
+/// What a release names.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ReleaseSpec {
+    /// A map position (CRS units): the rupture point.
+    Point(f64, f64),
+    /// A shapefile polygon or a raster mask in the DEM's grid.
+    File(std::path::PathBuf),
+    /// A mask of the DEM's cells (row-major, row 0 north; true = released).
+    Mask(Vec<bool>),
+}
+
+/// The terrain to release from (the bare DEM carrying the release's unstable snow), the
+/// release cells and their mask.
+///
+/// A file gives the cells (and, from a shapefile's `thickness` field, their thickness;
+/// `--thickness` overrides it, 1 m by default). A point covers the DEM with `--thickness` of
+/// unstable snow and breaks it there (Cordonnier 2018 §6.1 rupture: the unstable snow within a
+/// reach proportional to its thickness, and everything down the fall lines below).
+pub fn release_terrain(
+    dem: &Grid,
+    spec: &ReleaseSpec,
+    thickness: Option<f64>,
+    convention: ThicknessConvention,
+    dem_options: &ReadOptions,
+) -> Result<(LayeredTerrain, Vec<usize>, ReleaseMask), ReleaseAreaError> {
+    let g = dem.geometry();
+    let mut terrain = LayeredTerrain::from_bedrock(dem.clone());
+    let mask = terrain.mask().clone();
+    let area = match spec {
+        ReleaseSpec::Point(x, y) => {
+            let mut h = vec![thickness.unwrap_or(1.0); g.len()];
+            convention.to_vertical(&mut h, dem);
+            for (i, v) in terrain
+                .layer_mut(SnowLayer::Unstable)
+                .iter_mut()
+                .enumerate()
+            {
+                if mask.is_valid(i) {
+                    *v = h[i] as f32;
+                }
+            }
+            release_at_point(&terrain, *x, *y, &RuptureParams::default())?.mask
+        }
+        ReleaseSpec::File(_) | ReleaseSpec::Mask(_) => {
+            let mut area = match spec {
+                ReleaseSpec::File(path) => {
+                    let is_shp = path
+                        .extension()
+                        .and_then(|e| e.to_str())
+                        .is_some_and(|e| e.eq_ignore_ascii_case("shp"));
+                    let area = if is_shp {
+                        release_from_shapefile(path, g, dem.mask())?
+                    } else {
+                        release_from_raster(path, g, dem.mask(), dem_options, RasterRelease::Mask)?
+                    };
+                    for w in &area.warnings {
+                        tracing::warn!("{}: {w}", path.display());
+                    }
+                    area
+                }
+                _ => {
+                    let ReleaseSpec::Mask(cells) = spec else {
+                        unreachable!("matched above")
+                    };
+                    ReleaseMask::from_cells(g, dem.mask(), cells.clone(), None)?
+                }
+            };
+            if thickness.is_some() {
+                area.thickness = None;
+            }
+            let mut h = area.thickness_field(thickness.unwrap_or(1.0))?;
+            convention.to_vertical(&mut h, dem);
+            for (i, v) in terrain
+                .layer_mut(SnowLayer::Unstable)
+                .iter_mut()
+                .enumerate()
+            {
+                if area.cells[i] && mask.is_valid(i) {
+                    *v = h[i] as f32;
+                }
+            }
+            area
+        }
+    };
+    let cells = (0..area.cells.len()).filter(|&i| area.cells[i]).collect();
+    Ok((terrain, cells, area))
+}
+

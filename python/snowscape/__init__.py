@@ -1,0 +1,328 @@
+"""snowscape: snow-covered landscapes from real terrain, from Python.
+
+numpy in, georeferenced rasters out, the same bytes as the command line::
+
+    import snowscape
+    dem = snowscape.read_dem("avaMal.asc")
+    winter = snowscape.Winter(dem, scenario={"days": 60}, seed=1)
+    winter.run(60)
+    snowscape.write(winter.depth(), "depth.tif")
+
+Every job runs the library's own path (the one `snowscape run` and `snowscape avalanche`
+take). Bad input raises ``ValueError`` (``OSError`` for files) with the command line's message.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Callable, Dict, Iterable, Optional, Tuple, Union
+
+import numpy as np
+
+from . import _snowscape
+
+__all__ = ["Raster", "read_dem", "write", "Winter", "avalanche"]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+class Raster:
+    """A georeferenced raster: ``values`` (2-D float32, row 0 north, NaN = nodata), the cell
+    size in metres, the map position of the upper-left corner (``origin``) and the CRS.
+
+    ``Raster(values, cell_size, origin=None, crs=None)``: ``cell_size`` is one number or
+    ``(x, y)``; ``origin`` is the map ``(x, y)`` of the upper-left corner (default: a local
+    grid whose lower-left corner is at (0, 0)); ``crs`` an ``"EPSG:n"`` string or WKT.
+    """
+
+    def __init__(
+        self,
+        values: Any,
+        cell_size: Union[float, Tuple[float, float]],
+        origin: Optional[Tuple[float, float]] = None,
+        crs: Optional[str] = None,
+    ) -> None:
+        a = np.array(values, dtype=np.float32, copy=True)
+        if a.ndim != 2 or a.shape[0] < 1 or a.shape[1] < 1:
+            raise ValueError(f"values must be a non-empty 2-D array, got shape {a.shape}")
+        if np.isinf(a).any():
+            r, c = np.argwhere(np.isinf(a))[0]
+            raise ValueError(
+                f"values at row {r}, column {c} is {a[r, c]}: values must be finite (NaN marks nodata)"
+            )
+        if np.isscalar(cell_size) or np.ndim(cell_size) == 0:
+            dx = dy = float(cell_size)  # type: ignore[arg-type]
+        else:
+            dx, dy = (float(v) for v in cell_size)  # type: ignore[union-attr]
+        for name, v in (("cell_size x", dx), ("cell_size y", dy)):
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a positive number of metres, got {v}")
+        h, w = a.shape
+        if origin is None:
+            ox, oy = 0.0, h * dy
+        else:
+            ox, oy = (float(v) for v in origin)
+            if not (np.isfinite(ox) and np.isfinite(oy)):
+                raise ValueError(f"origin ({ox}, {oy}) must be finite")
+        self._values = a
+        self._geo = (ox, oy, dx, dy)
+        self._crs = crs
+        # The metric cell size (differs from the pixel size only for a geographic CRS).
+        self._cell = (dx, dy)
+
+    @classmethod
+    def _from_native(cls, parts: Tuple[Any, ...]) -> "Raster":
+        data, w, h, geo, crs, cell = parts
+        r = cls.__new__(cls)
+        r._values = np.frombuffer(data, dtype="<f4").reshape(h, w).astype(np.float32)
+        r._geo = tuple(float(v) for v in geo)
+        r._crs = crs
+        r._cell = tuple(float(v) for v in cell)
+        return r
+
+    def _native(self) -> Tuple[bytes, int, int, Tuple[float, float, float, float], Optional[str]]:
+        a = np.ascontiguousarray(self._values, dtype="<f4")
+        h, w = a.shape
+        return (a.tobytes(), w, h, self._geo, self._crs)
+
+    @property
+    def values(self) -> np.ndarray:
+        """The values, a 2-D float32 array (row 0 north; NaN = nodata)."""
+        return self._values
+
+    @property
+    def shape(self) -> Tuple[int, int]:
+        return self._values.shape  # type: ignore[return-value]
+
+    @property
+    def cell_size(self) -> Union[float, Tuple[float, float]]:
+        """Cell size in metres: one number for square cells, else ``(x, y)``."""
+        dx, dy = self._cell
+        return dx if dx == dy else (dx, dy)
+
+    @property
+    def origin(self) -> Tuple[float, float]:
+        """Map ``(x, y)`` of the upper-left corner."""
+        return (self._geo[0], self._geo[1])
+
+    @property
+    def transform(self) -> Tuple[float, float, float, float, float, float]:
+        """The GDAL geotransform ``(x0, dx, 0, y0, 0, -dy)`` (as rasterio's ``Affine.to_gdal()``)."""
+        ox, oy, pw, ph = self._geo
+        return (ox, pw, 0.0, oy, 0.0, -ph)
+
+    @property
+    def crs(self) -> Optional[str]:
+        """The CRS: ``"EPSG:n"`` or WKT; ``None`` when unknown."""
+        return self._crs
+
+    def xy(self, row: float, col: float) -> Tuple[float, float]:
+        """Map coordinates of the centre of cell ``(row, col)``."""
+        ox, oy, pw, ph = self._geo
+        return (ox + (col + 0.5) * pw, oy - (row + 0.5) * ph)
+
+    def to_xarray(self) -> Any:
+        """An ``xarray.DataArray`` with ``y`` and ``x`` coordinates of the cell centres (needs
+        xarray)."""
+        try:
+            import xarray as xr
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("Raster.to_xarray needs xarray: pip install xarray") from e
+        ox, oy, pw, ph = self._geo
+        h, w = self._values.shape
+        x = ox + (np.arange(w) + 0.5) * pw
+        y = oy - (np.arange(h) + 0.5) * ph
+        attrs = {"transform": self.transform}
+        if self._crs is not None:
+            attrs["crs"] = self._crs
+        return xr.DataArray(self._values, coords={"y": y, "x": x}, dims=("y", "x"), attrs=attrs)
+
+    def __repr__(self) -> str:
+        h, w = self._values.shape
+        return f"Raster({w} x {h} cells of {self.cell_size} m, origin {self.origin}, crs {self._crs!r})"
+
+
+def read_dem(
+    path: PathLike,
+    format: Optional[str] = None,
+    cell_size: Optional[float] = None,
+    height_range: Optional[Tuple[float, float]] = None,
+    raw_size: Optional[Tuple[int, int]] = None,
+    crs: Optional[str] = None,
+) -> Raster:
+    """Reads a raster in any format the command line reads (GeoTIFF, ESRI ASCII, PNG16,
+    RAW16, NPY, EXR), with the command line's input options (``--format``, ``--cell-size``,
+    ``--height-range``, ``--raw-size``, ``--crs``)."""
+    return Raster._from_native(
+        _snowscape.read_raster(os.fspath(path), format, cell_size, height_range, raw_size, crs)
+    )
+
+
+def write(raster: Raster, path: PathLike) -> None:
+    """Writes ``raster`` in the format its extension names (``.tif``, ``.asc``, ``.png``
+    (16-bit), ``.raw``/``.r16``, ``.npy``, ``.exr``), atomically."""
+    if not isinstance(raster, Raster):
+        raise ValueError(f"write needs a snowscape.Raster, got {type(raster).__name__}")
+    _snowscape.write(raster._native(), os.fspath(path))
+
+
+def _scenario_text(scenario: Union[None, PathLike, Dict[str, Any]]) -> Tuple[Optional[str], bool, str]:
+    """The scenario's text, whether it is JSON (a dict) rather than TOML (a file), and the name
+    its errors use."""
+    if scenario is None:
+        return None, False, "the default scenario"
+    if isinstance(scenario, dict):
+        try:
+            return json.dumps(scenario, allow_nan=False), True, "the scenario dict"
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"the scenario dict: {e}") from None
+    path = os.fspath(scenario)
+    with open(path, encoding="utf-8") as f:
+        return f.read(), False, path
+
+
+class Winter:
+    """A winter on a terrain: snowfall, melt, sun and wind, shedding, avalanches, day by day.
+
+    ``Winter(dem, scenario=None, seed=0, threads=None)``: ``dem`` a :class:`Raster` (or a
+    path); ``scenario`` a scenario file's path, a dict of its keys (``{"days": 60,
+    "parameters": {...}}``) or ``None`` for the default winter; ``seed`` the random seed (same
+    seed, same bytes, for any ``threads``).
+    """
+
+    def __init__(
+        self,
+        dem: Union[Raster, PathLike],
+        scenario: Union[None, PathLike, Dict[str, Any]] = None,
+        seed: Optional[int] = 0,
+        threads: Optional[int] = None,
+        _native: Any = None,
+    ) -> None:
+        if _native is not None:
+            self._w = _native
+            return
+        dem = _as_raster(dem)
+        text, is_json, name = _scenario_text(scenario)
+        if seed is not None and (not isinstance(seed, (int, np.integer)) or seed < 0):
+            raise ValueError(f"seed must be a whole number >= 0, got {seed!r}")
+        self._w = _snowscape._Winter(
+            dem._native(), text, is_json, name, None if seed is None else int(seed), threads
+        )
+
+    @classmethod
+    def resume(cls, path: PathLike, dem: Union[Raster, PathLike], threads: Optional[int] = None) -> "Winter":
+        """Resumes a season saved by :meth:`save_checkpoint` (or written by ``snowscape run``)
+        in the folder ``path``, on its terrain ``dem``: it continues bit-identically."""
+        dem = _as_raster(dem)
+        return cls(dem, _native=_snowscape._Winter.resume(os.fspath(path), dem._native(), threads))
+
+    @property
+    def day(self) -> float:
+        """The season's day."""
+        return self._w.day
+
+    @property
+    def days(self) -> float:
+        """The season's length, days."""
+        return self._w.days
+
+    def run(self, days: Optional[float] = None, progress: Optional[Callable[[float], Any]] = None) -> "Winter":
+        """Runs the season to day ``days`` (default: its end). ``progress(day)`` is called every
+        quarter day; Ctrl-C stops it between two events (the state stays consistent)."""
+        self._w.run_until(self.days if days is None else float(days), progress)
+        return self
+
+    def step(self, days: float) -> "Winter":
+        """Advances the season by ``days``."""
+        d = float(days)
+        if not (np.isfinite(d) and d >= 0):
+            raise ValueError(f"days {days} must be finite and >= 0")
+        self._w.run_until(self.day + d, None)
+        return self
+
+    def depth(self) -> Raster:
+        """Total snow depth, m."""
+        return Raster._from_native(self._w.depth())
+
+    def layers(self) -> Dict[str, Raster]:
+        """The snow layers (``compacted``, ``stable``, ``unstable``, ``powder``) and the
+        ``bedrock``, m."""
+        return {
+            n: Raster._from_native(self._w.layer(n))
+            for n in ("compacted", "stable", "unstable", "powder", "bedrock")
+        }
+
+    def budget(self) -> Dict[str, Any]:
+        """The season's volume budget (m³ per term, as report.json's ``mass_budget``)."""
+        return json.loads(self._w.budget_json())
+
+    def trigger_avalanche(self, x: float, y: float) -> Dict[str, Any]:
+        """Triggers an avalanche at map position ``(x, y)``; its record."""
+        return json.loads(self._w.trigger_avalanche(float(x), float(y)))
+
+    def save_checkpoint(self, path: PathLike) -> None:
+        """Writes the state into the folder ``path`` (``checkpoint.bin`` and ``scenario.toml``,
+        the layout ``snowscape run --resume DIR`` reads)."""
+        self._w.save_checkpoint(os.fspath(path))
+
+    def scenario_toml(self) -> str:
+        """The resolved scenario, as TOML."""
+        return self._w.scenario_toml()
+
+
+def _as_raster(dem: Union[Raster, PathLike]) -> Raster:
+    if isinstance(dem, Raster):
+        return dem
+    if isinstance(dem, (str, os.PathLike)):
+        return read_dem(dem)
+    raise ValueError(f"dem must be a snowscape.Raster or a path, got {type(dem).__name__}")
+
+
+def avalanche(
+    dem: Union[Raster, PathLike],
+    release: Union[PathLike, np.ndarray, Tuple[float, float]],
+    thickness: Optional[float] = 1.0,
+    *,
+    slope_normal: bool = False,
+    duration: float = 600.0,
+    snow_cover: float = 0.0,
+    **params: Any,
+) -> Dict[str, Any]:
+    """One avalanche from release to rest, as ``snowscape avalanche`` runs it.
+
+    ``release``: a shapefile or raster mask path, a boolean mask array of the DEM's shape, or a
+    map point ``(x, y)`` (a uniform cover of ``thickness`` breaks there). ``thickness`` in m
+    (``None``: a shapefile's own thickness field); ``slope_normal`` reads it normal to the
+    slope (AvaFrame's convention); ``snow_cover`` lays loose snow outside the release for the
+    flow to entrain. ``**params`` are the flow parameters (``[parameters.avalanche.flow]`` keys:
+    ``friction="voellmy"``, ``voellmy_mu=0.2``, ``samos_at={"mu": 0.22}``...).
+
+    Returns ``{"peak_thickness", "peak_velocity", "deposit", "entrained"}`` rasters and
+    ``"summary"`` (volumes, runout, travel angle, footprint...).
+    """
+    dem = _as_raster(dem)
+    path = mask = point = None
+    if isinstance(release, (str, os.PathLike)):
+        path = os.fspath(release)
+    elif isinstance(release, tuple) and len(release) == 2 and not isinstance(release[0], (list, np.ndarray)):
+        point = (float(release[0]), float(release[1]))
+    else:
+        m = np.asarray(release)
+        if m.shape != dem.shape:
+            raise ValueError(f"release mask has shape {m.shape}, the DEM {dem.shape}")
+        mask = np.ascontiguousarray(m != 0, dtype=np.uint8).tobytes()
+    rasters, summary = _snowscape.avalanche(
+        dem._native(),
+        path,
+        mask,
+        point,
+        None if thickness is None else float(thickness),
+        bool(slope_normal),
+        json.dumps(params),
+        float(duration),
+        float(snow_cover),
+    )
+    out: Dict[str, Any] = {name: Raster._from_native(parts) for name, parts in rasters}
+    out["summary"] = json.loads(summary)
+    return out

@@ -1,0 +1,581 @@
+//! `snowscape._snowscape`: the native half of the Python package. Rasters cross the boundary
+//! as little-endian `f32` bytes (NaN = nodata) with their width, height, GDAL-style geometry
+//! and CRS; `snowscape/__init__.py` turns them into numpy arrays. Every job calls the library's
+//! own path (the one `snowscape run` and `snowscape avalanche` take), so that the same inputs
+//! give the same bytes from Python as from the command line.
+
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+use snowscape::avalanche::validation::ThicknessConvention;
+use snowscape::avalanche::{AvalancheError, AvalancheParams, AvalancheWorkspace, RestOutcome};
+use snowscape::avalanche_release::{ReleaseSpec, release_terrain};
+use snowscape::io::{RasterFormat, ReadOptions, read_dem, write_raster};
+use snowscape::season::scenario::Scenario;
+use snowscape::season::winter::Winter;
+use snowscape::season_run::{CHECKPOINT, CHUNK_DAYS, write_checkpoint};
+use snowscape::terrain::{
+    Crs, GeoTransform, Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer,
+};
+use std::path::PathBuf;
+
+/// A raster coming in: `f32` bytes, width, height, `(origin_x, origin_y, pixel_width,
+/// pixel_height)` and the CRS (EPSG code as `EPSG:n`, or WKT).
+type GridIn<'a> = (&'a [u8], usize, usize, (f64, f64, f64, f64), Option<String>);
+
+/// A raster going out: as [`GridIn`], plus the metric cell size `(x, y)`.
+type GridOut<'py> = (
+    Bound<'py, PyBytes>,
+    usize,
+    usize,
+    (f64, f64, f64, f64),
+    Option<String>,
+    (f64, f64),
+);
+
+/// The message of an error and of its sources, as the command line prints it.
+fn message(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        let part = s.to_string();
+        if !text.contains(&part) {
+            text.push_str(": ");
+            text.push_str(&part);
+        }
+        source = s.source();
+    }
+    text
+}
+
+/// `OSError` when an I/O error lies under `e` (a file missing, unreadable, unwritable), else
+/// `ValueError`, with the command line's message.
+fn py_err(e: impl std::error::Error + 'static) -> PyErr {
+    let mut io = false;
+    let mut cur: Option<&(dyn std::error::Error + 'static)> = Some(&e);
+    while let Some(s) = cur {
+        io |= s.downcast_ref::<std::io::Error>().is_some();
+        cur = s.source();
+    }
+    let text = message(&e);
+    if io {
+        PyOSError::new_err(text)
+    } else {
+        PyValueError::new_err(text)
+    }
+}
+
+fn value_err(text: impl Into<String>) -> PyErr {
+    PyValueError::new_err(text.into())
+}
+
+/// A [`Grid`] from a raster coming in (NaN cells are nodata).
+fn grid_in(g: GridIn) -> PyResult<Grid> {
+    let (bytes, w, h, (ox, oy, pw, ph), crs) = g;
+    let n = w
+        .checked_mul(h)
+        .filter(|n| n.checked_mul(4) == Some(bytes.len()))
+        .ok_or_else(|| {
+            value_err(format!(
+                "raster values: {} bytes for {w} x {h} cells of float32",
+                bytes.len()
+            ))
+        })?;
+    let crs = match crs.as_deref().map(str::trim) {
+        None | Some("") => None,
+        Some(text) => Some(Crs::parse(text).ok_or_else(|| value_err(format!("crs {text:?}")))?),
+    };
+    let transform = GeoTransform {
+        origin_x: ox,
+        origin_y: oy,
+        pixel_width: pw,
+        pixel_height: ph,
+    };
+    let geometry = GridGeometry::from_transform(w, h, transform, crs).map_err(py_err)?;
+    let mut data = Vec::with_capacity(n);
+    let mut invalid = vec![false; n];
+    for (i, c) in bytes.chunks_exact(4).enumerate() {
+        let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+        if v.is_nan() {
+            invalid[i] = true;
+            data.push(0.0);
+        } else if !v.is_finite() {
+            return Err(value_err(format!(
+                "raster value at row {}, column {} is {v}: values must be finite (NaN marks nodata)",
+                i / w,
+                i % w
+            )));
+        } else {
+            data.push(v);
+        }
+    }
+    let mask = if invalid.iter().any(|&b| b) {
+        NodataMask::from_invalid(invalid)
+    } else {
+        NodataMask::all_valid()
+    };
+    Grid::new(geometry, data, mask).map_err(py_err)
+}
+
+/// A raster going out: `values` on `geometry`, NaN where `mask` says nodata.
+fn grid_out<'py>(
+    py: Python<'py>,
+    geometry: &GridGeometry,
+    mask: &NodataMask,
+    values: &[f32],
+) -> GridOut<'py> {
+    let mut bytes = Vec::with_capacity(values.len() * 4);
+    for (i, v) in values.iter().enumerate() {
+        let v = if mask.is_valid(i) { *v } else { f32::NAN };
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    let t = geometry.transform();
+    (
+        PyBytes::new(py, &bytes),
+        geometry.width(),
+        geometry.height(),
+        (t.origin_x, t.origin_y, t.pixel_width, t.pixel_height),
+        geometry.crs().map(|c| c.to_string()),
+        (geometry.cell_size_x(), geometry.cell_size_y()),
+    )
+}
+
+fn grid_parts<'py>(py: Python<'py>, g: &Grid) -> GridOut<'py> {
+    grid_out(py, g.geometry(), g.mask(), g.data())
+}
+
+/// Reads a raster (every format the command line reads), with the command line's input options.
+#[pyfunction]
+#[pyo3(signature = (path, format=None, cell_size=None, height_range=None, raw_size=None, crs=None))]
+fn read_raster<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    format: Option<String>,
+    cell_size: Option<f64>,
+    height_range: Option<(f64, f64)>,
+    raw_size: Option<(usize, usize)>,
+    crs: Option<String>,
+) -> PyResult<GridOut<'py>> {
+    let mut o = ReadOptions::default();
+    if let Some(f) = format {
+        o.format = Some(
+            f.parse::<RasterFormat>()
+                .map_err(|e| value_err(format!("format {f:?}: {e}")))?,
+        );
+    }
+    if let Some(c) = cell_size {
+        if !(c.is_finite() && c > 0.0) {
+            return Err(value_err(format!(
+                "cell_size must be a positive number of metres, got {c}"
+            )));
+        }
+        o.cell_size = Some(c);
+    }
+    if let Some((lo, hi)) = height_range {
+        if !(lo.is_finite() && hi.is_finite()) {
+            return Err(value_err(format!(
+                "height_range ({lo}, {hi}) must be finite"
+            )));
+        }
+        o.height_range = Some((lo, hi));
+    }
+    if let Some((w, h)) = raw_size {
+        if w == 0 || h == 0 {
+            return Err(value_err(format!("raw_size ({w}, {h}) must be positive")));
+        }
+        o.raw_size = Some((w, h));
+    }
+    if let Some(c) = crs {
+        o.crs = Some(Crs::parse(&c).ok_or_else(|| value_err(format!("crs {c:?}: empty")))?);
+    }
+    let grid = py.detach(|| read_dem(&path, &o)).map_err(py_err)?;
+    Ok(grid_parts(py, &grid))
+}
+
+/// Writes a raster in the format its extension names (atomically, as the command line does).
+#[pyfunction]
+fn write(py: Python<'_>, raster: GridIn, path: PathBuf) -> PyResult<()> {
+    let grid = grid_in(raster)?;
+    let format = RasterFormat::from_path(&path).ok_or_else(|| {
+        value_err(format!(
+            "{}: unknown raster extension; expected .tif, .tiff, .asc, .png, .raw, .r16, .npy or .exr",
+            path.display()
+        ))
+    })?;
+    py.detach(|| write_raster(&path, &grid, format))
+        .map_err(py_err)
+}
+
+/// Runs `f` on the pool when one was asked for.
+fn on_pool<T: Send>(pool: &Option<rayon::ThreadPool>, f: impl FnOnce() -> T + Send) -> T {
+    match pool {
+        Some(p) => p.install(f),
+        None => f(),
+    }
+}
+
+fn thread_pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
+    threads
+        .map(|n| {
+            if n == 0 || n > 1024 {
+                return Err(value_err(format!("threads must be in 1..=1024, got {n}")));
+            }
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| value_err(format!("threads {n}: {e}")))
+        })
+        .transpose()
+}
+
+/// A scenario from TOML text (a file's or a dict's), or the default; `seed` overrides its seed.
+fn scenario_of(text: Option<&str>, name: &str, seed: Option<u64>) -> PyResult<Scenario> {
+    let mut s = match text {
+        Some(t) => Scenario::from_toml(t, name).map_err(py_err)?,
+        None => Scenario::default(),
+    };
+    if let Some(seed) = seed {
+        s.seed = seed;
+    }
+    s.validate(name).map_err(py_err)?;
+    Ok(s)
+}
+
+/// A winter on a terrain (the `Winter` of the Python package).
+#[pyclass(name = "_Winter", module = "snowscape._snowscape")]
+struct PyWinter {
+    winter: Winter,
+    pool: Option<rayon::ThreadPool>,
+}
+
+#[pymethods]
+impl PyWinter {
+    /// `scenario`: TOML text (a file's), JSON text (a dict's, when `is_json`) or `None` (the
+    /// default scenario).
+    #[new]
+    #[pyo3(signature = (dem, scenario, is_json, scenario_name, seed, threads))]
+    fn new(
+        py: Python<'_>,
+        dem: GridIn,
+        scenario: Option<String>,
+        is_json: bool,
+        scenario_name: String,
+        seed: Option<u64>,
+        threads: Option<usize>,
+    ) -> PyResult<Self> {
+        let bedrock = grid_in(dem)?;
+        bedrock.check_terrain().map_err(py_err)?;
+        let text = match (scenario, is_json) {
+            (Some(json), true) => {
+                // A dict's keys are a scenario file's: through TOML, the same parser and checks.
+                let v: serde_json::Value = serde_json::from_str(&json)
+                    .map_err(|e| value_err(format!("{scenario_name}: {e}")))?;
+                Some(toml::to_string(&v).map_err(|e| {
+                    value_err(format!("{scenario_name}: {e} (None has no TOML form)"))
+                })?)
+            }
+            (text, _) => text,
+        };
+        let scenario = scenario_of(text.as_deref(), &scenario_name, seed)?;
+        scenario
+            .validate_on(bedrock.geometry(), &scenario_name)
+            .map_err(py_err)?;
+        let pool = thread_pool(threads)?;
+        let winter = py
+            .detach(|| {
+                on_pool(&pool, || {
+                    Winter::with_forcing(scenario, LayeredTerrain::from_bedrock(bedrock), None)
+                })
+            })
+            .map_err(py_err)?;
+        Ok(Self { winter, pool })
+    }
+
+    /// Resumes the season saved in `dir` (`checkpoint.bin` and `scenario.toml`, as
+    /// `save_checkpoint` and `snowscape run` write them) on its terrain.
+    #[staticmethod]
+    #[pyo3(signature = (dir, dem, threads=None))]
+    fn resume(py: Python<'_>, dir: PathBuf, dem: GridIn, threads: Option<usize>) -> PyResult<Self> {
+        let bedrock = grid_in(dem)?;
+        bedrock.check_terrain().map_err(py_err)?;
+        let scenario_path = dir.join("scenario.toml");
+        let text = std::fs::read_to_string(&scenario_path).map_err(|e| {
+            PyOSError::new_err(format!("cannot read {}: {e}", scenario_path.display()))
+        })?;
+        let scenario =
+            Scenario::from_toml(&text, &scenario_path.display().to_string()).map_err(py_err)?;
+        let path = dir.join(CHECKPOINT);
+        let bytes = std::fs::read(&path)
+            .map_err(|e| PyOSError::new_err(format!("cannot read {}: {e}", path.display())))?;
+        let pool = thread_pool(threads)?;
+        let winter = py
+            .detach(|| {
+                on_pool(&pool, || {
+                    Winter::resume(
+                        scenario,
+                        LayeredTerrain::from_bedrock(bedrock),
+                        &mut bytes.as_slice(),
+                    )
+                })
+            })
+            .map_err(|e| {
+                value_err(format!(
+                    "cannot resume from {}: {}",
+                    path.display(),
+                    message(&e)
+                ))
+            })?;
+        Ok(Self { winter, pool })
+    }
+
+    /// The season's day.
+    #[getter]
+    fn day(&self) -> f64 {
+        self.winter.day()
+    }
+
+    /// The season's length, days.
+    #[getter]
+    fn days(&self) -> f64 {
+        self.winter.scenario().days
+    }
+
+    /// The scenario as TOML (what `save_checkpoint` writes beside the state).
+    fn scenario_toml(&self) -> PyResult<String> {
+        toml::to_string(self.winter.scenario()).map_err(|e| value_err(e.to_string()))
+    }
+
+    /// Runs the season to `day` in chunks of at most `CHUNK_DAYS`, without the GIL; between
+    /// chunks calls `progress(day)` and honours Ctrl-C (the state stays consistent).
+    #[pyo3(signature = (day, progress=None))]
+    fn run_until(&mut self, py: Python<'_>, day: f64, progress: Option<Py<PyAny>>) -> PyResult<()> {
+        let days = self.winter.scenario().days;
+        if !(day.is_finite() && day >= 0.0) {
+            return Err(value_err(format!("day {day} must be finite and >= 0")));
+        }
+        if day > days + 1e-9 {
+            return Err(value_err(format!(
+                "day {day} lies past the season's end ({days} days): give the scenario more days, e.g. scenario={{\"days\": {day}}}"
+            )));
+        }
+        while self.winter.day() < day {
+            let before = self.winter.day();
+            let next = (before + CHUNK_DAYS).min(day);
+            let Self { winter, pool } = self;
+            py.detach(|| on_pool(pool, || winter.run_until(next)))
+                .map_err(py_err)?;
+            if let Some(cb) = &progress {
+                cb.call1(py, (self.winter.day(),))?;
+            }
+            py.check_signals()?;
+            if self.winter.day() <= before {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// Total snow depth of every cell, m.
+    fn depth<'py>(&self, py: Python<'py>) -> GridOut<'py> {
+        let t = &self.winter.terrain;
+        grid_out(py, t.geometry(), t.mask(), &t.total_depth())
+    }
+
+    /// One snow layer (`compacted`, `stable`, `unstable`, `powder`) or `bedrock`, m.
+    fn layer<'py>(&self, py: Python<'py>, name: &str) -> PyResult<GridOut<'py>> {
+        let t = &self.winter.terrain;
+        if name == "bedrock" {
+            return Ok(grid_out(py, t.geometry(), t.mask(), &t.bedrock));
+        }
+        let layer = SnowLayer::ALL
+            .into_iter()
+            .find(|l| l.name() == name)
+            .ok_or_else(|| {
+                value_err(format!(
+                    "unknown layer {name:?}; expected compacted, stable, unstable, powder or bedrock"
+                ))
+            })?;
+        Ok(grid_out(py, t.geometry(), t.mask(), t.layer(layer)))
+    }
+
+    /// The season's volume budget as JSON.
+    fn budget_json(&self) -> PyResult<String> {
+        serde_json::to_string(self.winter.budget()).map_err(|e| value_err(e.to_string()))
+    }
+
+    /// Triggers an avalanche at map position `(x, y)`; its record as JSON.
+    fn trigger_avalanche(&mut self, py: Python<'_>, x: f64, y: f64) -> PyResult<String> {
+        let Self { winter, pool } = self;
+        let rec = py
+            .detach(|| on_pool(pool, || winter.trigger_avalanche(x, y)))
+            .map_err(py_err)?;
+        serde_json::to_string(&rec).map_err(|e| value_err(e.to_string()))
+    }
+
+    /// Writes `dir/checkpoint.bin` and `dir/scenario.toml` (the layout `snowscape run --resume
+    /// DIR` reads).
+    fn save_checkpoint(&self, py: Python<'_>, dir: PathBuf) -> PyResult<()> {
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| PyOSError::new_err(format!("cannot create {}: {e}", dir.display())))?;
+        let text = self.scenario_toml()?;
+        py.detach(|| write_checkpoint(&dir, &self.winter))
+            .map_err(py_err)?;
+        snowscape::io::write_bytes_atomic(&dir.join("scenario.toml"), text.as_bytes())
+            .map_err(py_err)
+    }
+}
+
+/// One avalanche from release to rest on `dem`: the peak thickness and speed, the deposit and
+/// the entrained depth (grid rasters) and the summary (JSON).
+#[pyfunction]
+#[pyo3(signature = (dem, release_path, release_mask, release_point, thickness, slope_normal, params_json, duration, snow_cover))]
+#[allow(clippy::too_many_arguments)]
+fn avalanche<'py>(
+    py: Python<'py>,
+    dem: GridIn,
+    release_path: Option<PathBuf>,
+    release_mask: Option<&[u8]>,
+    release_point: Option<(f64, f64)>,
+    thickness: Option<f64>,
+    slope_normal: bool,
+    params_json: String,
+    duration: f64,
+    snow_cover: f64,
+) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
+    let dem = grid_in(dem)?;
+    dem.check_terrain().map_err(py_err)?;
+    let params: AvalancheParams = serde_json::from_str(&params_json)
+        .map_err(|e| value_err(format!("avalanche parameters: {e}")))?;
+    params.validate().map_err(py_err)?;
+    if let Some(t) = thickness
+        && !(t.is_finite() && t > 0.0 && t <= 50.0)
+    {
+        return Err(value_err(format!(
+            "thickness must be in (0, 50] m, got {t}"
+        )));
+    }
+    if !(snow_cover.is_finite() && (0.0..=50.0).contains(&snow_cover)) {
+        return Err(value_err(format!(
+            "snow_cover must be in [0, 50] m, got {snow_cover}"
+        )));
+    }
+    let options = snowscape::avalanche::RunOptions {
+        duration_s: duration,
+        ..Default::default()
+    };
+    options.validate().map_err(py_err)?;
+    let spec = match (release_path, release_mask, release_point) {
+        (Some(p), None, None) => {
+            if !p.exists() {
+                return Err(PyOSError::new_err(format!(
+                    "release {}: no such file",
+                    p.display()
+                )));
+            }
+            ReleaseSpec::File(p)
+        }
+        (None, Some(m), None) => {
+            if m.len() != dem.geometry().len() {
+                return Err(value_err(format!(
+                    "release mask has {} cells, the DEM {} x {}",
+                    m.len(),
+                    dem.geometry().width(),
+                    dem.geometry().height()
+                )));
+            }
+            ReleaseSpec::Mask(m.iter().map(|&b| b != 0).collect())
+        }
+        (None, None, Some((x, y))) => {
+            if !(x.is_finite() && y.is_finite()) {
+                return Err(value_err(format!(
+                    "release point ({x}, {y}) must be finite"
+                )));
+            }
+            ReleaseSpec::Point(x, y)
+        }
+        _ => {
+            return Err(value_err(
+                "give exactly one release: a path, a mask or (x, y)",
+            ));
+        }
+    };
+    let convention = if slope_normal {
+        ThicknessConvention::SlopeNormal
+    } else {
+        ThicknessConvention::Vertical
+    };
+    let (mut terrain, cells, area) =
+        release_terrain(&dem, &spec, thickness, convention, &ReadOptions::default())
+            .map_err(py_err)?;
+    if snow_cover > 0.0 {
+        let mask = dem.mask().clone();
+        for (i, v) in terrain.layer_mut(SnowLayer::Powder).iter_mut().enumerate() {
+            if mask.is_valid(i) && !area.cells[i] {
+                *v = snow_cover as f32;
+            }
+        }
+    }
+    if !cells
+        .iter()
+        .any(|&i| terrain.layer(SnowLayer::Unstable)[i] > 0.0)
+    {
+        return Err(value_err(
+            "the release holds no snow (released volume 0 m³)",
+        ));
+    }
+    let outcome: RestOutcome = py
+        .detach(|| {
+            AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
+                &mut terrain,
+                &cells,
+                None,
+                &params,
+                &options,
+                SnowLayer::Stable,
+                |_| Ok(()),
+            )
+        })
+        .map_err(py_err)?;
+    let g = dem.geometry();
+    let n = g.len();
+    let dense = |cells: Vec<f64>| cells.into_iter().map(|v| v as f32).collect::<Vec<f32>>();
+    let maps = vec![
+        (
+            "peak_thickness",
+            dense(RestOutcome::dense(&outcome.peak_thickness, n)),
+        ),
+        (
+            "peak_velocity",
+            dense(RestOutcome::dense(&outcome.peak_speed, n)),
+        ),
+        ("deposit", dense(RestOutcome::dense(&outcome.deposited, n))),
+        (
+            "entrained",
+            dense(RestOutcome::dense(&outcome.entrained, n)),
+        ),
+    ];
+    let rasters = maps
+        .into_iter()
+        .map(|(name, v)| (name.to_string(), grid_out(py, g, dem.mask(), &v)))
+        .collect();
+    let summary = serde_json::json!({
+        "summary": outcome.summary,
+        "released_volume_m3": outcome.released_m3,
+        "entrained_volume_m3": outcome.entrained_m3,
+        "deposited_volume_m3": outcome.deposited_m3,
+        "release_cells": area.count(),
+        "release_area_m2": area.area_m2(),
+        "parameters": params,
+    });
+    Ok((rasters, summary.to_string()))
+}
+
+#[pymodule]
+fn _snowscape(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_raster, m)?)?;
+    m.add_function(wrap_pyfunction!(write, m)?)?;
+    m.add_function(wrap_pyfunction!(avalanche, m)?)?;
+    m.add_class::<PyWinter>()?;
+    m.add("CHUNK_DAYS", CHUNK_DAYS)?;
+    Ok(())
+}

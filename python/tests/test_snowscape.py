@@ -1,0 +1,184 @@
+"""The Python package against the command line and hand-computed values, on the shared real
+DEMs (../shared/data beside the checkout; the tests fail when it is missing)."""
+
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import snowscape
+
+ROOT = Path(__file__).resolve().parents[2]
+DATA = ROOT.parent / "shared" / "data"
+WOG = DATA / "dem" / "avaframe_avaWog"
+BIN = Path(os.environ.get("SNOWSCAPE_BIN", ROOT / "target" / "release" / "snowscape"))
+
+
+def wog_dem() -> Path:
+    dem = WOG / "avaWog.asc"
+    assert dem.is_file(), f"the shared avaWog DEM is missing: expected {dem}"
+    return dem
+
+
+def snowscape_cli(*args: str) -> None:
+    assert BIN.is_file(), f"the snowscape binary is missing: build it (cargo build --release) or set SNOWSCAPE_BIN; expected {BIN}"
+    subprocess.run([str(BIN), "--quiet", *args], check=True)
+
+
+def same_bytes(a: np.ndarray, b: np.ndarray) -> bool:
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+def test_depth_bytes_equal_snowscape_run(tmp_path):
+    dem = wog_dem()
+    out = tmp_path / "run"
+    snowscape_cli("run", "--dem", str(dem), "--days", "6", "--seed", "3", "--out", str(out))
+    cli_depth = snowscape.read_dem(out / "depth.tif").values
+    w = snowscape.Winter(snowscape.read_dem(dem), scenario={"days": 6}, seed=3)
+    w.run()
+    py_depth = w.depth().values
+    assert np.nanmax(py_depth) > 0.1, "it snowed"
+    assert same_bytes(py_depth, cli_depth)
+    # The CLI's folder resumes in Python (the same layout): at its end already.
+    resumed = snowscape.Winter.resume(out, dem)
+    assert resumed.day == w.day
+    assert same_bytes(resumed.depth().values, py_depth)
+
+
+def test_checkpoint_resume_and_threads_are_bit_identical(tmp_path):
+    dem = snowscape.read_dem(wog_dem())
+    straight = snowscape.Winter(dem, scenario={"days": 4}, seed=9, threads=1).run()
+    half = snowscape.Winter(dem, scenario={"days": 4}, seed=9, threads=2)
+    days = []
+    half.run(2.0, progress=days.append)
+    assert days and days[-1] >= 2.0 and all(b > a for a, b in zip(days, days[1:]))
+    half.save_checkpoint(tmp_path / "ck")
+    assert (tmp_path / "ck" / "checkpoint.bin").is_file()
+    assert (tmp_path / "ck" / "scenario.toml").is_file()
+    resumed = snowscape.Winter.resume(tmp_path / "ck", dem)
+    assert resumed.day == half.day
+    resumed.run()
+    assert same_bytes(resumed.depth().values, straight.depth().values)
+    for name, r in straight.layers().items():
+        assert same_bytes(resumed.layers()[name].values, r.values), name
+    b = straight.budget()
+    assert b["snowfall"] > 0
+    store = float(np.nansum(straight.depth().values)) * dem.cell_size**2
+    assert store > 0
+
+
+def test_transform_matches_the_asc_header():
+    dem = snowscape.read_dem(wog_dem())
+    # avaWog.asc: ncols 490, nrows 555, xllcenter 167455.348391387, yllcenter 361955.626633194,
+    # cellsize 4.997678230579: the upper-left corner is half a cell west and north of the
+    # centres' extent.
+    cs = 4.997678230579
+    x0 = 167455.348391387 - cs / 2
+    y0 = 361955.626633194 - cs / 2 + 555 * cs
+    assert dem.shape == (555, 490)
+    t = dem.transform
+    assert t[1] == pytest.approx(cs) and t[5] == pytest.approx(-cs)
+    assert t[2] == 0.0 and t[4] == 0.0
+    assert t[0] == pytest.approx(x0, abs=1e-6)
+    assert t[3] == pytest.approx(y0, abs=1e-6)
+    assert dem.cell_size == pytest.approx(cs)
+    # Nodata is NaN; the first row's cells at columns 211-214 hold altitudes.
+    assert np.isnan(dem.values[0, 0])
+    assert dem.values[0, 211] == pytest.approx(1341.815185546875)
+    assert dem.xy(0, 0) == pytest.approx((x0 + cs / 2, y0 - cs / 2))
+
+
+@pytest.mark.parametrize("ext", ["tif", "asc", "npy", "exr", "png"])
+def test_numpy_round_trip(tmp_path, ext):
+    v = np.linspace(1000.0, 1500.0, 35 * 24, dtype=np.float32).reshape(35, 24)
+    v[3, 4] = np.nan
+    r = snowscape.Raster(v, 2.5, origin=(600000.0, 5100000.0), crs="EPSG:32632")
+    assert r.transform == (600000.0, 2.5, 0.0, 5100000.0, 0.0, -2.5)
+    path = tmp_path / f"r.{ext}"
+    snowscape.write(r, path)
+    back = snowscape.read_dem(path, cell_size=2.5) if ext in ("npy", "exr", "png") else snowscape.read_dem(path)
+    assert back.shape == (35, 24)
+    if ext == "png":
+        # 16-bit codes over the raster's range: within one step.
+        step = 500.0 / 65535
+        ok = ~np.isnan(back.values)
+        assert np.nanmax(np.abs(back.values[ok] - v[ok])) <= step * 1.01
+    else:
+        assert np.isnan(back.values[3, 4])
+        assert same_bytes(np.nan_to_num(back.values, nan=-1), np.nan_to_num(v, nan=-1))
+    if ext in ("tif", "asc"):
+        assert back.transform == pytest.approx(r.transform)
+    if ext == "tif":
+        assert back.crs == "EPSG:32632"
+
+
+def test_avalanche_on_avawog_and_its_release_forms():
+    dem = snowscape.read_dem(wog_dem())
+    shp = WOG / "REL" / "relWog.shp"
+    assert shp.is_file(), f"missing {shp}"
+    a = snowscape.avalanche(dem, shp, thickness=1.0, duration=20)
+    s = a["summary"]
+    released = s["released_volume_m3"]
+    assert released > 1e5
+    assert abs(released - s["deposited_volume_m3"] - s["summary"]["border_outflow_m3"]) < 1e-6 * released
+    assert s["summary"]["runout_length_m"] > 200
+    peak = a["peak_thickness"].values
+    assert np.nanmax(peak) > 0.5 and a["peak_thickness"].transform == dem.transform
+    # A point release: a uniform 0.5 m cover breaks at a cell of the release.
+    rows, cols = np.nonzero(np.nan_to_num(peak) > 1.0)
+    x, y = dem.xy(rows[0], cols[0])
+    p = snowscape.avalanche(dem, (x, y), thickness=0.5, duration=10)
+    assert p["summary"]["released_volume_m3"] > 0
+    # A boolean mask of 20 x 20 cells on the slope.
+    m = np.zeros(dem.shape, dtype=bool)
+    m[rows[0] : rows[0] + 20, cols[0] : cols[0] + 20] = True
+    m &= ~np.isnan(dem.values)
+    q = snowscape.avalanche(dem, m, thickness=1.0, duration=10, friction="voellmy", voellmy_mu=0.2)
+    cell_area = dem.cell_size**2
+    assert q["summary"]["released_volume_m3"] == pytest.approx(m.sum() * cell_area, rel=1e-5)
+    assert q["summary"]["parameters"]["friction"] == "voellmy"
+
+
+def test_bad_input_raises_naming_the_value(tmp_path):
+    dem = snowscape.read_dem(wog_dem())
+    with pytest.raises(OSError, match="no/such.tif"):
+        snowscape.read_dem("no/such.tif")
+    with pytest.raises(ValueError, match="-2"):
+        snowscape.read_dem(wog_dem(), cell_size=-2.0)
+    with pytest.raises(ValueError, match="-1"):
+        snowscape.Winter(dem, scenario={"days": -1})
+    with pytest.raises(ValueError, match="no_such_key"):
+        snowscape.Winter(dem, scenario={"days": 2, "no_such_key": 1})
+    with pytest.raises(ValueError, match="threads"):
+        snowscape.Winter(dem, scenario={"days": 2}, threads=0)
+    with pytest.raises(ValueError, match="inf"):
+        snowscape.Raster(np.array([[1.0, np.inf]]), 1.0)
+    with pytest.raises(ValueError, match="-3"):
+        snowscape.Raster(np.zeros((2, 2)), -3.0)
+    with pytest.raises(ValueError, match="unknown raster extension"):
+        snowscape.write(dem, tmp_path / "x.jpeg")
+    assert not (tmp_path / "x.jpeg").exists()
+    w = snowscape.Winter(dem, scenario={"days": 2})
+    with pytest.raises(ValueError, match="past the season's end"):
+        w.run(5)
+    with pytest.raises(ValueError, match="outside"):
+        w.trigger_avalanche(0.0, 0.0)
+    with pytest.raises(ValueError, match="voellmy_mu"):
+        snowscape.avalanche(dem, (0.0, 0.0), friction="voellmy", voellmy_mu=1e9)
+    with pytest.raises(ValueError, match="no_such_param"):
+        snowscape.avalanche(dem, (0.0, 0.0), no_such_param=1)
+    with pytest.raises(OSError, match="nothing.shp"):
+        snowscape.avalanche(dem, tmp_path / "nothing.shp")
+    nan_dem = snowscape.Raster(np.full((4, 4), np.nan, dtype=np.float32), 10.0)
+    with pytest.raises(ValueError):
+        snowscape.Winter(nan_dem, scenario={"days": 1})
+
+
+def test_to_xarray():
+    xr = pytest.importorskip("xarray")
+    r = snowscape.Raster(np.arange(6, dtype=np.float32).reshape(2, 3), 10.0, origin=(100.0, 50.0))
+    a = r.to_xarray()
+    assert isinstance(a, xr.DataArray)
+    assert list(a.x.values) == [105.0, 115.0, 125.0] and list(a.y.values) == [45.0, 35.0]
