@@ -22,7 +22,7 @@ import numpy as np
 
 from . import _snowscape
 
-__all__ = ["Raster", "read_dem", "write", "Winter", "avalanche"]
+__all__ = ["Raster", "read_dem", "write", "Winter", "avalanche", "cover", "transport"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -325,4 +325,68 @@ def avalanche(
     )
     out: Dict[str, Any] = {name: Raster._from_native(parts) for name, parts in rasters}
     out["summary"] = json.loads(summary)
+    return out
+
+
+def cover(
+    mesh_path: PathLike,
+    method: str = "diffusion",
+    *,
+    up: str = "y",
+    scale: float = 1.0,
+    **params: Any,
+) -> Dict[str, Any]:
+    """Snow on a triangle mesh (OBJ, PLY, glTF/GLB), as ``snowscape cover`` computes it:
+    ``method="diffusion"`` (von Festenberg & Gumhold 2011) or ``"fearing"`` (Fearing 2000).
+
+    ``up`` is the file's up axis (``"y"`` or ``"z"``), ``scale`` its metres per unit;
+    ``**params`` are the method's keys of a cover parameter file (``depth_m``, ``radius_m``,
+    ``overhang``... for diffusion; ``depth_m``, ``passes``, ``material={"aor_deg": 45}``...
+    for Fearing). Returns ``{"vertices": (N, 3) float32 in the mesh file's axes and units (as
+    snow.obj), "faces": (M, 3) uint32 counter-clockwise triangles, "report": dict}``.
+    """
+    v, f, report = _snowscape.cover(
+        os.fspath(mesh_path), str(method), str(up), float(scale), json.dumps(params)
+    )
+    return {
+        "vertices": np.frombuffer(v, dtype="<f4").reshape(-1, 3).astype(np.float32),
+        "faces": np.frombuffer(f, dtype="<u4").reshape(-1, 3).astype(np.uint32),
+        "report": json.loads(report),
+    }
+
+
+def transport(
+    dem: Union[None, Raster, PathLike] = None,
+    scenario: Optional[str] = None,
+    *,
+    hours: Optional[float] = None,
+    seed: Optional[int] = None,
+    flakes: Optional[int] = None,
+    wind_iterations: Optional[int] = None,
+    voxel_size: Optional[float] = None,
+    voxel_layers: Optional[int] = None,
+    uniform_precipitation: bool = False,
+) -> Dict[str, Any]:
+    """Physical snow transport (Jubert 2018: 3D wind, saltation, suspension, sublimation, melt)
+    as ``snowscape transport`` runs it, over ``dem`` or the scene of ``scenario`` (a scenario
+    file's path or a shipped name, ``"castle"`` or ``"valley"``; default: the weather of Table
+    7.I on the DEM, with a wind grid fitted to it).
+
+    Returns the rasters ``depth``, ``density``, ``q_salt``, ``q_susp``, ``q_subl``,
+    ``precipitation``, ``wind_u``, ``wind_v`` and ``"report"`` (mass budget, wind, flakes).
+    """
+    native = None if dem is None else _as_raster(dem)._native()
+    rasters, report = _snowscape.transport(
+        native,
+        None if scenario is None else os.fspath(scenario),
+        hours,
+        seed,
+        flakes,
+        wind_iterations,
+        voxel_size,
+        voxel_layers,
+        bool(uniform_precipitation),
+    )
+    out: Dict[str, Any] = {name: Raster._from_native(parts) for name, parts in rasters}
+    out["report"] = json.loads(report)
     return out

@@ -7,9 +7,6 @@
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-use snowscape::avalanche::validation::ThicknessConvention;
-use snowscape::avalanche::{AvalancheError, AvalancheParams, AvalancheWorkspace, RestOutcome};
-use snowscape::avalanche_release::{ReleaseSpec, release_terrain};
 use snowscape::io::{RasterFormat, ReadOptions, read_dem, write_raster};
 use snowscape::season::scenario::Scenario;
 use snowscape::season::winter::Winter;
@@ -21,10 +18,10 @@ use std::path::PathBuf;
 
 /// A raster coming in: `f32` bytes, width, height, `(origin_x, origin_y, pixel_width,
 /// pixel_height)` and the CRS (EPSG code as `EPSG:n`, or WKT).
-type GridIn<'a> = (&'a [u8], usize, usize, (f64, f64, f64, f64), Option<String>);
+pub(crate) type GridIn<'a> = (&'a [u8], usize, usize, (f64, f64, f64, f64), Option<String>);
 
 /// A raster going out: as [`GridIn`], plus the metric cell size `(x, y)`.
-type GridOut<'py> = (
+pub(crate) type GridOut<'py> = (
     Bound<'py, PyBytes>,
     usize,
     usize,
@@ -34,7 +31,7 @@ type GridOut<'py> = (
 );
 
 /// The message of an error and of its sources, as the command line prints it.
-fn message(e: &(dyn std::error::Error + 'static)) -> String {
+pub(crate) fn message(e: &(dyn std::error::Error + 'static)) -> String {
     let mut text = e.to_string();
     let mut source = e.source();
     while let Some(s) = source {
@@ -50,7 +47,7 @@ fn message(e: &(dyn std::error::Error + 'static)) -> String {
 
 /// `OSError` when an I/O error lies under `e` (a file missing, unreadable, unwritable), else
 /// `ValueError`, with the command line's message.
-fn py_err(e: impl std::error::Error + 'static) -> PyErr {
+pub(crate) fn py_err(e: impl std::error::Error + 'static) -> PyErr {
     let mut io = false;
     let mut cur: Option<&(dyn std::error::Error + 'static)> = Some(&e);
     while let Some(s) = cur {
@@ -65,12 +62,12 @@ fn py_err(e: impl std::error::Error + 'static) -> PyErr {
     }
 }
 
-fn value_err(text: impl Into<String>) -> PyErr {
+pub(crate) fn value_err(text: impl Into<String>) -> PyErr {
     PyValueError::new_err(text.into())
 }
 
 /// A [`Grid`] from a raster coming in (NaN cells are nodata).
-fn grid_in(g: GridIn) -> PyResult<Grid> {
+pub(crate) fn grid_in(g: GridIn) -> PyResult<Grid> {
     let (bytes, w, h, (ox, oy, pw, ph), crs) = g;
     let n = w
         .checked_mul(h)
@@ -118,7 +115,7 @@ fn grid_in(g: GridIn) -> PyResult<Grid> {
 }
 
 /// A raster going out: `values` on `geometry`, NaN where `mask` says nodata.
-fn grid_out<'py>(
+pub(crate) fn grid_out<'py>(
     py: Python<'py>,
     geometry: &GridGeometry,
     mask: &NodataMask,
@@ -140,7 +137,7 @@ fn grid_out<'py>(
     )
 }
 
-fn grid_parts<'py>(py: Python<'py>, g: &Grid) -> GridOut<'py> {
+pub(crate) fn grid_parts<'py>(py: Python<'py>, g: &Grid) -> GridOut<'py> {
     grid_out(py, g.geometry(), g.mask(), g.data())
 }
 
@@ -425,156 +422,15 @@ impl PyWinter {
     }
 }
 
-/// One avalanche from release to rest on `dem`: the peak thickness and speed, the deposit and
-/// the entrained depth (grid rasters) and the summary (JSON).
-#[pyfunction]
-#[pyo3(signature = (dem, release_path, release_mask, release_point, thickness, slope_normal, params_json, duration, snow_cover))]
-#[allow(clippy::too_many_arguments)]
-fn avalanche<'py>(
-    py: Python<'py>,
-    dem: GridIn,
-    release_path: Option<PathBuf>,
-    release_mask: Option<&[u8]>,
-    release_point: Option<(f64, f64)>,
-    thickness: Option<f64>,
-    slope_normal: bool,
-    params_json: String,
-    duration: f64,
-    snow_cover: f64,
-) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
-    let dem = grid_in(dem)?;
-    dem.check_terrain().map_err(py_err)?;
-    let params: AvalancheParams = serde_json::from_str(&params_json)
-        .map_err(|e| value_err(format!("avalanche parameters: {e}")))?;
-    params.validate().map_err(py_err)?;
-    if let Some(t) = thickness
-        && !(t.is_finite() && t > 0.0 && t <= 50.0)
-    {
-        return Err(value_err(format!(
-            "thickness must be in (0, 50] m, got {t}"
-        )));
-    }
-    if !(snow_cover.is_finite() && (0.0..=50.0).contains(&snow_cover)) {
-        return Err(value_err(format!(
-            "snow_cover must be in [0, 50] m, got {snow_cover}"
-        )));
-    }
-    let options = snowscape::avalanche::RunOptions {
-        duration_s: duration,
-        ..Default::default()
-    };
-    options.validate().map_err(py_err)?;
-    let spec = match (release_path, release_mask, release_point) {
-        (Some(p), None, None) => {
-            if !p.exists() {
-                return Err(PyOSError::new_err(format!(
-                    "release {}: no such file",
-                    p.display()
-                )));
-            }
-            ReleaseSpec::File(p)
-        }
-        (None, Some(m), None) => {
-            if m.len() != dem.geometry().len() {
-                return Err(value_err(format!(
-                    "release mask has {} cells, the DEM {} x {}",
-                    m.len(),
-                    dem.geometry().width(),
-                    dem.geometry().height()
-                )));
-            }
-            ReleaseSpec::Mask(m.iter().map(|&b| b != 0).collect())
-        }
-        (None, None, Some((x, y))) => {
-            if !(x.is_finite() && y.is_finite()) {
-                return Err(value_err(format!(
-                    "release point ({x}, {y}) must be finite"
-                )));
-            }
-            ReleaseSpec::Point(x, y)
-        }
-        _ => {
-            return Err(value_err(
-                "give exactly one release: a path, a mask or (x, y)",
-            ));
-        }
-    };
-    let convention = if slope_normal {
-        ThicknessConvention::SlopeNormal
-    } else {
-        ThicknessConvention::Vertical
-    };
-    let (mut terrain, cells, area) =
-        release_terrain(&dem, &spec, thickness, convention, &ReadOptions::default())
-            .map_err(py_err)?;
-    if snow_cover > 0.0 {
-        let mask = dem.mask().clone();
-        for (i, v) in terrain.layer_mut(SnowLayer::Powder).iter_mut().enumerate() {
-            if mask.is_valid(i) && !area.cells[i] {
-                *v = snow_cover as f32;
-            }
-        }
-    }
-    if !cells
-        .iter()
-        .any(|&i| terrain.layer(SnowLayer::Unstable)[i] > 0.0)
-    {
-        return Err(value_err(
-            "the release holds no snow (released volume 0 m³)",
-        ));
-    }
-    let outcome: RestOutcome = py
-        .detach(|| {
-            AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
-                &mut terrain,
-                &cells,
-                None,
-                &params,
-                &options,
-                SnowLayer::Stable,
-                |_| Ok(()),
-            )
-        })
-        .map_err(py_err)?;
-    let g = dem.geometry();
-    let n = g.len();
-    let dense = |cells: Vec<f64>| cells.into_iter().map(|v| v as f32).collect::<Vec<f32>>();
-    let maps = vec![
-        (
-            "peak_thickness",
-            dense(RestOutcome::dense(&outcome.peak_thickness, n)),
-        ),
-        (
-            "peak_velocity",
-            dense(RestOutcome::dense(&outcome.peak_speed, n)),
-        ),
-        ("deposit", dense(RestOutcome::dense(&outcome.deposited, n))),
-        (
-            "entrained",
-            dense(RestOutcome::dense(&outcome.entrained, n)),
-        ),
-    ];
-    let rasters = maps
-        .into_iter()
-        .map(|(name, v)| (name.to_string(), grid_out(py, g, dem.mask(), &v)))
-        .collect();
-    let summary = serde_json::json!({
-        "summary": outcome.summary,
-        "released_volume_m3": outcome.released_m3,
-        "entrained_volume_m3": outcome.entrained_m3,
-        "deposited_volume_m3": outcome.deposited_m3,
-        "release_cells": area.count(),
-        "release_area_m2": area.area_m2(),
-        "parameters": params,
-    });
-    Ok((rasters, summary.to_string()))
-}
+mod jobs;
 
 #[pymodule]
 fn _snowscape(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_raster, m)?)?;
     m.add_function(wrap_pyfunction!(write, m)?)?;
-    m.add_function(wrap_pyfunction!(avalanche, m)?)?;
+    m.add_function(wrap_pyfunction!(jobs::avalanche, m)?)?;
+    m.add_function(wrap_pyfunction!(jobs::cover, m)?)?;
+    m.add_function(wrap_pyfunction!(jobs::transport, m)?)?;
     m.add_class::<PyWinter>()?;
     m.add("CHUNK_DAYS", CHUNK_DAYS)?;
     Ok(())

@@ -182,3 +182,51 @@ def test_to_xarray():
     a = r.to_xarray()
     assert isinstance(a, xr.DataArray)
     assert list(a.x.values) == [105.0, 115.0, 125.0] and list(a.y.values) == [45.0, 35.0]
+
+
+def test_cover_matches_snowscape_cover(tmp_path):
+    mesh = DATA / "meshes" / "spider.obj"
+    assert mesh.is_file(), f"the shared spider mesh is missing: expected {mesh}"
+    out = tmp_path / "cover"
+    snowscape_cli("cover", "--mesh", str(mesh), "--method", "diffusion", "--depth", "0.5", "--out", str(out))
+    import json
+
+    cli = json.loads((out / "report.json").read_text())
+    c = snowscape.cover(mesh, "diffusion", depth_m=0.5)
+    assert c["vertices"].dtype == np.float32 and c["vertices"].shape[1] == 3
+    assert c["faces"].dtype == np.uint32 and c["faces"].max() < len(c["vertices"])
+    s = c["report"]["stats"]
+    assert s["vertices"] == cli["snow"]["vertices"] and s["triangles"] == cli["snow"]["triangles"]
+    assert s["volume_m3"] == cli["snow"]["volume_m3"]
+    # The vertices in the file's axes: the OBJ the command line wrote lists the same points.
+    first = next(l for l in (out / "snow.obj").read_text().splitlines() if l.startswith("v "))
+    assert np.allclose([float(t) for t in first.split()[1:4]], c["vertices"][0], atol=1e-4)
+    f = snowscape.cover(mesh, "fearing", passes=1, budget_s=1.0)
+    assert len(f["faces"]) > 100 and f["report"]["method"] == "fearing"
+    with pytest.raises(ValueError, match=r"kernel radius \(R\) -1"):
+        snowscape.cover(mesh, "diffusion", radius_m=-1.0)
+    with pytest.raises(ValueError, match="no_such"):
+        snowscape.cover(mesh, "diffusion", no_such=1)
+    with pytest.raises(ValueError, match="method"):
+        snowscape.cover(mesh, "paint")
+    with pytest.raises(OSError, match="nothing.obj"):
+        snowscape.cover(tmp_path / "nothing.obj")
+
+
+def test_transport_bytes_equal_snowscape_transport(tmp_path):
+    dem = DATA / "dem" / "rme_idaho_50m" / "dem.asc"
+    assert dem.is_file(), f"the shared RME DEM is missing: expected {dem}"
+    out = tmp_path / "tr"
+    snowscape_cli("transport", "--dem", str(dem), "--hours", "2", "--out", str(out))
+    r = snowscape.transport(dem, hours=2)
+    for name in ("depth", "q_salt", "precipitation"):
+        cli = snowscape.read_dem(out / f"{name}.tif").values
+        assert same_bytes(r[name].values, cli), name
+    b = r["report"]["budget"]
+    assert b["precipitation_in"] > 0 and abs(b["closure_error"]) < 1e-6 * b["precipitation_in"]
+    with pytest.raises(ValueError, match="no scene"):
+        snowscape.transport()
+    with pytest.raises(ValueError, match="hours|duration_h"):
+        snowscape.transport(dem, hours=-1.0)
+    with pytest.raises(ValueError, match="neither a file nor a shipped scenario"):
+        snowscape.transport(dem, scenario="no-such-scenario")

@@ -98,4 +98,3 @@ pub fn release_terrain(
     let cells = (0..area.cells.len()).filter(|&i| area.cells[i]).collect();
     Ok((terrain, cells, area))
 }
-

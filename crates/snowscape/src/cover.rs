@@ -85,6 +85,17 @@ impl CoverParameters {
         Ok(p)
     }
 
+    /// The Fearing cover's parameters for `scene`: the file's, with `depth_m` 2 % of the
+    /// scene's horizontal diameter unless the file set it (the command line's default and the
+    /// Python package's); `None` when the scene has no triangle.
+    pub fn fearing_for(&self, scene: &snowscape_mesh::Scene) -> Option<FearingParams> {
+        let mut p = self.fearing.clone();
+        if !self.fearing_depth_set {
+            p.depth_m = default_depth_m(scene)?;
+        }
+        Some(p)
+    }
+
     /// Reads a parameter file (a regular file of bounded size) and checks it.
     pub fn read(path: &Path) -> Result<Self, CoverParameterError> {
         let name = path.display().to_string();
@@ -112,6 +123,13 @@ impl CoverParameters {
                 source,
             })
     }
+}
+
+/// The default snow depth on a scene: 2 % of its horizontal diameter, m (`None` without
+/// triangles).
+pub fn default_depth_m(scene: &snowscape_mesh::Scene) -> Option<f64> {
+    let b = scene.bounds()?;
+    Some(0.02 * (b.size()[0] as f64).hypot(b.size()[1] as f64))
 }
 
 #[cfg(test)]

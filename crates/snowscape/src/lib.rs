@@ -26,6 +26,7 @@
 //! | [`report`] | the typed `report.json` of every job |
 //! | [`avalanche_release`] | one avalanche's release on a DEM (file, mask or rupture point), as `snowscape avalanche` and the Python package take it |
 //! | [`cover`] | both mesh covers' parameters from a TOML file |
+//! | [`transport_job`] | a 3D transport run's scenario, a DEM as its scene, the wind grid fitted to it |
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
 //! parameters a struct whose fields carry units and cite their source, its errors a typed
@@ -59,6 +60,7 @@ pub mod cover;
 pub mod outputs;
 pub mod report;
 pub mod season_run;
+pub mod transport_job;
 
 pub use snowscape_avalanche as avalanche;
 pub use snowscape_environment as environment;

@@ -464,13 +464,9 @@ fn cover_fearing(
     params.depth_m = match args.depth {
         Some(d) => d,
         None if depth_set => params.depth_m,
-        None => {
-            let b = scene
-                .bounds()
-                .ok_or_else(|| anyhow!("the mesh has no triangles"))
-                .bad_input()?;
-            0.02 * (b.size()[0] as f64).hypot(b.size()[1] as f64)
-        }
+        None => snowscape::cover::default_depth_m(scene)
+            .ok_or_else(|| anyhow!("the mesh has no triangles"))
+            .bad_input()?,
     };
     if let Some(b) = args.budget {
         params.budget_s = b;

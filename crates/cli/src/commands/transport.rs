@@ -8,18 +8,15 @@ use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::prepare_dir;
 use anyhow::{Context, anyhow, bail};
 use serde_json::json;
+use snowscape::transport_job::{Overrides, dem_heights, fit_to_scene, load_scenario};
 use snowscape_mesh::top_view::{frame_scene, highest_surface};
 use snowscape_mesh::{SceneBvh, SourceFrame, UpAxis, read_scene};
 use snowscape_terrain::{Grid, GridGeometry, NodataMask};
 use snowscape_transport::outputs::{RunContext, write_outputs};
-use snowscape_transport::scenario::{Scenario, SceneSpec, fit_voxels, run, shipped_scenario};
+use snowscape_transport::scenario::{SceneSpec, run};
 use std::path::Path;
 use std::time::Instant;
 
-/// Longest side of an automatically fitted wind grid, voxels.
-const FITTED_COLUMNS: usize = 128;
-
-/// The scene of a run: its grid, heights and the cells outside the input.
 struct SceneInput {
     geometry: GridGeometry,
     heights: Vec<f32>,
@@ -27,59 +24,15 @@ struct SceneInput {
     summary: serde_json::Value,
 }
 
-/// The scenario named by `--scenario`: a shipped one (`castle`, `valley`) or a TOML file.
-fn load_scenario(text: Option<&str>) -> anyhow::Result<(Scenario, bool)> {
-    let Some(text) = text else {
-        // The weather of Table 7.I (12 h of snowfall at −5 °C, then 24 h at +10 °C, a
-        // west wind of 11 m/s) on the input scene.
-        let castle = shipped_scenario("castle").expect("shipped");
-        let mut s = Scenario::from_toml(castle).map_err(|e| anyhow!("shipped castle: {e}"))?;
-        s.name = "table_7_1_weather".into();
-        s.scene = SceneSpec::Input;
-        s.wind_iterations = 20;
-        return Ok((s, false));
-    };
-    let path = Path::new(text);
-    let (source, name) = if path.exists() {
-        let s = snowscape_io::input::read_regular_text(path)
-            .with_context(|| format!("cannot read scenario {}", path.display()))?;
-        (s, path.display().to_string())
-    } else if let Some(s) = shipped_scenario(text) {
-        (s.to_string(), format!("shipped scenario {text}"))
-    } else {
-        bail!("--scenario {text:?} is neither a file nor a shipped scenario (castle, valley)");
-    };
-    let scenario = Scenario::from_toml(&source).map_err(|e| anyhow!("scenario {name}: {e}"))?;
-    scenario
-        .validate()
-        .map_err(|e| anyhow!("scenario {name}: {e}"))?;
-    Ok((scenario, true))
-}
-
 /// A DEM with its nodata cells filled by the lowest valid altitude (the wind needs a
 /// surface everywhere); the mask keeps them nodata in the outputs.
 fn dem_scene(args: &TransportArgs, path: &Path) -> anyhow::Result<SceneInput> {
     let grid = args.dem_input.read(path)?;
-    let mask = grid.mask().clone();
-    let valid = |i: usize| mask.is_valid(i);
-    let lowest = (0..grid.data().len())
-        .filter(|&i| valid(i))
-        .map(|i| grid.data()[i])
-        .fold(f32::INFINITY, f32::min);
-    if !lowest.is_finite() {
-        bail!("{}: every cell is nodata", path.display());
-    }
-    let filled = (0..grid.data().len()).filter(|&i| !valid(i)).count();
-    let heights = grid
-        .data()
-        .iter()
-        .enumerate()
-        .map(|(i, &z)| if valid(i) { z } else { lowest })
-        .collect();
+    let (heights, filled) = dem_heights(&grid, &path.display().to_string())?;
     Ok(SceneInput {
         geometry: grid.geometry().clone(),
         heights,
-        mask,
+        mask: grid.mask().clone(),
         summary: json!({"dem": path.display().to_string(), "nodata_cells_filled": filled}),
     })
 }
@@ -182,34 +135,6 @@ fn parse_at(text: &str, g: &GridGeometry) -> anyhow::Result<(f64, f64)> {
     ))
 }
 
-/// Applies the command-line overrides to the scenario.
-fn apply_overrides(args: &TransportArgs, s: &mut Scenario) -> anyhow::Result<()> {
-    if let Some(h) = args.hours {
-        s.duration_h = h;
-    }
-    if let Some(n) = args.flakes {
-        s.flakes.count = n;
-    }
-    if let Some(n) = args.wind_iterations {
-        s.wind_iterations = n;
-    }
-    if let Some(seed) = args.seed {
-        s.flakes.seed = seed;
-    }
-    if let Some(v) = args.voxel_size {
-        s.voxel_size_m = v;
-    }
-    if let Some(n) = args.voxel_layers {
-        s.voxel_layers = n;
-    }
-    if args.uniform_precipitation {
-        s.uniform_precipitation = true;
-    }
-    s.validate()
-        .context("the scenario after the command-line overrides")?;
-    Ok(())
-}
-
 pub fn run_command(args: &TransportArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let started = Instant::now();
     let (mut scenario, from_file) = load_scenario(args.scenario.as_deref()).bad_input()?;
@@ -245,27 +170,23 @@ pub fn run_command(args: &TransportArgs, global: &GlobalArgs) -> Result<(), Fail
             }
         },
     };
-    let lowest = input.heights.iter().fold(f32::INFINITY, |m, &z| m.min(z));
-    let highest = input
-        .heights
-        .iter()
-        .fold(f32::NEG_INFINITY, |m, &z| m.max(z));
-    if !from_file && args.voxel_size.is_none() && args.voxel_layers.is_none() {
+    let overrides = Overrides {
+        hours: args.hours,
+        flakes: args.flakes,
+        seed: args.seed,
+        wind_iterations: args.wind_iterations,
+        voxel_size: args.voxel_size,
+        voxel_layers: args.voxel_layers,
+        uniform_precipitation: args.uniform_precipitation,
+    };
+    if !from_file && !overrides.sets_voxels() {
         // No scenario file: a wind grid fitted to the scene.
-        let (size, layers) = fit_voxels(
-            &input.geometry,
-            f64::from(lowest),
-            f64::from(highest),
-            input
-                .geometry
-                .cell_size_x()
-                .max(input.geometry.cell_size_y()),
-            FITTED_COLUMNS,
-        );
-        scenario.voxel_size_m = size;
-        scenario.voxel_layers = layers;
+        fit_to_scene(&mut scenario, &input.geometry, &input.heights);
     }
-    apply_overrides(args, &mut scenario).bad_input()?;
+    overrides
+        .apply(&mut scenario)
+        .context("the scenario after the command-line overrides")
+        .bad_input()?;
     prepare_dir(&args.out).job_failed()?;
     if !global.quiet {
         let g = &input.geometry;

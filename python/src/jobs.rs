@@ -1,0 +1,337 @@
+//! The one-shot jobs: an avalanche to rest, a mesh cover (and the 3D transport run), each on
+//! the library's path that the command line takes.
+
+use crate::{GridIn, GridOut, grid_in, grid_out, py_err, value_err};
+use pyo3::exceptions::PyOSError;
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+use snowscape::avalanche::validation::ThicknessConvention;
+use snowscape::avalanche::{AvalancheError, AvalancheParams, AvalancheWorkspace, RestOutcome};
+use snowscape::avalanche_release::{ReleaseSpec, release_terrain};
+use snowscape::cover::CoverParameters;
+use snowscape::io::ReadOptions;
+use snowscape::mesh::{SourceFrame, UpAxis, read_scene};
+use snowscape::terrain::SnowLayer;
+use std::path::PathBuf;
+
+/// One avalanche from release to rest on `dem`: the peak thickness and speed, the deposit and
+/// the entrained depth (grid rasters) and the summary (JSON).
+#[pyfunction]
+#[pyo3(signature = (dem, release_path, release_mask, release_point, thickness, slope_normal, params_json, duration, snow_cover))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn avalanche<'py>(
+    py: Python<'py>,
+    dem: GridIn,
+    release_path: Option<PathBuf>,
+    release_mask: Option<&[u8]>,
+    release_point: Option<(f64, f64)>,
+    thickness: Option<f64>,
+    slope_normal: bool,
+    params_json: String,
+    duration: f64,
+    snow_cover: f64,
+) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
+    let dem = grid_in(dem)?;
+    dem.check_terrain().map_err(py_err)?;
+    let params: AvalancheParams = serde_json::from_str(&params_json)
+        .map_err(|e| value_err(format!("avalanche parameters: {e}")))?;
+    params.validate().map_err(py_err)?;
+    if let Some(t) = thickness
+        && !(t.is_finite() && t > 0.0 && t <= 50.0)
+    {
+        return Err(value_err(format!(
+            "thickness must be in (0, 50] m, got {t}"
+        )));
+    }
+    if !(snow_cover.is_finite() && (0.0..=50.0).contains(&snow_cover)) {
+        return Err(value_err(format!(
+            "snow_cover must be in [0, 50] m, got {snow_cover}"
+        )));
+    }
+    let options = snowscape::avalanche::RunOptions {
+        duration_s: duration,
+        ..Default::default()
+    };
+    options.validate().map_err(py_err)?;
+    let spec = match (release_path, release_mask, release_point) {
+        (Some(p), None, None) => {
+            if !p.exists() {
+                return Err(PyOSError::new_err(format!(
+                    "release {}: no such file",
+                    p.display()
+                )));
+            }
+            ReleaseSpec::File(p)
+        }
+        (None, Some(m), None) => {
+            if m.len() != dem.geometry().len() {
+                return Err(value_err(format!(
+                    "release mask has {} cells, the DEM {} x {}",
+                    m.len(),
+                    dem.geometry().width(),
+                    dem.geometry().height()
+                )));
+            }
+            ReleaseSpec::Mask(m.iter().map(|&b| b != 0).collect())
+        }
+        (None, None, Some((x, y))) => {
+            if !(x.is_finite() && y.is_finite()) {
+                return Err(value_err(format!(
+                    "release point ({x}, {y}) must be finite"
+                )));
+            }
+            ReleaseSpec::Point(x, y)
+        }
+        _ => {
+            return Err(value_err(
+                "give exactly one release: a path, a mask or (x, y)",
+            ));
+        }
+    };
+    let convention = if slope_normal {
+        ThicknessConvention::SlopeNormal
+    } else {
+        ThicknessConvention::Vertical
+    };
+    let (mut terrain, cells, area) =
+        release_terrain(&dem, &spec, thickness, convention, &ReadOptions::default())
+            .map_err(py_err)?;
+    if snow_cover > 0.0 {
+        let mask = dem.mask().clone();
+        for (i, v) in terrain.layer_mut(SnowLayer::Powder).iter_mut().enumerate() {
+            if mask.is_valid(i) && !area.cells[i] {
+                *v = snow_cover as f32;
+            }
+        }
+    }
+    if !cells
+        .iter()
+        .any(|&i| terrain.layer(SnowLayer::Unstable)[i] > 0.0)
+    {
+        return Err(value_err(
+            "the release holds no snow (released volume 0 m³)",
+        ));
+    }
+    let outcome: RestOutcome = py
+        .detach(|| {
+            AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
+                &mut terrain,
+                &cells,
+                None,
+                &params,
+                &options,
+                SnowLayer::Stable,
+                |_| Ok(()),
+            )
+        })
+        .map_err(py_err)?;
+    let g = dem.geometry();
+    let n = g.len();
+    let dense = |cells: Vec<f64>| cells.into_iter().map(|v| v as f32).collect::<Vec<f32>>();
+    let maps = vec![
+        (
+            "peak_thickness",
+            dense(RestOutcome::dense(&outcome.peak_thickness, n)),
+        ),
+        (
+            "peak_velocity",
+            dense(RestOutcome::dense(&outcome.peak_speed, n)),
+        ),
+        ("deposit", dense(RestOutcome::dense(&outcome.deposited, n))),
+        (
+            "entrained",
+            dense(RestOutcome::dense(&outcome.entrained, n)),
+        ),
+    ];
+    let rasters = maps
+        .into_iter()
+        .map(|(name, v)| (name.to_string(), grid_out(py, g, dem.mask(), &v)))
+        .collect();
+    let summary = serde_json::json!({
+        "summary": outcome.summary,
+        "released_volume_m3": outcome.released_m3,
+        "entrained_volume_m3": outcome.entrained_m3,
+        "deposited_volume_m3": outcome.deposited_m3,
+        "release_cells": area.count(),
+        "release_area_m2": area.area_m2(),
+        "parameters": params,
+    });
+    Ok((rasters, summary.to_string()))
+}
+
+/// A snow cover of a mesh scene (`method` `diffusion` or `fearing`, `params_json` the method's
+/// `[diffusion]` / `[fearing]` keys of a cover parameter file): the snow mesh's vertices
+/// (`f32` x, y, z in the mesh file's axes and units, as `snow.obj`) and triangles (`u32`), and
+/// the report (JSON).
+#[pyfunction]
+#[pyo3(signature = (mesh, method, up, scale, params_json))]
+pub(crate) fn cover<'py>(
+    py: Python<'py>,
+    mesh: PathBuf,
+    method: String,
+    up: String,
+    scale: f64,
+    params_json: String,
+) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)> {
+    if method != "diffusion" && method != "fearing" {
+        return Err(value_err(format!(
+            "method {method:?}: expected \"diffusion\" or \"fearing\""
+        )));
+    }
+    let up: UpAxis = up
+        .parse()
+        .map_err(|e| value_err(format!("up {up:?}: {e}")))?;
+    let frame = SourceFrame::new(up, scale).map_err(py_err)?;
+    // The keywords are the method's table of a cover parameter file: the same parser and checks.
+    let params: serde_json::Value = serde_json::from_str(&params_json)
+        .map_err(|e| value_err(format!("cover parameters: {e}")))?;
+    let text = toml::to_string(&serde_json::json!({ method.as_str(): params }))
+        .map_err(|e| value_err(format!("cover parameters: {e} (None has no TOML form)")))?;
+    let file = CoverParameters::from_toml(&text, "the cover keywords").map_err(py_err)?;
+    if !mesh.is_file() {
+        return Err(PyOSError::new_err(format!(
+            "mesh {}: no such file",
+            mesh.display()
+        )));
+    }
+    let (snow, report) = py.detach(|| -> PyResult<_> {
+        let (scene, mesh_report) = read_scene(&mesh, &frame).map_err(py_err)?;
+        let input = serde_json::json!({
+            "mesh": mesh.display().to_string(),
+            "objects": mesh_report.objects.len(),
+            "vertices": mesh_report.vertices(),
+            "triangles": mesh_report.triangles(),
+            "degenerate_dropped": mesh_report.degenerate_dropped(),
+            "open_edges": mesh_report.open_edges(),
+            "bounds_m": scene.bounds(),
+        });
+        if method == "diffusion" {
+            let c = snowscape::festenberg::cover(&scene, &file.diffusion).map_err(py_err)?;
+            let report = serde_json::json!({
+                "method": "diffusion",
+                "paper": "von Festenberg & Gumhold 2011, Diffusion-Based Snow Cover Generation, Section 5",
+                "input": input,
+                "parameters": c.resolved,
+                "stats": c.stats,
+            });
+            Ok((c.mesh, report))
+        } else {
+            let params = file
+                .fearing_for(&scene)
+                .ok_or_else(|| value_err(format!("{}: the mesh has no triangles", mesh.display())))?;
+            let c = snowscape::fearing::cover(&scene, &params).map_err(py_err)?;
+            let report = serde_json::json!({
+                "method": "fearing",
+                "paper": "Fearing 2000, Computer Modelling of Fallen Snow",
+                "input": input,
+                "parameters": params,
+                "report": c.report,
+            });
+            Ok((c.surface.to_mesh("snow"), report))
+        }
+    })?;
+    if snow.triangles.is_empty() {
+        return Err(value_err(format!(
+            "no snow settled on {} (try a finer resolution_m or a larger depth_m)",
+            mesh.display()
+        )));
+    }
+    let mut v = Vec::with_capacity(snow.positions.len() * 12);
+    for p in &snow.positions {
+        for c in frame.to_file(*p) {
+            v.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    let mut f = Vec::with_capacity(snow.triangles.len() * 12);
+    for t in &snow.triangles {
+        for i in t {
+            f.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    Ok((
+        PyBytes::new(py, &v),
+        PyBytes::new(py, &f),
+        report.to_string(),
+    ))
+}
+
+/// A 3D transport run (Jubert 2018) over a DEM or a scenario's own scene: its rasters (snow
+/// depth, density, saltation, suspension and sublimation fluxes, precipitation ratio, wind u
+/// and v) and its report (mass budget, wind, flakes; JSON).
+#[pyfunction]
+#[pyo3(signature = (dem, scenario, hours, seed, flakes, wind_iterations, voxel_size, voxel_layers, uniform_precipitation))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn transport<'py>(
+    py: Python<'py>,
+    dem: Option<GridIn>,
+    scenario: Option<String>,
+    hours: Option<f64>,
+    seed: Option<u64>,
+    flakes: Option<usize>,
+    wind_iterations: Option<usize>,
+    voxel_size: Option<f64>,
+    voxel_layers: Option<usize>,
+    uniform_precipitation: bool,
+) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
+    use snowscape::terrain::NodataMask;
+    use snowscape::transport::scenario::{SceneSpec, run};
+    use snowscape::transport_job::{Overrides, dem_heights, fit_to_scene, load_scenario};
+    let (mut scenario, from_file) = load_scenario(scenario.as_deref()).map_err(py_err)?;
+    let (geometry, heights, mask) = match dem {
+        Some(d) => {
+            let grid = grid_in(d)?;
+            let (heights, _) = dem_heights(&grid, "dem").map_err(py_err)?;
+            scenario.scene = SceneSpec::Input;
+            (grid.geometry().clone(), heights, grid.mask().clone())
+        }
+        None => match scenario.build_scene().map_err(py_err)? {
+            Some((g, h)) => (g, h, NodataMask::all_valid()),
+            None => {
+                return Err(value_err(
+                    "no scene: give a dem, or a scenario with a [scene] (e.g. scenario=\"castle\")",
+                ));
+            }
+        },
+    };
+    let overrides = Overrides {
+        hours,
+        flakes,
+        seed,
+        wind_iterations,
+        voxel_size,
+        voxel_layers,
+        uniform_precipitation,
+    };
+    if !from_file && !overrides.sets_voxels() {
+        fit_to_scene(&mut scenario, &geometry, &heights);
+    }
+    overrides.apply(&mut scenario).map_err(py_err)?;
+    let out = py
+        .detach(|| run(&scenario, &geometry, &heights))
+        .map_err(py_err)?;
+    let maps: Vec<(&str, Vec<f32>)> = vec![
+        ("depth", out.state.depth()),
+        ("density", out.state.density.clone()),
+        ("q_salt", out.q_salt.clone()),
+        ("q_susp", out.q_susp.clone()),
+        ("q_subl", out.q_subl.clone()),
+        ("precipitation", out.precipitation_ratio.clone()),
+        ("wind_u", out.wind_u.clone()),
+        ("wind_v", out.wind_v.clone()),
+    ];
+    let rasters = maps
+        .into_iter()
+        .map(|(n, v)| (n.to_string(), grid_out(py, &out.geometry, &mask, &v)))
+        .collect();
+    let report = serde_json::json!({
+        "scenario": scenario.name,
+        "duration_h": scenario.duration_h,
+        "voxel_size_m": scenario.voxel_size_m,
+        "voxel_layers": scenario.voxel_layers,
+        "steps": out.steps,
+        "budget": out.budget,
+        "wind": out.wind_report,
+        "flakes": out.flakes,
+    });
+    Ok((rasters, report.to_string()))
+}
