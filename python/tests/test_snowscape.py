@@ -230,3 +230,25 @@ def test_transport_bytes_equal_snowscape_transport(tmp_path):
         snowscape.transport(dem, hours=-1.0)
     with pytest.raises(ValueError, match="neither a file nor a shipped scenario"):
         snowscape.transport(dem, scenario="no-such-scenario")
+
+
+def test_ctrl_c_stops_a_season_between_two_events():
+    import signal
+    import threading
+
+    dem = snowscape.read_dem(wog_dem())
+    w = snowscape.Winter(dem, scenario={"days": 400})
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            w.run()
+    finally:
+        timer.cancel()
+    # Stopped part-way, in a consistent state that runs on.
+    assert 0 < w.day < 400
+    day = w.day
+    w.step(1.0)
+    assert w.day >= day + 1.0
+    d = w.depth().values
+    assert np.all(np.isnan(d) | (d >= 0))
