@@ -5,7 +5,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { applyFrame } from './wire.js';
-import { colourOf, LEGENDS, rampColour } from './shade.js';
+import { bareColour, colourOf, LEGENDS, rampColour } from './shade.js';
 import { setupPanels } from './panels.js';
 
 const $ = (id) => document.getElementById(id);
@@ -52,7 +52,7 @@ function onText(m) {
     case 'state': onState(m); break;
     case 'error': app.errors.push(m); status(`error (${m.code}): ${m.message}`); break;
     case 'notice': app.notices.push(m.message); status(m.message); break;
-    case 'job': app.lastJob = m; status(jobText(m)); break;
+    case 'job': app.lastJob = m; app.lastJobAt = performance.now(); status(jobText(m)); break;
     case 'avalanche':
       app.lastAvalanche = m;
       status(`avalanche ${m.phase}: t=${m.time_s.toFixed(1)} s, ${m.flowing_m3.toFixed(0)} m³ moving` +
@@ -70,15 +70,71 @@ function onText(m) {
 // ---------- 3D view ----------
 const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
 renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+// Shadows (`?noshadows` turns them off, for slow software renderers): the shadow map is redrawn
+// only when the terrain or the sun changes, not at every orbit of the camera.
+renderer.shadowMap.enabled = !new URLSearchParams(window.location.search).has('noshadows');
+renderer.shadowMap.type = THREE.PCFSoftShadowMap;
+renderer.shadowMap.autoUpdate = false;
 $('view').appendChild(renderer.domElement);
 const scene = new THREE.Scene();
-scene.background = new THREE.Color(0x9fb8d0);
+// Sky: a gradient from a pale, hazy horizon to a deeper blue zenith; distance haze of the
+// horizon's colour (its range set to the terrain's size when the view is framed).
+const HORIZON = new THREE.Color(0xd9e4ee), ZENITH = new THREE.Color(0x5d8cc4);
+scene.background = skyTexture();
+scene.fog = new THREE.Fog(HORIZON, 1e5, 1e6);
 const camera = new THREE.PerspectiveCamera(45, 1, 1, 1e6);
 const controls = new OrbitControls(camera, renderer.domElement);
-scene.add(new THREE.HemisphereLight(0xffffff, 0x445566, 0.9));
-const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+// Sky light, bluish (it alone lights the snow in the sun's shadows, which thus turn blue), and
+// a warm ground bounce; the sun from the season's date and latitude (state.sun) casts shadows.
+const skyLight = new THREE.HemisphereLight(0xbfd4ff, 0x6b6153, 1.0);
+scene.add(skyLight);
+const sun = new THREE.DirectionalLight(0xfff2dc, 2.1);
 sun.position.set(-1, 1.2, -0.6);
+sun.castShadow = true;
+sun.shadow.mapSize.set(2048, 2048);
+sun.shadow.bias = -0.0005;
+sun.shadow.normalBias = 0.5;
 scene.add(sun);
+scene.add(sun.target);
+
+function skyTexture() {
+  const c = document.createElement('canvas');
+  c.width = 2; c.height = 256;
+  const g = c.getContext('2d');
+  const grad = g.createLinearGradient(0, 0, 0, 256);
+  grad.addColorStop(0, `#${ZENITH.getHexString()}`);
+  grad.addColorStop(0.75, `#${HORIZON.getHexString()}`);
+  grad.addColorStop(1, `#${HORIZON.getHexString()}`);
+  g.fillStyle = grad;
+  g.fillRect(0, 0, 2, 256);
+  const t = new THREE.CanvasTexture(c);
+  t.colorSpace = THREE.SRGBColorSpace;
+  return t;
+}
+
+// Places the sun light along `state.sun` ([east, north, up]; the view's x is east, y up, z
+// south) and fits its shadow camera to the valid cells; below the horizon, a low sky light only.
+function placeSun() {
+  const s = app.state;
+  if (!s || !mesh) return;
+  const cs = s.cell_size_m;
+  const [c0, c1, r0, r1] = validBox || [0, s.width - 1, 0, s.height - 1];
+  const ext = Math.max(c1 - c0 + 1, r1 - r0 + 1) * cs;
+  const x = (c0 + c1 + 1) * cs / 2, z = (r0 + r1 + 1) * cs / 2, y = meshMid();
+  const [e, n, u] = s.sun || [-0.5, 0.5, 0.7];
+  const up = Math.max(u, 0.02);
+  const len = Math.hypot(e, n, up);
+  sun.target.position.set(x, y, z);
+  sun.position.set(x + e / len * ext * 2, y + up / len * ext * 2, z - n / len * ext * 2);
+  sun.intensity = u > 0 ? 2.1 * Math.min(1, 0.35 + u * 1.5) : 0;
+  const cam = sun.shadow.camera;
+  cam.left = -ext * 0.75; cam.right = ext * 0.75; cam.top = ext * 0.75; cam.bottom = -ext * 0.75;
+  cam.near = ext * 0.5; cam.far = ext * 4;
+  cam.updateProjectionMatrix();
+  renderer.shadowMap.needsUpdate = true;
+  app.sunElevationDeg = Math.asin(Math.max(-1, Math.min(1, u))) * 180 / Math.PI;
+  redraw = true;
+}
 const skierGroup = new THREE.Group();
 scene.add(skierGroup);
 
@@ -132,6 +188,8 @@ function buildMesh(s) {
   app.meshTriangles = idx.length / 3;
   app.meshQuads = (meshW - 1) * (meshH - 1);
   mesh = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true }));
+  mesh.castShadow = true;
+  mesh.receiveShadow = true;
   scene.add(mesh);
   // The camera stays where the artist put it across steps, scrubs and loads of the same
   // terrain; only a terrain of another size or cell size is framed anew.
@@ -158,11 +216,35 @@ function setView(kind) {
   else camera.position.set(x, mid + ext * 0.8, z + ext * 0.9);
   camera.far = Math.max(s.width, s.height) * cs * 20;
   camera.updateProjectionMatrix();
+  // Haze: clear over the terrain's near half, the horizon's colour far beyond it.
+  scene.fog.near = ext * 1.2;
+  scene.fog.far = ext * 6;
+  placeSun();
   controls.update();
   app.view = kind;
   redraw = true;
 }
 app.setView = setView;
+// What the view is lit and drawn with (for the browser tests): shadows, haze, the sun light's
+// direction [x east, y up, z south].
+app.rendering = () => ({
+  shadows: renderer.shadowMap.enabled && sun.castShadow && !!mesh && mesh.receiveShadow && mesh.castShadow,
+  fog: !!scene.fog,
+  sunIntensity: sun.intensity,
+  sunDirection: sun.position.clone().sub(sun.target.position).normalize().toArray(),
+});
+// The canvas pixel (CSS px from its top-left corner) where cell (col, row) is drawn, or null
+// when it has no vertex or lies off screen.
+app.screenOf = (col, row) => {
+  if (!mesh) return null;
+  const i = Math.round(col / step), j = Math.round(row / step);
+  if (i >= meshW || j >= meshH) return null;
+  const p = geo.attributes.position.array, v = 3 * (j * meshW + i);
+  const q = new THREE.Vector3(p[v], p[v + 1], p[v + 2]).project(camera);
+  if (Math.abs(q.x) > 1 || Math.abs(q.y) > 1 || q.z > 1) return null;
+  const el = renderer.domElement;
+  return [(q.x + 1) / 2 * el.clientWidth, (1 - q.y) / 2 * el.clientHeight];
+};
 app.cameraPosition = () => camera.position.toArray();
 
 // Keys: Ctrl+Z undo, Ctrl+Shift+Z or Ctrl+Y redo, H home view, T top view (not while typing
@@ -177,6 +259,14 @@ window.addEventListener('keydown', (e) => {
   else if (!mod && !e.altKey && k === 'h') setView('home');
   else if (!mod && !e.altKey && k === 't') setView('top');
 });
+
+// The lowest and highest valid bedrock altitudes (sampled), m.
+function bedrockRange() {
+  const b = grids.bedrock;
+  let lo = Infinity, hi = -Infinity;
+  if (b) for (let i = 0; i < b.length; i += 7) { if (b[i] < lo) lo = b[i]; if (b[i] > hi) hi = b[i]; }
+  return Number.isFinite(lo) ? [lo, hi] : [0, 1];
+}
 
 function meshMid() {
   const b = grids.bedrock;
@@ -209,7 +299,12 @@ function refreshMesh() {
   const b = grids.bedrock;
   if (!b) return;
   const nodataZ = meshMid();
-  const rgb = [0, 0, 0];
+  const rgb = [0, 0, 0], bare = [0, 0, 0];
+  const [zLo, zHi] = bedrockRange();
+  const bz = (c, r) => {
+    const v = b[Math.min(s.height - 1, Math.max(0, r)) * s.width + Math.min(s.width - 1, Math.max(0, c))];
+    return Number.isFinite(v) ? v : NaN;
+  };
   for (const [i0, i1, j0, j1] of ranges) {
     for (let j = j0; j <= j1; j++) {
       const r = Math.min(s.height - 1, j * step);
@@ -224,7 +319,11 @@ function refreshMesh() {
         pos[3 * v] = c * cs;
         pos[3 * v + 1] = z + depth + flow;
         pos[3 * v + 2] = r * cs;
-        colourOf(mode, grids, k, depth, flow, rgb);
+        const z0 = bz(c, r);
+        const gx = (bz(c + step, r) - bz(c - step, r)) / (2 * step * cs);
+        const gz = (bz(c, r + step) - bz(c, r - step)) / (2 * step * cs);
+        bareColour(Math.hypot(gx, gz), (z0 - zLo) / Math.max(1, zHi - zLo), bare);
+        colourOf(mode, grids, k, depth, flow, rgb, bare);
         col[3 * v] = rgb[0]; col[3 * v + 1] = rgb[1]; col[3 * v + 2] = rgb[2];
       }
     }
@@ -247,6 +346,7 @@ function refreshMesh() {
   geo.attributes.position.needsUpdate = true;
   geo.attributes.color.needsUpdate = true;
   geo.attributes.normal.needsUpdate = true;
+  renderer.shadowMap.needsUpdate = true;
   if (ranges.length && ranges[0][1] - ranges[0][0] === meshW - 1) geo.computeBoundingSphere();
 }
 
@@ -254,6 +354,7 @@ function onFrame(buf) {
   const f = applyFrame(buf, grids);
   if (!f) { status('malformed frame from the server'); return; }
   app.frames++;
+  app.lastFrameAt = performance.now();
   if (f.channel === 'bedrock' && app.state) { buildMesh(app.state); dirtyAll(); return; }
   for (const [tx, ty] of f.tiles) dirty.add(`${tx},${ty},${f.tile}`);
   if (f.channel === 'wind' && $('shade').value === 'wind') updateArrows();
@@ -261,8 +362,10 @@ function onFrame(buf) {
 
 function onState(m) {
   const first = !app.state || app.state.width !== m.width || app.state.height !== m.height;
+  const sunMoved = !app.state || String(app.state.sun) !== String(m.sun);
   app.state = m;
   if (first && grids.bedrock) { buildMesh(m); dirtyAll(); }
+  else if (sunMoved) placeSun();
   panels.onState(m);
   if ($('shade').value === 'wind') updateArrows();
 }
@@ -415,6 +518,26 @@ window.addEventListener('pointerup', () => { painting = false; pending = null; }
 $('tool').addEventListener('change', () => { controls.enabled = $('tool').value === 'orbit'; });
 $('shade').addEventListener('change', () => { dirtyAll(); renderLegend(); });
 
+// ---------- DEM import ----------
+// The file goes to `POST /api/dem`; the server reads it as `snowscape run --dem` does, in a job
+// whose progress, failure (the reader's message) or end every tab sees.
+async function importDem(file) {
+  if (!file) return;
+  if (!window.confirm(`Import ${file.name}? The season restarts on this terrain (save the project first to keep it).`)) return;
+  status(`uploading ${file.name} (${(file.size / 1048576).toFixed(1)} MiB)`);
+  try {
+    const r = await fetch(`/api/dem?name=${encodeURIComponent(file.name)}`, { method: 'POST', body: file });
+    const text = await r.text();
+    app.lastImport = { status: r.status, text };
+    status(r.ok ? `importing ${file.name}` : `import refused: ${text.trim()}`);
+  } catch (e) {
+    app.lastImport = { status: 0, text: String(e) };
+    status(`import failed: ${e}`);
+  }
+}
+app.importDem = importDem;
+$('dem-file').addEventListener('change', (ev) => { importDem(ev.target.files[0]); ev.target.value = ''; });
+
 // ---------- screenshot ----------
 // The 3D view as a PNG download, named after the project and the day.
 $('screenshot').addEventListener('click', () => {
@@ -526,12 +649,29 @@ function onDone(m) {
 app.redraw = () => { redraw = true; };
 controls.addEventListener('change', app.redraw);
 window.addEventListener('resize', app.redraw);
+// When the oldest unpatched change arrived (0: none pending).
+let dirtySince = 0;
 function loop() {
   if (painting && pending) { const at = pick(pending); pending = null; if (at) dab(at); }
   if (hover) { const ev = hover; hover = null; showHover(pick(ev)); }
-  if (dirty.size > 0) { refreshMesh(); redraw = true; }
+  // The tile frames of one step arrive as a burst: patch the mesh once they stop (40 ms
+  // without one), or every 400 ms while a long burst lasts; one patch and one draw instead of
+  // one per frame (a draw of a 1024² terrain takes hundreds of ms in a software renderer).
+  if (dirty.size > 0) {
+    const now = performance.now();
+    if (!dirtySince) dirtySince = now;
+    if (now - (app.lastFrameAt || 0) > 40 || now - dirtySince > 400 || !app.state) {
+      refreshMesh(); redraw = true; dirtySince = 0;
+      app.patches = (app.patches || 0) + 1;
+    }
+  }
   controls.update();
-  if (redraw) { renderer.render(scene, camera); redraw = false; app.renders = (app.renders || 0) + 1; }
+  if (redraw) {
+    renderer.render(scene, camera);
+    redraw = false;
+    app.renders = (app.renders || 0) + 1;
+    app.lastRenderAt = performance.now();
+  }
   requestAnimationFrame(loop);
 }
 resize();

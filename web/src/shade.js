@@ -2,6 +2,12 @@
 // Cordonnier et al. 2018 Fig. 11 (purple where unstable or powder snow lies on top, blue for
 // compacted and stable snow, black without snow), and the overlays.
 const ROCK = [0.45, 0.42, 0.38];
+// Bare ground by slope and altitude: grass on gentle, low ground, rock on steep or high ground,
+// dark scree on the steepest faces.
+const GRASS = [0.34, 0.40, 0.23], SCREE = [0.33, 0.31, 0.29];
+// Snow: bright and faintly blue (the sky light fills its shadows with blue); deep snow a little
+// bluer, as light scattered inside it is.
+const SNOW = [0.97, 0.98, 1.0], DEEP_SNOW = [0.80, 0.88, 1.0];
 const LAYER = { compacted: [0.55, 0.62, 0.72], stable: [0.96, 0.97, 1.0], unstable: [0.95, 0.45, 0.3], powder: [0.75, 0.92, 1.0] };
 const VIRIDIS = [[0.267, 0.005, 0.329], [0.229, 0.322, 0.546], [0.128, 0.567, 0.551], [0.369, 0.789, 0.383], [0.993, 0.906, 0.144]];
 const BLUE = [0.18, 0.38, 0.85], PURPLE = [0.6, 0.2, 0.72], BLACK = [0, 0, 0], RED = [0.85, 0.1, 0.1];
@@ -36,28 +42,45 @@ export function rampColour(mode, value, out) {
   viridis((value - r.lo) / (r.hi - r.lo), out);
 }
 
-// Snow depth: rock to white at 30 cm, deep snow bluish (4 m and more).
-function depthColour(depth, out) {
-  const snowShare = Math.min(1, Math.max(0, depth) / 0.3);
-  const deep = Math.min(1, Math.max(0, depth) / 4);
+// The colour of bare ground of slope `tanSlope` (rise over run) at altitude share `alt` (0 at
+// the terrain's lowest cell, 1 at its highest): grass below 30° on the lower 60 % of the
+// relief, rock above, scree on faces steeper than 45°.
+export function bareColour(tanSlope, alt, out) {
+  const t = Number.isFinite(tanSlope) ? tanSlope : 0;
+  const a = Number.isFinite(alt) ? alt : 0;
+  const grass = clamp01((0.58 - t) / 0.2) * clamp01((0.6 - a) / 0.15);
+  const scree = clamp01((t - 1.0) / 0.4);
   for (let c = 0; c < 3; c++) {
-    const snow = [1 - 0.25 * deep, 1 - 0.12 * deep, 1][c];
-    out[c] = ROCK[c] * (1 - snowShare) + snow * snowShare;
+    const rock = ROCK[c] * (1 - scree) + SCREE[c] * scree;
+    out[c] = rock * (1 - grass) + GRASS[c] * grass;
   }
 }
 
-export function colourOf(mode, grids, k, depth, flow, out) {
+function clamp01(x) { return Math.min(1, Math.max(0, x)); }
+
+// Snow depth: bare ground to snow at 30 cm, deep snow bluish (4 m and more).
+function depthColour(depth, out, bare = ROCK) {
+  const snowShare = Math.min(1, Math.max(0, depth) / 0.3);
+  const deep = Math.min(1, Math.max(0, depth) / 4);
+  for (let c = 0; c < 3; c++) {
+    const snow = SNOW[c] * (1 - deep) + DEEP_SNOW[c] * deep;
+    out[c] = bare[c] * (1 - snowShare) + snow * snowShare;
+  }
+}
+
+// `bare`: the colour of the cell's bare ground ([`bareColour`]), where the shading shows it.
+export function colourOf(mode, grids, k, depth, flow, out, bare = ROCK) {
   const snowShare = Math.min(1, depth / 0.3);
   if (flow > 0.01) { out[0] = RED[0]; out[1] = RED[1]; out[2] = RED[2]; return; }
   switch (mode) {
     case 'layers': {
-      if (depth <= 0) { out[0] = ROCK[0]; out[1] = ROCK[1]; out[2] = ROCK[2]; return; }
+      if (depth <= 0) { out[0] = bare[0]; out[1] = bare[1]; out[2] = bare[2]; return; }
       out[0] = out[1] = out[2] = 0;
       for (const l of ['compacted', 'stable', 'unstable', 'powder']) {
         const w = (grids[l] ? grids[l][k] : 0) / depth;
         for (let c = 0; c < 3; c++) out[c] += w * LAYER[l][c];
       }
-      for (let c = 0; c < 3; c++) out[c] = ROCK[c] * (1 - snowShare) + out[c] * snowShare;
+      for (let c = 0; c < 3; c++) out[c] = bare[c] * (1 - snowShare) + out[c] * snowShare;
       return;
     }
     case 'stability': {
@@ -74,5 +97,5 @@ export function colourOf(mode, grids, k, depth, flow, out) {
     }
     default: break;
   }
-  depthColour(depth, out);
+  depthColour(depth, out, bare);
 }

@@ -8,7 +8,9 @@
 // the cancel button stops it, a hover readout that matches the server's cell, Ctrl+Z / Ctrl+Y undo and redo, the home and top views and a camera
 // that a step keeps, the parameter panel (help, ranges and choices from the server, a
 // confirmation before the restart), and (with SNOWSCAPE_TOKEN_URL, a server bound to 0.0.0.0) the
-// page needs its access token and then runs on the cookie. Writes screenshots to
+// page needs its access token and then runs on the cookie; the view is lit by the season's sun
+// with shadows and haze, snow brighter and bluer than bare ground; a DEM imported from the page
+// becomes the terrain and a bad one is refused. Writes screenshots to
 // SNOWSCAPE_SHOTS (default /tmp).
 import { launchChromium, steepestCellInPage } from './common.mjs';
 import assert from 'node:assert/strict';
@@ -450,6 +452,107 @@ await check('a real DEM with nodata (avaMal): nodata cells are not drawn and the
   assert.ok(share < m.valid / m.cells + 0.02, `${share} of the quads drawn for ${m.valid / m.cells} valid cells`);
   assert.ok(share > m.valid / m.cells - 0.1, `only ${share} of the quads drawn`);
   await p.screenshot({ path: `${shots}/editor_avamal.png` });
+  await p.close();
+});
+
+await check('the view looks like snow on avaMal at day 60: shadows from the season\'s sun, haze, snow brighter and bluer than bare ground', async () => {
+  const demUrl = process.env.SNOWSCAPE_DEM_URL;
+  assert.ok(demUrl, 'SNOWSCAPE_DEM_URL is not set (scripts/browser-tests.sh starts that server)');
+  const p = await context.newPage();
+  await p.goto(demUrl);
+  await p.waitForFunction(() => window.snowscape && window.snowscape.meshTriangles > 0, null, { timeout: 120000 });
+  await p.evaluate(() => window.snowscape.send({ type: 'step', days: 60 }));
+  await p.waitForFunction(() => window.snowscape.state.day >= 60 - 1e-6 && !window.snowscape.state.busy, null, { timeout: 600000 });
+  await p.evaluate(() => window.snowscape.setView('top'));
+  await p.waitForTimeout(3000);
+  const r = await p.evaluate(() => {
+    const app = window.snowscape, s = app.state, g = app.grids;
+    const rendering = app.rendering();
+    // The canvas as the user sees it.
+    const src = document.querySelector('#view canvas');
+    const c = document.createElement('canvas');
+    c.width = src.clientWidth; c.height = src.clientHeight;
+    const ctx = c.getContext('2d');
+    ctx.drawImage(src, 0, 0, c.width, c.height);
+    const px = ctx.getImageData(0, 0, c.width, c.height).data;
+    const snow = [], bare = [];
+    for (let k = 0; k < s.width * s.height; k += 13) {
+      if (!Number.isFinite(g.bedrock[k])) continue;
+      let d = 0;
+      for (const l of ['compacted', 'stable', 'unstable', 'powder']) d += g[l][k];
+      const list = d >= 0.5 ? snow : d === 0 ? bare : null;
+      if (!list) continue;
+      const at = app.screenOf(k % s.width, Math.floor(k / s.width));
+      if (!at) continue;
+      const o = 4 * (Math.floor(at[1]) * c.width + Math.floor(at[0]));
+      list.push([px[o], px[o + 1], px[o + 2]]);
+    }
+    const mean = (l, f) => l.reduce((a, v) => a + f(v), 0) / Math.max(1, l.length);
+    const lum = (v) => 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2];
+    return {
+      rendering, sun: s.sun, lat: s.latitude_deg,
+      snow: snow.length, bare: bare.length,
+      snowLum: mean(snow, lum), bareLum: mean(bare, lum), snowBlue: mean(snow, (v) => v[2] - v[0]),
+    };
+  });
+  console.log(`     avaMal day 60: sun ${JSON.stringify(r.sun.map((x) => +x.toFixed(3)))} at ${r.lat}°N; ${r.snow} snowy and ${r.bare} bare cells sampled: luminance ${r.snowLum.toFixed(0)} vs ${r.bareLum.toFixed(0)}, snow blue - red ${r.snowBlue.toFixed(1)}`);
+  assert.ok(r.rendering.shadows, 'the sun casts shadows on the terrain');
+  assert.ok(r.rendering.fog, 'distance haze');
+  // The light comes from the season's sun: [east, north, up] -> [x, y, z] = [e, u, -n].
+  const [e, n, u] = r.sun, len = Math.hypot(e, n, u);
+  const d = r.rendering.sunDirection;
+  assert.ok(u > 0 && r.rendering.sunIntensity > 0, 'a day-time sun');
+  assert.ok(Math.abs(d[0] - e / len) < 1e-6 && Math.abs(d[1] - u / len) < 1e-6 && Math.abs(d[2] + n / len) < 1e-6, `light ${d} for sun ${r.sun}`);
+  assert.ok(r.snow > 100 && r.bare > 20, `${r.snow} snowy and ${r.bare} bare cells on screen`);
+  assert.ok(r.snowLum > r.bareLum + 40, `snow ${r.snowLum} not brighter than bare ground ${r.bareLum}`);
+  assert.ok(r.snowBlue > 0, `snow not blue-tinted: blue - red ${r.snowBlue}`);
+  await p.screenshot({ path: `${shots}/editor_avamal_day60.png` });
+  await p.close();
+});
+
+await check('a DEM imported from the page becomes the terrain; a bad file or name is refused with the reader\'s message and the season stays', async () => {
+  const demUrl = process.env.SNOWSCAPE_DEM_URL;
+  assert.ok(demUrl, 'SNOWSCAPE_DEM_URL is not set (scripts/browser-tests.sh starts that server)');
+  const p = await context.newPage();
+  p.on('dialog', (d) => d.accept());
+  await p.goto(demUrl);
+  await p.waitForFunction(() => window.snowscape && window.snowscape.meshTriangles > 0, null, { timeout: 120000 });
+  const before = await p.evaluate(() => [window.snowscape.state.width, window.snowscape.state.height, window.snowscape.state.day]);
+  // A file the reader refuses: the upload is taken, the job fails naming the file, nothing changes.
+  const bad = await p.evaluate(async () => {
+    await window.snowscape.importDem(new File(['this is not a grid\n'], 'bad.asc'));
+    const t0 = Date.now();
+    while (Date.now() - t0 < 30000) {
+      const j = window.snowscape.lastJob;
+      if (j && j.kind === 'import' && (j.phase === 'failed' || j.phase === 'ended')) return { job: j, upload: window.snowscape.lastImport };
+      await new Promise((r) => setTimeout(r, 100));
+    }
+    return null;
+  });
+  assert.ok(bad, 'the import job ended');
+  assert.equal(bad.upload.status, 202, bad.upload.text);
+  assert.equal(bad.job.phase, 'failed');
+  assert.ok(bad.job.message.includes('bad.asc'), bad.job.message);
+  const after = await p.evaluate(() => [window.snowscape.state.width, window.snowscape.state.height, window.snowscape.state.day]);
+  assert.deepEqual(after, before, 'the season is untouched');
+  // Names that are not a raster file name are refused before anything is written.
+  for (const name of ['../evil.asc', 'notes.txt', 'a b.asc']) {
+    const r = await p.evaluate(async (n) => {
+      const res = await fetch(`/api/dem?name=${encodeURIComponent(n)}`, { method: 'POST', body: 'x' });
+      return [res.status, await res.text()];
+    }, name);
+    assert.equal(r[0], 400, `${name}: ${r[1]}`);
+  }
+  // A small ESRI ASCII grid (40 x 30 cells of 10 m, a slope) becomes the terrain.
+  const asc = ['ncols 40', 'nrows 30', 'xllcorner 500000', 'yllcorner 5100000', 'cellsize 10', 'NODATA_value -9999']
+    .concat(Array.from({ length: 30 }, (_, r) => Array.from({ length: 40 }, (_, c) => (2000 + 8 * r + 3 * c).toFixed(1)).join(' ')))
+    .join('\n');
+  await p.evaluate(async (text) => { await window.snowscape.importDem(new File([text], 'slope_40x30.asc')); }, asc);
+  await p.waitForFunction(() => window.snowscape.state.width === 40 && window.snowscape.state.height === 30, null, { timeout: 60000 });
+  const s = await p.evaluate(() => ({ source: window.snowscape.state.source, day: window.snowscape.state.day, tri: window.snowscape.meshTriangles }));
+  assert.ok(s.source.includes('slope_40x30.asc'), s.source);
+  assert.equal(s.day, 0);
+  assert.ok(s.tri > 1000, `${s.tri} triangles`);
   await p.close();
 });
 

@@ -32,6 +32,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+/// Most cells of a DEM imported from the page (4096², as a 64 MiB f32 grid and its season
+/// state stay well within a workstation's memory).
+pub const MAX_IMPORT_CELLS: usize = 4096 * 4096;
+
 /// Slices of a season step (progress and cancel points).
 pub const STEP_SLICES: usize = 100;
 /// Shortest wall time between two progress reports of a job.
@@ -46,6 +50,7 @@ pub enum JobKind {
     Load,
     Export,
     Save,
+    Import,
 }
 
 impl JobKind {
@@ -57,6 +62,7 @@ impl JobKind {
             JobKind::Load => "loading a project",
             JobKind::Export => "an export",
             JobKind::Save => "saving a project",
+            JobKind::Import => "importing a DEM",
         }
     }
 }
@@ -122,6 +128,13 @@ enum Work {
         project: ProjectDir,
         name: String,
         contents: Box<ProjectContents>,
+    },
+    /// A DEM uploaded from the page (saved at `path`), read as `snowscape run --dem` reads it,
+    /// starts a season of the current scenario on it.
+    ImportDem {
+        path: PathBuf,
+        name: String,
+        scenario: Box<Scenario>,
     },
 }
 
@@ -235,6 +248,34 @@ impl Job {
                 },
                 Err(e) => JobOutcome::Failed((ErrorCode::Failed, e)),
             },
+            Work::ImportDem {
+                path,
+                name,
+                scenario,
+            } => {
+                let options = snowscape_io::ReadOptions {
+                    max_cells: MAX_IMPORT_CELLS,
+                    ..Default::default()
+                };
+                match snowscape_io::read_terrain(&path, &options) {
+                    Err(e) => JobOutcome::Failed((ErrorCode::InvalidValue, format!("{name}: {e}"))),
+                    Ok(bedrock) => match scenario
+                        .validate_on(bedrock.geometry(), "the current scenario")
+                        .map_err(|e| e.to_string())
+                        .and_then(|()| {
+                            Winter::new(*scenario, LayeredTerrain::from_bedrock(bedrock))
+                                .map_err(|e| e.to_string())
+                        }) {
+                        Ok(winter) => JobOutcome::Loaded {
+                            session: Box::new(Session::new(winter, format!("imported {name}"))),
+                            name,
+                        },
+                        Err(e) => {
+                            JobOutcome::Failed((ErrorCode::InvalidValue, format!("{name}: {e}")))
+                        }
+                    },
+                }
+            }
             Work::Save {
                 project,
                 name,
@@ -367,6 +408,29 @@ impl Session {
         let project = project_folder(project)?.clone();
         let message = format!("loading project {name}");
         Ok(self.new_job(JobKind::Load, 1.0, message, Work::Load { project, name }))
+    }
+
+    /// Importing the DEM uploaded to `path` (named `name`) as a job: the season of the
+    /// current scenario restarts on it.
+    pub(crate) fn import_dem_job(
+        &mut self,
+        path: PathBuf,
+        name: String,
+    ) -> Result<(Job, Vec<Out>), Refusal> {
+        if self.busy() {
+            return Err((
+                ErrorCode::Busy,
+                "busy: wait for the running job or live event, or cancel it".into(),
+            ));
+        }
+        let scenario = Box::new(self.winter.scenario().clone());
+        let message = format!("importing the DEM {name}: the season restarts on it");
+        let work = Work::ImportDem {
+            path,
+            name,
+            scenario,
+        };
+        Ok(self.new_job(JobKind::Import, 1.0, message, work))
     }
 
     /// An export to `exports/<name>` as a job.

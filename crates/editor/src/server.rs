@@ -10,7 +10,8 @@
 //!   `GET /api/parameters`: every scenario parameter with its help, range and choices
 //!   ([`snowscape_season::parameter_catalogue`], generated from the parameter types);
 //!   `GET /api/projects`: the saved projects (name, day); `GET /api/export/<name>`: an export's
-//!   files as one zip.
+//!   files as one zip; `POST /api/dem?name=FILE.ext`: a DEM uploaded from the page, imported by a
+//!   job (the season of the current scenario restarts on it).
 //! - `GET /files/<path>`: a file of the project folder (exports), read-only.
 //!
 //! **Who may talk to it** ([`crate::access`]): every request must name the served address in
@@ -74,6 +75,10 @@ pub const MAX_CONNECTIONS: usize = 16;
 /// Largest project file served for download.
 const MAX_DOWNLOAD: u64 = 1 << 30;
 
+/// Largest DEM upload, bytes (a 4096² float32 GeoTIFF is 64 MiB; ASCII grids take ~3 times as
+/// much).
+pub const MAX_DEM_UPLOAD: usize = 256 << 20;
+
 /// A server error.
 #[derive(Debug, Error)]
 pub enum ServeError {
@@ -118,6 +123,12 @@ enum Command {
     JobDone {
         id: u64,
         outcome: JobOutcome,
+    },
+    /// A DEM uploaded to `path` (`POST /api/dem`): start its import job; the job's id.
+    ImportDem {
+        path: std::path::PathBuf,
+        name: String,
+        reply: oneshot::Sender<Result<u64, Refusal>>,
     },
 }
 
@@ -240,6 +251,26 @@ fn actor(
                     ))],
                 };
                 route(outs, &updates, Some(&reply));
+            }
+            Some(Command::ImportDem { path, name, reply }) => {
+                let answer = match session.import_dem_job(path, name) {
+                    Ok((job, mut o)) => {
+                        let id = job.id();
+                        let spawned = to_self
+                            .upgrade()
+                            .ok_or_else(|| "the server is stopping".to_string())
+                            .and_then(|tx| spawn_job(job, tx));
+                        if let Err(e) = spawned {
+                            o.extend(
+                                session.finish_job(id, JobOutcome::Failed((ErrorCode::Failed, e))),
+                            );
+                        }
+                        route(o, &updates, None);
+                        Ok(id)
+                    }
+                    Err(r) => Err(r),
+                };
+                let _ = reply.send(answer);
             }
             Some(Command::Join(tx)) => {
                 let _ = tx.send(session.full_state());
@@ -427,6 +458,11 @@ fn router(config: ServeConfig, gate: Arc<Gate>) -> Router {
         .route("/api/parameters", get(parameters_handler))
         .route("/api/projects", get(projects_handler))
         .route("/api/export/{name}", get(export_zip_handler))
+        .route(
+            "/api/dem",
+            axum::routing::post(import_dem_handler)
+                .layer(axum::extract::DefaultBodyLimit::max(MAX_DEM_UPLOAD)),
+        )
         .route("/files/{*path}", get(file_handler))
         .fallback(get(asset_handler))
         .with_state(state)
@@ -465,6 +501,72 @@ async fn projects_handler(State(s): State<AppState>) -> Response {
     match tokio::task::spawn_blocking(move || project.list()).await {
         Ok(list) => axum::Json(list).into_response(),
         Err(_) => StatusCode::INTERNAL_SERVER_ERROR.into_response(),
+    }
+}
+
+#[derive(serde::Deserialize)]
+struct DemQuery {
+    name: String,
+}
+
+/// A DEM uploaded from the page (`POST /api/dem?name=FILE.ext`, the file as the body, at most
+/// [`MAX_DEM_UPLOAD`] bytes): saved as `imports/FILE.ext` in the project folder and imported by
+/// a job that reads it as `snowscape run --dem` does (`202` with the job's id; `400` for a bad
+/// name, `409` while busy, `413` when too large; the reader's errors come as the job's failure).
+async fn import_dem_handler(
+    State(s): State<AppState>,
+    Query(q): Query<DemQuery>,
+    body: axum::body::Bytes,
+) -> Response {
+    let name = q.name.trim().to_string();
+    let path = std::path::Path::new(&name);
+    let stem_ok = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .is_some_and(|stem| crate::protocol::check_name(stem).is_ok());
+    if path.file_name().and_then(|f| f.to_str()) != Some(name.as_str())
+        || !stem_ok
+        || snowscape_io::RasterFormat::from_path(path).is_none()
+    {
+        return (
+            StatusCode::BAD_REQUEST,
+            format!(
+                "DEM name {:?}: a file name of letters, digits, '_' or '-' with a raster extension (.asc, .tif, .png, .raw, .r16, .npy, .exr)\n",
+                name.chars().take(80).collect::<String>()
+            ),
+        )
+            .into_response();
+    }
+    if body.is_empty() {
+        return (
+            StatusCode::BAD_REQUEST,
+            format!("{name}: the file is empty\n"),
+        )
+            .into_response();
+    }
+    let project = s.project.clone();
+    let file = name.clone();
+    let saved = tokio::task::spawn_blocking(move || {
+        let dir = project.create_dir("imports").map_err(|e| e.to_string())?;
+        let p = dir.join(&file);
+        snowscape_io::write_bytes_atomic(&p, &body).map_err(|e| e.to_string())?;
+        Ok::<_, String>(p)
+    })
+    .await;
+    let path = match saved {
+        Ok(Ok(p)) => p,
+        Ok(Err(e)) => return (StatusCode::INTERNAL_SERVER_ERROR, format!("{e}\n")).into_response(),
+        Err(_) => return StatusCode::INTERNAL_SERVER_ERROR.into_response(),
+    };
+    match ask(&s, |reply| Command::ImportDem { path, name, reply }).await {
+        Some(Ok(id)) => (
+            StatusCode::ACCEPTED,
+            axum::Json(serde_json::json!({ "job": id })),
+        )
+            .into_response(),
+        Some(Err((ErrorCode::Busy, m))) => (StatusCode::CONFLICT, format!("{m}\n")).into_response(),
+        Some(Err((_, m))) => (StatusCode::BAD_REQUEST, format!("{m}\n")).into_response(),
+        None => StatusCode::SERVICE_UNAVAILABLE.into_response(),
     }
 }
 

@@ -54,6 +54,20 @@ pub enum Started {
 /// written file names (the command-line front end supplies it).
 pub type Exporter = dyn Fn(&Winter, &Path) -> Result<Vec<String>, String> + Send + Sync;
 
+/// Local solar time of the sun the page lights its view with, hours: mid-morning, low enough
+/// in winter to model the relief with shadows.
+pub const VIEW_SOLAR_HOUR: f64 = 10.5;
+
+/// The direction towards the sun `[east, north, up]` on the season's current day at
+/// [`VIEW_SOLAR_HOUR`].
+fn view_sun(winter: &Winter) -> [f64; 3] {
+    use snowscape_environment::solar::{DeclinationModel, declination, hour_angle, sun_vector};
+    let start = snowscape_season::scenario::day_of_year(&winter.scenario().start_date).unwrap_or(1);
+    let doy = ((f64::from(start) - 1.0 + winter.day()).rem_euclid(365.0) + 1.0).floor() as u32;
+    let dec = declination(doy.clamp(1, 365), DeclinationModel::Spencer);
+    sun_vector(winter.latitude_deg(), dec, hour_angle(VIEW_SOLAR_HOUR))
+}
+
 /// The state summary every tab shows.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StateSummary {
@@ -81,6 +95,12 @@ pub struct StateSummary {
     pub weather: Vec<WeatherPeriod>,
     /// Snow volume, m³.
     pub snow_volume_m3: f64,
+    /// Latitude the season runs at, degrees north.
+    pub latitude_deg: f64,
+    /// Unit vector towards the sun `[east, north, up]` the page lights the view with: the
+    /// season's date and latitude at [`VIEW_SOLAR_HOUR`] (Spencer's declination, as the
+    /// precompute's sun).
+    pub sun: [f64; 3],
     /// The snapshots' memory budget and their estimated memory, bytes; snapshots dropped
     /// for the budget so far (the oldest, never the first).
     pub snapshot_budget_bytes: u64,
@@ -229,6 +249,8 @@ impl Session {
             scenario: serde_json::to_value(self.winter.scenario()).unwrap_or_default(),
             weather: self.winter.weather().to_vec(),
             snow_volume_m3: self.winter.terrain.snow_volume(),
+            latitude_deg: self.winter.latitude_deg(),
+            sun: view_sun(&self.winter),
             snapshot_budget_bytes: self.timeline.budget_bytes(),
             snapshot_bytes: self.timeline.bytes(),
             snapshots_dropped: self.timeline.dropped(),
