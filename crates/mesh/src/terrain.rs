@@ -5,8 +5,8 @@
 //! the grid's value (altitude, metres). Nodata cells give no triangle.
 
 use crate::MeshError;
-use crate::scene::SceneObject;
-use snowscape_terrain::Grid;
+use crate::scene::{Scene, SceneObject};
+use snowscape_terrain::{Grid, GridGeometry};
 
 /// Scene (x, y) of the centre of cell `(col, row)`.
 pub fn cell_centre_xy(grid: &Grid, col: usize, row: usize) -> [f64; 2] {
@@ -95,6 +95,61 @@ pub fn place_on_grid(
     Ok(ground)
 }
 
+/// Scene metres `(x, y)` (from the grid's south-west corner, z up; [`grid_object`]'s frame) of
+/// map position `(mx, my)` (CRS units), or `None` outside the grid: where `--at X,Y` puts a
+/// mesh on a DEM.
+pub fn map_to_scene(geometry: &GridGeometry, mx: f64, my: f64) -> Option<(f64, f64)> {
+    // `map_to_cell` counts cell centres as whole numbers.
+    let (col, row) = geometry.map_to_cell(mx, my)?;
+    Some((
+        (col + 0.5) * geometry.cell_size_x(),
+        (geometry.height() as f64 - row - 0.5) * geometry.cell_size_y(),
+    ))
+}
+
+/// Places a whole scene on the terrain as one piece, with [`place_on_grid`]'s rule applied to
+/// all its objects together (the centre of their joint horizontal bounds at scene `(x, y)`,
+/// their lowest point on the lowest ground under any of their vertices): every object moves by
+/// the same offset, so a model made of several objects keeps its layout. Used by `snowscape
+/// cover` and `snowscape transport` alike. Returns the ground height and the offset applied.
+pub fn place_scene_on_grid(
+    scene: &mut Scene,
+    grid: &Grid,
+    x: f64,
+    y: f64,
+) -> Result<(f32, [f32; 3]), MeshError> {
+    // The vertices of every triangle as one object (one point-triangle per vertex, so the
+    // bounds count only vertices that triangles use).
+    let mut all = SceneObject {
+        name: scene
+            .objects
+            .first()
+            .map_or("mesh".into(), |o| o.name.clone()),
+        ..Default::default()
+    };
+    for o in &scene.objects {
+        all.positions.extend(
+            o.triangles
+                .iter()
+                .flatten()
+                .map(|&i| o.positions[i as usize]),
+        );
+    }
+    all.triangles = (0..all.positions.len() as u32).map(|i| [i, i, i]).collect();
+    let before = all.bounds().ok_or_else(|| MeshError::InvalidOption {
+        name: "scene to place",
+        value: all.name.clone(),
+        expected: "a scene with triangles",
+    })?;
+    let ground = place_on_grid(&mut all, grid, x, y)?;
+    let after = all.bounds().unwrap_or(before);
+    let d = [0, 1, 2].map(|k| after.min[k] - before.min[k]);
+    for o in &mut scene.objects {
+        o.translate(d);
+    }
+    Ok((ground, d))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -103,6 +158,48 @@ mod tests {
     fn slope() -> Grid {
         // 5 x 4 cells of 2 m, rising 1 m per column eastwards.
         Grid::from_fn(GridGeometry::new(5, 4, 2.0, 2.0).unwrap(), |c, _| c as f32)
+    }
+
+    #[test]
+    fn a_scene_is_placed_as_one_piece_and_at_map_positions() {
+        let g = slope();
+        let cube = |x0: f32| SceneObject {
+            name: "c".into(),
+            positions: vec![[x0, 0.0, 0.0], [x0 + 1.0, 0.0, 0.0], [x0, 1.0, 1.0]],
+            normals: None,
+            triangles: vec![[0, 1, 2]],
+        };
+        let mut scene = Scene {
+            objects: vec![cube(0.0), cube(3.0)],
+            frame: Default::default(),
+        };
+        let gap = scene.objects[1].positions[0][0] - scene.objects[0].positions[0][0];
+        let (ground, d) = place_scene_on_grid(&mut scene, &g, 5.0, 4.0).unwrap();
+        // Joint bounds x 0..4 centred at 5: both moved by 3, the layout kept.
+        assert_eq!(d[0], 3.0);
+        assert_eq!(
+            scene.objects[1].positions[0][0] - scene.objects[0].positions[0][0],
+            gap
+        );
+        // The lowest point on the lowest ground under the vertices (x = 3 m: column 1, 1 m).
+        assert_eq!(ground, height_at(&g, 3.0, 3.5).unwrap().min(ground));
+        let lowest = scene
+            .objects
+            .iter()
+            .flat_map(|o| o.positions.iter())
+            .map(|p| p[2])
+            .fold(f32::INFINITY, f32::min);
+        assert_eq!(lowest, ground);
+        // A map position 5.2 m east and 2.9 m south of the north-west corner: 5.2 m east and
+        // 8 - 2.9 m north of the south-west one.
+        let t = g.geometry().transform();
+        let (mx, my) = (t.origin_x + 5.2, t.origin_y - 2.9);
+        let (sx, sy) = map_to_scene(g.geometry(), mx, my).unwrap();
+        assert!(
+            (sx - 5.2).abs() < 1e-9 && (sy - 5.1).abs() < 1e-9,
+            "{sx} {sy}"
+        );
+        assert_eq!(map_to_scene(g.geometry(), t.origin_x - 1.0, my), None);
     }
 
     #[test]

@@ -17,7 +17,7 @@ use serde_json::json;
 use snowscape::cover::CoverParameters;
 use snowscape_festenberg::{CoverParams, FestenbergError, GrowthParams, cover, grow_cover};
 use snowscape_mesh::preview::{PreviewOptions, write_preview};
-use snowscape_mesh::terrain::{grid_object, place_on_grid};
+use snowscape_mesh::terrain::{grid_object, map_to_scene, place_scene_on_grid};
 use snowscape_mesh::write::{write_glb, write_obj};
 use snowscape_mesh::{MeshReport, Scene, SceneObject, SourceFrame, UpAxis, read_scene};
 use std::path::PathBuf;
@@ -170,43 +170,17 @@ fn read_input(args: &CoverArgs) -> anyhow::Result<CoverInput> {
             None => (0.5 * g.extent_m().0, 0.5 * g.extent_m().1),
             Some(text) => {
                 let (mx, my) = crate::pairs::parse_xy("--at", text)?;
-                let (c, r) = g.map_to_cell(mx, my).ok_or_else(|| {
+                map_to_scene(g, mx, my).ok_or_else(|| {
                     anyhow!("--at {text:?} lies outside the DEM {}", path.display())
-                })?;
-                (
-                    (c + 0.5) * g.cell_size_x(),
-                    (g.height() as f64 - r - 0.5) * g.cell_size_y(),
-                )
+                })?
             }
         };
         // Place the scene as one piece: every object moves by the same offset.
-        let mut all = SceneObject {
-            name: scene
-                .objects
-                .first()
-                .map_or("mesh".into(), |o| o.name.clone()),
-            ..Default::default()
-        };
-        for o in &scene.objects {
-            all.positions.extend(
-                o.triangles
-                    .iter()
-                    .flatten()
-                    .map(|&i| o.positions[i as usize]),
-            );
-        }
-        // Bounds count the vertices of triangles: one point-triangle per vertex.
-        all.triangles = (0..all.positions.len() as u32).map(|i| [i, i, i]).collect();
-        let before = all
+        let (ground, _) = place_scene_on_grid(&mut scene, &grid, x, y)
+            .with_context(|| format!("placing {} on {}", args.mesh.display(), path.display()))?;
+        let after = scene
             .bounds()
             .ok_or_else(|| anyhow!("the mesh has no triangles"))?;
-        let ground = place_on_grid(&mut all, &grid, x, y)
-            .with_context(|| format!("placing {} on {}", args.mesh.display(), path.display()))?;
-        let after = all.bounds().unwrap_or(before);
-        let d = [0, 1, 2].map(|k| after.min[k] - before.min[k]);
-        for o in &mut scene.objects {
-            o.translate(d);
-        }
         // Cover the object and the ground around it: a quarter of its size on each side.
         let margin = 0.25 * after.size()[0].max(after.size()[1]) as f64;
         let e = [

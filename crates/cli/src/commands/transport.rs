@@ -9,6 +9,7 @@ use crate::outputs::prepare_dir;
 use anyhow::{Context, anyhow, bail};
 use serde_json::json;
 use snowscape::transport_job::{Overrides, dem_heights, fit_to_scene, load_scenario};
+use snowscape_mesh::terrain::{map_to_scene, place_scene_on_grid};
 use snowscape_mesh::top_view::{frame_scene, highest_surface};
 use snowscape_mesh::{SceneBvh, SourceFrame, UpAxis, read_scene};
 use snowscape_terrain::{Grid, GridGeometry, NodataMask};
@@ -94,12 +95,15 @@ fn mesh_scene(
             )?;
             let (ex, ey) = dem.geometry.extent_m();
             let (x, y) = match &args.at {
-                Some(text) => parse_at(text, &dem.geometry)?,
+                Some(text) => {
+                    let (mx, my) = crate::pairs::parse_xy("--at", text)?;
+                    map_to_scene(&dem.geometry, mx, my)
+                        .ok_or_else(|| anyhow!("--at {text:?} lies outside the DEM"))?
+                }
                 None => (ex / 2.0, ey / 2.0),
             };
-            for o in &mut scene.objects {
-                snowscape_mesh::terrain::place_on_grid(o, &grid, x, y)?;
-            }
+            // The scene as one piece, as `snowscape cover` places it.
+            place_scene_on_grid(&mut scene, &grid, x, y)?;
             let bvh = SceneBvh::new(&scene);
             let top = scene.bounds().map_or(0.0, |b| b.max[2]) + 1.0;
             let heights = highest_surface(&bvh, &dem.geometry, top, &dem.heights)?;
@@ -121,18 +125,6 @@ fn mesh_scene(
             })
         }
     }
-}
-
-/// `--at X,Y` in map coordinates, as scene metres from the DEM's south-west corner.
-fn parse_at(text: &str, g: &GridGeometry) -> anyhow::Result<(f64, f64)> {
-    let (x, y) = crate::pairs::parse_xy("--at", text)?;
-    let Some((col, row)) = g.map_to_cell(x, y) else {
-        bail!("--at {text:?} lies outside the DEM");
-    };
-    Ok((
-        (col + 0.5) * g.cell_size_x(),
-        (g.height() as f64 - row - 0.5) * g.cell_size_y(),
-    ))
 }
 
 pub fn run_command(args: &TransportArgs, global: &GlobalArgs) -> Result<(), Failure> {
