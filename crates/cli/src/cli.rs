@@ -83,6 +83,41 @@ pub enum Command {
     /// Compare a run's snow depth with a measured depth raster (matched by map coordinates):
     /// correlations, errors, snow-cover agreement, terrain-only baselines, class ratios.
     Validate(ValidateArgs),
+    /// Export a run's terrain and snow for a game engine: 16-bit heightmaps at the engine's
+    /// terrain sizes, layer weight maps summing to 255, the scales to enter on import.
+    Export(ExportArgs),
+}
+
+/// The engines `snowscape export` writes for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum EngineArg {
+    /// Unreal Landscape: 16-bit PNG heightmaps at 127..8129 per axis, weight PNGs, tiles.
+    Unreal,
+    /// Unity Terrain: 16-bit RAW at 2^n+1, RGBA splat maps.
+    Unity,
+    /// Godot with the HTerrain add-on: 16-bit RAW and EXR at 2^n+1, an RGBA splat map.
+    Godot,
+}
+
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// Run folder written by `snowscape run` or `snowscape demo` (its bedrock.tif and
+    /// layers_*.tif are read).
+    #[arg(long)]
+    pub run: PathBuf,
+    /// Target engine.
+    #[arg(long, value_enum)]
+    pub engine: EngineArg,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "out/export")]
+    pub out: PathBuf,
+    /// Tiles of N x N samples named `_x{i}_y{j}` sharing their edges (Unreal World
+    /// Partition), 2..=8129.
+    #[arg(long, value_name = "N")]
+    pub tile: Option<usize>,
+    /// Also write the heightmap of the snow surface (bedrock + snow), on the same height scale.
+    #[arg(long)]
+    pub with_snow: bool,
 }
 
 #[derive(Debug, Args)]

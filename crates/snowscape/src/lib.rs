@@ -26,6 +26,7 @@
 //! | [`report`] | the typed `report.json` of every job |
 //! | [`avalanche_release`] | one avalanche's release on a DEM (file, mask or rupture point), as `snowscape avalanche` and the Python package take it |
 //! | [`cover`] | both mesh covers' parameters from a TOML file |
+//! | [`engine_export`] | a run's terrain and snow for Unreal, Unity or Godot: heightmaps, weight maps, import scales |
 //! | [`transport_job`] | a 3D transport run's scenario, a DEM as its scene, the wind grid fitted to it |
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
@@ -57,6 +58,7 @@
 
 pub mod avalanche_release;
 pub mod cover;
+pub mod engine_export;
 pub mod outputs;
 pub mod report;
 pub mod season_run;

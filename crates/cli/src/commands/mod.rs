@@ -6,6 +6,7 @@ mod bench;
 mod convert;
 pub mod cover;
 mod demo;
+mod export;
 mod info;
 mod parameters;
 mod render;
@@ -34,5 +35,6 @@ pub fn dispatch(cli: Cli) -> Result<(), Failure> {
         Command::Cover(a) => cover::run(a, g),
         Command::Transport(a) => transport::run_command(a, g),
         Command::Validate(a) => validate::run(a, g),
+        Command::Export(a) => export::run(a, g),
     }
 }
