@@ -107,6 +107,7 @@ fn bunny_preview_shows_a_plausible_silhouette() {
     let opts = PreviewOptions {
         width: 200,
         height: 150,
+        ground: false,
         ..Default::default()
     };
     let img = render_preview(&scene, &[], &opts).unwrap();
