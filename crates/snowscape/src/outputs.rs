@@ -12,6 +12,7 @@ use snowscape_io::{write_bytes_atomic, write_exr, write_geotiff, write_png16, wr
 use snowscape_render::RenderError;
 use snowscape_render::{
     ColourMode, GlbOptions, PreviewOptions, encode_gif, encode_png, render_preview, terrain_glb,
+    with_legend,
 };
 use snowscape_terrain::TerrainError;
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
@@ -263,7 +264,7 @@ pub fn write_previews(
             ..view.clone()
         };
         let img = render_preview(terrain, &opts)?;
-        write_png(&out.path(name), &img)?;
+        write_png(&out.path(name), &with_legend(&img, &opts.mode, terrain))?;
     }
     Ok(())
 }

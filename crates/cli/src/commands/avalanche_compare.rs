@@ -3,12 +3,12 @@
 //! `comparison` in report.json, `comparison_profile.csv` and the plot `comparison.png`.
 
 use crate::outputs::{Written, write_png};
-use crate::validation::pixel_font::{LINE_HEIGHT, draw_text};
 use anyhow::Context;
 use image::{Rgba, RgbaImage};
 use snowscape_avalanche::comparison::{PathComparison, compare_along_path, thalweg};
 use snowscape_avalanche::validation::read_polyline;
 use snowscape_io::{ReadOptions, read_dem, write_bytes_atomic};
+use snowscape_render::pixel_font::{LINE_HEIGHT, draw_text};
 use snowscape_terrain::{Grid, GridGeometry};
 use std::path::Path;
 

@@ -7,9 +7,9 @@
 //!   4×4-pixel bins coloured by log(1 + count), on axes from min(0, 0.5th percentile) to the
 //!   99.5th percentile of both (points beyond sit on the border), with the 1:1 line in red.
 
-use super::pixel_font::{LINE_HEIGHT, draw_text, text_width};
 use image::{Rgba, RgbaImage};
 use snowscape_render::colour::{to_bytes, viridis};
+use snowscape_render::pixel_font::{LINE_HEIGHT, draw_text, text_width};
 
 const WHITE: Rgba<u8> = Rgba([255, 255, 255, 255]);
 const BLACK: Rgba<u8> = Rgba([0, 0, 0, 255]);

@@ -24,7 +24,6 @@
 pub mod classes;
 pub mod figures;
 pub mod matching;
-pub mod pixel_font;
 pub mod stats;
 pub mod summary;
 
