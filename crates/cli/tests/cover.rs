@@ -73,6 +73,56 @@ fn spider_gets_bridged_rounded_snow_and_every_output() {
 }
 
 #[test]
+fn a_turntable_gif_goes_around_the_snowy_mesh() {
+    let mesh = shared("meshes/bunny_npm.obj");
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("bunny");
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--turntable",
+        "6",
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    use image::AnimationDecoder;
+    let f = std::io::BufReader::new(std::fs::File::open(dir.join("turntable.gif")).unwrap());
+    let frames = image::codecs::gif::GifDecoder::new(f)
+        .unwrap()
+        .into_frames()
+        .collect_frames()
+        .unwrap();
+    assert_eq!(frames.len(), 6);
+    assert_eq!(frames[0].buffer().dimensions(), (480, 360));
+    // Seen from another side, the picture changes.
+    assert_ne!(frames[0].buffer(), frames[3].buffer());
+    assert!(
+        report(&dir)["outputs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|f| f == "turntable.gif")
+    );
+    // A turntable of one frame is refused before anything runs.
+    let bad = out.path().join("bad");
+    let o = snowscape(&[
+        "cover",
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--turntable",
+        "1",
+        "--out",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--turntable 1"));
+    assert!(!bad.exists());
+}
+
+#[test]
 fn teapots_z_up_with_overhangs() {
     let mesh = shared("meshes/teapot_assimp.obj");
     let out = tempfile::tempdir().unwrap();

@@ -141,11 +141,66 @@ pub fn render_preview(
     render(scene, snow, opts).map(|(image, _)| image)
 }
 
+/// `frames` previews of `scene` and `snow` seen from azimuths evenly spaced around the scene,
+/// starting at `opts.view_azimuth_deg` (a turntable; the sun stays). The camera is fitted to
+/// the scene's horizontal bounding circle, so the scene keeps its size from frame to frame.
+pub fn render_turntable(
+    scene: &Scene,
+    snow: &[SnowMesh],
+    opts: &PreviewOptions,
+    frames: usize,
+) -> Result<Vec<RgbImage>, MeshError> {
+    if !(2..=720).contains(&frames) {
+        return Err(MeshError::InvalidOption {
+            name: "turntable frames",
+            value: frames.to_string(),
+            expected: "2..=720 frames",
+        });
+    }
+    let snow_bounds = snow.iter().filter_map(|m| Bounds::of_points(&m.positions));
+    let Some(b) = scene
+        .bounds()
+        .into_iter()
+        .chain(snow_bounds)
+        .reduce(Bounds::union)
+    else {
+        return render_preview(scene, snow, opts).map(|i| vec![i]);
+    };
+    // The box around the bounding circle of the horizontal extent: any azimuth sees it alike.
+    let (c, r) = (
+        [0.5 * (b.min[0] + b.max[0]), 0.5 * (b.min[1] + b.max[1])],
+        0.5 * (b.max[0] - b.min[0]).hypot(b.max[1] - b.min[1]),
+    );
+    let circle = Bounds {
+        min: [c[0] - r, c[1] - r, b.min[2]],
+        max: [c[0] + r, c[1] + r, b.max[2]],
+    };
+    (0..frames)
+        .map(|k| {
+            let o = PreviewOptions {
+                view_azimuth_deg: opts.view_azimuth_deg + 360.0 * k as f32 / frames as f32,
+                ..opts.clone()
+            };
+            render_framed(scene, snow, &o, Some(&circle)).map(|(img, _)| img)
+        })
+        .collect()
+}
+
 /// [`render_preview`], and what each pixel shows (row-major; `None`: sky).
 fn render(
     scene: &Scene,
     snow: &[SnowMesh],
     opts: &PreviewOptions,
+) -> Result<(RgbImage, Vec<Option<Material>>), MeshError> {
+    render_framed(scene, snow, opts, None)
+}
+
+/// [`render`] with the camera fitted to `frame` instead of the scene's bounds.
+fn render_framed(
+    scene: &Scene,
+    snow: &[SnowMesh],
+    opts: &PreviewOptions,
+    frame: Option<&Bounds>,
 ) -> Result<(RgbImage, Vec<Option<Material>>), MeshError> {
     let bad =
         |name: &'static str, value: String, expected: &'static str| MeshError::InvalidOption {
@@ -194,7 +249,7 @@ fn render(
     };
     let tris = triangles(scene, snow, &ground)?;
     let camera = Camera::fit(
-        &bounds,
+        frame.unwrap_or(&bounds),
         opts.view_azimuth_deg,
         opts.view_elevation_deg,
         opts.width,

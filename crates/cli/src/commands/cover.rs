@@ -16,7 +16,7 @@ use clap::{Args, ValueEnum};
 use serde_json::json;
 use snowscape::cover::CoverParameters;
 use snowscape_festenberg::{CoverParams, FestenbergError, GrowthParams, cover, grow_cover};
-use snowscape_mesh::preview::{PreviewOptions, write_preview};
+use snowscape_mesh::preview::{PreviewOptions, render_turntable, write_preview};
 use snowscape_mesh::terrain::{grid_object, map_to_scene, place_scene_on_grid};
 use snowscape_mesh::write::{write_glb, write_obj};
 use snowscape_mesh::{MeshReport, Scene, SceneObject, SourceFrame, UpAxis, read_scene};
@@ -82,6 +82,9 @@ pub struct CoverArgs {
     /// Laplacian, no bridges or overhangs) as growth/frame_NNNN.glb.
     #[arg(long, value_name = "N", value_parser = crate::bounds::frames)]
     pub growth: Option<usize>,
+    /// Also write turntable.gif: N preview frames seen from all around the scene (2..=720).
+    #[arg(long, value_name = "N")]
+    pub turntable: Option<usize>,
     /// Time budget of the anytime accumulation loop, seconds (fearing; default 20).
     #[arg(long, allow_negative_numbers = true, value_parser = crate::bounds::wall_seconds)]
     pub budget: Option<f64>,
@@ -132,6 +135,11 @@ pub struct CoverInput {
 /// Runs `snowscape cover`.
 pub fn run(args: &CoverArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let t0 = Instant::now();
+    if let Some(n) = args.turntable
+        && !(2..=720).contains(&n)
+    {
+        return Err(anyhow!("--turntable {n}: 2..=720 frames")).bad_input();
+    }
     let file = match &args.parameters {
         Some(p) => CoverParameters::read(p).bad_input()?,
         None => CoverParameters::default(),
@@ -228,6 +236,27 @@ fn crop(mut o: SceneObject, e: [f64; 4], margin: f64) -> SceneObject {
     o
 }
 
+/// `turntable.gif` in `dir`: `frames` previews around the scene and its snow, 80 ms apart.
+fn write_turntable(
+    dir: &std::path::Path,
+    scene: &Scene,
+    snow: &[snowscape_mesh::SnowMesh],
+    frames: usize,
+) -> anyhow::Result<()> {
+    let opts = PreviewOptions {
+        width: 480,
+        height: 360,
+        ..PreviewOptions::default()
+    };
+    let images: Vec<image::RgbaImage> = render_turntable(scene, snow, &opts, frames)?
+        .into_iter()
+        .map(|i| image::DynamicImage::ImageRgb8(i).into_rgba8())
+        .collect();
+    let gif = snowscape_render::encode_gif(&images, 80)?;
+    snowscape_io::write_bytes_atomic(&dir.join("turntable.gif"), &gif)?;
+    Ok(())
+}
+
 /// The exit code of a snow-cover error: the user's input (2) unless it is an output problem.
 fn festenberg_failure(e: FestenbergError) -> Failure {
     let code = match &e {
@@ -310,6 +339,10 @@ fn cover_diffusion(
     })
     .job_failed()?;
     files.push("preview.png".into());
+    if let Some(n) = args.turntable {
+        stage("turntable", &mut || write_turntable(dir, scene, meshes, n)).job_failed()?;
+        files.push("turntable.gif".into());
+    }
     let mut growth_report = serde_json::Value::Null;
     if let Some(frames) = args.growth {
         let t = Instant::now();
@@ -463,6 +496,14 @@ fn cover_fearing(
         params.wind_transport = w;
     }
     let c = snowscape_fearing::cover(scene, &params).bad_input()?;
+    if let Some(n) = args.turntable {
+        let mut meshes = vec![c.surface.to_mesh("snow")];
+        meshes.extend(c.dusting.clone());
+        std::fs::create_dir_all(&args.out)
+            .with_context(|| format!("cannot create {}", args.out.display()))
+            .job_failed()?;
+        write_turntable(&args.out, scene, &meshes, n).job_failed()?;
+    }
     let summary = json!({
         "mesh": args.mesh.display().to_string(),
         "up": args.up,
@@ -478,6 +519,7 @@ fn cover_fearing(
         "parameters_file": args.parameters.as_ref().map(|p| p.display().to_string()),
         "read_s": input.read_s,
         "wall_s": t0.elapsed().as_secs_f64(),
+        "turntable": args.turntable.map(|n| json!({"file": "turntable.gif", "frames": n})),
     });
     snowscape_fearing::write_outputs(&args.out, scene, &c, Some(summary)).map_err(|e| {
         let code = match e {
