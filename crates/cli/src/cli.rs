@@ -175,6 +175,10 @@ pub struct DemoArgs {
         value_parser = crate::bounds::latitude
     )]
     pub latitude: f64,
+    /// Write the single-band GeoTIFFs Cloud-Optimized (256x256 tiles, overviews, Deflate with
+    /// the floating-point predictor, GDAL's COG layout; wind.tif, two bands, stays plain).
+    #[arg(long)]
+    pub cog: bool,
 }
 
 #[derive(Debug, Args)]
@@ -219,6 +223,10 @@ pub struct RunArgs {
         value_parser = crate::bounds::latitude
     )]
     pub latitude: Option<f64>,
+    /// Write the single-band GeoTIFFs Cloud-Optimized (256x256 tiles, overviews, Deflate with
+    /// the floating-point predictor, GDAL's COG layout; wind.tif, two bands, stays plain).
+    #[arg(long)]
+    pub cog: bool,
     #[command(flatten)]
     pub skiers: SkierArgs,
     #[command(flatten)]
@@ -345,6 +353,9 @@ pub struct ConvertArgs {
     /// Output format, when the extension does not say it.
     #[arg(long)]
     pub to: Option<String>,
+    /// Write a Cloud-Optimized GeoTIFF (the output must be .tif; one band).
+    #[arg(long)]
+    pub cog: bool,
 }
 
 #[derive(Debug, Args)]

@@ -199,6 +199,8 @@ pub struct Written {
     pub dir: PathBuf,
     /// The files written so far, relative to the folder, in order.
     pub files: Vec<String>,
+    /// Single-band GeoTIFFs are written Cloud-Optimized (`--cog`; [`snowscape_io::write_cog`]).
+    pub cog: bool,
 }
 
 impl Written {
@@ -207,7 +209,19 @@ impl Written {
         Self {
             dir: dir.to_path_buf(),
             files: Vec::new(),
+            cog: false,
         }
+    }
+
+    /// Writes a single-band GeoTIFF `name` of `grid` (Cloud-Optimized when [`Written::cog`]).
+    pub fn geotiff(&mut self, name: &str, grid: &snowscape_terrain::Grid) -> Result<()> {
+        let path = self.path(name);
+        if self.cog {
+            snowscape_io::write_cog(&path, grid)?;
+        } else {
+            write_geotiff(&path, grid)?;
+        }
+        Ok(())
     }
     /// Full path of `name` inside the output folder, recorded as written.
     pub fn path(&mut self, name: &str) -> PathBuf {
@@ -226,14 +240,11 @@ pub fn write_png(path: &Path, img: &RgbaImage) -> Result<()> {
 /// Writes the rasters (GeoTIFF per layer, multi-channel EXR, 16-bit PNG, splat map).
 pub fn write_rasters(out: &mut Written, terrain: &LayeredTerrain) -> Result<()> {
     let depth = terrain.to_grid(terrain.total_depth())?;
-    write_geotiff(&out.path("depth.tif"), &depth)?;
-    write_geotiff(
-        &out.path("bedrock.tif"),
-        &terrain.to_grid(terrain.bedrock.clone())?,
-    )?;
+    out.geotiff("depth.tif", &depth)?;
+    out.geotiff("bedrock.tif", &terrain.to_grid(terrain.bedrock.clone())?)?;
     for layer in SnowLayer::ALL {
         let grid = terrain.to_grid(terrain.layer(layer).to_vec())?;
-        write_geotiff(&out.path(&format!("layers_{}.tif", layer.name())), &grid)?;
+        out.geotiff(&format!("layers_{}.tif", layer.name()), &grid)?;
     }
     let total = depth.data();
     let mut channels: Vec<(&str, &[f32])> = vec![("bedrock", &terrain.bedrock), ("depth", total)];
@@ -296,9 +307,10 @@ pub fn write_all(
     frames: &[RgbaImage],
     view: &PreviewOptions,
 ) -> Result<Vec<(&'static str, f64)>> {
-    let dir = out.dir.clone();
+    let (dir, cog) = (out.dir.clone(), out.cog);
     let timed = |write: &(dyn Fn(&mut Written) -> Result<()> + Sync)| {
         let mut files = Written::new(&dir);
+        files.cog = cog;
         let t0 = std::time::Instant::now();
         let result = write(&mut files);
         (files, t0.elapsed().as_secs_f64(), result)

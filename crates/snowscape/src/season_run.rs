@@ -18,7 +18,7 @@ use crate::outputs::{
 use crate::report::{InputSummary, MassBudget, Report, timings_object};
 use image::RgbaImage;
 use serde_json::json;
-use snowscape_io::{AtomicWriteError, write_atomic, write_bytes_atomic, write_geotiff};
+use snowscape_io::{AtomicWriteError, write_atomic, write_bytes_atomic};
 use snowscape_render::{PreviewOptions, render_preview};
 use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::{LatitudeSource, SeasonError, Winter, phenomenon_name};
@@ -53,6 +53,9 @@ pub struct SeasonJob {
     pub forcing: Option<snowscape_season::forcing::StationForcing>,
     /// How the previews and frames are drawn.
     pub view: PreviewOptions,
+    /// Write the single-band GeoTIFFs Cloud-Optimized (`--cog`; `wind.tif`, two bands, stays
+    /// a plain GeoTIFF).
+    pub cog: bool,
 }
 
 /// What a front end hears while a season runs (all optional).
@@ -369,6 +372,7 @@ pub fn run_season(
         }))
     };
     let mut out = Written::new(&job.out);
+    out.cog = job.cog;
     let frames: Vec<RgbaImage> = frames.into_iter().flatten().collect();
     out.files.extend((0..frames.len()).map(frame_name));
     if let Some(o) = stop_if_interrupted()? {
@@ -428,7 +432,7 @@ fn write_environment(out: &mut Written, terrain: &LayeredTerrain) -> Result<(), 
         (m::TEMPERATURE, "temperature.tif"),
         (m::WIND_SHADOW, "wind_shadow.tif"),
     ] {
-        write_geotiff(&out.path(file), &terrain.to_grid(map(name)?.clone())?)?;
+        out.geotiff(file, &terrain.to_grid(map(name)?.clone())?)?;
     }
     snowscape_io::write_geotiff_bands(
         &out.path("wind.tif"),
@@ -444,14 +448,8 @@ fn write_environment(out: &mut Written, terrain: &LayeredTerrain) -> Result<(), 
 fn write_avalanche_maps(out: &mut Written, winter: &Winter) -> Result<(), SeasonJobError> {
     let m = winter.avalanche_maps();
     let t = &winter.terrain;
-    write_geotiff(
-        &out.path("avalanche_scour.tif"),
-        &t.to_grid(m.scour.clone())?,
-    )?;
-    write_geotiff(
-        &out.path("avalanche_deposit.tif"),
-        &t.to_grid(m.deposit.clone())?,
-    )?;
+    out.geotiff("avalanche_scour.tif", &t.to_grid(m.scour.clone())?)?;
+    out.geotiff("avalanche_deposit.tif", &t.to_grid(m.deposit.clone())?)?;
     Ok(())
 }
 

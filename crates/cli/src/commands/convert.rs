@@ -20,7 +20,18 @@ pub fn run(args: &ConvertArgs) -> Result<(), Failure> {
             })
             .bad_input()?,
     };
+    if args.cog && format != RasterFormat::GeoTiff {
+        return Err(anyhow!(
+            "--cog writes a Cloud-Optimized GeoTIFF: the output {:?} is not .tif",
+            args.output
+        ))
+        .bad_input();
+    }
     let grid = args.dem.read_raster(&args.input).bad_input()?;
-    write_raster(&args.output, &grid, format).job_failed()?;
+    if args.cog {
+        snowscape_io::write_cog(&args.output, &grid).job_failed()?;
+    } else {
+        write_raster(&args.output, &grid, format).job_failed()?;
+    }
     Ok(())
 }

@@ -78,6 +78,7 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
             forcing: None,
             stop_at: None,
             view,
+            cog: args.cog,
         },
         global.quiet,
     )

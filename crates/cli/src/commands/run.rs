@@ -141,6 +141,7 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
             stop_at: args.stop_at,
             forcing,
             view,
+            cog: args.cog,
         },
         global.quiet,
     )

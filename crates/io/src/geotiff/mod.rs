@@ -16,11 +16,13 @@
 //! the GeoKeys, else a `.prj` / `CRS.txt` sidecar. Truncated or corrupt files give
 //! [`crate::RasterError::Tiff`] (or a `GeoTiffTag` error naming the bad tag), never a panic.
 //!
-//! Writing: see [`write_geotiff_bands`].
+//! Writing: see [`write_geotiff_bands`]; Cloud-Optimized: [`write_cog`].
 
+mod cog;
 pub(crate) mod geokeys;
 mod read;
 mod write;
 
+pub use cog::{COG_TILE, write_cog};
 pub(crate) use read::read;
 pub use write::{GEOTIFF_NODATA, write_geotiff, write_geotiff_bands};
