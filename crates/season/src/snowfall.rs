@@ -294,22 +294,36 @@ pub struct PrecipitationMaps<'a> {
     pub orographic: &'a [f32],
 }
 
+/// Where a window's precipitation goes besides the snow layers, and how the snow is laid.
+pub struct PrecipitationTargets<'a> {
+    /// Density of new snow in each layer (compacted, stable, unstable, powder), kg/m³.
+    pub densities_kg_m3: [f64; 4],
+    /// Age of the snow surface per cell, days: reset where at least `reset_swe_m` fell.
+    pub surface_age: &'a mut [f32],
+    /// Snow water that resets the surface age, m.
+    pub reset_swe_m: f64,
+    /// Rain per cell, m of water, added to (the melt's liquid water).
+    pub rain_out: &'a mut [f32],
+}
+
 /// Adds a window's precipitation (the orographic model): snow water `s · f_oro` by the
 /// layer split of [`layer_shares`], each share at its layer's density; the surface age is
 /// reset where at least `reset_swe_m` fell; the rain `r · f_oro` is added to `rain_out`
 /// (m of water per cell, for the melt's liquid water).
-#[allow(clippy::too_many_arguments)]
 pub fn add_precipitation(
     params: &SnowfallParams,
     terrain: &mut LayeredTerrain,
     maps: &PrecipitationMaps,
     table: &PrecipitationTable,
-    densities_kg_m3: [f64; 4],
-    surface_age: &mut [f32],
-    reset_swe_m: f64,
-    rain_out: &mut [f32],
+    targets: PrecipitationTargets,
     scratch: &mut SnowfallScratch,
 ) -> Result<PrecipitationReport, PhenomenonError> {
+    let PrecipitationTargets {
+        densities_kg_m3,
+        surface_age,
+        reset_swe_m,
+        rain_out,
+    } = targets;
     params.validate()?;
     let geometry = terrain.geometry().clone();
     check_map("temperature", maps.temperature, &geometry)?;

@@ -758,7 +758,6 @@ impl Coefficients {
     /// table lookups, then the column updates written without data-dependent branches, so
     /// the cells of a row overlap in the pipeline (and vectorise) instead of waiting on one
     /// another's long dependency chains.
-    #[allow(clippy::too_many_arguments)]
     fn row(
         &self,
         f: &MeltForcing,

@@ -77,10 +77,12 @@ impl Winter {
             &mut self.terrain,
             &maps,
             table,
-            p.melt.enhanced.layer_density_kg_m3,
-            &mut self.pack.surface_age_days,
-            p.melt.enhanced.reset_swe_m,
-            &mut self.pending_rain,
+            snowfall::PrecipitationTargets {
+                densities_kg_m3: p.melt.enhanced.layer_density_kg_m3,
+                surface_age: &mut self.pack.surface_age_days,
+                reset_swe_m: p.melt.enhanced.reset_swe_m,
+                rain_out: &mut self.pending_rain,
+            },
             &mut self.snowfall_scratch,
         )?;
         let b = &mut self.state.budget;
