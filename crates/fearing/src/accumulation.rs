@@ -11,7 +11,7 @@
 //! get to shoot in this pass keep their flakes of an earlier pass in the sky.
 
 use crate::edge_groups::Topology;
-use crate::flakes::{Batch, Ceiling, Walk, shoot};
+use crate::flakes::{Batch, Ceiling, Volley, Walk, shoot};
 use crate::importance::{Weights, disagreement, importance, top};
 use crate::launch_sites::LaunchSites;
 use crate::params::FearingParams;
@@ -154,7 +154,18 @@ pub fn accumulate(
                 (
                     id,
                     shoot(
-                        &walk, &tracer, &ceiling, p.seed, pass, id, start, own, first, count,
+                        &walk,
+                        &tracer,
+                        &ceiling,
+                        Volley {
+                            seed: p.seed,
+                            pass,
+                            site: id,
+                            start,
+                            own,
+                            first,
+                            count,
+                        },
                     ),
                 )
             })

@@ -158,21 +158,34 @@ pub struct Batch {
     pub rays: u64,
 }
 
-/// Shoots flakes `first..first + count` of site `site` (cell id) from `start`, ignoring the
-/// site's own base triangle and own snow top (`own`) on the first step.
-#[allow(clippy::too_many_arguments)]
-pub fn shoot(
-    walk: &Walk,
-    tracer: &Tracer,
-    ceiling: &Ceiling,
-    seed: u64,
-    pass: u32,
-    site: u32,
-    start: [f64; 3],
-    own: [Tag; 2],
-    first: u32,
-    count: u32,
-) -> Batch {
+/// One batch of flakes to shoot from a launch site.
+#[derive(Debug, Clone, Copy)]
+pub struct Volley {
+    /// The cover's seed and the accumulation pass (the flakes' random keys).
+    pub seed: u64,
+    pub pass: u32,
+    /// The site (cell id) and where its flakes start.
+    pub site: u32,
+    pub start: [f64; 3],
+    /// The site's own base triangle and snow top, ignored on the first step.
+    pub own: [Tag; 2],
+    /// Flakes `first..first + count`.
+    pub first: u32,
+    pub count: u32,
+}
+
+/// Shoots flakes `first..first + count` of the volley's site from its start upwards, ignoring the
+/// site's own base triangle and snow top (`own`) on the first step.
+pub fn shoot(walk: &Walk, tracer: &Tracer, ceiling: &Ceiling, volley: Volley) -> Batch {
+    let Volley {
+        seed,
+        pass,
+        site,
+        start,
+        own,
+        first,
+        count,
+    } = volley;
     let mut b = Batch {
         shot: count,
         ..Default::default()

@@ -502,23 +502,37 @@ pub struct AvalancheMaps {
     pub deposit: Vec<f32>,
 }
 
+/// One release of the season: its cells, when and how it started, and the rupture cell.
+#[derive(Debug, Clone, Copy)]
+pub struct Release<'a> {
+    /// Released cells, row-major, ascending.
+    pub cells: &'a [usize],
+    /// Season day.
+    pub day: f64,
+    pub trigger: Trigger,
+    /// The rupture cell (row-major index).
+    pub cell: usize,
+}
+
 /// Releases `cells` (row-major, ascending), runs the avalanche to rest and deposits it as
 /// stable snow ([`AvalancheWorkspace::run_to_rest`]: the cost follows the avalanche's
 /// footprint). With `alpha_from_temperature`, α comes from the mean `temperature` (°C per
 /// cell) of the released cells. Returns the record and the cells whose snow the flow
 /// entrained (ascending), beside the released ones.
-#[allow(clippy::too_many_arguments)]
 pub fn run_avalanche(
     params: &AvalancheParameters,
     terrain: &mut LayeredTerrain,
     temperature: &[f32],
-    cells: &[usize],
-    day: f64,
-    trigger: Trigger,
-    cell: usize,
+    release: Release,
     maps: &mut AvalancheMaps,
     workspace: &mut AvalancheWorkspace,
 ) -> Result<(AvalancheRecord, Vec<usize>), AvalancheError> {
+    let Release {
+        cells,
+        day,
+        trigger,
+        cell,
+    } = release;
     let n = terrain.geometry().len();
     for m in [&mut maps.scour, &mut maps.deposit] {
         if m.len() != n {

@@ -546,10 +546,12 @@ impl Winter {
             params,
             &mut self.terrain,
             &self.environment.temperature,
-            &cells,
-            day,
-            trigger,
-            cell,
+            avalanches::Release {
+                cells: &cells,
+                day,
+                trigger,
+                cell,
+            },
             &mut self.avalanche_maps,
             &mut self.avalanche_workspace,
         )
