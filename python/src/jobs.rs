@@ -36,18 +36,6 @@ pub(crate) fn avalanche<'py>(
     let params: AvalancheParams = serde_json::from_str(&params_json)
         .map_err(|e| value_err(format!("avalanche parameters: {e}")))?;
     params.validate().map_err(py_err)?;
-    if let Some(t) = thickness
-        && !(t.is_finite() && t > 0.0 && t <= 50.0)
-    {
-        return Err(value_err(format!(
-            "thickness must be in (0, 50] m, got {t}"
-        )));
-    }
-    if !(snow_cover.is_finite() && (0.0..=50.0).contains(&snow_cover)) {
-        return Err(value_err(format!(
-            "snow_cover must be in [0, 50] m, got {snow_cover}"
-        )));
-    }
     let options = snowscape::avalanche::RunOptions {
         duration_s: duration,
         ..Default::default()
@@ -93,25 +81,15 @@ pub(crate) fn avalanche<'py>(
     } else {
         ThicknessConvention::Vertical
     };
-    let (mut terrain, cells, area) =
-        release_terrain(&dem, &spec, thickness, convention, &ReadOptions::default())
-            .map_err(py_err)?;
-    if snow_cover > 0.0 {
-        let mask = dem.mask().clone();
-        for (i, v) in terrain.layer_mut(SnowLayer::Powder).iter_mut().enumerate() {
-            if mask.is_valid(i) && !area.cells[i] {
-                *v = snow_cover as f32;
-            }
-        }
-    }
-    if !cells
-        .iter()
-        .any(|&i| terrain.layer(SnowLayer::Unstable)[i] > 0.0)
-    {
-        return Err(value_err(
-            "the release holds no snow (released volume 0 m³)",
-        ));
-    }
+    let (mut terrain, cells, area) = release_terrain(
+        &dem,
+        &spec,
+        thickness,
+        convention,
+        &ReadOptions::default(),
+        snow_cover,
+    )
+    .map_err(py_err)?;
     let outcome: RestOutcome = py
         .detach(|| {
             AvalancheWorkspace::new().run_to_rest::<AvalancheError>(

@@ -167,6 +167,10 @@ def test_bad_input_raises_naming_the_value(tmp_path):
         w.trigger_avalanche(0.0, 0.0)
     with pytest.raises(ValueError, match="voellmy_mu"):
         snowscape.avalanche(dem, (0.0, 0.0), friction="voellmy", voellmy_mu=1e9)
+    with pytest.raises(ValueError, match="1000000000"):
+        snowscape.avalanche(dem, (0.0, 0.0), thickness=1e9)
+    with pytest.raises(ValueError, match="snow cover -1"):
+        snowscape.avalanche(dem, (0.0, 0.0), snow_cover=-1.0)
     with pytest.raises(ValueError, match="no_such_param"):
         snowscape.avalanche(dem, (0.0, 0.0), no_such_param=1)
     with pytest.raises(OSError, match="nothing.shp"):

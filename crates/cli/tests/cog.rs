@@ -2,15 +2,11 @@
 //! GeoTIFFs that GDAL (`gdalinfo`, Debian's gdal-bin, installed by `.ci/run`) reads as COGs
 //! with their georeferencing; a non-.tif output is refused.
 
+mod common;
+
+use common::{shared, snowscape};
 use std::path::Path;
 use std::process::Command;
-
-fn snowscape(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_snowscape"))
-        .args(args)
-        .output()
-        .expect("the snowscape binary runs")
-}
 
 fn gdalinfo(path: &Path) -> String {
     let o = Command::new("gdalinfo")
@@ -27,13 +23,7 @@ fn gdalinfo(path: &Path) -> String {
 
 #[test]
 fn convert_and_demo_write_cogs_gdal_accepts() {
-    let dem = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/dem/avaframe_avaMal/avaMal.asc");
-    assert!(
-        dem.is_file(),
-        "the shared avaMal DEM is missing: {}",
-        dem.display()
-    );
+    let dem = shared("dem/avaframe_avaMal/avaMal.asc");
     let tmp = tempfile::tempdir().unwrap();
     let cog = tmp.path().join("mal.tif");
     let o = snowscape(&[

@@ -2,15 +2,10 @@
 //! names, tiles sharing their edges, heights that decode back to the run's bedrock within one
 //! 16-bit step, weight maps that sum to 255 in every texel, and bad input refused (exit 2).
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn snowscape(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_snowscape"))
-        .args(args)
-        .output()
-        .expect("the snowscape binary runs")
-}
+use common::snowscape;
+use std::path::{Path, PathBuf};
 
 fn ok(args: &[&str]) {
     let o = snowscape(args);

@@ -3,19 +3,16 @@
 //! as none, a rougher raster shortening the runout, and bad rasters refused (exit code 2,
 //! nothing written) with the value or the flag named.
 
+mod common;
+
+use common::{shared, snowscape};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn wog() -> (PathBuf, PathBuf) {
-    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/dem/avaframe_avaWog");
-    let (dem, rel) = (d.join("avaWog.asc"), d.join("REL/relWog.shp"));
-    assert!(
-        dem.is_file() && rel.is_file(),
-        "the avaWog DEM and release shapefile are missing: expected {} and {} (shared data folder beside the checkout)",
-        dem.display(),
-        rel.display()
-    );
-    (dem, rel)
+    (
+        shared("dem/avaframe_avaWog/avaWog.asc"),
+        shared("dem/avaframe_avaWog/REL/relWog.shp"),
+    )
 }
 
 /// An ESRI ASCII grid of 20 m cells over avaWog's extent (x 167453-169902, y 361953-364727)
@@ -31,13 +28,6 @@ fn write_asc(path: &Path, x0: f64, y0: f64, value: impl Fn(usize, usize) -> f64)
         s.push('\n');
     }
     std::fs::write(path, s).unwrap();
-}
-
-fn snowscape(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_snowscape"))
-        .args(args)
-        .output()
-        .expect("the snowscape binary runs")
 }
 
 /// A 15 s Voellmy run of avaWog (μ = 0.25, ξ = 4096: both exact in the rasters' f32) with

@@ -29,7 +29,62 @@ pub enum ReleaseSpec {
 /// `--thickness` overrides it, 1 m by default). A point covers the DEM with `--thickness` of
 /// unstable snow and breaks it there (Cordonnier 2018 §6.1 rupture: the unstable snow within a
 /// reach proportional to its thickness, and everything down the fall lines below).
+///
+/// `snow_cover_m` metres of loose snow (powder, fully entrainable: AvaFrame's entrainment
+/// thickness) are laid on every valid cell outside the release. The thickness must be in
+/// (0, 50] m and the cover in [0, 50] m (checked before any work, for every front end), and a
+/// release that holds no snow is refused.
 pub fn release_terrain(
+    dem: &Grid,
+    spec: &ReleaseSpec,
+    thickness: Option<f64>,
+    convention: ThicknessConvention,
+    dem_options: &ReadOptions,
+    snow_cover_m: f64,
+) -> Result<(LayeredTerrain, Vec<usize>, ReleaseMask), ReleaseError> {
+    if let Some(t) = thickness
+        && !(t.is_finite() && t > 0.0 && t <= MAX_THICKNESS_M)
+    {
+        return Err(ReleaseError::Thickness(t));
+    }
+    if !(snow_cover_m.is_finite() && (0.0..=MAX_THICKNESS_M).contains(&snow_cover_m)) {
+        return Err(ReleaseError::SnowCover(snow_cover_m));
+    }
+    let (mut terrain, cells, area) = release_only(dem, spec, thickness, convention, dem_options)?;
+    if snow_cover_m > 0.0 {
+        // The cover the flow can entrain, outside the release (whose snow it releases).
+        let mask = dem.mask().clone();
+        for (i, v) in terrain.layer_mut(SnowLayer::Powder).iter_mut().enumerate() {
+            if mask.is_valid(i) && !area.cells[i] {
+                *v = snow_cover_m as f32;
+            }
+        }
+    }
+    let unstable = terrain.layer(SnowLayer::Unstable);
+    if !cells.iter().any(|&i| unstable[i] > 0.0) {
+        return Err(ReleaseError::NoSnow);
+    }
+    Ok((terrain, cells, area))
+}
+
+/// Largest release thickness and snow cover, m.
+pub const MAX_THICKNESS_M: f64 = 50.0;
+
+/// Why a release was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum ReleaseError {
+    #[error(transparent)]
+    Area(#[from] ReleaseAreaError),
+    #[error("release thickness {0} m must be in (0, 50]")]
+    Thickness(f64),
+    #[error("snow cover {0} m must be in [0, 50]")]
+    SnowCover(f64),
+    #[error("the release holds no snow (released volume 0 m³)")]
+    NoSnow,
+}
+
+/// The release's terrain, cells and mask, before the cover and the checks.
+fn release_only(
     dem: &Grid,
     spec: &ReleaseSpec,
     thickness: Option<f64>,

@@ -199,27 +199,16 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         ThicknessArg::Vertical => ThicknessConvention::Vertical,
         ThicknessArg::SlopeNormal => ThicknessConvention::SlopeNormal,
     };
-    let (mut terrain, cells, area) =
-        release_terrain(&dem, &spec, args.thickness, convention, &dem_options)
-            .with_context(|| format!("--release {}", args.release))
-            .bad_input()?;
-    if args.snow_cover > 0.0 {
-        // The cover the flow can entrain, outside the release (whose snow it releases).
-        let mask = dem.mask().clone();
-        for (i, v) in terrain.layer_mut(SnowLayer::Powder).iter_mut().enumerate() {
-            if mask.is_valid(i) && !area.cells[i] {
-                *v = args.snow_cover as f32;
-            }
-        }
-    }
-    let unstable = terrain.layer(SnowLayer::Unstable);
-    if !cells.iter().any(|&i| unstable[i] > 0.0) {
-        return Err(anyhow!(
-            "the release {} holds no snow (released volume 0 m³)",
-            args.release
-        ))
-        .bad_input();
-    }
+    let (mut terrain, cells, area) = release_terrain(
+        &dem,
+        &spec,
+        args.thickness,
+        convention,
+        &dem_options,
+        args.snow_cover,
+    )
+    .with_context(|| format!("--release {}", args.release))
+    .bad_input()?;
     let (friction_maps, friction_report) = friction_maps(args, &dem, &params).bad_input()?;
     let compare = args
         .compare
