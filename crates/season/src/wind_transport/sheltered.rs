@@ -35,7 +35,7 @@ use super::{Context, WindMaps};
 use crate::phenomenon::{PhenomenonError, Validity, check_range, row_gradient_norm};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::{LayeredTerrain, SnowLayer};
+use snowscape_terrain::LayeredTerrain;
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 /// Parameters of the Sx-driven redistribution.
@@ -151,16 +151,13 @@ pub(super) struct SxSums {
     pub border: f64,
 }
 
-/// Per-cell inputs of the sweep.
+/// Buffers of the sweep.
 #[derive(Debug, Clone, Default)]
 pub(super) struct SxScratch {
     /// Depth scoured from each cell, m.
     scour: Vec<f32>,
-    /// Share of the arriving load each cell keeps.
+    /// Share of the arriving load each cell keeps, negative on slab slopes.
     keep: Vec<f32>,
-    /// Whether deposits on the cell land as unstable snow (slope above the slab slope).
-    slab: Vec<bool>,
-    gradient: Vec<f32>,
     /// Load arriving from the upwind row, per column.
     from_row: Vec<f32>,
 }
@@ -186,6 +183,35 @@ fn dominant<V: Validity>(ctx: &Context, valid: &V) -> Option<(f64, f64)> {
     (norm > 0.0 && norm.is_finite()).then(|| (su / norm, sv / norm))
 }
 
+/// The share of the arriving load a cell keeps, `1 − exp(−(a + b · x))` for a shelter `x =
+/// Sx − sheltered_above_deg` (degrees; `x ≤ 0`, open ground: `1 − exp(−a)`), `a = ℓ / L`,
+/// `b = ℓ · k_deposit`.
+struct KeepShare {
+    open: f32,
+    a: f64,
+    b: f64,
+}
+
+impl KeepShare {
+    fn new(a: f64, b: f64) -> Self {
+        Self {
+            open: (1.0 - (-a).exp()) as f32,
+            a,
+            b,
+        }
+    }
+
+    #[inline]
+    fn at(&self, x: f32) -> f32 {
+        let x = f64::from(x);
+        if x > 0.0 {
+            (1.0 - (-(self.a + self.b * x)).exp()) as f32
+        } else {
+            self.open
+        }
+    }
+}
+
 /// Runs the Sx term on the layers (after the paper's passes).
 pub(super) fn run<V: Validity>(
     ctx: &Context,
@@ -199,66 +225,118 @@ pub(super) fn run<V: Validity>(
     let Some((ex, ey)) = dominant(ctx, valid) else {
         return SxSums::default();
     };
-    let (w, h) = (ctx.geometry.width(), ctx.geometry.height());
-    let n = w * h;
     let (dx, dy) = (ctx.geometry.cell_size_x(), ctx.geometry.cell_size_y());
     let fx = ex.abs() / (ex.abs() + ey.abs());
     let hop = fx * dx * ex.abs() + (1.0 - fx) * dy * ey.abs();
-    let rate_open = hop / params.settling_length_m;
-    let rate_shelter = hop * params.k_deposit;
-    let keep_open = (1.0 - (-rate_open).exp()) as f32;
-    let scour_dt = (params.k_exposed * dt_days) as f32;
-    let inv_ref = (1.0 / params.reference_speed_m_s) as f32;
-    let expo = params.speed_exponent as f32;
-    let (exposed, sheltered) = (
-        params.exposed_below_deg as f32,
-        params.sheltered_above_deg as f32,
-    );
+    let cell = CellTerms {
+        sx,
+        keep: KeepShare::new(hop / params.settling_length_m, hop * params.k_deposit),
+        scour_dt: (params.k_exposed * dt_days) as f32,
+        inv_ref: (1.0 / params.reference_speed_m_s) as f32,
+        expo: params.speed_exponent as f32,
+        exposed: params.exposed_below_deg as f32,
+        sheltered: params.sheltered_above_deg as f32,
+    };
+    let w = ctx.geometry.width();
+    let n = w * ctx.geometry.height();
     scratch.scour.resize(n, 0.0);
     scratch.keep.resize(n, 0.0);
-    scratch.slab.resize(n, false);
-    scratch.gradient.resize(n, 0.0);
-    let powder = terrain.layer(SnowLayer::Powder);
-    let unstable = terrain.layer(SnowLayer::Unstable);
-    let wind = ctx.wind;
+    let [_, _, unstable, powder] = &terrain.snow;
     scratch
         .scour
         .par_chunks_mut(w)
         .zip(scratch.keep.par_chunks_mut(w))
-        .zip(scratch.slab.par_chunks_mut(w))
-        .zip(scratch.gradient.par_chunks_mut(w))
         .enumerate()
-        .for_each(|(row, (((sc, kp), sl), gr))| {
-            row_gradient_norm(surface, ctx.geometry, ctx.mask, valid, row, gr);
-            for col in 0..w {
-                let i = row * w + col;
-                if !valid.at(i) {
-                    (sc[col], kp[col], sl[col]) = (0.0, 0.0, false);
-                    continue;
+        .for_each_init(
+            || vec![0.0f32; w],
+            |gradient, (row, (sc, kp))| {
+                let r = row * w..(row + 1) * w;
+                row_gradient_norm(surface, ctx.geometry, ctx.mask, valid, row, gradient);
+                let erodible = ctx.erode_unstable.then(|| &unstable[r.clone()]);
+                cell.scour_row(ctx.wind, r.clone(), &powder[r.clone()], erodible, sc);
+                cell.keep_row(&sx[r.clone()], gradient, ctx.slab_gradient, kp);
+                for (k, i) in r.enumerate() {
+                    if !valid.at(i) {
+                        (sc[k], kp[k]) = (0.0, 0.0);
+                    }
                 }
-                let s = sx[i];
-                // Wind speeds are far from overflow: the plain norm, not the slower `hypot`.
-                let (u, v) = (wind.u[i], wind.v[i]);
-                let speed = (u * u + v * v).sqrt() * inv_ref;
-                let factor = if expo == 3.0 {
-                    speed * speed * speed
-                } else {
-                    speed.powf(expo)
-                };
-                let available = powder[i] + if ctx.erode_unstable { unstable[i] } else { 0.0 };
-                let exposure = (exposed - s).max(0.0);
-                let e = (scour_dt * exposure * factor).min(available).max(0.0);
-                sc[col] = if wind.shadow[i] > 0.5 { 0.0 } else { e };
-                let shelter = f64::from(s - sheltered);
-                kp[col] = if shelter > 0.0 {
-                    (1.0 - (-(rate_open + rate_shelter * shelter)).exp()) as f32
-                } else {
-                    keep_open
-                };
-                sl[col] = gr[col] > ctx.slab_gradient;
-            }
-        });
+            },
+        );
     sweep(ctx, valid, (ex, ey, fx as f32), terrain, scratch)
+}
+
+/// The per-cell terms of the sweep, computed in a row-parallel pass before it from the maps
+/// and the snow before the step: the scour and the share kept (a pure function of each cell).
+struct CellTerms<'a> {
+    sx: &'a [f32],
+    keep: KeepShare,
+    scour_dt: f32,
+    inv_ref: f32,
+    expo: f32,
+    exposed: f32,
+    sheltered: f32,
+}
+
+impl CellTerms<'_> {
+    /// Depth scoured from the cells `r` of one row, with `powder` (and the `unstable` snow,
+    /// when it erodes) on them: `min(P + U, k_exposed · (exposed_below_deg − Sx) · (|W| /
+    /// W_ref)^n · δt)`, 0 in the wind shadow. Straight loops over the row's slices, so that they
+    /// vectorise.
+    fn scour_row(
+        &self,
+        wind: &WindMaps,
+        r: std::ops::Range<usize>,
+        powder: &[f32],
+        unstable: Option<&[f32]>,
+        out: &mut [f32],
+    ) {
+        let (u, v, shadow, sx) = (
+            &wind.u[r.clone()],
+            &wind.v[r.clone()],
+            &wind.shadow[r.clone()],
+            &self.sx[r],
+        );
+        let w = out.len();
+        let (u, v, shadow, sx, powder) = (&u[..w], &v[..w], &shadow[..w], &sx[..w], &powder[..w]);
+        // Wind speeds are far from overflow: the plain norm, not the slower `hypot`.
+        if self.expo == 3.0 {
+            for k in 0..w {
+                let speed = (u[k] * u[k] + v[k] * v[k]).sqrt() * self.inv_ref;
+                let exposure = (self.exposed - sx[k]).max(0.0);
+                out[k] = self.scour_dt * exposure * (speed * speed * speed);
+            }
+        } else {
+            for k in 0..w {
+                let speed = (u[k] * u[k] + v[k] * v[k]).sqrt() * self.inv_ref;
+                let exposure = (self.exposed - sx[k]).max(0.0);
+                out[k] = self.scour_dt * exposure * speed.powf(self.expo);
+            }
+        }
+        match unstable {
+            Some(unstable) => {
+                let unstable = &unstable[..w];
+                for k in 0..w {
+                    let e = out[k].min(powder[k] + unstable[k]).max(0.0);
+                    out[k] = if shadow[k] > 0.5 { 0.0 } else { e };
+                }
+            }
+            None => {
+                for k in 0..w {
+                    let e = out[k].min(powder[k]).max(0.0);
+                    out[k] = if shadow[k] > 0.5 { 0.0 } else { e };
+                }
+            }
+        }
+    }
+
+    /// Share of the arriving load each cell of a row keeps (Sx `sx`), negative where the surface
+    /// `gradient` (tan) exceeds `slab_gradient` (deposits land as unstable snow).
+    fn keep_row(&self, sx: &[f32], gradient: &[f32], slab_gradient: f32, out: &mut [f32]) {
+        for ((o, &s), &g) in out.iter_mut().zip(sx).zip(gradient) {
+            let keep = self.keep.at(s - self.sheltered);
+            *o = if g > slab_gradient { -keep } else { keep };
+        }
+    }
 }
 
 /// The ordered sweep downwind: scour, carry, keep, pass on.
@@ -314,7 +392,6 @@ fn sweep<V: Validity>(
         valid,
         scour: &scratch.scour,
         keep: &scratch.keep,
-        slab: &scratch.slab,
         fx,
         dc,
         dr,
@@ -363,9 +440,11 @@ fn sweep<V: Validity>(
 struct SweepMaps<'a, V> {
     ctx: &'a Context<'a>,
     valid: &'a V,
+    /// Depth scoured from each cell, m.
     scour: &'a [f32],
+    /// Share of the arriving load each cell keeps, negative where deposits land as unstable
+    /// snow (surface slope above the slab slope).
     keep: &'a [f32],
-    slab: &'a [bool],
     fx: f32,
     dc: isize,
     dr: isize,
@@ -417,7 +496,8 @@ impl Half<'_> {
                 if load <= 0.0 {
                     continue;
                 }
-                let mut kept = load * m.keep[i];
+                let keep = m.keep[i];
+                let mut kept = load * keep.abs();
                 let out = load - kept;
                 let to_x = out * m.fx;
                 let to_y = out - to_x;
@@ -435,7 +515,7 @@ impl Half<'_> {
                 }
                 if kept > 0.0 {
                     sums.deposited += f64::from(kept);
-                    if m.slab[i] {
+                    if keep < 0.0 {
                         unstable[local] += kept;
                         sums.deposited_unstable += f64::from(kept);
                     } else {
