@@ -340,6 +340,8 @@ struct CellState {
     /// scratch's `generation`: in this one).
     stamp: u32,
     flags: u8,
+    /// Not in the first or last row or column (set with `rank`; kept between steps).
+    interior: bool,
 }
 
 impl Default for CellState {
@@ -352,6 +354,7 @@ impl Default for CellState {
             rank: u32::MAX,
             stamp: 0,
             flags: 0,
+            interior: false,
         }
     }
 }
@@ -410,6 +413,11 @@ impl SheddingScratch {
         self.cells = vec![CellState::default(); terrain.bedrock.len()];
         for (p, &i) in self.order.iter().enumerate() {
             self.cells[i as usize].rank = p as u32;
+        }
+        let (w, h) = (geometry.width(), geometry.height());
+        for (i, cell) in self.cells.iter_mut().enumerate() {
+            let (col, row) = (i % w, i / w);
+            cell.interior = col > 0 && row > 0 && col + 1 < w && row + 1 < h;
         }
         self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
         self.key_mask = mask.map(<[bool]>::to_vec);
@@ -693,22 +701,49 @@ fn for_each_around<V: Validity>(
     valid: &V,
     nb: &[Neighbour; 8],
     i: usize,
+    f: impl FnMut(&Neighbour, Around),
+) {
+    let (w, h) = (geometry.width(), geometry.height());
+    let (col, row) = (i % w, i / w);
+    let interior = col > 0 && row > 0 && col + 1 < w && row + 1 < h;
+    for_each_around_of(geometry, valid, nb, i, interior, f);
+}
+
+/// [`for_each_around`] for a cell whose position, away from the grid border or not, is known
+/// (`interior`: not in the first or last row or column), as the sweep keeps it per cell: an
+/// interior cell's neighbours need no division of its index into a column and a row.
+#[inline(always)]
+fn for_each_around_of<V: Validity>(
+    geometry: &GridGeometry,
+    valid: &V,
+    nb: &[Neighbour; 8],
+    i: usize,
+    interior: bool,
     mut f: impl FnMut(&Neighbour, Around),
 ) {
+    if interior {
+        for n in nb {
+            let j = i.wrapping_add_signed(n.di);
+            if valid.at(j) {
+                f(n, Around::Cell(j));
+            } else if n.dc == 0 || n.dr == 0 {
+                // Into nodata: the opposite cell of an interior cell is inside the grid.
+                let o = i.wrapping_sub(j.wrapping_sub(i));
+                if valid.at(o) {
+                    f(n, Around::Ghost(o));
+                }
+            }
+        }
+        return;
+    }
     let (w, h) = (geometry.width(), geometry.height());
     let (col, row) = (i % w, i / w);
     let inside = |dc: isize, dr: isize| {
         let (c, r) = (col.wrapping_add_signed(dc), row.wrapping_add_signed(dr));
         (c < w && r < h).then(|| r * w + c)
     };
-    let interior = col > 0 && row > 0 && col + 1 < w && row + 1 < h;
     for n in nb {
-        let j = if interior {
-            Some(i.wrapping_add_signed(n.di))
-        } else {
-            inside(n.dc, n.dr)
-        };
-        match j {
+        match inside(n.dc, n.dr) {
             Some(j) if valid.at(j) => f(n, Around::Cell(j)),
             // Past the grid border or into nodata (the outline of a clipped DEM is its border).
             _ if n.dc == 0 || n.dr == 0 => {

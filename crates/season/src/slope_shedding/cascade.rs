@@ -134,12 +134,19 @@ impl<V: Validity> Cascade<'_, V> {
         self.touch(i);
         let mut cells = [0usize; 8];
         let mut m = 0;
-        for_each_around(self.geometry, self.valid, &self.nb, i, |_, a| {
-            if let Around::Cell(j) = a {
-                cells[m] = j;
-                m += 1;
-            }
-        });
+        for_each_around_of(
+            self.geometry,
+            self.valid,
+            &self.nb,
+            i,
+            self.cells[i].interior,
+            |_, a| {
+                if let Around::Cell(j) = a {
+                    cells[m] = j;
+                    m += 1;
+                }
+            },
+        );
         for &j in &cells[..m] {
             self.touch(j);
         }
@@ -168,15 +175,22 @@ impl<V: Validity> Cascade<'_, V> {
     fn retained(&self, i: usize, base: f32, depth: f32) -> f32 {
         let mut fixed = 0.0f32;
         let mut rises = [f32::NEG_INFINITY; 3];
-        for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| match a {
-            Around::Cell(j) => {
-                let g = &mut rises[distance_group(n)];
-                *g = g.max(base - self.seen(j));
-            }
-            Around::Ghost(o) => {
-                fixed = fixed.max((self.cells[o].bed - self.cells[i].bed) * n.inv_l)
-            }
-        });
+        for_each_around_of(
+            self.geometry,
+            self.valid,
+            &self.nb,
+            i,
+            self.cells[i].interior,
+            |n, a| match a {
+                Around::Cell(j) => {
+                    let g = &mut rises[distance_group(n)];
+                    *g = g.max(base - self.seen(j));
+                }
+                Around::Ghost(o) => {
+                    fixed = fixed.max((self.cells[o].bed - self.cells[i].bed) * n.inv_l)
+                }
+            },
+        );
         let mut keep = depth.min(self.holding.hold(fixed, true));
         for (table, &rise) in self.retained.iter().zip(&rises) {
             if rise > f32::NEG_INFINITY {
@@ -230,20 +244,27 @@ impl<V: Validity> Cascade<'_, V> {
         // (a receiver the sweep has passed) and `1 / distance`.
         let mut seen_around = [(Around::Ghost(0), 0.0f32, false, 0.0f32); 8];
         let mut m = 0;
-        for_each_around(self.geometry, self.valid, &self.nb, i, |n, a| {
-            seen_around[m] = match a {
-                Around::Cell(j) => {
-                    let cell = &self.cells[j];
-                    if cell.rank > self.sweep {
-                        (a, cell.surface0, false, n.inv_l)
-                    } else {
-                        (a, cell.surface, true, n.inv_l)
+        for_each_around_of(
+            self.geometry,
+            self.valid,
+            &self.nb,
+            i,
+            self.cells[i].interior,
+            |n, a| {
+                seen_around[m] = match a {
+                    Around::Cell(j) => {
+                        let cell = &self.cells[j];
+                        if cell.rank > self.sweep {
+                            (a, cell.surface0, false, n.inv_l)
+                        } else {
+                            (a, cell.surface, true, n.inv_l)
+                        }
                     }
-                }
-                Around::Ghost(o) => (a, a_i - (self.cells[o].bed - bed_i), false, n.inv_l),
-            };
-            m += 1;
-        });
+                    Around::Ghost(o) => (a, a_i - (self.cells[o].bed - bed_i), false, n.inv_l),
+                };
+                m += 1;
+            },
+        );
         for after in [a_i - excess, a_i] {
             for &(target, seen, limit_of, inv_l) in &seen_around[..m] {
                 // A neighbour within a millimetre is level (and would cut the round to nothing).
