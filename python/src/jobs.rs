@@ -6,7 +6,9 @@ use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use snowscape::avalanche::validation::ThicknessConvention;
-use snowscape::avalanche::{AvalancheError, AvalancheParams, AvalancheWorkspace, RestOutcome};
+use snowscape::avalanche::{
+    AvalancheError, AvalancheParams, AvalancheWorkspace, ReleasedCells, RestOutcome,
+};
 use snowscape::avalanche_release::{ReleaseSpec, release_terrain};
 use snowscape::cover::CoverParameters;
 use snowscape::io::ReadOptions;
@@ -94,8 +96,7 @@ pub(crate) fn avalanche<'py>(
         .detach(|| {
             AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
                 &mut terrain,
-                &cells,
-                None,
+                ReleasedCells::new(&cells, None),
                 &params,
                 &options,
                 SnowLayer::Stable,

@@ -34,5 +34,5 @@ pub use release_area::{
     MapExtent, RasterRelease, ReleaseAreaError, ReleaseMask, Rupture, RuptureCells, RuptureParams,
     release_at_point, release_from_raster, release_from_shapefile, rupture_at_point,
 };
-pub use rest::{AvalancheWorkspace, RestOutcome};
+pub use rest::{AvalancheWorkspace, ReleasedCells, RestOutcome};
 pub use run::{AvalancheRun, RecordTiming, RunBuffers, RunOptions, RunSummary, StopReason};

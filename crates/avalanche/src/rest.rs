@@ -26,6 +26,24 @@ use crate::friction_maps::FrictionMaps;
 use crate::run::{AvalancheRun, RunBuffers, RunOptions, RunSummary};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
 
+/// What a run releases: `cells` (row-major indices; nodata cells are skipped), with
+/// `thickness` `None` all their unstable snow and powder, else up to that many metres from the
+/// top of the pack down.
+#[derive(Debug, Clone, Copy)]
+pub struct ReleasedCells<'a> {
+    /// The released cells, row-major indices.
+    pub cells: &'a [usize],
+    /// Depth released from the top of the pack, m (`None`: the unstable snow and powder).
+    pub thickness: Option<f64>,
+}
+
+impl<'a> ReleasedCells<'a> {
+    /// The release of `cells` to `thickness`.
+    pub fn new(cells: &'a [usize], thickness: Option<f64>) -> Self {
+        Self { cells, thickness }
+    }
+}
+
 /// What one avalanche did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RestOutcome {
@@ -108,16 +126,13 @@ impl AvalancheWorkspace {
         &self.friction
     }
 
-    /// Releases `cells` (row-major indices; nodata cells are skipped) of `terrain`: with
-    /// `thickness` `None` all unstable snow and powder, else up to that many metres from the
-    /// top of the pack down; runs the flow `flow` to rest under `options`, calling
-    /// `on_record` after every record interval; lays the snow down into `deposit_layer`.
-    #[allow(clippy::too_many_arguments)]
+    /// Releases the cells of `release` of `terrain` (see [`ReleasedCells`]); runs the flow
+    /// `flow` to rest under `options`, calling `on_record` after every record interval; lays
+    /// the snow down into `deposit_layer`.
     pub fn run_to_rest<E: From<AvalancheError>>(
         &mut self,
         terrain: &mut LayeredTerrain,
-        cells: &[usize],
-        thickness: Option<f64>,
+        release: ReleasedCells,
         flow: &AvalancheParams,
         options: &RunOptions,
         deposit_layer: SnowLayer,
@@ -127,6 +142,7 @@ impl AvalancheWorkspace {
         options.validate()?;
         self.friction.check_for(terrain.geometry(), flow)?;
         let (mut state, buffers) = self.take_parts(terrain)?;
+        let ReleasedCells { cells, thickness } = release;
         let released_m3 = match release_cells(terrain, &mut state, cells, thickness) {
             Ok(v) => v,
             Err(e) => {

@@ -18,7 +18,7 @@ use crate::flow::{
     AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, Border, G, step,
 };
 use crate::release_area::{ReleaseAreaError, ReleaseMask, release_from_shapefile};
-use crate::rest::{AvalancheWorkspace, RestOutcome};
+use crate::rest::{AvalancheWorkspace, ReleasedCells, RestOutcome};
 use crate::run::{AvalancheRun, RunOptions, RunSummary};
 use snowscape_io::{RasterError, ReadOptions};
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
@@ -358,8 +358,7 @@ pub fn run_release(
     let t0 = std::time::Instant::now();
     let outcome = AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
         &mut terrain,
-        &cells,
-        None,
+        ReleasedCells::new(&cells, None),
         params,
         options,
         SnowLayer::Stable,

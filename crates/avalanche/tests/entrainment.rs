@@ -4,7 +4,8 @@
 //! erosion energy entrains less; turned off, the track keeps every bit of its snow.
 
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheWorkspace, EntrainmentParams, RestOutcome, RunOptions,
+    AvalancheError, AvalancheParams, AvalancheWorkspace, EntrainmentParams, ReleasedCells,
+    RestOutcome, RunOptions,
 };
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 
@@ -53,8 +54,7 @@ fn try_run(
     };
     AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
         t,
-        &release(),
-        None,
+        ReleasedCells::new(&release(), None),
         &flow,
         &RunOptions::default(),
         SnowLayer::Stable,

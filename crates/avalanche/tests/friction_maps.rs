@@ -5,7 +5,7 @@
 
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, AvalancheWorkspace,
-    FrictionLaw, FrictionMaps, RunOptions, SamosAtParams, step,
+    FrictionLaw, FrictionMaps, ReleasedCells, RunOptions, SamosAtParams, step,
 };
 use snowscape_terrain::{GeoTransform, Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 
@@ -229,8 +229,7 @@ fn entrainment_reads_the_map() {
         };
         ws.run_to_rest::<AvalancheError>(
             &mut terrain,
-            &cells,
-            None,
+            ReleasedCells::new(&cells, None),
             &voellmy(),
             &options,
             SnowLayer::Stable,
@@ -291,8 +290,7 @@ fn bad_maps_are_refused_naming_the_value() {
     let before = terrain.clone();
     let r = ws.run_to_rest::<AvalancheError>(
         &mut terrain,
-        &[500],
-        None,
+        ReleasedCells::new(&[500], None),
         &AvalancheParams::default(),
         &RunOptions::default(),
         SnowLayer::Stable,

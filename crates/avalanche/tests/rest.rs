@@ -4,7 +4,7 @@
 
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, AvalancheWorkspace, Border,
-    RunOptions, deposit, release,
+    ReleasedCells, RunOptions, deposit, release,
 };
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer, random};
 
@@ -76,8 +76,7 @@ fn a_kept_workspace_gives_the_bits_of_a_fresh_state_per_avalanche() {
         let out = ws
             .run_to_rest::<AvalancheError>(
                 &mut a,
-                &cells,
-                None,
+                ReleasedCells::new(&cells, None),
                 &AvalancheParams::default(),
                 &opts,
                 SnowLayer::Stable,
@@ -138,8 +137,7 @@ fn a_stopped_run_lays_its_snow_down_and_loses_none() {
     let err = ws
         .run_to_rest::<Wrapped>(
             &mut t,
-            &cells,
-            None,
+            ReleasedCells::new(&cells, None),
             &closed,
             &RunOptions::default(),
             SnowLayer::Stable,
@@ -164,8 +162,7 @@ fn a_stopped_run_lays_its_snow_down_and_loses_none() {
     let cells = release_cells(&t, 1);
     ws.run_to_rest::<AvalancheError>(
         &mut t,
-        &cells,
-        None,
+        ReleasedCells::new(&cells, None),
         &AvalancheParams::default(),
         &RunOptions::default(),
         SnowLayer::Stable,
@@ -195,8 +192,7 @@ fn bad_parameters_are_refused_before_any_snow_moves() {
     };
     let r = AvalancheWorkspace::new().run_to_rest::<Wrapped>(
         &mut t,
-        &cells,
-        None,
+        ReleasedCells::new(&cells, None),
         &flow,
         &RunOptions::default(),
         SnowLayer::Stable,
@@ -206,8 +202,7 @@ fn bad_parameters_are_refused_before_any_snow_moves() {
     assert_eq!(t.snow, before);
     let r = AvalancheWorkspace::new().run_to_rest::<Wrapped>(
         &mut t,
-        &[usize::MAX],
-        None,
+        ReleasedCells::new(&[usize::MAX], None),
         &AvalancheParams::default(),
         &RunOptions::default(),
         SnowLayer::Stable,

@@ -70,18 +70,31 @@ pub fn between(
     }
 }
 
-/// The probe over border edge `e` of a site whose snow top is `centre` (centroid xy, top z).
-#[allow(clippy::too_many_arguments)]
+/// The site whose snow an edge probe starts from.
+#[derive(Debug, Clone, Copy)]
+pub struct EdgeSite {
+    /// Its snow top: centroid x, y and the top's z, m.
+    pub centre: [f64; 3],
+    /// Its own triangle, which the probe's rays pass through.
+    pub own_tri: Tag,
+    /// Its group (its own snow, which the rays pass through too).
+    pub group: u32,
+}
+
+/// The probe over border edge `e` of `site` (sites `spacing` m apart).
 pub fn over_edge(
     flight: &Flight,
-    centre: [f64; 3],
+    site: &EdgeSite,
     e: &BorderEdge,
     spacing: f64,
-    own_tri: Tag,
-    group: u32,
     sp: &StabilityParams,
     rep: &mut StabilityReport,
 ) -> EdgeObs {
+    let EdgeSite {
+        centre,
+        own_tri,
+        group,
+    } = *site;
     let eps = spacing * 1e-3;
     let mid = [0, 1, 2].map(|q| 0.5 * (e.a[q] + e.b[q]));
     let (dx, dy) = (mid[0] - centre[0], mid[1] - centre[1]);

@@ -244,16 +244,13 @@ pub fn stabilise(
                     }
                     if edges[s][k] == EdgeObs::Unknown {
                         let centre = [centroids[s][0], centroids[s][1], ts];
-                        edges[s][k] = obstacles::over_edge(
-                            &flight,
+                        let site = obstacles::EdgeSite {
                             centre,
-                            e,
-                            sites.spacing,
                             own_tri,
                             group,
-                            sp,
-                            &mut rep,
-                        );
+                        };
+                        edges[s][k] =
+                            obstacles::over_edge(&flight, &site, e, sites.spacing, sp, &mut rep);
                     }
                     if let EdgeObs::Open { height, .. } = edges[s][k]
                         && ts - height > allowed

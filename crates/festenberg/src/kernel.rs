@@ -376,19 +376,14 @@ fn site_kernel(
         edge: f32::INFINITY,
         ..Default::default()
     };
+    let centre = Centre {
+        base: s,
+        h0,
+        inv_h0,
+        roomy,
+    };
     let general = |sums: &mut Sums, t: usize, column: usize| {
-        member_term(
-            field,
-            table,
-            sums,
-            t,
-            table.weight[t],
-            column,
-            s,
-            h0,
-            inv_h0,
-            roomy,
-        );
+        member_term(field, table, sums, t, column, &centre);
     };
     for y in y0..=y1 {
         // The disk's run of columns in this row, within the map.
@@ -487,20 +482,34 @@ fn lambda_units(dz: f32, inv_h0: f32) -> i32 {
     ((dz * inv_h0).max(-1.0).min(1.0) * LAMBDA_ONE) as i32
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The site a kernel is centred on, as its member terms read it.
+struct Centre {
+    /// Base of the site's snow column `s`, m.
+    base: f32,
+    /// The kernel's depth scale `h0`, m, and its inverse.
+    h0: f32,
+    inv_h0: f32,
+    /// Whether the site is roomy (`SiteField::roomy`).
+    roomy: bool,
+}
+
+/// The general (scalar) term of the column at table column `t`, grid column `column`.
 #[inline(always)]
 fn member_term(
     field: &SiteField,
     table: &KernelTable,
     sums: &mut Sums,
     t: usize,
-    wq: i64,
     column: usize,
-    s: f32,
-    h0: f32,
-    inv_h0: f32,
-    roomy: bool,
+    centre: &Centre,
 ) {
+    let &Centre {
+        base: s,
+        h0,
+        inv_h0,
+        roomy,
+    } = centre;
+    let wq = table.weight[t];
     sums.visited += 1;
     sums.weight += wq;
     let boundary = match field.member(column, s, roomy) {

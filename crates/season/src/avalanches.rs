@@ -35,7 +35,9 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::release_area::{ReleaseAreaError, RuptureParams};
-use snowscape_avalanche::{AvalancheError, AvalancheParams, AvalancheWorkspace, RunOptions};
+use snowscape_avalanche::{
+    AvalancheError, AvalancheParams, AvalancheWorkspace, ReleasedCells, RunOptions,
+};
 use snowscape_terrain::{LayeredTerrain, SnowLayer, surface};
 use thiserror::Error;
 
@@ -556,8 +558,7 @@ pub fn run_avalanche(
     }
     let outcome = workspace.run_to_rest::<AvalancheError>(
         terrain,
-        cells,
-        None,
+        ReleasedCells::new(cells, None),
         &flow,
         &params.run,
         SnowLayer::Stable,

@@ -11,7 +11,7 @@ use crate::scenario::WeatherPeriod;
 use crate::snowfall::PrecipitationTable;
 use snowscape_environment::SeasonSun;
 use snowscape_environment::insolation::clear_sky;
-use snowscape_terrain::NodataMask;
+use snowscape_terrain::{LayeredTerrain, NodataMask};
 use std::sync::Arc;
 
 /// Longwave emission of a melting snow surface, `σ · 273.15⁴`, W/m² (emissivity 1).
@@ -50,18 +50,17 @@ pub struct Air {
 }
 
 impl Air {
-    /// The air over `bedrock` (nodata cells get offset 0 and factor 0).
-    #[allow(clippy::too_many_arguments)]
+    /// The air over the bedrock of `terrain` (nodata cells get offset 0 and factor 0).
     pub fn new(
         climate: &ClimateParams,
         source: AirSource,
         periods: &[WeatherPeriod],
         latitude_deg: f64,
         start_day_of_year: u32,
-        bedrock: &[f32],
-        mask: &NodataMask,
+        terrain: &LayeredTerrain,
         sun: Arc<SeasonSun>,
     ) -> Self {
+        let (bedrock, mask) = (&terrain.bedrock, terrain.mask());
         let lapse = climate.lapse_c_per_m() as f32;
         let reference_altitude_m = match &source {
             AirSource::Station(s) => s.station_altitude_m.unwrap_or(climate.reference_altitude_m),

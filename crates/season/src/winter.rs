@@ -291,8 +291,7 @@ impl Winter {
             &weather,
             latitude,
             env.sun.start_day,
-            &terrain.bedrock,
-            terrain.mask(),
+            &terrain,
             Arc::new(season_sun),
         );
         let n_cells = terrain.geometry().len();

@@ -20,7 +20,7 @@
 
 use crate::frame::SnowView;
 use crate::refine::{SineTrack, turn_frequency};
-use crate::steering::{Aim, SteeringRule, choose};
+use crate::steering::{Aim, Pose, SteeringRule, choose};
 use crate::terminus::TerminusMap;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::random::uniform;
@@ -197,16 +197,12 @@ impl Skier {
     pub(crate) fn steer(&mut self, ctx: &StepContext, orthogonal_only: bool) -> bool {
         let u = uniform(ctx.seed ^ STEER, self.track.id, self.decisions);
         self.decisions += 1;
-        let aim = choose(
-            &ctx.rule,
-            &ctx.view,
-            ctx.map,
-            self.cell,
-            self.pos,
-            self.heading,
-            u,
-            orthogonal_only,
-        );
+        let pose = Pose {
+            cell: self.cell,
+            pos: self.pos,
+            heading: self.heading,
+        };
+        let aim = choose(&ctx.rule, &ctx.view, ctx.map, &pose, u, orthogonal_only);
         let Some(Aim { cell, slope }) = aim else {
             return false;
         };

@@ -88,20 +88,33 @@ pub(crate) struct Aim {
     pub slope: f64,
 }
 
-/// Where the skier in `cell` at `pos` with heading `h` aims, drawn with the uniform `u`;
-/// `orthogonal_only` restricts the window to the 4 edge neighbours (used after a blocked
-/// move, see `skier`). `None` when every candidate has zero weight (the skier is stuck).
-#[allow(clippy::too_many_arguments)]
+/// Where a skier is and where it heads.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pose {
+    /// Its cell `(col, row)`.
+    pub cell: (usize, usize),
+    /// Its position `(x, y)` in the grid's frame, m.
+    pub pos: (f64, f64),
+    /// Its unit heading `(x, y)`.
+    pub heading: (f64, f64),
+}
+
+/// Where the skier at `pose` aims, drawn with the uniform `u`; `orthogonal_only` restricts
+/// the window to the 4 edge neighbours (used after a blocked move, see `skier`). `None` when
+/// every candidate has zero weight (the skier is stuck).
 pub(crate) fn choose(
     rule: &SteeringRule,
     view: &SnowView,
     map: &TerminusMap,
-    cell: (usize, usize),
-    pos: (f64, f64),
-    h: (f64, f64),
+    pose: &Pose,
     u: f64,
     orthogonal_only: bool,
 ) -> Option<Aim> {
+    let Pose {
+        cell,
+        pos,
+        heading: h,
+    } = *pose;
     const MAX: usize = (2 * crate::params::MAX_LOOKAHEAD + 1).pow(2);
     let mut weights = [0.0f64; MAX];
     let mut cells = [(0usize, 0usize, 0.0f64); MAX];

@@ -5,8 +5,8 @@
 //! `cargo run --release -p snowscape --example avalanche -- [DATA] [OUT]` (defaults: the shared
 //! data folder `../shared/data` and `out/example_avalanche`).
 
-use snowscape::avalanche::AvalancheError;
 use snowscape::avalanche::release_area::release_from_shapefile;
+use snowscape::avalanche::{AvalancheError, ReleasedCells};
 use snowscape::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -38,8 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let outcome = AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
         &mut terrain,
-        &cells,
-        None,
+        ReleasedCells::new(&cells, None),
         &AvalancheParams::default(),
         &options,
         SnowLayer::Stable,

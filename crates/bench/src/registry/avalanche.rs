@@ -22,7 +22,8 @@
 use crate::kernel::{Kernel, KernelError};
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, AvalancheWorkspace,
-    FrictionLaw, FrictionMaps, RunOptions, SlopeGravity, cfl_dt, release_from_shapefile, step,
+    FrictionLaw, FrictionMaps, ReleasedCells, RunOptions, SlopeGravity, cfl_dt,
+    release_from_shapefile, step,
 };
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 
@@ -141,8 +142,7 @@ fn run_to_rest_kernel(name: &str, release: Release) -> Result<Kernel, KernelErro
     let run = move |ws: &mut AvalancheWorkspace, t: &mut LayeredTerrain, cells: &[usize]| {
         ws.run_to_rest::<AvalancheError>(
             t,
-            cells,
-            None,
+            ReleasedCells::new(cells, None),
             &params,
             &options,
             SnowLayer::Stable,

@@ -16,7 +16,7 @@ use snowscape::avalanche_release::release_terrain;
 use snowscape_avalanche::validation::ThicknessConvention;
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, FrictionMaps,
-    MapMatch, RestOutcome, RunOptions, SamosAtParams, SlopeGravity,
+    MapMatch, ReleasedCells, RestOutcome, RunOptions, SamosAtParams, SlopeGravity,
 };
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
@@ -242,8 +242,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let outcome = workspace
         .run_to_rest::<AvalancheError>(
             &mut terrain,
-            &cells,
-            None,
+            ReleasedCells::new(&cells, None),
             &params,
             &options,
             SnowLayer::Stable,
