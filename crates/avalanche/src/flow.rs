@@ -669,18 +669,23 @@ type RowItem<'a> = (
     ((&'a mut [f64], [&'a mut [f64]; 4]), &'a mut [[u32; 2]]),
 );
 
+/// A row of pass 1: its index and the segments of cells it visits.
+#[derive(Debug, Clone, Copy)]
+struct PassRow<'a> {
+    row: usize,
+    segs: &'a [[u32; 2]],
+}
+
 /// Defines `$name(simd, args..)`, running `$generic::<F4>` compiled for AVX when `simd` is
 /// set (the caller checked the CPU), else `$generic::<f64>`.
 macro_rules! lanes_dispatch {
     ($name:ident, $avx:ident, $generic:ident, ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $(,)?) => {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx")]
-        #[allow(clippy::too_many_arguments)]
         fn $avx($($arg: $ty),*) -> $ret {
             $generic::<lanes::F4>($($arg),*)
         }
 
-        #[allow(clippy::too_many_arguments)]
         fn $name(simd: bool, $($arg: $ty),*) -> $ret {
             #[cfg(target_arch = "x86_64")]
             if simd {
@@ -715,10 +720,8 @@ lanes_dispatch!(
         k: &Consts,
         pg: &PipeGeometry,
         inp: &Inputs,
-        segs: &[[u32; 2]],
-        r: usize,
-        np: &mut [&mut [f64]; 4],
-        fl: &mut [&mut [f64]; 4],
+        row: PassRow,
+        out: PipeRows,
     ) -> ()
 );
 lanes_dispatch!(
@@ -740,9 +743,7 @@ lanes_dispatch!(
     (
         k: &Consts,
         inp: &Inputs,
-        seg2: &[[u32; 2]],
-        seg3: &[[u32; 2]],
-        r: usize,
+        segs: UpdateSegs,
         hrow: &mut [f64],
         prow: &mut [&mut [f64]; 4],
         trow: &mut [[u32; 2]],

@@ -137,18 +137,26 @@ pub(super) fn projected_gradient(gx: f64, gy: f64, bx: f64, by: f64) -> [f64; 3]
 }
 
 /// Pipes of pass 1 on one row.
-#[allow(clippy::too_many_arguments)]
+/// The pipe velocities and volume fluxes a row of pass 1 writes, each per direction.
+pub(super) struct PipeRows<'a, 'b> {
+    pub pipes: &'a mut [&'b mut [f64]; 4],
+    pub fluxes: &'a mut [&'b mut [f64]; 4],
+}
+
 #[inline(always)]
 pub(super) fn pipes_row_lanes<V: Lanes>(
     params: &AvalancheParams,
     k: &Consts,
     pg: &PipeGeometry,
     inp: &Inputs,
-    segs: &[[u32; 2]],
-    r: usize,
-    np: &mut [&mut [f64]; 4],
-    fl: &mut [&mut [f64]; 4],
+    row: PassRow,
+    out: PipeRows,
 ) {
+    let PassRow { row: r, segs } = row;
+    let PipeRows {
+        pipes: np,
+        fluxes: fl,
+    } = out;
     let pw = k.pw;
     let (lo, hi) = if r >= 1 && r + 3 <= k.ph && pw >= 5 {
         (2, pw - 3)
@@ -183,7 +191,14 @@ pub(super) fn pipes_row_lanes<V: Lanes>(
                                     r + dr as usize,
                                 ) =>
                         {
-                            pipe_update(params, k, pg, inp, kk, j, d, c, r)
+                            let at = PipeAt {
+                                owner: kk,
+                                neighbour: j,
+                                direction: d,
+                                col: c,
+                                row: r,
+                            };
+                            pipe_update(params, k, pg, inp, at)
                         }
                         _ => (0.0, 0.0),
                     };
@@ -322,7 +337,7 @@ unsafe fn pipe_lanes<V: Lanes>(
         };
         let mut u = u0 + V::splat(k.dt) * a;
         if k.adv {
-            u = u + advection_lanes::<V>(k, inp, d, kk, j, hk, hj, u0);
+            u = u + advection_lanes::<V>(k, inp, (d, kk, j), PipeEnds { hk, hj, u0 });
         }
         // `e·trial` (the exact zero components of the axis pipes only change the sign of a zero,
         // which `abs` drops).
@@ -360,24 +375,28 @@ unsafe fn pipe_lanes<V: Lanes>(
     }
 }
 
-/// [`advection`] for the owners of [`owner_lanes`] (every lattice neighbour exists).
+/// The lanes' depths at a pipe's owner and neighbour cells and the pipe's velocity.
+struct PipeEnds<V> {
+    hk: V,
+    hj: V,
+    u0: V,
+}
+
+/// [`advection`] for the owners of [`owner_lanes`] (every lattice neighbour exists), the pipe
+/// in direction `d` from the owners at padded index `kk` to the cells at `j`.
 ///
 /// # Safety
 /// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
 /// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
 /// cell of the stencil is in the arrays.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 unsafe fn advection_lanes<V: Lanes>(
     k: &Consts,
     inp: &Inputs,
-    d: usize,
-    kk: usize,
-    j: usize,
-    hk: V,
-    hj: V,
-    u0: V,
+    (d, kk, j): (usize, usize, usize),
+    ends: PipeEnds<V>,
 ) -> V {
+    let PipeEnds { hk, hj, u0 } = ends;
     // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
     unsafe {
         let zero = V::splat(0.0);

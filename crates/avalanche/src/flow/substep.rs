@@ -126,7 +126,11 @@ pub(super) fn substep(
                         let lr = (r - b0) * pw..(r - b0 + 1) * pw;
                         let mut np_r = np.each_mut().map(|a| &mut a[lr.clone()]);
                         let mut fl_r = fl.each_mut().map(|a| &mut a[lr.clone()]);
-                        pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
+                        let out = PipeRows {
+                            pipes: &mut np_r,
+                            fluxes: &mut fl_r,
+                        };
+                        pipes_row(simd, params, &k, pg, &inp, PassRow { row: r, segs }, out);
                     } else {
                         // The next block's first row, after a copy of this block's last
                         // row of volumes (the factors read both).
@@ -136,7 +140,11 @@ pub(super) fn substep(
                         }
                         let mut np_r = np_h.each_mut().map(|a| &mut a[..pw]);
                         let mut fl_r = fl_h.each_mut().map(|a| &mut a[pw..2 * pw]);
-                        pipes_row(simd, params, &k, pg, &inp, segs, r, &mut np_r, &mut fl_r);
+                        let out = PipeRows {
+                            pipes: &mut np_r,
+                            fluxes: &mut fl_r,
+                        };
+                        pipes_row(simd, params, &k, pg, &inp, PassRow { row: r, segs }, out);
                     }
                     // The factors of the row (the block's first row: the block above).
                     if r > b0 {
@@ -197,17 +205,12 @@ pub(super) fn substep(
         let prows = rows_of(pipes.each_mut().map(|v| &mut v[rows.clone()]), pw);
         let row = |(ri, ((hrow, mut prow), trow)): RowItem| {
             let r = r0 + ri;
-            update_row(
-                simd,
-                &k,
-                &inp,
-                seg2.row(r),
-                seg3.row(r),
-                r,
-                hrow,
-                &mut prow,
-                trow,
-            )
+            let segs = UpdateSegs {
+                row: r,
+                seg2: seg2.row(r),
+                seg3: seg3.row(r),
+            };
+            update_row(simd, &k, &inp, segs, hrow, &mut prow, trow)
         };
         let (hr, tr) = (
             &mut h[rows.clone()],

@@ -80,20 +80,36 @@ pub(super) struct Acc<V> {
     flowing: usize,
 }
 
+/// A row of pass 2: its index, the segments of cells whose thickness it updates (`seg2`) and
+/// those whose pipes it scales (`seg3`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct UpdateSegs<'a> {
+    pub row: usize,
+    pub seg2: &'a [[u32; 2]],
+    pub seg3: &'a [[u32; 2]],
+}
+
+/// `V::N` cells of pass 2 from padded index `index` (column `col`), with whether their
+/// thickness is updated (`thick`: they lie in `seg2`).
+#[derive(Debug, Clone, Copy)]
+struct LaneCell {
+    index: usize,
+    col: usize,
+    thick: bool,
+}
+
 /// Pass 2 on one row.
 #[allow(clippy::needless_range_loop)]
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn update_row_lanes<V: Lanes>(
     k: &Consts,
     inp: &Inputs,
-    seg2: &[[u32; 2]],
-    seg3: &[[u32; 2]],
-    r: usize,
+    segs: UpdateSegs,
     hrow: &mut [f64],
     prow: &mut [&mut [f64]; 4],
     trow: &mut [[u32; 2]],
 ) -> RowStats {
+    let UpdateSegs { row: r, seg2, seg3 } = segs;
     let (pw, ph) = (k.pw, k.ph);
     let mut st = RowStats::default();
     let zero = V::splat(0.0);
@@ -151,31 +167,34 @@ pub(super) fn update_row_lanes<V: Lanes>(
                 // `pw·ph`).
                 if n == 1 {
                     unsafe {
-                        update_lanes::<f64>(
-                            k, inp, kk, hrow, prow, c, &mut acc1, &mut moved, inside,
-                        )
+                        let cell = LaneCell {
+                            index: kk,
+                            col: c,
+                            thick: inside,
+                        };
+                        update_lanes::<f64>(k, inp, cell, hrow, prow, &mut acc1, &mut moved)
                     }
                 } else if (inside && c + n - 1 <= edge) || (!inside && c + n - 1 < edge) {
                     // All lanes in seg2, or none.
                     unsafe {
-                        update_lanes::<V>(k, inp, kk, hrow, prow, c, &mut acc, &mut moved, inside)
+                        let cell = LaneCell {
+                            index: kk,
+                            col: c,
+                            thick: inside,
+                        };
+                        update_lanes::<V>(k, inp, cell, hrow, prow, &mut acc, &mut moved)
                     }
                 } else {
                     let mut bits = 0;
                     for i in 0..n {
                         let inside = in2(c + i).0;
                         let b = unsafe {
-                            update_lanes::<f64>(
-                                k,
-                                inp,
-                                kk + i,
-                                hrow,
-                                prow,
-                                c + i,
-                                &mut acc1,
-                                &mut moved,
-                                inside,
-                            )
+                            let cell = LaneCell {
+                                index: kk + i,
+                                col: c + i,
+                                thick: inside,
+                            };
+                            update_lanes::<f64>(k, inp, cell, hrow, prow, &mut acc1, &mut moved)
                         };
                         bits |= b << i;
                     }
@@ -326,19 +345,21 @@ pub(super) fn scaled_flux(
 /// Every array of `inp` the kernel reads has the padded length `pw·ph`, and the `V::N` cells
 /// from padded index `kk` lie in the pass's inner region (see the `walk` call), so that every
 /// cell of the stencil is in the arrays.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 unsafe fn update_lanes<V: Lanes>(
     k: &Consts,
     inp: &Inputs,
-    kk: usize,
+    cell: LaneCell,
     hrow: &mut [f64],
     prow: &mut [&mut [f64]; 4],
-    c: usize,
     acc: &mut Acc<V>,
     moved: &mut f64,
-    thick: bool,
 ) -> u32 {
+    let LaneCell {
+        index: kk,
+        col: c,
+        thick,
+    } = cell;
     // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
     unsafe {
         let zero = V::splat(0.0);
@@ -398,18 +419,33 @@ pub(super) fn turbulent_depth(hi: f64, hj: f64) -> f64 {
 pub(super) const MIN_TURBULENT_DEPTH: f64 = 0.01;
 
 /// One pipe's new velocity and raw (unscaled) volume for a sub-step.
-#[allow(clippy::too_many_arguments)]
+/// One pipe of the scalar path: from its owner cell to the neighbour in its direction.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PipeAt {
+    /// The owner cell, padded index.
+    pub owner: usize,
+    /// The neighbour cell, padded index.
+    pub neighbour: usize,
+    /// The direction, an index of `DIRS`.
+    pub direction: usize,
+    /// The owner's column and row in the padded grid.
+    pub col: usize,
+    pub row: usize,
+}
+
 pub(super) fn pipe_update(
     params: &AvalancheParams,
     k: &Consts,
     pg: &PipeGeometry,
     inp: &Inputs,
-    kk: usize,
-    j: usize,
-    d: usize,
-    c: usize,
-    r: usize,
+    at: PipeAt,
 ) -> (f64, f64) {
+    let PipeAt {
+        owner: kk,
+        neighbour: j,
+        direction: d,
+        ..
+    } = at;
     let (h, bed, vel, vb) = (inp.h, inp.bed, &inp.vel, inp.vbase);
     let dt = k.dt;
     let (hi, hj) = (h[kk], h[j]);
@@ -436,7 +472,7 @@ pub(super) fn pipe_update(
     ];
     let mut u = u0 + dt * a;
     if params.momentum_advection {
-        u += advection(pg, inp, k.pw, kk, j, d, c, r, dt);
+        u += advection(pg, inp, k.pw, at, dt);
     }
     // Coulomb friction as one vector: the trial velocity at the pipe, `v + δt·(−g∇A)` (cell
     // velocities and surface gradients averaged over the pipe's two cells), is slowed by
@@ -568,18 +604,14 @@ fn gradient(
 /// `λ_f = dt · Q_f / (Δ · h̄)` with `Q_f` the inflowing discharge at the face (mean of the cell
 /// discharges `h·v` of the two pipes' end cells), `h̄` the mean depth of the pipe's cells. The
 /// `λ` are scaled so that `Σ λ ≤ 1` (a convex combination: no overshoot).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn advection(
-    pg: &PipeGeometry,
-    inp: &Inputs,
-    pw: usize,
-    k: usize,
-    j: usize,
-    d: usize,
-    c: usize,
-    r: usize,
-    dt: f64,
-) -> f64 {
+pub(super) fn advection(pg: &PipeGeometry, inp: &Inputs, pw: usize, at: PipeAt, dt: f64) -> f64 {
+    let PipeAt {
+        owner: k,
+        neighbour: j,
+        direction: d,
+        col: c,
+        row: r,
+    } = at;
     let (h, vel, vb) = (inp.h, &inp.vel, inp.vbase);
     let hbar = 0.5 * (h[k] + h[j]);
     if hbar <= DRY {
