@@ -160,28 +160,11 @@ fn read_raster<'py>(
                 .map_err(|e| value_err(format!("format {f:?}: {e}")))?,
         );
     }
-    if let Some(c) = cell_size {
-        if !(c.is_finite() && c > 0.0) {
-            return Err(value_err(format!(
-                "cell_size must be a positive number of metres, got {c}"
-            )));
-        }
-        o.cell_size = Some(c);
-    }
-    if let Some((lo, hi)) = height_range {
-        if !(lo.is_finite() && hi.is_finite()) {
-            return Err(value_err(format!(
-                "height_range ({lo}, {hi}) must be finite"
-            )));
-        }
-        o.height_range = Some((lo, hi));
-    }
-    if let Some((w, h)) = raw_size {
-        if w == 0 || h == 0 {
-            return Err(value_err(format!("raw_size ({w}, {h}) must be positive")));
-        }
-        o.raw_size = Some((w, h));
-    }
+    // The values' ranges are checked by the reader (`ReadOptions::validate`), as for the
+    // command line.
+    o.cell_size = cell_size;
+    o.height_range = height_range;
+    o.raw_size = raw_size;
     if let Some(c) = crs {
         o.crs = Some(Crs::parse(&c).ok_or_else(|| value_err(format!("crs {c:?}: empty")))?);
     }

@@ -36,20 +36,17 @@ impl DemInputArgs {
                     .map_err(|e| anyhow::anyhow!("--format {f:?}: {e}"))?,
             );
         }
-        if let Some(c) = self.cell_size {
-            if !(c.is_finite() && c > 0.0) {
-                bail!("--cell-size must be a positive number of metres, got {c}");
-            }
-            o.cell_size = Some(c);
-        }
+        // The values' ranges are checked by the reader (`ReadOptions::validate`), the same
+        // check as for the Python package and the editor.
+        o.cell_size = self.cell_size;
         if let Some(r) = &self.height_range {
             o.height_range =
                 Some(parse_pair(r, ',').with_context(|| format!("--height-range {r:?}"))?);
         }
         if let Some(s) = &self.raw_size {
             let (w, h) = parse_pair(s, 'x').with_context(|| format!("--raw-size {s:?}"))?;
-            if w < 1.0 || h < 1.0 || w.fract() != 0.0 || h.fract() != 0.0 {
-                bail!("--raw-size {s:?}: width and height must be whole positive numbers");
+            if w < 0.0 || w.fract() != 0.0 || h < 0.0 || h.fract() != 0.0 {
+                bail!("--raw-size {s:?}: width and height must be whole numbers");
             }
             o.raw_size = Some((w as usize, h as usize));
         }

@@ -162,6 +162,13 @@ pub enum RasterError {
     /// A PNG that is not single-channel grayscale.
     #[error("{path}: PNG colour type {color} is not a heightmap (need 16- or 8-bit grayscale)")]
     PngColor { path: PathBuf, color: String },
+    /// A RAW16 grid size option with no columns or no rows.
+    #[error("{path}: invalid raw size {width}x{height}: both must be at least 1")]
+    InvalidRawSize {
+        path: PathBuf,
+        width: usize,
+        height: usize,
+    },
     /// A RAW16 file whose length does not fit the grid size.
     #[error("{path}: {bytes} bytes is not {expected}")]
     RawSize {

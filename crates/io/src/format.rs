@@ -120,6 +120,37 @@ pub struct ReadOptions {
     pub crs: Option<Crs>,
 }
 
+impl ReadOptions {
+    /// Checks every option a user set before a file is read, whether or not the file's format
+    /// uses it (a georeferenced file ignores the cell size, but a negative one is still a
+    /// mistake): the cell size finite and positive, the height range finite and in order, the
+    /// raw size at least 1x1. The one check for every front end (command line, Python, editor).
+    pub fn validate(&self, path: &Path) -> Result<(), crate::RasterError> {
+        if let Some(c) = self.cell_size {
+            crate::cells::check_cell_size(path, c, "the cell size option (--cell-size)")?;
+        }
+        if let Some((min, max)) = self.height_range
+            && !(min.is_finite() && max.is_finite() && min <= max)
+        {
+            return Err(crate::RasterError::InvalidHeightRange {
+                path: path.to_path_buf(),
+                min,
+                max,
+            });
+        }
+        if let Some((width, height)) = self.raw_size
+            && (width == 0 || height == 0)
+        {
+            return Err(crate::RasterError::InvalidRawSize {
+                path: path.to_path_buf(),
+                width,
+                height,
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Default for ReadOptions {
     fn default() -> Self {
         Self {

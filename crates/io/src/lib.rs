@@ -157,6 +157,7 @@ fn warn_tiny_cells_without_crs(path: &Path, g: &GridGeometry) {
 }
 
 fn read_any(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
+    opts.validate(path)?;
     match format_of(path, opts.format)? {
         RasterFormat::Asc => asc::read(path, opts),
         RasterFormat::GeoTiff => geotiff::read(path, opts),

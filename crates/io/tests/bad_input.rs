@@ -407,3 +407,53 @@ fn read_terrain_refuses_what_cannot_be_a_terrain() {
         assert_names(&e, &p, needle);
     }
 }
+
+/// An absurd read option is refused before the file is read, even by a format that would
+/// ignore it (a georeferenced ASC has its own cell size): one check for every front end.
+#[test]
+fn absurd_read_options_are_refused_for_every_format() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write_tmp(
+        d.path(),
+        "dem.asc",
+        format!("{HEADER}1 2 3 4\n5 6 7 8\n9 10 11 12\n").as_bytes(),
+    );
+    assert!(read_dem(&p, &ReadOptions::default()).is_ok());
+    for c in [-2.0, 0.0, f64::NAN, f64::INFINITY] {
+        let o = ReadOptions {
+            cell_size: Some(c),
+            ..Default::default()
+        };
+        let e = read_dem(&p, &o).unwrap_err();
+        assert!(
+            matches!(e, RasterError::InvalidCellSize { value, .. } if value.to_bits() == c.to_bits()),
+            "{e}"
+        );
+        assert_names(&e, &p, &format!("{c}"));
+    }
+    let o = ReadOptions {
+        height_range: Some((5.0, 1.0)),
+        ..Default::default()
+    };
+    assert!(matches!(
+        read_dem(&p, &o).unwrap_err(),
+        RasterError::InvalidHeightRange { .. }
+    ));
+    let o = ReadOptions {
+        raw_size: Some((0, 4)),
+        ..Default::default()
+    };
+    let e = read_dem(&p, &o).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            RasterError::InvalidRawSize {
+                width: 0,
+                height: 4,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert_names(&e, &p, "0x4");
+}
