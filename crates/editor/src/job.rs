@@ -176,10 +176,17 @@ impl Job {
                 let from = winter.day();
                 let target = (from + days).min(winter.scenario().days);
                 let mut last = Instant::now();
-                let mut outcome = None;
+                // The painted release probability is a hazard source of the season's
+                // scheduler: its avalanches start during the step's days.
+                let mut outcome = crate::painted::set_painted_release(&mut winter, &paint)
+                    .err()
+                    .map(JobOutcome::Failed);
                 // Slices end where a single run_until(target) would pass anyway: the same
                 // events in the same order, so the same season.
                 for k in 1..=STEP_SLICES {
+                    if outcome.is_some() {
+                        break;
+                    }
                     if cancelled() {
                         outcome = Some(JobOutcome::Cancelled);
                         break;

@@ -390,6 +390,39 @@ fn painted_skiers_run_on_the_season_path() {
     assert!(w.ski_stats().steps > 0 && w.ski_stats().distance_m > 0.0);
 }
 
+/// Painted release probability is a hazard source of the season's scheduler: a step starts
+/// painted avalanches during its days, recorded with the `painted` trigger.
+#[test]
+fn painted_release_probability_starts_the_seasons_avalanches() {
+    let mut s = session(128, 10.0);
+    snow_everywhere(&mut s);
+    let (c, r) = steepest_cell(&s);
+    s.handle(
+        brush(
+            3,
+            BrushOp::Add,
+            BrushTarget::AvalancheProbability,
+            c,
+            r,
+            1.0,
+        ),
+        None,
+        None,
+    )
+    .unwrap();
+    let from = s.winter().day();
+    s.handle(ClientMessage::Step { days: 2.0 }, None, None)
+        .unwrap();
+    let w = s.winter();
+    let painted: Vec<_> = w
+        .avalanches()
+        .iter()
+        .filter(|a| a.trigger == snowscape_season::avalanches::Trigger::Painted)
+        .collect();
+    assert!(!painted.is_empty(), "{:?}", w.avalanches());
+    assert!(painted.iter().all(|a| a.day > from && a.day <= w.day()));
+}
+
 #[test]
 fn a_scenario_that_is_not_a_json_object_is_refused() {
     let mut s = session(128, 10.0);

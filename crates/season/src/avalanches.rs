@@ -255,9 +255,31 @@ pub fn hazard(
         row_sums: Vec::new(),
         total: 0.0,
     };
-    let total = map.compute(params, terrain, slope_deg, skiers);
+    let sources = HazardSources {
+        skiers,
+        painted: None,
+    };
+    let total = map.compute(params, terrain, slope_deg, &sources);
     *out = map.lambda;
     total
+}
+
+/// What raises the hazard besides the snow and the slope, per cell.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct HazardSources<'a> {
+    /// The recent-skier map (skier-triggered releases, weighted by `skier_gain`).
+    pub skiers: Option<&'a [f32]>,
+    /// Painted release rates, 1/day per cell (the editor's avalanche brush): added to `λ_i`
+    /// wherever the cell holds at least `min_unstable_m` of unstable snow, at any slope (a
+    /// painted release is the user's choice; the rupture still needs unstable snow).
+    pub painted: Option<&'a [f32]>,
+}
+
+impl HazardSources<'_> {
+    /// Whether nothing but natural releases can raise the hazard.
+    fn none_but_natural(&self, params: &AvalancheParameters) -> bool {
+        (self.skiers.is_none() || params.skier_gain == 0.0) && self.painted.is_none()
+    }
 }
 
 /// The hazard `λ_i` of one cell, 1/day.
@@ -266,21 +288,30 @@ fn cell_hazard(
     params: &AvalancheParameters,
     terrain: &LayeredTerrain,
     slope_deg: &[f32],
-    skiers: Option<&[f32]>,
+    sources: &HazardSources,
     i: usize,
 ) -> f64 {
     let u = terrain.layer(SnowLayer::Unstable)[i] as f64;
     if u < params.min_unstable_m || !terrain.mask().is_valid(i) {
         return 0.0;
     }
+    let painted = sources.painted.map_or(0.0, |m| f64::from(m[i]));
     let s = params.slope_window(slope_deg[i] as f64);
     if s == 0.0 {
-        return 0.0;
+        return painted;
     }
     let natural = if params.natural { 1.0 } else { 0.0 };
-    let k = skiers.map_or(0.0, |m| m[i] as f64);
+    let k = sources.skiers.map_or(0.0, |m| m[i] as f64);
     let per_cell = params.rate_per_km2_per_day * terrain.geometry().cell_area() / 1e6;
-    per_cell * (u / params.reference_unstable_m).min(1.0) * s * (natural + params.skier_gain * k)
+    let released = per_cell
+        * (u / params.reference_unstable_m).min(1.0)
+        * s
+        * (natural + params.skier_gain * k);
+    if sources.painted.is_some() {
+        released + painted
+    } else {
+        released
+    }
 }
 
 /// The hazard map of a season: `λ_i` per cell, its sum per row and in all. A full
@@ -310,7 +341,7 @@ impl HazardMap {
         params: &AvalancheParameters,
         terrain: &LayeredTerrain,
         slope_deg: &[f32],
-        skiers: Option<&[f32]>,
+        sources: &HazardSources,
     ) -> f64 {
         let g = terrain.geometry();
         let (w, h) = (g.width(), g.height());
@@ -318,7 +349,7 @@ impl HazardMap {
         self.lambda.resize(w * h, 0.0);
         self.row_sums.clear();
         self.row_sums.resize(h, 0.0);
-        if !params.natural && (skiers.is_none() || params.skier_gain == 0.0) {
+        if !params.natural && sources.none_but_natural(params) {
             // Nothing releases: every λ is 0.
             self.total = 0.0;
             return 0.0;
@@ -340,7 +371,7 @@ impl HazardMap {
                     {
                         0.0
                     } else {
-                        cell_hazard(params, terrain, slope_deg, skiers, i)
+                        cell_hazard(params, terrain, slope_deg, sources, i)
                     };
                     *sum += *l;
                 }
@@ -355,19 +386,19 @@ impl HazardMap {
         params: &AvalancheParameters,
         terrain: &LayeredTerrain,
         slope_deg: &[f32],
-        skiers: Option<&[f32]>,
+        sources: &HazardSources,
         cells: &[usize],
     ) -> f64 {
         let w = terrain.geometry().width();
         if self.lambda.len() != terrain.geometry().len() {
-            return self.compute(params, terrain, slope_deg, skiers);
+            return self.compute(params, terrain, slope_deg, sources);
         }
-        if !params.natural && (skiers.is_none() || params.skier_gain == 0.0) {
+        if !params.natural && sources.none_but_natural(params) {
             return 0.0;
         }
         let mut last_row = usize::MAX;
         for &i in cells {
-            self.lambda[i] = cell_hazard(params, terrain, slope_deg, skiers, i);
+            self.lambda[i] = cell_hazard(params, terrain, slope_deg, sources, i);
             let r = i / w;
             if r != last_row {
                 if last_row != usize::MAX {
@@ -457,6 +488,8 @@ pub enum Trigger {
     User,
     /// Started by a skier crossing unstable snow.
     Skier,
+    /// Drawn from the painted release rates ([`HazardSources::painted`]: the editor's brush).
+    Painted,
 }
 
 /// One avalanche of the season, as `report.json` lists it.

@@ -7,7 +7,7 @@
 //! layers, the scheduler, the budget — is plain data, so a checkpoint captures a run exactly
 //! and a resumed run ends bit-identical to an uninterrupted one.
 
-use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, Trigger};
+use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, HazardSources, Trigger};
 use crate::checkpoint::{CheckpointError, bedrock_fingerprint};
 use crate::forcing::StationForcing;
 use crate::melt::{MeltModel, SnowpackState};
@@ -154,6 +154,9 @@ pub struct Winter {
     /// The hazard map may be out of date: an event that can change unstable snow ran since
     /// it was computed (an avalanche start recomputes it).
     hazard_stale: bool,
+    /// Painted release rates, 1/day per cell ([`Winter::set_painted_release`]); not
+    /// checkpointed (the editor's project keeps its paint and sets it again).
+    painted_release: Option<Vec<f32>>,
     /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
     avalanche_maps: AvalancheMaps,
     avalanche_workspace: AvalancheWorkspace,
@@ -317,6 +320,7 @@ impl Winter {
             slope_deg: Vec::new(),
             hazard: Default::default(),
             hazard_stale: true,
+            painted_release: None,
             avalanche_maps: AvalancheMaps::default(),
             avalanche_workspace: AvalancheWorkspace::default(),
             ski_area: None,
@@ -488,16 +492,87 @@ impl Winter {
     /// Recomputes the avalanche hazard and the Avalanche-Start rate.
     fn update_avalanche_rate(&mut self) {
         let skiers = self.recent_skier_map();
+        let sources = HazardSources {
+            skiers: skiers.as_deref(),
+            painted: self.painted_release.as_deref(),
+        };
         let total = self.hazard.compute(
             &self.scenario.parameters.avalanche,
             &self.terrain,
             &self.slope_deg,
-            skiers.as_deref(),
+            &sources,
         );
         self.hazard_stale = false;
         self.state
             .scheduler
             .set_rate(EventKind::AvalancheStart, total, total > 0.0);
+    }
+
+    /// The painted release rate of `cell`, 1/day (0 without paint).
+    pub(super) fn painted_rate(&self, cell: usize) -> f64 {
+        self.painted_release
+            .as_ref()
+            .map_or(0.0, |p| f64::from(p[cell]))
+    }
+
+    /// Paints where avalanches start (the editor's avalanche brush): `probability_per_day`
+    /// per cell, in [0, 1], the chance that a release zone of `site_spacing_m` × `site_spacing_m`
+    /// around the cell releases on a given day. Each cell becomes a release rate of
+    /// `−ln(1 − min(p, 0.99)) · cell area / site area` per day, added to the hazard map the
+    /// scheduler draws its Avalanche-Start events from
+    /// ([`crate::avalanches::HazardSources::painted`]), so the painted releases happen during the season's days, at the times the scheduler draws,
+    /// wherever unstable snow lies; they are recorded with [`Trigger::Painted`]. `None` (or a
+    /// map of zeros) removes the paint. An error names the first value out of range.
+    pub fn set_painted_release(
+        &mut self,
+        probability_per_day: Option<&[f32]>,
+        site_spacing_m: f64,
+    ) -> Result<(), SeasonError> {
+        let g = self.terrain.geometry();
+        let rates = match probability_per_day {
+            None => None,
+            Some(p) => {
+                let bad = |name: &'static str, value: f64, reason: &'static str| {
+                    SeasonError::Phenomenon {
+                        phenomenon: "painted release",
+                        day: self.day(),
+                        source: crate::phenomenon::PhenomenonError::InvalidParameter {
+                            phenomenon: "painted release",
+                            name,
+                            value,
+                            reason,
+                        },
+                    }
+                };
+                if p.len() != g.len() {
+                    return Err(bad("cells", p.len() as f64, "one value per grid cell"));
+                }
+                if !(site_spacing_m.is_finite() && site_spacing_m > 0.0) {
+                    return Err(bad("site_spacing_m", site_spacing_m, "must be > 0 m"));
+                }
+                if let Some(&v) = p.iter().find(|v| !(0.0..=1.0).contains(*v)) {
+                    return Err(bad(
+                        "probability_per_day",
+                        f64::from(v),
+                        "must be in [0, 1]",
+                    ));
+                }
+                let share = g.cell_area() / (site_spacing_m * site_spacing_m);
+                // A certain release (p = 1) has no finite rate: p counts up to 0.99 (4.6
+                // releases a day per zone).
+                let rate = |p: f32| (-(1.0 - f64::from(p).min(0.99)).ln() * share) as f32;
+                p.iter().any(|&v| v > 0.0).then(|| {
+                    p.iter()
+                        .map(|&v| if v > 0.0 { rate(v) } else { 0.0 })
+                        .collect()
+                })
+            }
+        };
+        if rates != self.painted_release {
+            self.painted_release = rates;
+            self.update_avalanche_rate();
+        }
+        Ok(())
     }
 
     /// Triggers an avalanche now at a map position (the user's rupture point, §3.2): the
@@ -575,11 +650,15 @@ impl Winter {
             changed.dedup();
         }
         let skiers = self.recent_skier_map();
+        let sources = HazardSources {
+            skiers: skiers.as_deref(),
+            painted: self.painted_release.as_deref(),
+        };
         let total = self.hazard.update_cells(
             &self.scenario.parameters.avalanche,
             &self.terrain,
             &self.slope_deg,
-            skiers.as_deref(),
+            &sources,
             &changed,
         );
         self.state
@@ -683,6 +762,8 @@ impl Winter {
 
 /// Random stream of the avalanche start cells.
 const STREAM_AVALANCHE_CELL: u64 = 0xa7a1_a4c3;
+/// Random stream of the painted-or-natural draw of an avalanche start on a painted cell.
+const STREAM_PAINTED_TRIGGER: u64 = 0xa7a1_9a17;
 
 /// The environment parameters of one weather period.
 fn weather_params(base: &EnvironmentParams, w: &WeatherPeriod) -> EnvironmentParams {

@@ -1,7 +1,9 @@
 //! Avalanches inside the season: the hazard map, user and natural triggers, deposits, the
 //! budget, and (on the real avaMal terrain) steep slopes cleared with debris at their foot.
 
-use snowscape_season::avalanches::{AvalancheParameters, HazardMap, Trigger, hazard, pick_cell};
+use snowscape_season::avalanches::{
+    AvalancheParameters, HazardMap, HazardSources, Trigger, hazard, pick_cell,
+};
 use snowscape_season::scenario::{Scenario, UserAvalanche};
 use snowscape_season::winter::Winter;
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, SnowLayer};
@@ -86,7 +88,11 @@ fn the_hazard_map_updated_over_released_cells_keeps_the_bits_of_a_full_computati
         .map(|i| snowscape_terrain::random::uniform(4, 1, i as u64) as f32)
         .collect();
     let mut kept = HazardMap::default();
-    kept.compute(&p, &t, &slopes, Some(&skiers));
+    let sources = HazardSources {
+        skiers: Some(&skiers),
+        painted: None,
+    };
+    kept.compute(&p, &t, &slopes, &sources);
     for round in 0..5u64 {
         // An avalanche takes the unstable snow of some cells (ascending).
         let cells: Vec<usize> = (0..n)
@@ -95,9 +101,9 @@ fn the_hazard_map_updated_over_released_cells_keeps_the_bits_of_a_full_computati
         for &i in &cells {
             t.layer_mut(SnowLayer::Unstable)[i] = 0.0;
         }
-        let total = kept.update_cells(&p, &t, &slopes, Some(&skiers), &cells);
+        let total = kept.update_cells(&p, &t, &slopes, &sources, &cells);
         let mut fresh = HazardMap::default();
-        let full = fresh.compute(&p, &t, &slopes, Some(&skiers));
+        let full = fresh.compute(&p, &t, &slopes, &sources);
         assert_eq!(total.to_bits(), full.to_bits(), "round {round}");
         assert_eq!(kept, fresh, "round {round}");
         // Draws follow the hazard and agree with the cell-by-cell draw to a neighbour.
@@ -167,6 +173,64 @@ fn a_user_avalanche_clears_the_slope_and_piles_at_its_foot() {
         b.expected_store()
     );
     w.terrain.check_invariants().unwrap();
+}
+
+/// The editor's painted release probability is a hazard source of the scheduler: with natural
+/// releases off, painted cells release during the season's days (trigger `painted`), unpainted
+/// ones never; the rate follows the paint; a value out of [0, 1] is refused by name.
+#[test]
+fn painted_release_probability_starts_avalanches_during_the_days() {
+    let mut t = slope_onto_flat();
+    t.layer_mut(SnowLayer::Unstable).fill(0.6);
+    let mut s = quiet_scenario(3.0);
+    s.parameters.avalanche.natural = false;
+    let g = t.geometry().clone();
+    let mut w = Winter::new(s.clone(), t.clone()).unwrap();
+    w.run_until(3.0).unwrap();
+    assert!(w.avalanches().is_empty(), "no paint, no natural releases");
+
+    // A painted band across the slope, one release a day per 60 m zone.
+    let paint: Vec<f32> = (0..g.len())
+        .map(|i| {
+            if (10..20).contains(&g.col_row(i).1) {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut w = Winter::new(s.clone(), t.clone()).unwrap();
+    w.set_painted_release(Some(&paint), 60.0).unwrap();
+    w.run_until(3.0).unwrap();
+    let recs = w.avalanches();
+    eprintln!("{} painted releases in 3 days", recs.len());
+    assert!(!recs.is_empty(), "painted releases happened");
+    for r in recs {
+        assert_eq!(r.trigger, Trigger::Painted, "{r:?}");
+        assert!(
+            r.day > 0.0 && r.day <= w.day(),
+            "during the days: {}",
+            r.day
+        );
+    }
+    // Several distinct days (the scheduler's times), not all at one instant.
+    let first = recs.first().unwrap().day;
+    assert!(recs.iter().any(|r| r.day != first), "{recs:?}");
+
+    // The same season again: the same avalanches (keyed draws).
+    let mut again = Winter::new(s.clone(), t.clone()).unwrap();
+    again.set_painted_release(Some(&paint), 60.0).unwrap();
+    again.run_until(3.0).unwrap();
+    assert_eq!(again.avalanches(), recs);
+
+    let mut bad = paint.clone();
+    bad[7] = 1.5;
+    let e = w.set_painted_release(Some(&bad), 60.0).unwrap_err();
+    assert!(e.to_string().contains("1.5"), "{e}");
+    let e = w.set_painted_release(Some(&paint), -1.0).unwrap_err();
+    assert!(e.to_string().contains("-1"), "{e}");
+    let e = w.set_painted_release(Some(&paint[1..]), 60.0).unwrap_err();
+    assert!(e.to_string().contains("cells"), "{e}");
 }
 
 #[test]

@@ -5,7 +5,7 @@
 //! table; the scheduler draws its events at the rate its parameters give
 //! ([`crate::scheduler`]).
 
-use super::{STREAM_AVALANCHE_CELL, SeasonError, Winter};
+use super::{STREAM_AVALANCHE_CELL, STREAM_PAINTED_TRIGGER, SeasonError, Winter};
 use crate::avalanches::Trigger;
 use crate::melt::{self, MeltModel};
 use crate::phenomenon::PhenomenonError;
@@ -193,7 +193,22 @@ fn avalanche_start(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
         w.update_avalanche_rate();
     }
     if let Some(cell) = w.hazard.pick(u) {
-        match w.start_avalanche(cell, Trigger::Natural) {
+        // A painted cell releases by the paint with the share of its rate the paint brings
+        // (a second draw, taken only where there is paint).
+        let painted = w.painted_rate(cell);
+        let trigger = if painted > 0.0
+            && snowscape_terrain::random::uniform(
+                w.scenario.seed,
+                STREAM_PAINTED_TRIGGER,
+                event.index,
+            ) * w.hazard.lambda[cell]
+                < painted
+        {
+            Trigger::Painted
+        } else {
+            Trigger::Natural
+        };
+        match w.start_avalanche(cell, trigger) {
             Ok(_) | Err(SeasonError::AvalanchePosition { .. }) => {}
             Err(e) => return Err(e),
         }

@@ -4,6 +4,7 @@
 //! environment precompute, so a refused resume costs no time; a refusal names what changed.
 
 use super::{RunState, SeasonError, SnowpackState, Winter};
+use crate::avalanches::HazardSources;
 use crate::checkpoint::{self, bedrock_fingerprint};
 use crate::forcing::StationForcing;
 use crate::scenario::Scenario;
@@ -159,7 +160,7 @@ impl Winter {
             &w.scenario.parameters.avalanche,
             &w.terrain,
             &w.slope_deg,
-            None,
+            &HazardSources::default(),
         );
         w.hazard_stale = true;
         Ok(w)
