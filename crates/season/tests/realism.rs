@@ -8,7 +8,10 @@ mod support;
 use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::Winter;
 use snowscape_terrain::{Grid, LayeredTerrain};
-use support::{band_median_ratio, band_ratio, block_average, facing, shared_dem, slope_aspect};
+use support::{
+    band_median_ratio, band_ratio, band_slope_ratio, block_average, facing, shared_dem,
+    slope_aspect,
+};
 
 /// The default winter from 1 November to 30 April (a spring period with the sun high), no
 /// natural avalanches (they are not the phenomenon under test, and cost most of the time).
@@ -78,9 +81,18 @@ fn check_behaviour(bedrock: Grid, label: &str) {
         10,
     );
     eprintln!("{label}: north/south of the band medians {ns:.3} {detail:?}");
+    let (strat_ns, strat_detail) = band_slope_ratio(&depth, &bedrock, &classes, 0.0, 180.0, 10);
+    eprintln!("{label}: north/south within band × slope class {strat_ns:.3} {strat_detail:?}");
     assert!(
         mean_ns >= 1.3 && ns >= 1.3,
         "{label}: north/south depth ratio {mean_ns} (means), {ns} (medians) < 1.3: {detail:?}"
+    );
+    // The same contrast at the same altitude and slope (the band means above mix slope into
+    // aspect where one aspect's faces are steeper: on avaMal at 5 m they sit near 1.3).
+    assert!(
+        strat_ns >= 1.3,
+        "{label}: north/south depth ratio within band × slope class {strat_ns} < 1.3: \
+         {strat_detail:?}"
     );
     // The default winter's winds blow from 270-300°: east faces are the lee.
     let (lee, detail) = band_ratio(

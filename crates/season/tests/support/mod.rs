@@ -156,3 +156,49 @@ fn band_ratio_of(
     }
     (if den > 0.0 { num / den } else { f64::NAN }, detail)
 }
+
+/// [`band_ratio`] within strata of elevation band × slope class (15-30°, 30-45°, 45-60°): the
+/// aspect contrast at the same altitude *and* slope. On real terrain the faces of one aspect
+/// are often steeper than those of the other (avaMal's north faces are), and steeper faces
+/// hold less snow whatever their aspect, so the band means alone mix slope into aspect.
+pub fn band_slope_ratio(
+    depth: &[f32],
+    bedrock: &Grid,
+    classes: &[Option<(f32, f32)>],
+    a_aspect: f32,
+    b_aspect: f32,
+    min_cells: usize,
+) -> (f64, Vec<(i32, i32, f64, usize, usize)>) {
+    use std::collections::BTreeMap;
+    let mut strata: BTreeMap<(i32, i32), [Vec<f32>; 2]> = BTreeMap::new();
+    for (i, cls) in classes.iter().enumerate() {
+        let Some((s, asp)) = *cls else { continue };
+        if !(15.0..60.0).contains(&s) {
+            continue;
+        }
+        let band = (bedrock.data()[i] / 200.0).floor() as i32 * 200;
+        let class = 15 + 15 * ((s - 15.0) / 15.0).floor() as i32;
+        let e = strata.entry((band, class)).or_default();
+        if facing(asp, a_aspect, 45.0) {
+            e[0].push(depth[i]);
+        }
+        if facing(asp, b_aspect, 45.0) {
+            e[1].push(depth[i]);
+        }
+    }
+    let mean = |v: &[f32]| v.iter().map(|&d| d as f64).sum::<f64>() / v.len() as f64;
+    let (mut num, mut den) = (0.0, 0.0);
+    let mut detail = Vec::new();
+    for ((band, class), [va, vb]) in strata {
+        let (na, nb) = (va.len(), vb.len());
+        if na < min_cells || nb < min_cells {
+            continue;
+        }
+        let (ma, mb) = (mean(&va), mean(&vb));
+        let weight = na.min(nb) as f64;
+        num += ma * weight;
+        den += mb * weight;
+        detail.push((band, class, ma / mb, na, nb));
+    }
+    (if den > 0.0 { num / den } else { f64::NAN }, detail)
+}
