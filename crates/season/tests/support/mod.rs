@@ -157,6 +157,10 @@ fn band_ratio_of(
     (if den > 0.0 { num / den } else { f64::NAN }, detail)
 }
 
+/// One stratum of [`band_slope_ratio`]: band floor (m), slope class floor (°), ratio, cells of
+/// each aspect.
+pub type Stratum = (i32, i32, f64, usize, usize);
+
 /// [`band_ratio`] within strata of elevation band × slope class (15-30°, 30-45°, 45-60°): the
 /// aspect contrast at the same altitude *and* slope. On real terrain the faces of one aspect
 /// are often steeper than those of the other (avaMal's north faces are), and steeper faces
@@ -168,7 +172,7 @@ pub fn band_slope_ratio(
     a_aspect: f32,
     b_aspect: f32,
     min_cells: usize,
-) -> (f64, Vec<(i32, i32, f64, usize, usize)>) {
+) -> (f64, Vec<Stratum>) {
     use std::collections::BTreeMap;
     let mut strata: BTreeMap<(i32, i32), [Vec<f32>; 2]> = BTreeMap::new();
     for (i, cls) in classes.iter().enumerate() {
