@@ -37,6 +37,8 @@ test -s "$scratch/ex_transport/depth.tif"
 # The season's phase timings and the shedding timing at a reduced size (so the example never rots).
 target/release/examples/season_phases 128 > /dev/null
 target/release/examples/season_phases 128 shed > /dev/null
+# The large-export memory check at a reduced size (16384² by hand: scripts/export-memory.sh).
+bash scripts/export-memory.sh "$scratch/large_run" 600 > /dev/null
 # The Python package: built by pip (maturin) into a fresh virtual environment, from the same
 # target folder as the rest, then its tests (the same bytes as `snowscape run`) and example.
 python3 -m venv "$scratch/venv"

@@ -52,6 +52,10 @@ impl NodataRule {
 pub(crate) struct CellSink<'p> {
     path: &'p Path,
     width: usize,
+    /// Column and row of the file the first cell lies in (a window or a chunk of the file),
+    /// for error messages.
+    first_col: usize,
+    first_row: usize,
     rule: NodataRule,
     declared_f32: Option<f32>,
     data: Vec<f32>,
@@ -70,11 +74,26 @@ impl<'p> CellSink<'p> {
         Self {
             path,
             width: width.max(1),
+            first_col: 0,
+            first_row: 0,
             rule,
             declared_f32: rule.declared.map(|v| v as f32),
             data: Vec::with_capacity(n),
             invalid: Vec::with_capacity(n),
         }
+    }
+
+    /// The same sink for a window of the file whose first cell is at `(col, row)`.
+    pub fn starting_at(mut self, col: usize, row: usize) -> Self {
+        (self.first_col, self.first_row) = (col, row);
+        self
+    }
+
+    /// Adds a cell already classified as data, finite (a chunk's cell moved into a window).
+    pub fn push_data(&mut self, v: f32) {
+        debug_assert!(v.is_finite());
+        self.data.push(v);
+        self.invalid.push(false);
     }
 
     /// Whether `v` is nodata under the file's rule (the declared value, or NaN where NaN
@@ -103,8 +122,8 @@ impl<'p> CellSink<'p> {
             let i = self.data.len();
             Err(RasterError::NonFinite {
                 path: self.path.to_path_buf(),
-                col: i % self.width,
-                row: i / self.width,
+                col: self.first_col + i % self.width,
+                row: self.first_row + i / self.width,
                 value: raw,
             })
         }

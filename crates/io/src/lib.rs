@@ -57,7 +57,9 @@ pub use atomic::{AtomicWriteError, write_atomic, write_bytes_atomic};
 pub use error::RasterError;
 pub use exr::write_exr;
 pub use format::{DEFAULT_MAX_CELLS, ParseFormatError, RasterFormat, ReadOptions};
-pub use geotiff::{COG_TILE, GEOTIFF_NODATA, write_cog, write_geotiff, write_geotiff_bands};
+pub use geotiff::{
+    COG_TILE, GEOTIFF_NODATA, TiffRows, write_cog, write_geotiff, write_geotiff_bands,
+};
 pub use heightmap16::Png16Scale;
 pub use input::{InputError, open_regular};
 pub use png16::write_png16;

@@ -27,12 +27,14 @@
 //! the snow covers a texel in proportion to its depth up to 30 cm (the page's snow shading),
 //! shared among the layers by thickness; the rest is rock; rounded so the weights sum to 255.
 //!
-//! Memory: the run's rasters are read whole (4 bytes per cell per layer, six layers), then the
-//! outputs are written one tile at a time.
+//! Memory: the run's rasters are read a window of rows at a time ([`TiffRows`]: only the strips
+//! or tiles under the window are decoded), so memory follows the output, at most 8129² samples
+//! (two f32 heightmaps and five byte weight maps, 0.9 GB at 8129²), whatever the run's size;
+//! the outputs are written one tile at a time.
 
 use image::ExtendedColorType;
 use serde::Serialize;
-use snowscape_io::{ReadOptions, read_dem, write_atomic, write_bytes_atomic, write_exr};
+use snowscape_io::{ReadOptions, TiffRows, write_atomic, write_bytes_atomic, write_exr};
 use snowscape_terrain::{Grid, GridGeometry, SnowLayer};
 use std::path::{Path, PathBuf};
 
@@ -104,14 +106,31 @@ pub struct EngineExport {
     pub files: Vec<String>,
 }
 
-/// The run's rasters: bedrock and the four snow layers.
-struct RunRasters {
-    bedrock: Grid,
-    layers: Vec<Grid>,
+/// A run raster opened for windows of rows, with its path (for errors).
+struct RunRaster {
+    path: PathBuf,
+    rows: TiffRows,
 }
 
-fn read_run(dir: &Path) -> Result<RunRasters, ExportError> {
-    let read = |file: &'static str| {
+impl RunRaster {
+    fn read_rows(&mut self, rows: std::ops::Range<usize>) -> Result<Grid, ExportError> {
+        self.rows
+            .read_rows(rows)
+            .map_err(|source| ExportError::Read {
+                path: self.path.clone(),
+                source,
+            })
+    }
+}
+
+/// The run's rasters: bedrock and the four snow layers, read a window of rows at a time.
+struct RunRasters {
+    bedrock: RunRaster,
+    layers: Vec<RunRaster>,
+}
+
+fn open_run(dir: &Path) -> Result<RunRasters, ExportError> {
+    let open = |file: &'static str| {
         let path = dir.join(file);
         if !path.is_file() {
             return Err(ExportError::NotARun {
@@ -119,10 +138,12 @@ fn read_run(dir: &Path) -> Result<RunRasters, ExportError> {
                 file,
             });
         }
-        read_dem(&path, &ReadOptions::default())
-            .map_err(|source| ExportError::Read { path, source })
+        match TiffRows::open(&path, &ReadOptions::default()) {
+            Ok(rows) => Ok(RunRaster { path, rows }),
+            Err(source) => Err(ExportError::Read { path, source }),
+        }
     };
-    let bedrock = read("bedrock.tif")?;
+    let bedrock = open("bedrock.tif")?;
     let mut layers = Vec::new();
     for (l, file) in SnowLayer::ALL.iter().zip([
         "layers_compacted.tif",
@@ -130,8 +151,8 @@ fn read_run(dir: &Path) -> Result<RunRasters, ExportError> {
         "layers_unstable.tif",
         "layers_powder.tif",
     ]) {
-        let g = read(file)?;
-        let (a, b) = (g.geometry(), bedrock.geometry());
+        let r = open(file)?;
+        let (a, b) = (r.rows.geometry(), bedrock.rows.geometry());
         if (a.width(), a.height()) != (b.width(), b.height()) {
             return Err(ExportError::SizeMismatch {
                 what: l.name().to_string(),
@@ -141,9 +162,50 @@ fn read_run(dir: &Path) -> Result<RunRasters, ExportError> {
                 h: b.height(),
             });
         }
-        layers.push(g);
+        layers.push(r);
     }
     Ok(RunRasters { bedrock, layers })
+}
+
+/// Rows of the run's rasters read at a time.
+const WINDOW_ROWS: usize = 64;
+
+/// Rows `start..` of the run's rasters.
+struct Window {
+    start: usize,
+    end: usize,
+    bedrock: Grid,
+    layers: Vec<Grid>,
+}
+
+impl RunRasters {
+    fn window(&mut self, rows: std::ops::Range<usize>) -> Result<Window, ExportError> {
+        Ok(Window {
+            start: rows.start,
+            end: rows.end,
+            bedrock: self.bedrock.read_rows(rows.clone())?,
+            layers: self
+                .layers
+                .iter_mut()
+                .map(|l| l.read_rows(rows.clone()))
+                .collect::<Result<_, _>>()?,
+        })
+    }
+
+    /// The lowest valid bedrock cell, m.
+    fn lowest_bedrock(&mut self) -> Result<f32, ExportError> {
+        let h = self.bedrock.rows.geometry().height();
+        let mut lowest: Option<f32> = None;
+        for start in (0..h).step_by(4 * WINDOW_ROWS) {
+            let rows = self
+                .bedrock
+                .read_rows(start..(start + 4 * WINDOW_ROWS).min(h))?;
+            if let Some((lo, _)) = rows.value_range() {
+                lowest = Some(lowest.map_or(lo, |l| l.min(lo)));
+            }
+        }
+        lowest.ok_or(ExportError::NoData)
+    }
 }
 
 /// The heightmap size of `engine` for a grid of `w` × `h` cells.
@@ -173,13 +235,12 @@ struct Maps {
     weights: [Vec<u8>; 5],
 }
 
-fn resample(run: &RunRasters, size: [usize; 2]) -> Result<Maps, ExportError> {
-    let g = run.bedrock.geometry();
-    let lowest = run
-        .bedrock
-        .value_range()
-        .map(|(lo, _)| lo)
-        .ok_or(ExportError::NoData)?;
+/// The maps at `size` samples, bilinear at evenly spaced positions from the first to the last
+/// cell centre, reading the run's rasters a window of rows at a time (the rows each output row
+/// samples: memory follows the output and the window, not the run's grid).
+fn resample(run: &mut RunRasters, size: [usize; 2]) -> Result<Maps, ExportError> {
+    let g = run.bedrock.rows.geometry().clone();
+    let lowest = run.lowest_bedrock()?;
     let [nw, nh] = size;
     let n = nw * nh;
     let (mut bedrock, mut surface) = (vec![0.0f32; n], vec![0.0f32; n]);
@@ -191,19 +252,35 @@ fn resample(run: &RunRasters, size: [usize; 2]) -> Result<Maps, ExportError> {
             k as f64 * (cells - 1) as f64 / (n - 1) as f64
         }
     };
+    let h = g.height();
+    let mut window: Option<Window> = None;
     for r in 0..nh {
-        let row = at(r, nh, g.height());
+        let row = at(r, nh, h);
+        // A sample reads its row and the next (the last row alone at the bottom).
+        let first = (row.floor() as usize).min(h - 1);
+        let last = (first + 2).min(h);
+        if !window
+            .as_ref()
+            .is_some_and(|w| w.start <= first && last <= w.end)
+        {
+            window = Some(run.window(first..(first + WINDOW_ROWS).min(h).max(last))?);
+        }
+        let Some(win) = window.as_ref() else {
+            continue;
+        };
+        // Exact: `row − start` is a multiple of `row`'s last bit, smaller than `row`.
+        let wrow = row - win.start as f64;
         for c in 0..nw {
             let col = at(c, nw, g.width());
             let i = r * nw + c;
-            let Some(b) = run.bedrock.sample(col, row) else {
+            let Some(b) = win.bedrock.sample(col, wrow) else {
                 bedrock[i] = lowest;
                 surface[i] = lowest;
                 weights[4][i] = 255;
                 continue;
             };
             let t: [f32; 4] =
-                std::array::from_fn(|l| run.layers[l].sample(col, row).unwrap_or(0.0).max(0.0));
+                std::array::from_fn(|l| win.layers[l].sample(col, wrow).unwrap_or(0.0).max(0.0));
             let depth: f32 = t.iter().sum();
             bedrock[i] = b;
             surface[i] = b + depth;
@@ -339,10 +416,10 @@ pub fn export_run(
     {
         return Err(ExportError::BadTile(t));
     }
-    let run = read_run(run_dir)?;
-    let g: GridGeometry = run.bedrock.geometry().clone();
+    let mut run = open_run(run_dir)?;
+    let g: GridGeometry = run.bedrock.rows.geometry().clone();
     let size = engine_size(options.engine, g.width(), g.height());
-    let maps = resample(&run, size)?;
+    let maps = resample(&mut run, size)?;
     std::fs::create_dir_all(out).map_err(|e| ExportError::Write {
         path: out.to_path_buf(),
         message: e.to_string(),

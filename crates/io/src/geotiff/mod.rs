@@ -21,8 +21,10 @@
 mod cog;
 pub(crate) mod geokeys;
 mod read;
+mod rows;
 mod write;
 
 pub use cog::{COG_TILE, write_cog};
 pub(crate) use read::read;
+pub use rows::TiffRows;
 pub use write::{GEOTIFF_NODATA, write_geotiff, write_geotiff_bands};

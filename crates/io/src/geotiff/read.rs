@@ -13,7 +13,7 @@ use std::path::Path;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
-type Dec = Decoder<BufReader<File>>;
+pub(super) type Dec = Decoder<BufReader<File>>;
 
 fn tag_err(path: &Path, tag: u16, name: &'static str, reason: String) -> RasterError {
     RasterError::GeoTiffTag {
@@ -185,7 +185,7 @@ fn band1_stride(path: &Path, dec: &mut Dec) -> Result<usize> {
 }
 
 /// Moves band 1 of `samples` into `sink`.
-fn push_band1(
+pub(super) fn push_band1(
     path: &Path,
     sink: &mut CellSink,
     samples: DecodingResult,
@@ -244,8 +244,19 @@ fn open(path: &Path, max_cells: usize) -> Result<(Dec, usize, usize)> {
     Ok((dec.with_limits(limits), w as usize, h as usize))
 }
 
-/// Reads band 1 of a (Geo)TIFF as a DEM.
-pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
+/// An opened (Geo)TIFF, its tags read: the decoder, its size, the grid's geometry, the nodata
+/// rule and band 1's sample stride.
+pub(super) struct Opened {
+    pub dec: Dec,
+    pub width: usize,
+    pub height: usize,
+    pub geometry: GridGeometry,
+    pub rule: NodataRule,
+    pub stride: usize,
+}
+
+/// Opens a (Geo)TIFF and reads its georeferencing, CRS, nodata and layout (no cell yet).
+pub(super) fn open_image(path: &Path, opts: &ReadOptions) -> Result<Opened> {
     let (mut dec, w, h) = open(path, opts.max_cells)?;
     let keys = read_geokeys(path, &mut dec)?;
     let transform = read_transform(path, &mut dec, &keys)?;
@@ -257,9 +268,6 @@ pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
             what: format!("{stride} interleaved samples per pixel (at most 16)"),
         });
     }
-    let samples = dec.read_image().map_err(tiff_err(path))?;
-    let mut sink = CellSink::new(path, w, h, NodataRule::for_binary(nodata));
-    push_band1(path, &mut sink, samples, w * h, stride)?;
     let crs = match opts.crs.clone().or_else(|| keys.crs()) {
         Some(c) => Some(c),
         None => sidecar_crs(path)?,
@@ -278,5 +286,21 @@ pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
         }
     }
     .map_err(geometry_err(path))?;
-    sink.finish(geometry)
+    Ok(Opened {
+        dec,
+        width: w,
+        height: h,
+        geometry,
+        rule: NodataRule::for_binary(nodata),
+        stride,
+    })
+}
+
+/// Reads band 1 of a (Geo)TIFF as a DEM.
+pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
+    let mut o = open_image(path, opts)?;
+    let samples = o.dec.read_image().map_err(tiff_err(path))?;
+    let mut sink = CellSink::new(path, o.width, o.height, o.rule);
+    push_band1(path, &mut sink, samples, o.width * o.height, o.stride)?;
+    sink.finish(o.geometry)
 }
