@@ -44,6 +44,7 @@ pub mod error;
 pub mod exr;
 pub mod format;
 pub mod geotiff;
+pub mod glb;
 pub mod heightmap16;
 pub mod input;
 pub mod npy;
