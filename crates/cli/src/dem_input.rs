@@ -103,13 +103,18 @@ mod tests {
         assert!(parse_pair("inf,2", ',').is_err());
     }
 
+    /// The reader refuses the value before opening the file (the one check of every front
+    /// end, `ReadOptions::validate`), naming it and the flag.
     #[test]
     fn negative_cell_size_is_rejected() {
         let a = DemInputArgs {
             cell_size: Some(-2.0),
             ..Default::default()
         };
-        let e = a.read_options().unwrap_err().to_string();
-        assert!(e.contains("-2"), "{e}");
+        let e = a
+            .read(Path::new("no/such/file.asc"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("-2") && e.contains("--cell-size"), "{e}");
     }
 }
