@@ -151,6 +151,11 @@ impl<'p> CellSink<'p> {
         }
     }
 
+    /// The cells pushed: values (0 where nodata) and which are nodata.
+    pub fn into_parts(self) -> (Vec<f32>, Vec<bool>) {
+        (self.data, self.invalid)
+    }
+
     /// The grid over `geometry`; the caller has pushed exactly `geometry.len()` cells.
     pub fn finish(self, geometry: GridGeometry) -> Result<Grid> {
         Grid::new(geometry, self.data, NodataMask::from_invalid(self.invalid))

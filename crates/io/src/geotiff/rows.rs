@@ -18,6 +18,16 @@ pub struct TiffRows {
     opened: Opened,
     /// Chunk width and height, cells (a strip spans the width).
     chunk: (usize, usize),
+    /// The last band of chunks decoded (its index and its chunks, left to right): windows
+    /// that share a band (a 512-row COG tile read 64 rows at a time) decode it once.
+    band: Option<(usize, Vec<Chunk>)>,
+}
+
+/// One decoded chunk: its data width and its cells (values, and which are nodata).
+struct Chunk {
+    width: usize,
+    values: Vec<f32>,
+    nodata: Vec<bool>,
 }
 
 impl TiffRows {
@@ -40,6 +50,7 @@ impl TiffRows {
             path: path.to_path_buf(),
             opened,
             chunk,
+            band: None,
         })
     }
 
@@ -64,22 +75,28 @@ impl TiffRows {
         let mut sink =
             CellSink::new(path, w, rows.len(), self.opened.rule).starting_at(0, rows.start);
         for chunk_row in rows.start / ch..=(rows.end - 1) / ch {
-            // The chunks of this band of rows, decoded to band 1, left to right.
-            let mut band: Vec<(usize, Grid)> = Vec::with_capacity(across);
-            for tc in 0..across {
-                let index = (chunk_row * across + tc) as u32;
-                let at = (tc * cw, chunk_row * ch);
-                band.push(decode_chunk(path, &mut self.opened, index, at)?);
+            if self.band.as_ref().is_none_or(|(b, _)| *b != chunk_row) {
+                // The chunks of this band of rows, decoded to band 1, left to right.
+                let mut chunks = Vec::with_capacity(across);
+                for tc in 0..across {
+                    let index = (chunk_row * across + tc) as u32;
+                    let at = (tc * cw, chunk_row * ch);
+                    chunks.push(decode_chunk(path, &mut self.opened, index, at)?);
+                }
+                self.band = Some((chunk_row, chunks));
             }
+            let Some((_, chunks)) = &self.band else {
+                unreachable!("the band was decoded above");
+            };
             let top = chunk_row * ch;
             for r in rows.start.max(top)..rows.end.min(top + ch) {
-                for (dw, cells) in &band {
-                    let local = (r - top) * dw;
-                    for k in local..local + dw {
-                        if cells.mask().is_valid(k) {
-                            sink.push_data(cells.data()[k]);
-                        } else {
+                for chunk in chunks {
+                    let line = (r - top) * chunk.width..(r - top + 1) * chunk.width;
+                    for k in line {
+                        if chunk.nodata[k] {
                             sink.push_nodata();
+                        } else {
+                            sink.push_data(chunk.values[k]);
                         }
                     }
                 }
@@ -97,20 +114,18 @@ impl TiffRows {
     }
 }
 
-/// Chunk `index`, whose first cell is `at` (column, row) in the file, decoded to band 1: its
-/// data width and its cells, classified by the file's nodata rule as a whole-image read
-/// classifies them.
-fn decode_chunk(
-    path: &Path,
-    opened: &mut Opened,
-    index: u32,
-    at: (usize, usize),
-) -> Result<(usize, Grid)> {
+/// Chunk `index`, whose first cell is `at` (column, row) in the file, decoded to band 1 and
+/// classified by the file's nodata rule as a whole-image read classifies it.
+fn decode_chunk(path: &Path, opened: &mut Opened, index: u32, at: (usize, usize)) -> Result<Chunk> {
     let (dw, dh) = opened.dec.chunk_data_dimensions(index);
     let (dw, dh) = (dw as usize, dh as usize);
     let samples = opened.dec.read_chunk(index).map_err(tiff_err(path))?;
     let mut sink = CellSink::new(path, dw, dh, opened.rule).starting_at(at.0, at.1);
     push_band1(path, &mut sink, samples, dw * dh, opened.stride)?;
-    let g = GridGeometry::square(dw.max(1), dh.max(1), 1.0).map_err(geometry_err(path))?;
-    Ok((dw, sink.finish(g)?))
+    let (values, nodata) = sink.into_parts();
+    Ok(Chunk {
+        width: dw,
+        values,
+        nodata,
+    })
 }
