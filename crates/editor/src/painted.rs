@@ -27,13 +27,11 @@ pub const SKIERS_PER_DAY: f64 = 4.0;
 pub const MAX_EVENTS_PER_STEP: usize = 32;
 const STREAM_SKIER: u64 = 0xed17_5c1e;
 
-/// Hands the painted release probability to the season's scheduler (nothing painted: no
+/// Hands the painted release probability to the season's scheduler (a map of zeros is no
 /// painted source).
 pub fn set_painted_release(winter: &mut Winter, paint: &PaintMaps) -> Result<(), Refusal> {
-    let p = &paint.avalanche_probability;
-    let painted = p.iter().any(|&v| v > 0.0);
     winter
-        .set_painted_release(painted.then_some(p.as_slice()), SITE_SPACING_M)
+        .set_painted_release(Some(&paint.avalanche_probability), SITE_SPACING_M)
         .map_err(|e| (ErrorCode::InvalidValue, e.to_string()))
 }
 

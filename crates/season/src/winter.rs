@@ -520,9 +520,10 @@ impl Winter {
     /// around the cell releases on a given day. Each cell becomes a release rate of
     /// `−ln(1 − min(p, 0.99)) · cell area / site area` per day, added to the hazard map the
     /// scheduler draws its Avalanche-Start events from
-    /// ([`crate::avalanches::HazardSources::painted`]), so the painted releases happen during the season's days, at the times the scheduler draws,
-    /// wherever unstable snow lies; they are recorded with [`Trigger::Painted`]. `None` (or a
-    /// map of zeros) removes the paint. An error names the first value out of range.
+    /// ([`crate::avalanches::HazardSources::painted`]), so the painted releases happen during
+    /// the season's days, at the times the scheduler draws, wherever unstable snow lies; they
+    /// are recorded with [`Trigger::Painted`]. `None` (or a map of zeros) removes the paint.
+    /// An error names the first value out of range.
     pub fn set_painted_release(
         &mut self,
         probability_per_day: Option<&[f32]>,
