@@ -307,11 +307,7 @@ fn cell_hazard(
         * (u / params.reference_unstable_m).min(1.0)
         * s
         * (natural + params.skier_gain * k);
-    if sources.painted.is_some() {
-        released + painted
-    } else {
-        released
-    }
+    released + painted
 }
 
 /// The hazard map of a season: `λ_i` per cell, its sum per row and in all. A full
