@@ -113,6 +113,9 @@ struct RunState {
     /// End of the last melt window, days (the next window starts here).
     #[serde(default)]
     melt_clock_days: f64,
+    /// Day of the last slope-shedding step (none yet: `None`).
+    #[serde(default)]
+    shed_clock_days: Option<f64>,
 }
 
 /// Where the season's latitude came from.
@@ -254,6 +257,7 @@ impl Winter {
             user_avalanche_index: 0,
             ski: SkiStats::default(),
             melt_clock_days: 0.0,
+            shed_clock_days: None,
         };
         let t = Instant::now();
         let params = weather_params(&env, &weather[0]);

@@ -96,3 +96,48 @@ fn resumed_run_ends_bit_identical() {
     other.seed = 99;
     assert!(Winter::resume(other, mountain(), &mut bytes.as_slice()).is_err());
 }
+
+/// The mountain under 0.5 m of settled snow.
+fn snowy_mountain() -> LayeredTerrain {
+    let mut t = mountain();
+    t.layer_mut(snowscape_terrain::SnowLayer::Stable).fill(0.5);
+    t
+}
+
+/// The scenario with slope shedding on (the cone's flanks steeper than 60° shed), once per
+/// `interval_days`.
+fn shedding_scenario(days: f64, interval_days: f64) -> Scenario {
+    let mut s = scenario(days);
+    s.parameters.slope_shedding.enabled = true;
+    s.parameters.slope_shedding.interval_days = interval_days;
+    s
+}
+
+#[test]
+fn slope_shedding_runs_at_most_once_per_interval_and_resumes_bit_identical() {
+    // An interval longer than the run: the first melt-and-state event sheds, no later one.
+    let mut w = Winter::new(shedding_scenario(20.0, 30.0), snowy_mountain()).unwrap();
+    w.run_until(2.0).unwrap();
+    let first = w.budget().shedding_moved;
+    assert!(first > 0.0, "the first step sheds the flanks' snow");
+    w.run_until(20.0).unwrap();
+    assert_eq!(w.budget().shedding_moved, first);
+    // Daily: later snowfall sheds too.
+    let mut daily = Winter::new(shedding_scenario(20.0, 1.0), snowy_mountain()).unwrap();
+    daily.run_until(20.0).unwrap();
+    assert!(daily.budget().shedding_moved > first);
+    // A checkpoint in the middle of an interval restores the shedding clock.
+    let mut part = Winter::new(shedding_scenario(20.0, 1.0), snowy_mountain()).unwrap();
+    part.run_until(7.3).unwrap();
+    let mut bytes = Vec::new();
+    part.write_checkpoint(&mut bytes).unwrap();
+    let mut resumed = Winter::resume(
+        shedding_scenario(20.0, 1.0),
+        snowy_mountain(),
+        &mut bytes.as_slice(),
+    )
+    .unwrap();
+    resumed.run_until(20.0).unwrap();
+    assert_eq!(resumed.terrain, daily.terrain);
+    assert_eq!(resumed.budget(), daily.budget());
+}

@@ -40,6 +40,7 @@ pub(super) fn sweep<V: Validity>(
         sweep: 0,
         deposit: params.deposit_layer.index(),
         power: params.flow_exponent as f32,
+        tan_entrain: params.entrain_min_slope_deg.to_radians().tan() as f32,
         moved: 0.0,
         received: 0.0,
         border: 0.0,
@@ -114,6 +115,9 @@ struct Cascade<'a, V> {
     sweep: u32,
     deposit: usize,
     power: f32,
+    /// tan of [`SheddingParams::entrain_min_slope_deg`].
+    tan_entrain: f32,
+
     /// Depths (m) summed over cells.
     moved: f64,
     received: f64,
@@ -165,6 +169,28 @@ impl<V: Validity> Cascade<'_, V> {
         }
     }
 
+    /// Steepest descent (tan) of cell `i`'s bedrock to its valid neighbours' bedrock, or past
+    /// the border to the bedrock continued there.
+    fn bedrock_descent(&self, i: usize) -> f32 {
+        let b = self.bedrock[i];
+        let mut best = 0.0f32;
+        for_each_around_of(
+            self.geometry,
+            self.valid,
+            &self.nb,
+            i,
+            self.cells[i].interior,
+            |n, a| {
+                let drop = match a {
+                    Around::Cell(j) => b - self.bedrock[j],
+                    Around::Ghost(o) => self.bedrock[o] - b,
+                };
+                best = best.max(drop * n.inv_l);
+            },
+        );
+        best
+    }
+
     /// Depth a cell that received snow keeps, m: the `d` in `[0, depth]` that equals its
     /// (dynamic) holding depth on the slope its surface would then have, the descent from
     /// `base + d` (`base` the bedrock under the column) to its neighbours' surfaces as seen
@@ -208,7 +234,15 @@ impl<V: Validity> Cascade<'_, V> {
         let depth = s[0][i] + s[1][i] + s[2][i] + s[3][i];
         let cell = self.cells[i];
         let keep = if cell.flags & RECEIVED != 0 {
-            self.retained(i, cell.surface - depth, depth)
+            let base = cell.surface - depth;
+            let retained = self.retained(i, base, depth);
+            if cell.flags & ACTIVE != 0 || self.bedrock_descent(i) >= self.tan_entrain {
+                retained
+            } else {
+                // Below `entrain_min_slope_deg` a cell keeps its own snow: the depth it had at
+                // the start of the step.
+                retained.max((cell.surface0 - base).min(depth))
+            }
         } else {
             if cell.tan_slope < self.tan_min {
                 return;

@@ -329,6 +329,18 @@ fn bad_parameters_are_typed_errors_and_round_trip() {
             min_holding_depth_m: -1.0,
             ..Default::default()
         },
+        SheddingParams {
+            entrain_min_slope_deg: -5.0,
+            ..Default::default()
+        },
+        SheddingParams {
+            interval_days: f64::NAN,
+            ..Default::default()
+        },
+        SheddingParams {
+            interval_days: 1e9,
+            ..Default::default()
+        },
     ] {
         assert!(bad.validate().is_err(), "{bad:?}");
     }
@@ -499,4 +511,66 @@ fn the_slope_bound_passes_over_no_cell_that_sheds() {
         assert!(!all.is_empty(), "{min_slope_deg}°");
         assert_eq!(found, all, "{min_slope_deg}°");
     }
+}
+
+/// A 70° face (columns 0-9) above a 40° slope (10-29) above flat ground: the face carries 0.5 m
+/// of fresh powder, the 40° slope 1 m of its own settled snow (its holding depth is 0.54 m,
+/// but at 40° < `min_slope_deg` it does not shed it).
+fn face_over_a_40_degree_slope() -> LayeredTerrain {
+    let geo = GridGeometry::square(60, 8, 5.0).unwrap();
+    let (t70, t40) = (
+        70f32.to_radians().tan() * 5.0,
+        40f32.to_radians().tan() * 5.0,
+    );
+    let mut t = terrain_from(geo, move |c, _| {
+        let below_face = (10usize.saturating_sub(c)) as f32 * t70;
+        100.0 + below_face + 30usize.saturating_sub(c.max(10)) as f32 * t40
+    });
+    for row in 0..8 {
+        for c in 0..60 {
+            let i = row * 60 + c;
+            if c < 10 {
+                t.layer_mut(SnowLayer::Powder)[i] = 0.5;
+            } else if c < 30 {
+                t.layer_mut(SnowLayer::Stable)[i] = 1.0;
+            }
+        }
+    }
+    t
+}
+
+#[test]
+fn a_sluff_runs_over_a_40_degree_slope_without_stripping_its_own_snow() {
+    let mut t = face_over_a_40_degree_slope();
+    let before = t.snow_volume();
+    let r = run(&mut t, &SheddingParams::default());
+    assert!(r.cells_shed > 0 && r.border_outflow_m3 == 0.0, "{r:?}");
+    assert!((t.snow_volume() - before).abs() <= 1e-5 * before);
+    let stable = t.layer(SnowLayer::Stable);
+    for row in 0..8 {
+        for c in 11..29 {
+            // Its own snow stays where it was (the sluff passes over it as unstable debris), to
+            // the f32 round-off of a snow surface at 100-200 m.
+            let d = stable[row * 60 + c];
+            assert!((d - 1.0).abs() < 1e-4, "({c},{row}) {d}");
+        }
+    }
+    // FSM2oshd's rule (every receiver sheds its excess): the sluff strips the slope's cover
+    // to about its holding depth and piles it on the flat below.
+    let mut t = face_over_a_40_degree_slope();
+    let fsm = SheddingParams {
+        entrain_min_slope_deg: 0.0,
+        ..Default::default()
+    };
+    run(&mut t, &fsm);
+    let mean_40: f64 = (0..8)
+        .flat_map(|row| (12..28).map(move |c| row * 60 + c))
+        .map(|i| t.depth_at(i) as f64)
+        .sum::<f64>()
+        / (8.0 * 16.0);
+    assert!(
+        mean_40 < 0.8,
+        "mean depth on the 40° slope {mean_40} (1 m before)"
+    );
+    assert!((t.snow_volume() - before).abs() <= 1e-5 * before);
 }

@@ -109,11 +109,20 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     Ok(())
 }
 
-/// Slope shedding (SnowSlide) of what the other phenomena left over its holding depth.
+/// Slope shedding (SnowSlide) of what the other phenomena left over its holding depth, at
+/// most once per `interval_days`.
 fn slope_shedding_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
     if !w.scenario.parameters.slope_shedding.enabled {
         return Ok(());
     }
+    let interval = w.scenario.parameters.slope_shedding.interval_days;
+    if w.state
+        .shed_clock_days
+        .is_some_and(|last| event.time_days < last + interval)
+    {
+        return Ok(());
+    }
+    w.state.shed_clock_days = Some(event.time_days);
     let r = crate::slope_shedding::step(
         &w.scenario.parameters.slope_shedding,
         &mut w.terrain,
