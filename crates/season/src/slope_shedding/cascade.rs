@@ -169,26 +169,18 @@ impl<V: Validity> Cascade<'_, V> {
         }
     }
 
-    /// Steepest descent (tan) of cell `i`'s bedrock to its valid neighbours' bedrock, or past
-    /// the border to the bedrock continued there.
-    fn bedrock_descent(&self, i: usize) -> f32 {
-        let b = self.bedrock[i];
-        let mut best = 0.0f32;
-        for_each_around_of(
+    /// Steepest descent (tan) of cell `i`'s bedrock ([`steepest_descent`] on the bedrock).
+    fn bedrock_descent_at(&self, i: usize) -> f32 {
+        let b = self.bedrock;
+        steepest_descent(
+            b[i],
+            |j| b[j],
+            |j| b[j],
             self.geometry,
             self.valid,
             &self.nb,
             i,
-            self.cells[i].interior,
-            |n, a| {
-                let drop = match a {
-                    Around::Cell(j) => b - self.bedrock[j],
-                    Around::Ghost(o) => self.bedrock[o] - b,
-                };
-                best = best.max(drop * n.inv_l);
-            },
-        );
-        best
+        )
     }
 
     /// Depth a cell that received snow keeps, m: the `d` in `[0, depth]` that equals its
@@ -236,7 +228,7 @@ impl<V: Validity> Cascade<'_, V> {
         let keep = if cell.flags & RECEIVED != 0 {
             let base = cell.surface - depth;
             let retained = self.retained(i, base, depth);
-            if cell.flags & ACTIVE != 0 || self.bedrock_descent(i) >= self.tan_entrain {
+            if cell.flags & ACTIVE != 0 || self.bedrock_descent_at(i) >= self.tan_entrain {
                 retained
             } else {
                 // Below `entrain_min_slope_deg` a cell keeps its own snow: the depth it had at
