@@ -160,6 +160,50 @@ pub(super) struct SxScratch {
     keep: Vec<f32>,
     /// Load arriving from the upwind row, per column.
     from_row: Vec<f32>,
+    /// The share of the arriving load each cell keeps on open or sheltered ground (before the
+    /// slab sign), cached while the `Sx` map and the [`KeepShare`] stay the same (a weather
+    /// period): it costs an `exp` per cell.
+    keep_share: KeepShareCache,
+}
+
+/// [`SxScratch::keep_share`]: the shares and what they were computed from.
+#[derive(Debug, Clone, Default)]
+struct KeepShareCache {
+    /// `(a, b, sheltered_above_deg)` bits of the [`KeepShare`] and the `Sx` map.
+    key: Option<([u64; 3], Vec<f32>)>,
+    share: Vec<f32>,
+}
+
+impl KeepShareCache {
+    /// The shares for `sx` under `keep`, recomputed (row-parallel) if either changed.
+    fn shares(&mut self, keep: &KeepShare, sheltered: f32, sx: &[f32], w: usize) -> &[f32] {
+        let params = [
+            keep.a.to_bits(),
+            keep.b.to_bits(),
+            u64::from(sheltered.to_bits()),
+        ];
+        let same = self.key.as_ref().is_some_and(|(k, old)| {
+            *k == params
+                && old.len() == sx.len()
+                && old
+                    .par_iter()
+                    .zip(sx.par_iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+        });
+        if !same {
+            self.share.resize(sx.len(), 0.0);
+            self.share
+                .par_chunks_mut(w)
+                .zip(sx.par_chunks(w))
+                .for_each(|(out, sx)| {
+                    for (o, &s) in out.iter_mut().zip(sx) {
+                        *o = keep.at(s - sheltered);
+                    }
+                });
+            self.key = Some((params, sx.to_vec()));
+        }
+        &self.share
+    }
 }
 
 /// The unit dominant wind `(east, north)`: the mean of the wind field over valid cells (row
@@ -241,6 +285,7 @@ pub(super) fn run<V: Validity>(
     let n = w * ctx.geometry.height();
     scratch.scour.resize(n, 0.0);
     scratch.keep.resize(n, 0.0);
+    let share = scratch.keep_share.shares(&cell.keep, cell.sheltered, sx, w);
     let [_, _, unstable, powder] = &terrain.snow;
     scratch
         .scour
@@ -254,7 +299,7 @@ pub(super) fn run<V: Validity>(
                 row_gradient_norm(surface, ctx.geometry, ctx.mask, valid, row, gradient);
                 let erodible = ctx.erode_unstable.then(|| &unstable[r.clone()]);
                 cell.scour_row(ctx.wind, r.clone(), &powder[r.clone()], erodible, sc);
-                cell.keep_row(&sx[r.clone()], gradient, ctx.slab_gradient, kp);
+                keep_row(&share[r.clone()], gradient, ctx.slab_gradient, kp);
                 for (k, i) in r.enumerate() {
                     if !valid.at(i) {
                         (sc[k], kp[k]) = (0.0, 0.0);
@@ -328,14 +373,14 @@ impl CellTerms<'_> {
             }
         }
     }
+}
 
-    /// Share of the arriving load each cell of a row keeps (Sx `sx`), negative where the surface
-    /// `gradient` (tan) exceeds `slab_gradient` (deposits land as unstable snow).
-    fn keep_row(&self, sx: &[f32], gradient: &[f32], slab_gradient: f32, out: &mut [f32]) {
-        for ((o, &s), &g) in out.iter_mut().zip(sx).zip(gradient) {
-            let keep = self.keep.at(s - self.sheltered);
-            *o = if g > slab_gradient { -keep } else { keep };
-        }
+/// Share of the arriving load each cell of a row keeps (`share`, from [`KeepShareCache`]),
+/// negative where the surface `gradient` (tan) exceeds `slab_gradient` (deposits land as
+/// unstable snow).
+fn keep_row(share: &[f32], gradient: &[f32], slab_gradient: f32, out: &mut [f32]) {
+    for ((o, &keep), &g) in out.iter_mut().zip(share).zip(gradient) {
+        *o = if g > slab_gradient { -keep } else { keep };
     }
 }
 
