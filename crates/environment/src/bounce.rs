@@ -143,47 +143,90 @@ fn offsets(params: &BounceParams, csx: f64, csy: f64) -> Vec<Offset> {
 
 /// The bounce on a prepared field.
 pub(crate) fn bounce_field(field: &TerrainField, sun: &[f32], params: &BounceParams) -> Vec<f32> {
+    bounce_fields(field, &[sun], params)
+        .pop()
+        .unwrap_or_default()
+}
+
+/// Most sun maps one pass of [`bounce_fields`] carries (the months of a year).
+const MAX_SUNS: usize = 12;
+
+/// The bounce of several sun maps on a prepared field (the months of a season), in one pass
+/// over the samples: the sample geometry and its form term are shared by every map, so the
+/// pass costs about what one map's does. Each map's bounce is the same sum, in the same order,
+/// as [`bounce_field`]'s alone. More than [`MAX_SUNS`] maps are done in several passes.
+pub(crate) fn bounce_fields(
+    field: &TerrainField,
+    suns: &[&[f32]],
+    params: &BounceParams,
+) -> Vec<Vec<f32>> {
+    if suns.len() > MAX_SUNS {
+        let (first, rest) = suns.split_at(MAX_SUNS);
+        let mut out = bounce_fields(field, first, params);
+        out.extend(bounce_fields(field, rest, params));
+        return out;
+    }
+    let m = suns.len();
     let (w, h) = (field.width as i64, field.height as i64);
     let table = offsets(params, field.csx, field.csy);
     let per_cell = table.len() / ROTATIONS;
     let k = (params.k_ind / std::f64::consts::PI) as f32;
     let layout = &field.rows;
-    // Sender records packed for one memory access per sample: height, sun, normal.
-    let senders: Vec<[f32; 5]> = (0..field.len())
-        .into_par_iter()
-        .map(|i| {
-            let n = layout.normal[i];
-            [layout.z[i], sun[i], n[0], n[1], n[2]]
-        })
-        .collect();
-    let mut out = vec![0.0f32; field.len()];
-    out.par_chunks_mut(field.width)
+    // Sender records packed for one memory access per sample: height, normal, then the sun of
+    // each map.
+    let stride = 4 + m;
+    let mut senders = vec![0.0f32; field.len() * stride];
+    senders
+        .par_chunks_mut(stride)
         .enumerate()
-        .for_each(|(row, line)| {
-            for (col, o) in line.iter_mut().enumerate() {
-                let p = row * field.width + col;
-                let [zp, _, nx, ny, nz] = senders[p];
-                if zp == f32::NEG_INFINITY {
-                    continue;
-                }
-                let rot =
-                    (hash3(params.seed, STREAM_ROTATION, p as u64) % ROTATIONS as u64) as usize;
-                let mut sum = 0.0f32;
-                for s in &table[rot * per_cell..(rot + 1) * per_cell] {
-                    let (c, r) = (col as i64 + s.dc as i64, row as i64 + s.dr as i64);
-                    if (s.dc == 0 && s.dr == 0) || c < 0 || r < 0 || c >= w || r >= h {
-                        continue;
-                    }
-                    let [zq, sq, mx, my, mz] = senders[(r * w + c) as usize];
-                    if zq == f32::NEG_INFINITY || sq == 0.0 {
-                        continue;
-                    }
-                    let d = [s.east, s.north, zq - zp];
-                    sum += s.area * sq * form_term(d, [nx, ny, nz], [mx, my, mz]);
-                }
-                *o = k * sum;
+        .for_each(|(i, rec)| {
+            let n = layout.normal[i];
+            rec[..4].copy_from_slice(&[layout.z[i], n[0], n[1], n[2]]);
+            for (r, sun) in rec[4..].iter_mut().zip(suns) {
+                *r = sun[i];
             }
         });
+    let mut out: Vec<Vec<f32>> = (0..m).map(|_| vec![0.0f32; field.len()]).collect();
+    let mut rows: Vec<Vec<&mut [f32]>> = (0..field.height).map(|_| Vec::with_capacity(m)).collect();
+    for map in &mut out {
+        for (row, line) in map.chunks_mut(field.width).enumerate() {
+            rows[row].push(line);
+        }
+    }
+    rows.par_iter_mut().enumerate().for_each(|(row, lines)| {
+        for col in 0..field.width {
+            let p = row * field.width + col;
+            let rec = &senders[p * stride..(p + 1) * stride];
+            let [zp, nx, ny, nz] = [rec[0], rec[1], rec[2], rec[3]];
+            if zp == f32::NEG_INFINITY {
+                continue;
+            }
+            let rot = (hash3(params.seed, STREAM_ROTATION, p as u64) % ROTATIONS as u64) as usize;
+            let mut sums = [0.0f32; MAX_SUNS];
+            for s in &table[rot * per_cell..(rot + 1) * per_cell] {
+                let (c, r) = (col as i64 + s.dc as i64, row as i64 + s.dr as i64);
+                if (s.dc == 0 && s.dr == 0) || c < 0 || r < 0 || c >= w || r >= h {
+                    continue;
+                }
+                let q = (r * w + c) as usize;
+                let rec = &senders[q * stride..(q + 1) * stride];
+                let [zq, mx, my, mz] = [rec[0], rec[1], rec[2], rec[3]];
+                if zq == f32::NEG_INFINITY || rec[4..].iter().all(|&sq| sq == 0.0) {
+                    continue;
+                }
+                let d = [s.east, s.north, zq - zp];
+                let f = form_term(d, [nx, ny, nz], [mx, my, mz]);
+                for (sum, &sq) in sums.iter_mut().zip(&rec[4..]) {
+                    if sq != 0.0 {
+                        *sum += s.area * sq * f;
+                    }
+                }
+            }
+            for (line, sum) in lines.iter_mut().zip(sums) {
+                line[col] = k * sum;
+            }
+        }
+    });
     out
 }
 
@@ -219,5 +262,49 @@ mod tests {
         let d = 200f32.sqrt();
         assert!((t - (10.0 / d) * (10.0 / d) / 200.0).abs() < 1e-9);
         assert_eq!(form_term([10.0, 0.0, 10.0], up, [1.0, 0.0, 0.0]), 0.0);
+    }
+
+    #[test]
+    fn maps_bounced_together_equal_each_bounced_alone_bit_for_bit() {
+        let g = GridGeometry::square(40, 30, 10.0).unwrap();
+        let z: Vec<f32> = (0..g.len())
+            .map(|i| {
+                // A valley: its two flanks face each other.
+                let (c, r) = ((i % 40) as f32, (i / 40) as f32);
+                1000.0 + 8.0 * (c - 20.0).abs() + 3.0 * (r * 0.2).cos()
+            })
+            .collect();
+        let mut invalid = vec![false; g.len()];
+        invalid[5 * 40 + 7] = true;
+        let mask = NodataMask::from_invalid(invalid);
+        let field = TerrainField::new(&z, &g, &mask).unwrap();
+        let params = BounceParams {
+            min_radius_m: 10.0,
+            max_radius_m: 150.0,
+            ..BounceParams::default()
+        };
+        // 14 maps: more than one pass carries; some zero here and there.
+        let suns: Vec<Vec<f32>> = (0..14)
+            .map(|m| {
+                (0..g.len())
+                    .map(|i| {
+                        if (i + m) % 7 == 0 {
+                            0.0
+                        } else {
+                            ((i * (m + 3)) % 11 + 1) as f32
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let refs: Vec<&[f32]> = suns.iter().map(|v| &v[..]).collect();
+        let together = bounce_fields(&field, &refs, &params);
+        assert_eq!(together.len(), 14);
+        for (sun, t) in suns.iter().zip(&together) {
+            let alone = bounce_field(&field, sun, &params);
+            assert!(alone.iter().any(|&v| v > 0.0));
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&alone), bits(t));
+        }
     }
 }

@@ -23,7 +23,7 @@
 //! The same beam maps give the season-mean direct sun of Cordonnier's `I_sun`, so the
 //! precompute sweeps each sun position once.
 
-use crate::bounce::bounce_field;
+use crate::bounce::bounce_fields;
 use crate::field::TerrainField;
 use crate::solar::{SunSample, declination, hour_angle, sun_vector};
 use crate::sun::direct_sun_field;
@@ -188,7 +188,9 @@ pub(crate) fn season_sun_field(
     bounce: &BounceParams,
     sky_view_factor: &[f32],
 ) -> SeasonSun {
-    let months = months
+    // Each month's hours and daily direct sun, then the reflected share of every month in one
+    // pass of the bounce.
+    let mut months: Vec<(MonthSun, Vec<f32>, f64)> = months
         .iter()
         .map(|&month| {
             let day = MONTH_START[month as usize - 1] + 14;
@@ -223,24 +225,24 @@ pub(crate) fn season_sun_field(
                         .collect(),
                 });
             }
-            let reflected = if flat_daily > 0.0 {
-                let inv = (1.0 / flat_daily) as f32;
-                bounce_field(field, &daily, bounce)
-                    .into_iter()
-                    .map(|r| r * inv)
-                    .collect()
-            } else {
-                vec![0.0; field.len()]
-            };
-            MonthSun {
+            let sun = MonthSun {
                 month,
                 day_of_year: day,
                 hours,
                 first_hour,
-                reflected,
-            }
+                reflected: vec![0.0; field.len()],
+            };
+            (sun, daily, flat_daily)
         })
         .collect();
+    let sunny: Vec<usize> = (0..months.len()).filter(|&k| months[k].2 > 0.0).collect();
+    let dailies: Vec<&[f32]> = sunny.iter().map(|&k| &months[k].1[..]).collect();
+    let bounced = bounce_fields(field, &dailies, bounce);
+    for (&k, reflected) in sunny.iter().zip(bounced) {
+        let inv = (1.0 / months[k].2) as f32;
+        months[k].0.reflected = reflected.into_iter().map(|r| r * inv).collect();
+    }
+    let months = months.into_iter().map(|(sun, _, _)| sun).collect();
     SeasonSun {
         latitude_deg,
         months,
