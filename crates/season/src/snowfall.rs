@@ -128,6 +128,12 @@ struct ShareCoefficients {
     k_powdery: f32,
     k_unstable: f32,
     s_u_deg: f32,
+    /// Surface gradients (tan) at or below which the unstable fraction is surely 0, and at or
+    /// above which it is surely 1: 0.01° inside the ramp's ends, a hundred times the f32
+    /// error of the slope in degrees, so that the `atan` is only evaluated on the ramp and
+    /// the shares keep their bits.
+    flat_below: f32,
+    steep_above: f32,
 }
 
 impl ShareCoefficients {
@@ -139,6 +145,17 @@ impl ShareCoefficients {
             k_powdery: p.k_powdery as f32,
             k_unstable: p.k_unstable as f32,
             s_u_deg: p.s_u_deg as f32,
+            // (k_u = 0 keeps the formula, whose −0 the shortcut would not reproduce.)
+            flat_below: if p.k_unstable >= 1e-6 {
+                tan_deg(p.s_u_deg - 0.01)
+            } else {
+                -1.0
+            },
+            steep_above: if p.k_unstable >= 1e-6 {
+                tan_deg(p.s_u_deg + 1.0 / p.k_unstable + 0.01)
+            } else {
+                f32::INFINITY
+            },
         }
     }
 
@@ -146,10 +163,28 @@ impl ShareCoefficients {
     fn shares(&self, gradient_norm: f32, temperature: f32) -> (f32, f32, f32) {
         let sc = self.sc0 + self.k_sc * (self.t0_powdery - temperature).max(0.0);
         let x_p = (self.k_powdery * (gradient_norm - sc)).clamp(0.0, 1.0);
-        let slope_deg = gradient_norm.atan().to_degrees();
-        let x_u = (self.k_unstable * (slope_deg - self.s_u_deg)).clamp(0.0, 1.0);
+        let x_u = if gradient_norm <= self.flat_below {
+            0.0
+        } else if gradient_norm >= self.steep_above {
+            1.0
+        } else {
+            let slope_deg = gradient_norm.atan().to_degrees();
+            (self.k_unstable * (slope_deg - self.s_u_deg)).clamp(0.0, 1.0)
+        };
         let rest = 1.0 - x_p;
         (x_p, rest * x_u, rest * (1.0 - x_u))
+    }
+}
+
+/// `tan` of a slope in degrees as f32: −1 below 0° (no gradient is that low), infinite from
+/// 90° (none is that high).
+fn tan_deg(deg: f64) -> f32 {
+    if deg < 0.0 {
+        -1.0
+    } else if deg >= 90.0 {
+        f32::INFINITY
+    } else {
+        deg.to_radians().tan() as f32
     }
 }
 
@@ -407,6 +442,44 @@ mod tests {
 
     fn plane(alt: f32) -> LayeredTerrain {
         LayeredTerrain::from_bedrock(Grid::filled(GridGeometry::square(8, 8, 10.0).unwrap(), alt))
+    }
+
+    #[test]
+    fn shares_skip_the_atan_off_the_ramp_without_changing_a_bit() {
+        for (s_u, k_u) in [
+            (30.0, 0.05),
+            (0.0, 0.05),
+            (85.0, 0.01),
+            (40.0, 0.0),
+            (10.0, 1.0),
+        ] {
+            let p = SnowfallParams {
+                s_u_deg: s_u,
+                k_unstable: k_u,
+                ..SnowfallParams::default()
+            };
+            let k = ShareCoefficients::new(&p);
+            let mut g = 0.0f32;
+            while g < 40.0 {
+                let (xp, xu, xs) = k.shares(g, -5.0);
+                let deg = g.atan().to_degrees();
+                let sc = k.sc0 + k.k_sc * (k.t0_powdery + 5.0).max(0.0);
+                let want_p = (k.k_powdery * (g - sc)).clamp(0.0, 1.0);
+                let want_u = (k.k_unstable * (deg - k.s_u_deg)).clamp(0.0, 1.0);
+                let rest = 1.0 - want_p;
+                assert_eq!(
+                    (xp.to_bits(), xu.to_bits(), xs.to_bits()),
+                    (
+                        want_p.to_bits(),
+                        (rest * want_u).to_bits(),
+                        (rest * (1.0 - want_u)).to_bits()
+                    ),
+                    "s_u {s_u} k_u {k_u} gradient {g}"
+                );
+                // Fine steps near the ramp's ends, coarser beyond.
+                g = if g < 3.0 { g + 1e-4 } else { g * 1.001 };
+            }
+        }
     }
 
     #[test]

@@ -517,8 +517,14 @@ impl Half<'_> {
         let w = m.ctx.geometry.width();
         let n_cols = self.from_row.len();
         let mut sums = SxSums::default();
+        // The east/west neighbour lies off the grid only past the last column of the half
+        // whose last step is the grid's edge; the north/south one only past the last row.
+        let edge_col = if m.dc > 0 { w - 1 } else { 0 };
+        let step_x = m.dc;
+        let step_y = m.dr * w as isize;
         for (k, &row) in rows.iter().enumerate() {
             let mut carry = if n_cols == 0 { 0.0 } else { carry_in(k) };
+            let has_y = k + 1 < rows.len();
             let (unstable, powder) = &mut self.rows[row];
             for step in 0..n_cols {
                 let local = if m.dc > 0 { step } else { n_cols - 1 - step };
@@ -547,16 +553,20 @@ impl Half<'_> {
                 let to_x = out * m.fx;
                 let to_y = out - to_x;
                 // The east/west share.
-                match m.ctx.geometry.neighbour(col, row, m.dc, 0) {
-                    None => sums.border += f64::from(to_x),
-                    Some(j) if m.valid.at(j) => carry = to_x,
-                    Some(_) => kept += to_x,
+                if col == edge_col {
+                    sums.border += f64::from(to_x);
+                } else if m.valid.at(i.wrapping_add_signed(step_x)) {
+                    carry = to_x;
+                } else {
+                    kept += to_x;
                 }
                 // The north/south share.
-                match m.ctx.geometry.neighbour(col, row, 0, m.dr) {
-                    None => sums.border += f64::from(to_y),
-                    Some(j) if m.valid.at(j) => self.from_row[local] = to_y,
-                    Some(_) => kept += to_y,
+                if !has_y {
+                    sums.border += f64::from(to_y);
+                } else if m.valid.at(i.wrapping_add_signed(step_y)) {
+                    self.from_row[local] = to_y;
+                } else {
+                    kept += to_y;
                 }
                 if kept > 0.0 {
                     sums.deposited += f64::from(kept);
