@@ -383,6 +383,9 @@ struct CellState {
     tan_slope: f32,
     /// Position of the cell in the cached order (`u32::MAX` for nodata); kept between steps.
     rank: u32,
+    /// Steepest descent of the cell's bedrock (tan, [`steepest_descent`] on the bedrock, the
+    /// border continued): whether snow sliding onto it entrains its own (set with `rank`).
+    bedrock_tan: f32,
     /// The step in which `bed`, `surface0`, `surface` and `flags` were set up (equal to the
     /// scratch's `generation`: in this one).
     stamp: u32,
@@ -399,6 +402,7 @@ impl Default for CellState {
             surface: 0.0,
             tan_slope: 0.0,
             rank: u32::MAX,
+            bedrock_tan: 0.0,
             stamp: 0,
             flags: 0,
             interior: false,
@@ -465,6 +469,24 @@ impl SheddingScratch {
         for (i, cell) in self.cells.iter_mut().enumerate() {
             let (col, row) = (i % w, i / w);
             cell.interior = col > 0 && row > 0 && col + 1 < w && row + 1 < h;
+        }
+        let nb = neighbours(geometry);
+        let bedrock = &terrain.bedrock;
+        let descents: Vec<f32> = with_validity!(terrain.mask(), |valid| {
+            (0..bedrock.len())
+                .into_par_iter()
+                .map(|i| {
+                    if valid.at(i) {
+                        let b = |j: usize| bedrock[j];
+                        steepest_descent(bedrock[i], b, b, geometry, valid, &nb, i)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        });
+        for (cell, d) in self.cells.iter_mut().zip(descents) {
+            cell.bedrock_tan = d;
         }
         self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
         self.key_mask = mask.map(<[bool]>::to_vec);

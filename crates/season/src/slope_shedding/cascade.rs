@@ -169,20 +169,6 @@ impl<V: Validity> Cascade<'_, V> {
         }
     }
 
-    /// Steepest descent (tan) of cell `i`'s bedrock ([`steepest_descent`] on the bedrock).
-    fn bedrock_descent_at(&self, i: usize) -> f32 {
-        let b = self.bedrock;
-        steepest_descent(
-            b[i],
-            |j| b[j],
-            |j| b[j],
-            self.geometry,
-            self.valid,
-            &self.nb,
-            i,
-        )
-    }
-
     /// Depth a cell that received snow keeps, m: the `d` in `[0, depth]` that equals its
     /// (dynamic) holding depth on the slope its surface would then have, the descent from
     /// `base + d` (`base` the bedrock under the column) to its neighbours' surfaces as seen
@@ -228,7 +214,7 @@ impl<V: Validity> Cascade<'_, V> {
         let keep = if cell.flags & RECEIVED != 0 {
             let base = cell.surface - depth;
             let retained = self.retained(i, base, depth);
-            if cell.flags & ACTIVE != 0 || self.bedrock_descent_at(i) >= self.tan_entrain {
+            if cell.flags & ACTIVE != 0 || cell.bedrock_tan >= self.tan_entrain {
                 retained
             } else {
                 // Below `entrain_min_slope_deg` a cell keeps its own snow: the depth it had at
