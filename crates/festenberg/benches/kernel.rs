@@ -56,7 +56,7 @@ fn scene(side: usize) -> Scene {
     let ground = Grid::from_fn(g, |c, r| {
         0.3 * ((c as f32 * 0.7).sin() * (r as f32 * 0.5).cos()) + 0.02 * r as f32
     });
-    let mut objects = vec![grid_object(&ground, "ground")];
+    let mut objects = vec![grid_object(&ground, "ground").expect("ground mesh")];
     let mut k = 0;
     let mut y = 2.0;
     while y + 3.0 < metres as f32 {

@@ -87,6 +87,9 @@ pub enum MeshError {
     /// The output could not be written (nothing is left at the target path).
     #[error(transparent)]
     Write(#[from] AtomicWriteError),
+    /// A grid that cannot become a mesh (over 2^32 vertices).
+    #[error("grid as a mesh: {0}")]
+    Grid(#[from] snowscape_terrain::TerrainError),
     /// The output could not be encoded (glTF JSON, PNG...).
     #[error("cannot encode {path}: {message}")]
     Encode { path: PathBuf, message: String },

@@ -26,9 +26,11 @@ pub fn height_at(grid: &Grid, x: f64, y: f64) -> Option<f32> {
     grid.sample(col, row)
 }
 
-/// The grid as one object: a vertex per cell centre, two triangles per square of four valid
-/// cells (counter-clockwise seen from above, so normals point up).
-pub fn grid_object(grid: &Grid, name: &str) -> SceneObject {
+/// The grid as one object: a vertex per cell centre and the triangles of the project's one
+/// triangulation of a height field ([`snowscape_terrain::lattice`]: two per square of four
+/// cells, a triangle kept where its three cells are valid; counter-clockwise seen from above,
+/// so normals point up). An error for a grid of more than 2^32 cells.
+pub fn grid_object(grid: &Grid, name: &str) -> Result<SceneObject, MeshError> {
     let g = grid.geometry();
     let (w, h) = (g.width(), g.height());
     let mask = grid.mask();
@@ -40,25 +42,16 @@ pub fn grid_object(grid: &Grid, name: &str) -> SceneObject {
             positions.push([x as f32, y as f32, data[g.index(col, row)]]);
         }
     }
-    let mut triangles = Vec::with_capacity(2 * w.saturating_sub(1) * h.saturating_sub(1));
-    for row in 0..h.saturating_sub(1) {
-        for col in 0..w.saturating_sub(1) {
-            let nw = g.index(col, row) as u32;
-            let (ne, sw) = (nw + 1, nw + w as u32);
-            let se = sw + 1;
-            let valid = |i: u32| mask.is_valid(i as usize) && data[i as usize].is_finite();
-            if [nw, ne, sw, se].into_iter().all(valid) {
-                triangles.push([sw, se, ne]);
-                triangles.push([sw, ne, nw]);
-            }
-        }
-    }
-    SceneObject {
+    let usable: Vec<bool> = (0..w * h)
+        .map(|i| mask.is_valid(i) && data[i].is_finite())
+        .collect();
+    let triangles = snowscape_terrain::lattice::lattice_triangles(&usable, w, h)?;
+    Ok(SceneObject {
         name: name.to_string(),
         positions,
         normals: None,
         triangles,
-    }
+    })
 }
 
 /// Moves `object` so that the centre of its horizontal bounds is at scene `(x, y)` and its
@@ -205,7 +198,7 @@ mod tests {
     #[test]
     fn grid_mesh_faces_up_and_skips_nodata() {
         let g = slope();
-        let o = grid_object(&g, "terrain");
+        let o = grid_object(&g, "terrain").unwrap();
         assert_eq!(o.triangles.len(), 2 * 4 * 3);
         for t in 0..o.triangles.len() {
             assert!(o.triangle_normal(t)[2] > 0.0);
@@ -222,7 +215,12 @@ mod tests {
             NodataMask::from_invalid(invalid),
         )
         .unwrap();
-        assert_eq!(grid_object(&holed, "t").triangles.len(), 2 * (12 - 4));
+        // Of the four squares around the hole, those that have it at their north-west or
+        // south-east corner keep the triangle opposite it (the diagonal runs south-west to
+        // north-east).
+        let o = grid_object(&holed, "t").unwrap();
+        assert_eq!(o.triangles.len(), 2 * (12 - 4) + 2);
+        assert!(o.triangles.iter().all(|t| !t.contains(&6)));
     }
 
     #[test]

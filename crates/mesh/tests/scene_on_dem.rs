@@ -36,7 +36,7 @@ fn bunny_stands_on_the_rme_dem() {
     let under = height_at(&grid, x, y).unwrap();
     assert!(under >= ground && under - ground < 10.0, "{under} {ground}");
 
-    let terrain = grid_object(&grid, "terrain");
+    let terrain = grid_object(&grid, "terrain").unwrap();
     let scene = Scene {
         objects: vec![terrain, object],
         frame,

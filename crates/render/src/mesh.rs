@@ -1,9 +1,10 @@
 //! Triangle meshes of a height field sampled on a (possibly decimated) lattice of cells.
 //!
-//! The lattice keeps every `step`-th column and row of the grid plus the last ones, so the mesh
-//! always spans the whole grid. Each lattice quad is split into two triangles; a triangle is
-//! kept only when its three corners are usable (valid cells for the terrain; valid cells with
-//! snow for the snow mesh), and only vertices used by a kept triangle are emitted.
+//! The lattice and its triangles are the project's one triangulation of a height field
+//! ([`snowscape_terrain::lattice`]: every `step`-th column and row plus the last ones, each
+//! square split along its south-west to north-east diagonal, a triangle kept when its three
+//! corners are usable: valid cells for the terrain, valid cells with snow for the snow mesh);
+//! only vertices used by a kept triangle are emitted.
 //!
 //! Coordinates are glTF's: metres, x east, y up, z south, x and z centred on the grid's
 //! centre, `y = (altitude - base) · exaggeration`. Triangles wind counter-clockwise seen from
@@ -13,20 +14,7 @@
 use crate::RenderError;
 use snowscape_terrain::GridGeometry;
 
-/// Sampled positions `0, step, 2·step, ..., n - 1` of an axis of `n` cells.
-pub fn lattice_axis(n: usize, step: usize) -> Vec<usize> {
-    let mut axis: Vec<usize> = (0..n).step_by(step.max(1)).collect();
-    if axis.last() != Some(&(n - 1)) {
-        axis.push(n - 1);
-    }
-    axis
-}
-
-/// Vertices of the lattice of a `width x height` grid at `step`.
-pub fn lattice_vertices(width: usize, height: usize, step: usize) -> usize {
-    let samples = |n: usize| (n - 1) / step + 1 + usize::from(!(n - 1).is_multiple_of(step));
-    samples(width) * samples(height)
-}
+pub use snowscape_terrain::lattice::{lattice_axis, lattice_vertices};
 
 /// The smallest step at least `decimation` whose lattice has at most `budget` vertices.
 pub fn choose_step(
@@ -145,7 +133,16 @@ pub fn surface_mesh(
             ys[b * nc + a] = (altitude - base) * exaggeration;
         }
     }
-    let lattice_triangles = kept_triangles(&usable, nc, nr);
+    let lattice_triangles: Vec<u32> =
+        snowscape_terrain::lattice::lattice_triangles(&usable, nc, nr)
+            .map_err(|_| RenderError::InvalidCount {
+                name: "max_vertices",
+                value: nc * nr,
+                expected: "fewer than 2^32 lattice vertices per mesh (decimate more)",
+            })?
+            .into_iter()
+            .flatten()
+            .collect();
     if lattice_triangles.is_empty() {
         return Ok(None);
     }
@@ -189,23 +186,6 @@ pub fn surface_mesh(
     }))
 }
 
-/// Lattice-vertex corners of every triangle whose corners are all usable.
-fn kept_triangles(usable: &[bool], nc: usize, nr: usize) -> Vec<u32> {
-    let mut out = Vec::new();
-    for b in 0..nr.saturating_sub(1) {
-        for a in 0..nc.saturating_sub(1) {
-            let v00 = b * nc + a;
-            let (v10, v01, v11) = (v00 + 1, v00 + nc, v00 + nc + 1);
-            for tri in [[v00, v01, v10], [v10, v01, v11]] {
-                if tri.iter().all(|&v| usable[v]) {
-                    out.extend(tri.map(|v| v as u32));
-                }
-            }
-        }
-    }
-    out
-}
-
 /// The lattice's coordinates and usability, for normals.
 struct Lattice<'a> {
     xs: &'a [f32],
@@ -246,15 +226,6 @@ fn lattice_normal(l: &Lattice, a: usize, b: usize) -> [f32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn lattice_keeps_the_last_row_and_column() {
-        assert_eq!(lattice_axis(10, 3), vec![0, 3, 6, 9]);
-        assert_eq!(lattice_axis(11, 3), vec![0, 3, 6, 9, 10]);
-        assert_eq!(lattice_axis(1, 4), vec![0]);
-        assert_eq!(lattice_vertices(11, 10, 3), 5 * 4);
-        assert_eq!(lattice_vertices(8192, 8192, 1), 8192 * 8192);
-    }
 
     #[test]
     fn step_meets_the_vertex_budget() {

@@ -22,6 +22,7 @@ pub mod crs_latitude;
 pub mod error;
 pub mod geometry;
 pub mod grid;
+pub mod lattice;
 pub mod layers;
 pub mod materials;
 pub mod procedural;

@@ -197,7 +197,7 @@ fn read_input(args: &CoverArgs) -> anyhow::Result<CoverInput> {
             after.max[0] as f64 + margin,
             after.max[1] as f64 + margin,
         ];
-        let terrain = crop(grid_object(&grid, "terrain"), e, margin);
+        let terrain = crop(grid_object(&grid, "terrain")?, e, margin);
         if terrain.triangles.is_empty() {
             bail!(
                 "the DEM {} has no valid cells around the mesh",

@@ -40,7 +40,7 @@ pub fn scene_of(triangles: usize) -> Scene {
     let g = GridGeometry::new(73, 73, 1.0, 1.0).unwrap();
     let ground = Grid::from_fn(g, |c, r| 0.02 * c as f32 + 0.01 * r as f32);
     let mut scene = Scene {
-        objects: vec![grid_object(&ground, "ground")],
+        objects: vec![grid_object(&ground, "ground").expect("ground mesh")],
         frame: SourceFrame::default(),
     };
     let mut k = 0;
