@@ -39,6 +39,7 @@ use crate::stability::StabilityParams;
 use crate::wind_transport::WindTransportParams;
 use serde::{Deserialize, Serialize};
 use snowscape_environment::EnvironmentParams;
+use snowscape_terrain::timeline::{TimeUnit, TimelinePeriod, check_timeline};
 use thiserror::Error;
 
 /// A malformed or inconsistent scenario.
@@ -64,7 +65,7 @@ pub enum ScenarioError {
         source_name: String,
         key: String,
         value: String,
-        reason: &'static str,
+        reason: std::borrow::Cow<'static, str>,
     },
 }
 
@@ -90,6 +91,14 @@ pub struct WeatherPeriod {
     /// altitude, mm of water per day; `None`: `[parameters.climate] precipitation_mm_per_day`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub precipitation_mm_per_day: Option<f64>,
+}
+
+impl TimelinePeriod for WeatherPeriod {
+    const UNIT: TimeUnit = TimeUnit::Days;
+    const START_KEY: &'static str = "from_day";
+    fn start(&self) -> f64 {
+        self.from_day
+    }
 }
 
 /// A forced snowfall period.
@@ -260,11 +269,11 @@ impl Scenario {
 
     /// Checks ranges the types cannot express.
     pub fn validate(&self, source_name: &str) -> Result<(), ScenarioError> {
-        let bad = |key: &str, value: String, reason| ScenarioError::Invalid {
+        let bad = |key: &str, value: String, reason: &'static str| ScenarioError::Invalid {
             source_name: source_name.to_string(),
             key: key.to_string(),
             value,
-            reason,
+            reason: reason.into(),
         };
         if !(self.days.is_finite() && self.days > 0.0 && self.days <= 3650.0) {
             return Err(bad(
@@ -341,17 +350,17 @@ impl Scenario {
                 ));
             }
         }
-        let mut last = f64::NEG_INFINITY;
+        // The periods' starts: the timeline rule a transport run's weather follows too.
+        if let Err(e) = check_timeline(&self.weather, true) {
+            return Err(ScenarioError::Invalid {
+                source_name: source_name.to_string(),
+                key: format!("weather[{}].{}", e.index, e.key),
+                value: e.start.to_string(),
+                reason: e.reason.into(),
+            });
+        }
         for (k, w) in self.weather.iter().enumerate() {
             let key = |f: &str| format!("weather[{k}].{f}");
-            if !(w.from_day.is_finite() && w.from_day >= 0.0 && w.from_day > last) {
-                return Err(bad(
-                    &key("from_day"),
-                    w.from_day.to_string(),
-                    "must be >= 0 and increasing",
-                ));
-            }
-            last = w.from_day;
             for (f, v, ok, reason) in [
                 (
                     "sea_level_temperature_c",
@@ -388,15 +397,6 @@ impl Scenario {
                     return Err(bad(&key(f), v.to_string(), reason));
                 }
             }
-        }
-        if let Some(first) = self.weather.first()
-            && first.from_day != 0.0
-        {
-            return Err(bad(
-                "weather[0].from_day",
-                first.from_day.to_string(),
-                "the first period must start at day 0",
-            ));
         }
         for (k, p) in self.snowfall_periods.iter().enumerate() {
             if !(p.start_day.is_finite()
@@ -462,7 +462,7 @@ impl Scenario {
             source_name: source_name.to_string(),
             key,
             value: format!("x {x} y {y}"),
-            reason: "lies outside the terrain",
+            reason: "lies outside the terrain".into(),
         };
         for (k, a) in self.avalanches.iter().enumerate() {
             if geometry.map_to_cell(a.x, a.y).is_none() {

@@ -122,7 +122,9 @@ impl Air {
     }
 
     fn period_at(&self, day: f64) -> Option<&WeatherPeriod> {
-        self.periods.iter().rev().find(|p| p.from_day <= day)
+        let k = snowscape_terrain::timeline::period_index_at(&self.periods, day)?;
+        let p = &self.periods[k];
+        (p.from_day <= day).then_some(p)
     }
 
     /// The station record covering season day `day`.

@@ -28,6 +28,7 @@ pub mod materials;
 pub mod procedural;
 pub mod random;
 pub mod surface;
+pub mod timeline;
 
 pub use error::TerrainError;
 pub use geometry::{Crs, GeoTransform, GridGeometry};

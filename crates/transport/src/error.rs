@@ -60,7 +60,7 @@ pub enum TransportError {
         /// Its start, h.
         from_hour: f64,
         /// What is wrong.
-        reason: &'static str,
+        reason: String,
     },
 }
 

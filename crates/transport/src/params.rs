@@ -11,6 +11,9 @@
 
 use crate::error::{TransportError, check_positive, check_range};
 use serde::{Deserialize, Serialize};
+use snowscape_terrain::timeline::{
+    TimeUnit, TimelinePeriod, check_timeline, next_start_after, period_index_at,
+};
 
 /// Which phenomena of Eq. 5.16 take part, so the ablations of Figs. 7.6-7.8 can be run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -262,41 +265,36 @@ impl Weather {
 #[serde(transparent)]
 pub struct Timeline(pub Vec<Weather>);
 
+impl TimelinePeriod for Weather {
+    const UNIT: TimeUnit = TimeUnit::Hours;
+    const START_KEY: &'static str = "from_hour";
+    fn start(&self) -> f64 {
+        self.from_hour
+    }
+}
+
 impl Timeline {
-    /// Checks the periods are valid, start at hour 0 and are sorted by strictly increasing
-    /// start.
+    /// Checks the periods are valid and form a timeline: they start at hour 0 and at strictly
+    /// increasing hours (`snowscape_terrain::timeline`, the rule a season's weather follows).
     pub fn validate(&self) -> Result<(), TransportError> {
-        if self.0.is_empty() {
-            return Err(TransportError::Timeline {
-                index: 0,
-                from_hour: f64::NAN,
-                reason: "no weather period",
-            });
-        }
-        if self.0[0].from_hour != 0.0 {
-            return Err(TransportError::Timeline {
-                index: 0,
-                from_hour: self.0[0].from_hour,
-                reason: "the first period must start at hour 0",
-            });
-        }
-        for (i, w) in self.0.iter().enumerate() {
+        for w in &self.0 {
             w.validate()?;
-            if i > 0 && w.from_hour <= self.0[i - 1].from_hour {
-                return Err(TransportError::Timeline {
-                    index: i,
-                    from_hour: w.from_hour,
-                    reason: "periods must start at strictly increasing hours",
-                });
-            }
         }
-        Ok(())
+        check_timeline(&self.0, false).map_err(|e| TransportError::Timeline {
+            index: e.index,
+            from_hour: e.start,
+            reason: e.reason,
+        })
     }
 
     /// The weather in force at `hour` (the last period starting at or before it).
     pub fn at(&self, hour: f64) -> &Weather {
-        let k = self.0.partition_point(|w| w.from_hour <= hour);
-        &self.0[k.saturating_sub(1)]
+        &self.0[period_index_at(&self.0, hour).unwrap_or(0)]
+    }
+
+    /// Start of the next period after `hour`, h (`None` in the last one).
+    pub fn next_start_after(&self, hour: f64) -> Option<f64> {
+        next_start_after(&self.0, hour)
     }
 }
 

@@ -360,11 +360,8 @@ pub fn run(
     while t < total_s - 1e-9 {
         let weather = timeline.at(t / 3600.0);
         let next_change = timeline
-            .0
-            .iter()
-            .map(|w| w.from_hour * 3600.0)
-            .find(|&s| s > t + 1e-9)
-            .unwrap_or(f64::INFINITY);
+            .next_start_after((t + 1e-9) / 3600.0)
+            .map_or(f64::INFINITY, |h| h * 3600.0);
         let dt = scenario
             .transport
             .time_step_s
