@@ -284,6 +284,7 @@ mod tests {
             vec![[0, 1, 2], [0, 2, 3]]
         };
         SceneObject {
+            frame: Default::default(),
             name: "sq".into(),
             positions,
             normals: None,

@@ -288,6 +288,7 @@ mod tests {
     fn cells_tile_their_triangles_through_splits_and_merges() {
         let scene = Scene {
             objects: vec![SceneObject {
+                frame: Default::default(),
                 name: "t".into(),
                 positions: vec![[0., 0., 0.], [3., 0., 0.5], [0., 2., 0.], [0., 0., 5.]],
                 normals: None,

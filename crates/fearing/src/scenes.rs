@@ -16,6 +16,7 @@ pub fn frame() -> SourceFrame {
 pub fn plane(name: &str, size: f32, z: f32) -> SceneObject {
     let h = 0.5 * size;
     SceneObject {
+        frame: Default::default(),
         name: name.into(),
         positions: vec![[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]],
         normals: None,
@@ -47,6 +48,7 @@ pub fn cuboid(name: &str, lo: [f32; 3], hi: [f32; 3]) -> SceneObject {
         .flat_map(|q: &[u32; 4]| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
         .collect();
     SceneObject {
+        frame: Default::default(),
         name: name.into(),
         positions,
         normals: None,

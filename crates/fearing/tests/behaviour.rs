@@ -525,6 +525,7 @@ fn bad_parameters_name_the_value() {
     );
     let upside_down = Scene {
         objects: vec![snowscape_mesh::SceneObject {
+            frame: Default::default(),
             triangles: vec![[0, 2, 1]],
             ..scenes::plane("p", 1.0, 0.0)
         }],
@@ -543,6 +544,7 @@ fn swept_steep_faces_get_flake_dusting() {
     // A 70° face (steeper than the 50° AOR) over open ground: its snow slides off, but it saw
     // the sky, so it gets a dense dusting; the ground gets a surface.
     let face = snowscape_mesh::SceneObject {
+        frame: Default::default(),
         name: "face".into(),
         positions: vec![
             [0.0, -1.0, 0.0],

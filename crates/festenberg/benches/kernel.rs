@@ -38,6 +38,7 @@ fn cube(name: String, min: [f32; 3], max: [f32; 3]) -> SceneObject {
         [1, 3, 7, 5],
     ];
     SceneObject {
+        frame: Default::default(),
         name,
         positions: (0..8).map(p).collect(),
         normals: None,

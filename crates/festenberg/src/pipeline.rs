@@ -11,7 +11,7 @@ use crate::mask::boundary_mask;
 use crate::overhang;
 use crate::params::{CoverParams, Resolved};
 use crate::sites::SiteField;
-use crate::surface_mesh::{self, SurfaceMesh};
+use crate::surface_mesh::{self, SiteMesh};
 use serde::Serialize;
 use snowscape_mesh::write::vertex_normals;
 use snowscape_mesh::{HeightSpanMap, HeightSpanOptions, Scene, SnowMesh};
@@ -200,7 +200,7 @@ pub fn cover(scene: &Scene, params: &CoverParams) -> Result<SnowCover, Festenber
 }
 
 /// A surface mesh as a writable snow mesh (normals computed, no texture).
-pub fn plain_mesh(name: &str, surface: SurfaceMesh) -> SnowMesh {
+pub fn plain_mesh(name: &str, surface: SiteMesh) -> SnowMesh {
     let normals = vertex_normals(&surface.positions, &surface.triangles);
     SnowMesh {
         name: name.into(),

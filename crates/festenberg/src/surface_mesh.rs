@@ -14,9 +14,11 @@
 use crate::links::SiteLinks;
 use crate::sites::SiteField;
 
-/// A snow surface mesh over the sites.
+/// A snow surface mesh over the sites, as built: its positions and triangles (scene frame, as
+/// a `snowscape_mesh::TriMesh`) with each vertex's site and ground point, which the texture and
+/// the bridges need; [`crate::pipeline::plain_mesh`] makes the mesh to write of it.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct SurfaceMesh {
+pub struct SiteMesh {
     /// Snow surface positions (scene metres, z up).
     pub positions: Vec<[f32; 3]>,
     /// The ground point under each vertex (the site without snow and offset).
@@ -41,8 +43,8 @@ pub fn build(
     links: &[SiteLinks],
     heights: &[f32],
     offsets: Option<&[[f32; 2]]>,
-) -> SurfaceMesh {
-    let mut m = SurfaceMesh::default();
+) -> SiteMesh {
+    let mut m = SiteMesh::default();
     let mut vertex = vec![u32::MAX; field.len()];
     let eps = NO_SNOW * field.depth;
     let (w, h) = (field.width, field.height);
@@ -50,7 +52,7 @@ pub fn build(
     let south = |i: usize| links[i][1].site();
     let west = |i: usize| links[i][2].site();
     let north = |i: usize| links[i][3].site();
-    let mut add = |m: &mut SurfaceMesh, corners: &[usize]| -> Option<Vec<u32>> {
+    let mut add = |m: &mut SiteMesh, corners: &[usize]| -> Option<Vec<u32>> {
         if corners.iter().all(|&i| heights[i] <= eps) {
             return None;
         }

@@ -28,5 +28,5 @@ pub use height_span::{HeightSpanMap, HeightSpanOptions, SnowSite};
 pub use raycast::{Ray, RayHit, SceneBvh};
 pub use read::{MeshFormat, read_scene};
 pub use report::{MeshReport, ObjectReport};
-pub use scene::{Bounds, Scene, SceneObject, SourceFrame, UpAxis};
+pub use scene::{Bounds, MeshFrame, Scene, SceneObject, SourceFrame, TriMesh, UpAxis};
 pub use write::SnowMesh;

@@ -469,6 +469,7 @@ mod tests {
 
     fn quad(z: f32) -> SceneObject {
         SceneObject {
+            frame: Default::default(),
             name: "q".into(),
             positions: vec![[0., 0., z], [1., 0., z], [1., 1., z], [0., 1., z]],
             normals: None,
@@ -534,6 +535,7 @@ mod tests {
         ];
         let scene = Scene {
             objects: vec![SceneObject {
+                frame: Default::default(),
                 name: "box".into(),
                 positions,
                 normals: None,
@@ -542,6 +544,7 @@ mod tests {
             ..Default::default()
         };
         let slab = SceneObject {
+            frame: Default::default(),
             name: "snow".into(),
             positions: vec![
                 p(lo, lo, 1.05),

@@ -210,6 +210,7 @@ mod tests {
 
     fn square(name: &str, z: f32, size: f32) -> SceneObject {
         SceneObject {
+            frame: Default::default(),
             name: name.into(),
             positions: vec![[0., 0., z], [size, 0., z], [size, size, z], [0., size, z]],
             normals: None,
@@ -274,6 +275,7 @@ mod tests {
         }
         let one = Scene {
             objects: vec![SceneObject {
+                frame: Default::default(),
                 triangles: vec![[0, 1, 2]],
                 ..square("one", 0.0, 1.0)
             }],

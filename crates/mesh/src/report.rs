@@ -180,6 +180,7 @@ pub(crate) fn check_object(
     }
     Ok((
         Some(SceneObject {
+            frame: Default::default(),
             name: raw.name,
             positions,
             normals,

@@ -154,11 +154,30 @@ impl Bounds {
     }
 }
 
-/// One named triangle mesh of a scene, in scene metres (z up).
+/// The axes and unit of a [`TriMesh`]'s coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum MeshFrame {
+    /// The scene frame of the mesh methods (module docs): metres, x and y horizontal (on a
+    /// DEM: east and north of the grid's south-west corner), z up. Readers convert into it
+    /// with a [`SourceFrame`]; writers convert back.
+    #[default]
+    Scene,
+    /// glTF's frame for a height field (`snowscape-render`'s terrain and snow GLB): metres, x
+    /// east, y up, z south, x and z centred on the grid's centre, y above a base altitude
+    /// (times an exaggeration).
+    Gltf,
+}
+
+/// The project's triangle mesh: named, with its frame ([`MeshFrame`]), vertex positions,
+/// optional unit vertex normals and counter-clockwise triangles. A scene object
+/// ([`SceneObject`]) is one in the scene frame; the terrain and snow GLB meshes one in glTF's.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct SceneObject {
-    /// Name from the file (OBJ `o`/`g`, glTF node or mesh name, PLY file stem).
+pub struct TriMesh {
+    /// Name from the file (OBJ `o`/`g`, glTF node or mesh name, PLY file stem), or of what
+    /// the mesh shows.
     pub name: String,
+    /// The axes and unit of `positions` and `normals`.
+    pub frame: MeshFrame,
     /// Vertex positions, metres.
     pub positions: Vec<[f32; 3]>,
     /// Unit vertex normals from the file, one per position, if the file had them.
@@ -167,7 +186,10 @@ pub struct SceneObject {
     pub triangles: Vec<[u32; 3]>,
 }
 
-impl SceneObject {
+/// One named triangle mesh of a scene: a [`TriMesh`] in the scene frame (metres, z up).
+pub type SceneObject = TriMesh;
+
+impl TriMesh {
     /// The three corners of triangle `t`.
     #[inline]
     pub fn corners(&self, t: usize) -> [[f32; 3]; 3] {
@@ -310,6 +332,7 @@ mod tests {
         assert_eq!(f.direction_to_scene([0.0, 0.0, 1.0]), [0.0, -1.0, 0.0]);
         // A counter-clockwise triangle seen from +y in the file faces +z in the scene.
         let o = SceneObject {
+            frame: Default::default(),
             name: "t".into(),
             positions: [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]
                 .map(|p| f.to_scene(p))

@@ -47,6 +47,7 @@ pub fn grid_object(grid: &Grid, name: &str) -> Result<SceneObject, MeshError> {
         .collect();
     let triangles = snowscape_terrain::lattice::lattice_triangles(&usable, w, h)?;
     Ok(SceneObject {
+        frame: Default::default(),
         name: name.to_string(),
         positions,
         normals: None,
@@ -114,6 +115,7 @@ pub fn place_scene_on_grid(
     // The vertices of every triangle as one object (one point-triangle per vertex, so the
     // bounds count only vertices that triangles use).
     let mut all = SceneObject {
+        frame: Default::default(),
         name: scene
             .objects
             .first()
@@ -157,6 +159,7 @@ mod tests {
     fn a_scene_is_placed_as_one_piece_and_at_map_positions() {
         let g = slope();
         let cube = |x0: f32| SceneObject {
+            frame: Default::default(),
             name: "c".into(),
             positions: vec![[x0, 0.0, 0.0], [x0 + 1.0, 0.0, 0.0], [x0, 1.0, 1.0]],
             normals: None,
@@ -227,6 +230,7 @@ mod tests {
     fn placed_objects_stand_on_the_lowest_ground_under_them() {
         let g = slope();
         let mut cube = SceneObject {
+            frame: Default::default(),
             name: "box".into(),
             positions: vec![[0., 0., 5.], [2., 0., 5.], [2., 2., 5.], [0., 2., 6.]],
             normals: None,

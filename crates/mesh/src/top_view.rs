@@ -121,6 +121,7 @@ mod tests {
 
     fn quad(z: f32, x0: f32, x1: f32) -> SceneObject {
         SceneObject {
+            frame: Default::default(),
             name: format!("quad{z}"),
             positions: vec![[x0, 0.0, z], [x1, 0.0, z], [x1, 4.0, z], [x0, 4.0, z]],
             normals: None,

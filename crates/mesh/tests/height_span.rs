@@ -11,6 +11,7 @@ use snowscape_mesh::{
 /// diagonal from (x0, y0) to (x1, y1)).
 fn quad(name: &str, [x0, y0, x1, y1]: [f32; 4], z: f32) -> SceneObject {
     SceneObject {
+        frame: Default::default(),
         name: name.into(),
         positions: vec![[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]],
         normals: None,
@@ -36,6 +37,7 @@ fn cube(name: &str, min: [f32; 3], max: [f32; 3]) -> SceneObject {
         [1, 3, 7, 5], // east
     ];
     SceneObject {
+        frame: Default::default(),
         name: name.into(),
         positions: (0..8).map(p).collect(),
         normals: None,

@@ -15,8 +15,9 @@
 //! project's one GLB writer).
 
 use crate::RenderError;
-use crate::mesh::{HeightSource, SurfaceMesh, choose_step, surface_mesh};
+use crate::mesh::{HeightSource, choose_step, surface_mesh};
 use snowscape_io::glb::{GlbDocument, GlbError, f32_bytes, gltf_json as json, u32_bytes};
+use snowscape_mesh::TriMesh;
 use snowscape_terrain::LayeredTerrain;
 
 /// Snow thinner than this (metres) gets no snow-mesh triangle.
@@ -150,7 +151,7 @@ pub fn terrain_glb(terrain: &LayeredTerrain, opts: &GlbOptions) -> Result<Vec<u8
 fn add_surface(
     doc: &mut GlbDocument,
     name: &str,
-    mesh: &SurfaceMesh,
+    mesh: &TriMesh,
     material_name: &str,
     colour: [f32; 4],
     roughness: f32,
@@ -161,17 +162,17 @@ fn add_surface(
         &f32_bytes(mesh.positions.as_flattened()),
         n,
         (C::F32, T::Vec3),
-        Some(mesh.bounds()),
+        mesh.bounds().map(|b| (b.min, b.max)),
     );
     let normals = doc.push_accessor(
-        &f32_bytes(mesh.normals.as_flattened()),
+        &f32_bytes(mesh.normals.as_deref().unwrap_or_default().as_flattened()),
         n,
         (C::F32, T::Vec3),
         None,
     );
     let indices = doc.push_accessor(
-        &u32_bytes(&mesh.indices),
-        mesh.indices.len(),
+        &u32_bytes(mesh.triangles.as_flattened()),
+        3 * mesh.triangles.len(),
         (C::U32, T::Scalar),
         None,
     );

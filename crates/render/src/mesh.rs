@@ -12,6 +12,7 @@
 //! (one-sided at borders and next to unusable vertices).
 
 use crate::RenderError;
+use snowscape_mesh::{MeshFrame, TriMesh};
 use snowscape_terrain::GridGeometry;
 
 pub use snowscape_terrain::lattice::{lattice_axis, lattice_vertices};
@@ -51,32 +52,6 @@ pub fn choose_step(
     Ok(step)
 }
 
-/// One surface mesh: positions and unit normals per vertex, u32 triangle indices.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SurfaceMesh {
-    /// Vertex positions, metres (x east, y up, z south).
-    pub positions: Vec<[f32; 3]>,
-    /// Unit vertex normals.
-    pub normals: Vec<[f32; 3]>,
-    /// Triangle corner indices into `positions`, counter-clockwise from above.
-    pub indices: Vec<u32>,
-}
-
-impl SurfaceMesh {
-    /// Component-wise minimum and maximum of the positions.
-    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        for p in &self.positions {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        (lo, hi)
-    }
-}
-
 /// What to mesh: altitude and usability of each grid cell.
 pub struct HeightSource<'a> {
     /// The grid's geometry.
@@ -89,13 +64,15 @@ pub struct HeightSource<'a> {
     pub what: &'static str,
 }
 
-/// Meshes `source` on the lattice of `step`; `None` when no triangle is usable.
+/// Meshes `source` on the lattice of `step`, in glTF's frame ([`MeshFrame::Gltf`], module
+/// docs) with unit vertex normals and named after `source.what`; `None` when no triangle is
+/// usable.
 pub fn surface_mesh(
     source: &HeightSource,
     step: usize,
     base: f32,
     exaggeration: f32,
-) -> Result<Option<SurfaceMesh>, RenderError> {
+) -> Result<Option<TriMesh>, RenderError> {
     let g = source.geometry;
     let (cols, rows) = (
         lattice_axis(g.width(), step),
@@ -133,22 +110,18 @@ pub fn surface_mesh(
             ys[b * nc + a] = (altitude - base) * exaggeration;
         }
     }
-    let lattice_triangles: Vec<u32> =
-        snowscape_terrain::lattice::lattice_triangles(&usable, nc, nr)
-            .map_err(|_| RenderError::InvalidCount {
-                name: "max_vertices",
-                value: nc * nr,
-                expected: "fewer than 2^32 lattice vertices per mesh (decimate more)",
-            })?
-            .into_iter()
-            .flatten()
-            .collect();
+    let lattice_triangles = snowscape_terrain::lattice::lattice_triangles(&usable, nc, nr)
+        .map_err(|_| RenderError::InvalidCount {
+            name: "max_vertices",
+            value: nc * nr,
+            expected: "fewer than 2^32 lattice vertices per mesh (decimate more)",
+        })?;
     if lattice_triangles.is_empty() {
         return Ok(None);
     }
     // Compact: number the used lattice vertices in lattice order.
     let mut new_index = vec![u32::MAX; nc * nr];
-    for &v in &lattice_triangles {
+    for &v in lattice_triangles.as_flattened() {
         new_index[v as usize] = 0;
     }
     let lattice = Lattice {
@@ -175,14 +148,16 @@ pub fn surface_mesh(
         positions.push([xs[a], ys[v], zs[b]]);
         normals.push(lattice_normal(&lattice, a, b));
     }
-    let indices = lattice_triangles
+    let triangles = lattice_triangles
         .iter()
-        .map(|&v| new_index[v as usize])
+        .map(|t| t.map(|v| new_index[v as usize]))
         .collect();
-    Ok(Some(SurfaceMesh {
+    Ok(Some(TriMesh {
+        name: source.what.to_string(),
+        frame: MeshFrame::Gltf,
         positions,
-        normals,
-        indices,
+        normals: Some(normals),
+        triangles,
     }))
 }
 
@@ -256,21 +231,22 @@ mod tests {
         .unwrap()
         .unwrap();
         assert_eq!(mesh.positions.len(), 20);
-        assert_eq!(mesh.indices.len(), 4 * 3 * 2 * 3);
+        assert_eq!(mesh.triangles.len(), 4 * 3 * 2);
+        assert_eq!(mesh.frame, MeshFrame::Gltf);
         let len = (1.0f32 + 0.25).sqrt();
-        for n in &mesh.normals {
+        for n in mesh.normals.as_ref().unwrap() {
             assert!((n[0] + 0.5 / len).abs() < 1e-6 && (n[1] - 1.0 / len).abs() < 1e-6);
             assert!(n[2].abs() < 1e-6);
         }
-        for t in mesh.indices.chunks_exact(3) {
+        for t in &mesh.triangles {
             let p: [[f32; 3]; 3] = std::array::from_fn(|k| mesh.positions[t[k] as usize]);
             let e1 = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
             let e2 = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
             let up = e1[2] * e2[0] - e1[0] * e2[2];
             assert!(up > 0.0, "triangle {t:?} faces down");
         }
-        let (lo, hi) = mesh.bounds();
-        assert_eq!((lo[0], hi[0]), (-4.0, 4.0));
-        assert_eq!((lo[2], hi[2]), (-1.5, 1.5));
+        let b = mesh.bounds().unwrap();
+        assert_eq!((b.min[0], b.max[0]), (-4.0, 4.0));
+        assert_eq!((b.min[2], b.max[2]), (-1.5, 1.5));
     }
 }

@@ -22,6 +22,7 @@ pub fn cube(name: &str, min: [f32; 3], max: [f32; 3]) -> SceneObject {
         [1, 3, 7, 5], // east
     ];
     SceneObject {
+        frame: Default::default(),
         name: name.into(),
         positions: (0..8).map(p).collect(),
         normals: None,
@@ -35,6 +36,7 @@ pub fn cube(name: &str, min: [f32; 3], max: [f32; 3]) -> SceneObject {
 /// A horizontal quad facing up.
 pub fn quad(name: &str, [x0, y0, x1, y1]: [f32; 4], z: f32) -> SceneObject {
     SceneObject {
+        frame: Default::default(),
         name: name.into(),
         positions: vec![[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]],
         normals: None,
