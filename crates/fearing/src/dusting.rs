@@ -12,7 +12,7 @@
 use crate::edge_groups::Topology;
 use crate::launch_sites::LaunchSites;
 use image::{Rgba, RgbaImage};
-use snowscape_mesh::SnowMesh;
+use snowscape_mesh::{MeshFrame, SnowMesh, TriMesh};
 use snowscape_terrain::random::{hash3, uniform};
 
 /// Density levels of the atlas.
@@ -71,11 +71,14 @@ pub fn dusting_mesh(
         triangles.push([base, base + 1, base + 2]);
     }
     (!triangles.is_empty()).then(|| SnowMesh {
-        name: "dusting".into(),
-        positions,
-        normals: Vec::new(),
+        mesh: TriMesh {
+            name: "dusting".into(),
+            frame: MeshFrame::Scene,
+            positions,
+            normals: None,
+            triangles,
+        },
         uvs: Some(uvs),
-        triangles,
         texture: Some(atlas(seed)),
     })
 }

@@ -15,7 +15,7 @@
 use crate::edge_groups::Topology;
 use crate::launch_sites::LaunchSites;
 use crate::tracer::Tag;
-use snowscape_mesh::SnowMesh;
+use snowscape_mesh::{MeshFrame, SnowMesh, TriMesh};
 use std::collections::HashMap;
 
 /// The snow surface of all edge groups, scene metres.
@@ -149,14 +149,13 @@ impl SnowSurface {
                 })
             })
             .collect();
-        SnowMesh {
+        SnowMesh::new(TriMesh {
             name: name.into(),
+            frame: MeshFrame::Scene,
             positions,
-            normals: Vec::new(),
-            uvs: None,
+            normals: None,
             triangles,
-            texture: None,
-        }
+        })
     }
 }
 

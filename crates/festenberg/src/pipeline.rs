@@ -14,7 +14,7 @@ use crate::sites::SiteField;
 use crate::surface_mesh::{self, SiteMesh};
 use serde::Serialize;
 use snowscape_mesh::write::vertex_normals;
-use snowscape_mesh::{HeightSpanMap, HeightSpanOptions, Scene, SnowMesh};
+use snowscape_mesh::{HeightSpanMap, HeightSpanOptions, MeshFrame, Scene, SnowMesh, TriMesh};
 use std::time::Instant;
 
 /// Counts and timings of a snow cover, for reports.
@@ -183,11 +183,14 @@ pub fn cover(scene: &Scene, params: &CoverParams) -> Result<SnowCover, Festenber
         timings: timer.0,
     };
     let mesh = SnowMesh {
-        name: "snow".into(),
-        positions: textured.positions,
-        normals: textured.normals,
+        mesh: TriMesh {
+            name: "snow".into(),
+            frame: MeshFrame::Scene,
+            positions: textured.positions,
+            normals: Some(textured.normals),
+            triangles: textured.triangles,
+        },
         uvs: Some(textured.uvs),
-        triangles: textured.triangles,
         texture: Some(mask),
     };
     Ok(SnowCover {
@@ -202,14 +205,13 @@ pub fn cover(scene: &Scene, params: &CoverParams) -> Result<SnowCover, Festenber
 /// A surface mesh as a writable snow mesh (normals computed, no texture).
 pub fn plain_mesh(name: &str, surface: SiteMesh) -> SnowMesh {
     let normals = vertex_normals(&surface.positions, &surface.triangles);
-    SnowMesh {
+    SnowMesh::new(TriMesh {
         name: name.into(),
+        frame: MeshFrame::Scene,
         positions: surface.positions,
-        normals,
-        uvs: None,
+        normals: Some(normals),
         triangles: surface.triangles,
-        texture: None,
-    }
+    })
 }
 
 /// The growth mode (Eq. 2, no bridges or overhangs) on `scene`: `frame(index, time, mesh)`

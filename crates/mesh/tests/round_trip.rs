@@ -3,7 +3,7 @@
 
 mod common;
 use snowscape_mesh::write::{glb_bytes, write_glb, write_obj};
-use snowscape_mesh::{MeshError, Scene, SnowMesh, SourceFrame, UpAxis, read_scene};
+use snowscape_mesh::{MeshError, Scene, SnowMesh, SourceFrame, TriMesh, UpAxis, read_scene};
 use std::path::Path;
 
 /// Each triangle's three corner positions, in order.
@@ -78,10 +78,13 @@ fn glb_and_obj_round_trip_in_the_input_frame() {
 fn files_are_in_the_input_units_not_the_scene_metres() {
     let frame = SourceFrame::new(UpAxis::Y, 0.01).unwrap();
     let mesh = SnowMesh {
-        name: "cap".into(),
-        // 1 m up in the scene.
-        positions: vec![[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]],
-        triangles: vec![[0, 1, 2]],
+        mesh: TriMesh {
+            name: "cap".into(),
+            // 1 m up in the scene.
+            positions: vec![[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 1.0, 1.0]],
+            triangles: vec![[0, 1, 2]],
+            ..Default::default()
+        },
         ..Default::default()
     };
     let d = tempfile::tempdir().unwrap();
@@ -107,17 +110,19 @@ fn textures_and_uvs_are_written_with_the_mesh() {
         *p = image::Rgba([255, 255, 255, if x < 2 { 255 } else { 0 }]);
     }
     let mesh = SnowMesh {
-        name: "masked snow".into(),
-        positions: vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ],
+        mesh: TriMesh {
+            name: "masked snow".into(),
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            ..Default::default()
+        },
         uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
         texture: Some(img.clone()),
-        ..Default::default()
     };
     let frame = SourceFrame::default();
     let d = tempfile::tempdir().unwrap();
@@ -163,12 +168,12 @@ fn textures_and_uvs_are_written_with_the_mesh() {
 #[test]
 fn inconsistent_meshes_are_refused_and_leave_nothing() {
     let d = tempfile::tempdir().unwrap();
-    let bad = SnowMesh {
+    let bad = SnowMesh::new(TriMesh {
         name: "bad".into(),
         positions: vec![[0.0; 3], [1.0, 0.0, 0.0]],
         triangles: vec![[0, 1, 2]],
         ..Default::default()
-    };
+    });
     let frame = SourceFrame::default();
     let e = write_glb(
         &d.path().join("bad.glb"),
@@ -176,10 +181,8 @@ fn inconsistent_meshes_are_refused_and_leave_nothing() {
         &frame,
     );
     assert!(matches!(e, Err(MeshError::InvalidMesh { .. })), "{e:?}");
-    let nan = SnowMesh {
-        positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [f32::NAN, 1.0, 0.0]],
-        ..bad
-    };
+    let mut nan = bad.clone();
+    nan.positions = vec![[0.0; 3], [1.0, 0.0, 0.0], [f32::NAN, 1.0, 0.0]];
     let e = write_obj(&d.path().join("nan.obj"), &[nan], &frame);
     assert!(matches!(e, Err(MeshError::InvalidMesh { .. })), "{e:?}");
     assert!(only_files(d.path()).is_empty());

@@ -58,7 +58,7 @@ fn add_mesh(
     use json::accessor::{ComponentType as C, Type as T};
     let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| frame.to_file(*p)).collect();
     let normals: Vec<[f32; 3]> = mesh
-        .normals
+        .normals()
         .iter()
         .map(|n| frame.direction_to_file(*n))
         .collect();

@@ -10,40 +10,61 @@ pub use glb::{SNOW_BASE_COLOUR, SNOW_ROUGHNESS, glb_bytes, write_glb};
 pub use obj::write_obj;
 
 use crate::MeshError;
-use crate::scene::{SceneObject, cross, norm};
+use crate::scene::{SceneObject, TriMesh, cross, norm};
 use image::RgbaImage;
 
-/// A triangle mesh to write (snow, or any scene object), in scene metres, z up.
+/// A triangle mesh to write (snow, or any scene object): a [`TriMesh`] in the scene frame
+/// (metres, z up; its `normals` `None` to have them computed, area-weighted) with optional
+/// texture coordinates and a texture. It reads as its mesh (`Deref`): `m.positions`,
+/// `m.triangles`.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SnowMesh {
-    pub name: String,
-    pub positions: Vec<[f32; 3]>,
-    /// Unit vertex normals, one per position; empty to have them computed (area-weighted).
-    pub normals: Vec<[f32; 3]>,
+    /// The mesh: name, positions, normals, counter-clockwise triangles (seen from outside).
+    pub mesh: TriMesh,
     /// Texture coordinates, one per position, glTF convention: u right, v down from the top
     /// left of the image.
     pub uvs: Option<Vec<[f32; 2]>>,
-    /// Counter-clockwise triangles (seen from outside).
-    pub triangles: Vec<[u32; 3]>,
     /// RGBA base colour texture; its alpha is a mask (cut at 0.5): snow where alpha is high.
     pub texture: Option<RgbaImage>,
 }
 
+impl std::ops::Deref for SnowMesh {
+    type Target = TriMesh;
+    fn deref(&self) -> &TriMesh {
+        &self.mesh
+    }
+}
+
+impl std::ops::DerefMut for SnowMesh {
+    fn deref_mut(&mut self) -> &mut TriMesh {
+        &mut self.mesh
+    }
+}
+
 impl SnowMesh {
-    /// A scene object as a mesh to write (its normals, or computed ones).
-    pub fn from_object(object: &SceneObject) -> Self {
-        let mut m = SnowMesh {
-            name: object.name.clone(),
-            positions: object.positions.clone(),
-            normals: object.normals.clone().unwrap_or_default(),
+    /// An untextured mesh of `mesh` (normals as given: missing ones are computed when it is
+    /// written, after its indices are checked).
+    pub fn new(mesh: TriMesh) -> Self {
+        SnowMesh {
+            mesh,
             uvs: None,
-            triangles: object.triangles.clone(),
             texture: None,
-        };
-        if m.normals.is_empty() {
-            m.normals = vertex_normals(&m.positions, &m.triangles);
         }
-        m
+    }
+
+    /// A scene object (checked when it was read) as a mesh to write: its normals, or computed
+    /// ones.
+    pub fn from_object(object: &SceneObject) -> Self {
+        let mut mesh = object.clone();
+        if mesh.normals.as_ref().is_none_or(Vec::is_empty) {
+            mesh.normals = Some(vertex_normals(&mesh.positions, &mesh.triangles));
+        }
+        Self::new(mesh)
+    }
+
+    /// The unit vertex normals (empty until computed: see [`SnowMesh::checked`]).
+    pub fn normals(&self) -> &[[f32; 3]] {
+        self.mesh.normals.as_deref().unwrap_or_default()
     }
 
     /// Checks lengths, indices and finiteness; fills in missing normals.
@@ -76,11 +97,9 @@ impl SnowMesh {
                 "triangle {t} {tri:?} refers past the {n} vertices"
             )));
         }
-        if !self.normals.is_empty() && self.normals.len() != n {
-            return Err(bad(format!(
-                "{} normals for {n} vertices",
-                self.normals.len()
-            )));
+        let normals = self.normals();
+        if !normals.is_empty() && normals.len() != n {
+            return Err(bad(format!("{} normals for {n} vertices", normals.len())));
         }
         if let Some(uvs) = &self.uvs
             && uvs.len() != n
@@ -90,9 +109,9 @@ impl SnowMesh {
                 uvs.len()
             )));
         }
-        if self.normals.is_empty() {
+        if normals.is_empty() {
             let mut m = self.clone();
-            m.normals = vertex_normals(&m.positions, &m.triangles);
+            m.mesh.normals = Some(vertex_normals(&m.positions, &m.triangles));
             return Ok(std::borrow::Cow::Owned(m));
         }
         Ok(std::borrow::Cow::Borrowed(self))

@@ -62,7 +62,7 @@ pub fn write_obj(path: &Path, meshes: &[SnowMesh], frame: &SourceFrame) -> Resul
                     writeln!(w, "vt {u} {}", 1.0 - v).map_err(io)?;
                 }
             }
-            for n in &m.normals {
+            for n in m.normals() {
                 let [x, y, z] = frame.direction_to_file(*n);
                 writeln!(w, "vn {x} {y} {z}").map_err(io)?;
             }
