@@ -7,7 +7,7 @@ use crate::cli::{GlobalArgs, TransportArgs};
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::prepare_dir;
 use anyhow::{Context, anyhow, bail};
-use serde_json::json;
+use serde::Serialize;
 use snowscape::transport_job::{Overrides, dem_heights, fit_to_scene, load_scenario};
 use snowscape_mesh::terrain::{map_to_scene, place_scene_on_grid};
 use snowscape_mesh::top_view::{frame_scene, highest_surface};
@@ -22,7 +22,49 @@ struct SceneInput {
     geometry: GridGeometry,
     heights: Vec<f32>,
     mask: NodataMask,
-    summary: serde_json::Value,
+    summary: SceneSummary,
+}
+
+/// What the run's scene was made of (`report.json`'s `input`).
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+enum SceneSummary {
+    /// A DEM.
+    Dem(DemSummary),
+    /// A mesh, alone or standing on a DEM.
+    Mesh(MeshSummary),
+    /// The scenario's own scene.
+    Scenario { scene: SceneSpec },
+}
+
+/// A DEM as the scene.
+#[derive(Debug, Clone, Serialize)]
+struct DemSummary {
+    /// The DEM file.
+    dem: String,
+    /// Nodata cells filled with the lowest valid altitude for the wind.
+    nodata_cells_filled: usize,
+}
+
+/// A mesh as the scene: its file, its check, where it stands.
+#[derive(Debug, Clone, Serialize)]
+struct MeshSummary {
+    mesh: String,
+    triangles: usize,
+    degenerate_dropped: usize,
+    open_edges: usize,
+    /// Cells whose top surface is the mesh, not the ground.
+    cells_above_ground: usize,
+    /// A mesh alone: the top view's cell size and the open ground around it, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    resolution_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    margin_m: Option<f64>,
+    /// A mesh on a DEM: the DEM and where the mesh stands (scene metres).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dem: Option<DemSummary>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    placed_at_m: Option<[f64; 2]>,
 }
 
 /// A DEM with its nodata cells filled by the lowest valid altitude (the wind needs a
@@ -34,7 +76,10 @@ fn dem_scene(args: &TransportArgs, path: &Path) -> anyhow::Result<SceneInput> {
         geometry: grid.geometry().clone(),
         heights,
         mask: grid.mask().clone(),
-        summary: json!({"dem": path.display().to_string(), "nodata_cells_filled": filled}),
+        summary: SceneSummary::Dem(DemSummary {
+            dem: path.display().to_string(),
+            nodata_cells_filled: filled,
+        }),
     })
 }
 
@@ -51,12 +96,17 @@ fn mesh_scene(
         .map_err(|e| anyhow!("--up {:?}: {e}", args.up))?;
     let frame = SourceFrame::new(up, args.scale).map_err(|e| anyhow!("--scale: {e}"))?;
     let (mut scene, report) = read_scene(path, &frame)?;
-    let summary = json!({
-        "mesh": path.display().to_string(),
-        "triangles": report.triangles(),
-        "degenerate_dropped": report.degenerate_dropped(),
-        "open_edges": report.open_edges(),
-    });
+    let mut summary = MeshSummary {
+        mesh: path.display().to_string(),
+        triangles: report.triangles(),
+        degenerate_dropped: report.degenerate_dropped(),
+        open_edges: report.open_edges(),
+        cells_above_ground: 0,
+        resolution_m: None,
+        margin_m: None,
+        dem: None,
+        placed_at_m: None,
+    };
     match dem {
         None => {
             let b = scene
@@ -70,16 +120,14 @@ fn mesh_scene(
             let bvh = SceneBvh::new(&scene);
             let top = b.max[2] + 1.0;
             let heights = highest_surface(&bvh, &geometry, top, &vec![ground; geometry.len()])?;
-            let mut summary = summary;
-            summary["cells_above_ground"] =
-                json!(heights.iter().filter(|&&z| z > ground + 1e-3).count());
-            summary["resolution_m"] = json!(cell);
-            summary["margin_m"] = json!(margin);
+            summary.cells_above_ground = heights.iter().filter(|&&z| z > ground + 1e-3).count();
+            summary.resolution_m = Some(cell);
+            summary.margin_m = Some(margin);
             Ok(SceneInput {
                 geometry,
                 heights,
                 mask: NodataMask::all_valid(),
-                summary,
+                summary: SceneSummary::Mesh(summary),
             })
         }
         Some(dem) => {
@@ -107,21 +155,20 @@ fn mesh_scene(
             let bvh = SceneBvh::new(&scene);
             let top = scene.bounds().map_or(0.0, |b| b.max[2]) + 1.0;
             let heights = highest_surface(&bvh, &dem.geometry, top, &dem.heights)?;
-            let mut summary = summary;
-            summary["cells_above_ground"] = json!(
-                heights
-                    .iter()
-                    .zip(&dem.heights)
-                    .filter(|(z, d)| **z > **d + 1e-3)
-                    .count()
-            );
-            summary["dem"] = dem.summary;
-            summary["placed_at_m"] = json!([x, y]);
+            summary.cells_above_ground = heights
+                .iter()
+                .zip(&dem.heights)
+                .filter(|(z, d)| **z > **d + 1e-3)
+                .count();
+            if let SceneSummary::Dem(d) = dem.summary {
+                summary.dem = Some(d);
+            }
+            summary.placed_at_m = Some([x, y]);
             Ok(SceneInput {
                 geometry: dem.geometry,
                 heights,
                 mask: dem.mask,
-                summary,
+                summary: SceneSummary::Mesh(summary),
             })
         }
     }
@@ -152,7 +199,9 @@ pub fn run_command(args: &TransportArgs, global: &GlobalArgs) -> Result<(), Fail
                 geometry,
                 heights,
                 mask: NodataMask::all_valid(),
-                summary: json!({"scene": scenario.scene}),
+                summary: SceneSummary::Scenario {
+                    scene: scenario.scene.clone(),
+                },
             },
             None => {
                 return Err(anyhow!(
@@ -194,7 +243,9 @@ pub fn run_command(args: &TransportArgs, global: &GlobalArgs) -> Result<(), Fail
     }
     let out = run(&scenario, &input.geometry, &input.heights).bad_input()?;
     let context = RunContext {
-        input: input.summary,
+        input: serde_json::to_value(&input.summary)
+            .context("the scene summary")
+            .job_failed()?,
         mask: Some(&input.mask),
         wall_s: started.elapsed().as_secs_f64(),
     };
