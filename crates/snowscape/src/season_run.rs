@@ -33,6 +33,39 @@ pub const CHECKPOINT: &str = "checkpoint.bin";
 /// Longest stretch of simulated days between two checks of the interrupt flag.
 pub const CHUNK_DAYS: f64 = 0.25;
 
+/// What a front end adds to a season report's `parameters.extra`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(untagged)]
+pub enum ExtraParameters {
+    /// `demo`: the procedural terrain it generated.
+    Demo {
+        /// The generator's parameters and its time.
+        terrain: GeneratedTerrain,
+    },
+    /// `run`: the scenario file, if one was given.
+    Run {
+        /// Its path as given.
+        scenario_file: Option<String>,
+    },
+}
+
+/// The procedural terrain of a `demo` (`snowscape_terrain::procedural::AlpineParams`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct GeneratedTerrain {
+    /// Cells per side.
+    pub size: usize,
+    /// The generator's seed.
+    pub seed: u64,
+    /// Cell size, m.
+    pub cell_size_m: f64,
+    /// Relief (highest minus lowest altitude), m.
+    pub relief_m: f64,
+    /// Lowest altitude, m.
+    pub base_altitude_m: f64,
+    /// Wall time of the generation, s.
+    pub generation_seconds: f64,
+}
+
 /// One season to run and write.
 pub struct SeasonJob {
     /// The front end's name for the job (`run`, `demo`), for the report.
@@ -41,8 +74,9 @@ pub struct SeasonJob {
     pub source: String,
     pub bedrock: Grid,
     pub scenario: Scenario,
-    /// Extra parameters for the report (terrain generator, scenario file...).
-    pub extra_parameters: serde_json::Value,
+    /// What the front end adds to the report's `parameters.extra` (the generated terrain,
+    /// the scenario file).
+    pub extra_parameters: ExtraParameters,
     /// The output folder (created if missing).
     pub out: PathBuf,
     /// Resume from the checkpoint in this folder.
@@ -474,7 +508,7 @@ fn write_ski_tracks(out: &mut Written, winter: &Winter) -> Result<(), SeasonJobE
 /// The season's `report.json`.
 fn season_report(
     command: &str,
-    extra_parameters: &serde_json::Value,
+    extra_parameters: &ExtraParameters,
     input: InputSummary,
     winter: &Winter,
     timings: Vec<(String, f64)>,

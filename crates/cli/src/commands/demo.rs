@@ -8,7 +8,7 @@ use crate::commands::render::preview_options;
 use crate::commands::season::{SeasonJob, run_season};
 use crate::failure::{ExitCodeExt, Failure};
 use anyhow::{Context, anyhow};
-use serde_json::json;
+use snowscape::season_run::{ExtraParameters, GeneratedTerrain};
 use snowscape_render::ColourMode;
 use snowscape_season::scenario::Scenario;
 use snowscape_terrain::procedural::{AlpineParams, alpine};
@@ -63,16 +63,16 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
             source: "procedural alpine terrain".into(),
             bedrock,
             scenario,
-            extra_parameters: json!({
-                "terrain": {
-                    "size": params.size,
-                    "seed": params.seed,
-                    "cell_size_m": params.cell_size,
-                    "relief_m": params.relief,
-                    "base_altitude_m": params.base_altitude,
-                    "generation_seconds": terrain_seconds,
-                }
-            }),
+            extra_parameters: ExtraParameters::Demo {
+                terrain: GeneratedTerrain {
+                    size: params.size,
+                    seed: params.seed,
+                    cell_size_m: params.cell_size,
+                    relief_m: params.relief,
+                    base_altitude_m: params.base_altitude,
+                    generation_seconds: terrain_seconds,
+                },
+            },
             out: args.out.clone(),
             resume: None,
             forcing: None,

@@ -5,7 +5,7 @@ use crate::commands::render::preview_options;
 use crate::commands::season::{SeasonJob, run_season};
 use crate::failure::{ExitCodeExt, Failure};
 use anyhow::{Context, anyhow, bail};
-use serde_json::json;
+use snowscape::season_run::ExtraParameters;
 use snowscape_io::write_bytes_atomic;
 use snowscape_render::ColourMode;
 use snowscape_season::scenario::Scenario;
@@ -133,9 +133,9 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
             source: args.dem.display().to_string(),
             bedrock,
             scenario,
-            extra_parameters: json!({
-                "scenario_file": scenario_path.map(|p| p.display().to_string()),
-            }),
+            extra_parameters: ExtraParameters::Run {
+                scenario_file: scenario_path.map(|p| p.display().to_string()),
+            },
             out,
             resume: args.resume.clone(),
             stop_at: args.stop_at,
