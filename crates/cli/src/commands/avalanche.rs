@@ -10,7 +10,7 @@ use crate::report::InputSummary;
 use anyhow::{Context, anyhow, bail};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use serde_json::json;
+use serde::Serialize;
 pub use snowscape::avalanche_release::ReleaseSpec;
 use snowscape::avalanche_release::release_terrain;
 use snowscape_avalanche::validation::ThicknessConvention;
@@ -117,15 +117,85 @@ fn run_options(args: &AvalancheArgs) -> anyhow::Result<RunOptions> {
     Ok(o)
 }
 
+/// `snowscape avalanche`'s report.json.
+#[derive(Serialize)]
+struct AvalancheReport<'a> {
+    snowscape_version: &'static str,
+    command: &'static str,
+    input: InputSummary,
+    release: ReleaseReport,
+    release_cells: usize,
+    release_area_m2: f64,
+    release_warnings: &'a [String],
+    friction_maps: Option<FrictionReport>,
+    parameters: RunParameters<'a>,
+    seed: u64,
+    threads: usize,
+    released_volume_m3: f64,
+    entrained_volume_m3: f64,
+    snow_cover_m: f64,
+    deposited_volume_m3: f64,
+    border_outflow_m3: f64,
+    volume_closure_rel: f64,
+    runout_length_m: f64,
+    alpha_angle_deg: f64,
+    travel_angle_deg: f64,
+    summary: &'a snowscape_avalanche::RunSummary,
+    simulated_s: f64,
+    wall_s: f64,
+    timings: Timings,
+    comparison: Option<&'a snowscape_avalanche::comparison::PathComparison>,
+    outputs: &'a [String],
+}
+
+/// Where the release came from.
+#[derive(Serialize)]
+#[serde(untagged)]
+enum ReleaseReport {
+    Point { point: [f64; 2] },
+    File { file: String },
+    Mask { mask: bool },
+}
+
+/// The flow and run parameters and the release thickness.
+#[derive(Serialize)]
+struct RunParameters<'a> {
+    flow: &'a AvalancheParams,
+    run: &'a RunOptions,
+    thickness_m: Option<f64>,
+    thickness_measured: Option<String>,
+}
+
+/// Wall seconds of the flow and of the frames.
+#[derive(Serialize)]
+struct Timings {
+    flow_s: f64,
+    frames_s: f64,
+}
+
+/// A friction raster as report.json tells it: its file and how it was matched.
+#[derive(Debug, Serialize)]
+struct FrictionRasterReport {
+    file: Option<String>,
+    matched: MapMatch,
+}
+
+/// The friction rasters of a run (`null` in report.json without either).
+#[derive(Debug, Serialize)]
+struct FrictionReport {
+    mu: Option<FrictionRasterReport>,
+    xi: Option<FrictionRasterReport>,
+}
+
 /// The μ and ξ rasters of `--mu-raster` and `--xi-raster` matched onto the DEM's cells, and
-/// what report.json says of them (`null` without either).
+/// what report.json says of them (`None` without either).
 fn friction_maps(
     args: &AvalancheArgs,
     dem: &Grid,
     params: &AvalancheParams,
-) -> anyhow::Result<(FrictionMaps, serde_json::Value)> {
+) -> anyhow::Result<(FrictionMaps, Option<FrictionReport>)> {
     if args.mu_raster.is_none() && args.xi_raster.is_none() {
-        return Ok((FrictionMaps::default(), serde_json::Value::Null));
+        return Ok((FrictionMaps::default(), None));
     }
     let read = |flag: &str, path: &Option<std::path::PathBuf>| {
         path.as_deref()
@@ -161,13 +231,16 @@ fn friction_maps(
         }
     }
     let entry = |path: &Option<std::path::PathBuf>, m: Option<MapMatch>| {
-        m.map(|m| json!({ "file": path.as_ref().map(|p| p.display().to_string()), "matched": m }))
+        m.map(|matched| FrictionRasterReport {
+            file: path.as_ref().map(|p| p.display().to_string()),
+            matched,
+        })
     };
-    let report = json!({
-        "mu": entry(&args.mu_raster, mu_match),
-        "xi": entry(&args.xi_raster, xi_match),
-    });
-    Ok((maps, report))
+    let report = FrictionReport {
+        mu: entry(&args.mu_raster, mu_match),
+        xi: entry(&args.xi_raster, xi_match),
+    };
+    Ok((maps, Some(report)))
 }
 
 fn write_map(out: &mut Written, name: &str, dem: &Grid, values: Vec<f32>) -> anyhow::Result<()> {
@@ -352,38 +425,54 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .transpose()
         .job_failed()?;
     out.files.push("report.json".into());
-    let report = json!({
-        "snowscape_version": env!("CARGO_PKG_VERSION"),
-        "command": "avalanche",
-        "input": InputSummary::of(&source, &dem),
-        "release": match &spec {
-            ReleaseSpec::Point(x, y) => json!({ "point": [x, y] }),
-            ReleaseSpec::File(p) => json!({ "file": p.display().to_string() }),
-            ReleaseSpec::Mask(_) => json!({ "mask": true }),
+    let report = AvalancheReport {
+        snowscape_version: env!("CARGO_PKG_VERSION"),
+        command: "avalanche",
+        input: InputSummary::of(&source, &dem),
+        release: match &spec {
+            ReleaseSpec::Point(x, y) => ReleaseReport::Point { point: [*x, *y] },
+            ReleaseSpec::File(p) => ReleaseReport::File {
+                file: p.display().to_string(),
+            },
+            ReleaseSpec::Mask(_) => ReleaseReport::Mask { mask: true },
         },
-        "release_cells": area.count(),
-        "release_area_m2": area.area_m2(),
-        "release_warnings": area.warnings,
-        "friction_maps": friction_report,
-        "parameters": { "flow": params, "run": options, "thickness_m": args.thickness, "thickness_measured": args.thickness_measured.to_possible_value().map(|v| v.get_name().to_string()) },
-        "seed": args.seed,
-        "threads": rayon::current_num_threads(),
-        "released_volume_m3": summary.released_volume_m3,
-        "entrained_volume_m3": summary.entrained_volume_m3,
-        "snow_cover_m": args.snow_cover,
-        "deposited_volume_m3": summary.final_volume_m3,
-        "border_outflow_m3": summary.border_outflow_m3,
-        "volume_closure_rel": summary.volume_closure_rel,
-        "runout_length_m": summary.runout_length_m,
-        "alpha_angle_deg": summary.alpha_angle_deg,
-        "travel_angle_deg": summary.travel_angle_deg,
-        "summary": summary,
-        "simulated_s": summary.simulated_s,
-        "wall_s": wall,
-        "timings": { "flow_s": wall - render_s, "frames_s": render_s },
-        "comparison": comparison,
-        "outputs": out.files,
-    });
+        release_cells: area.count(),
+        release_area_m2: area.area_m2(),
+        release_warnings: &area.warnings,
+        friction_maps: friction_report,
+        parameters: RunParameters {
+            flow: &params,
+            run: &options,
+            thickness_m: args.thickness,
+            thickness_measured: args
+                .thickness_measured
+                .to_possible_value()
+                .map(|v| v.get_name().to_string()),
+        },
+        seed: args.seed,
+        threads: rayon::current_num_threads(),
+        released_volume_m3: summary.released_volume_m3,
+        entrained_volume_m3: summary.entrained_volume_m3,
+        snow_cover_m: args.snow_cover,
+        deposited_volume_m3: summary.final_volume_m3,
+        border_outflow_m3: summary.border_outflow_m3,
+        volume_closure_rel: summary.volume_closure_rel,
+        runout_length_m: summary.runout_length_m,
+        alpha_angle_deg: summary.alpha_angle_deg,
+        travel_angle_deg: summary.travel_angle_deg,
+        summary: &summary,
+        simulated_s: summary.simulated_s,
+        wall_s: wall,
+        timings: Timings {
+            flow_s: wall - render_s,
+            frames_s: render_s,
+        },
+        comparison: comparison.as_ref(),
+        outputs: &out.files,
+    };
+    let report = serde_json::to_value(&report)
+        .context("the avalanche report")
+        .job_failed()?;
     write_report(&args.out, &earlier, report).job_failed()?;
     if !global.quiet {
         println!(
