@@ -470,42 +470,37 @@ impl SheddingScratch {
             let (col, row) = (i % w, i / w);
             cell.interior = col > 0 && row > 0 && col + 1 < w && row + 1 < h;
         }
+        self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
+        self.key_mask = mask.map(<[bool]>::to_vec);
+        // Per cell in one pass: the bound of `bedrock_descent` (infinite beside the border or
+        // nodata) and the descent with the border continued ([`steepest_descent`] on the
+        // bedrock, the same terms in the same order).
         let nb = neighbours(geometry);
         let bedrock = &terrain.bedrock;
-        let descents: Vec<f32> = with_validity!(terrain.mask(), |valid| {
+        let descents: Vec<(f32, f32)> = with_validity!(terrain.mask(), |valid| {
             (0..bedrock.len())
                 .into_par_iter()
                 .map(|i| {
-                    if valid.at(i) {
-                        let b = |j: usize| bedrock[j];
-                        steepest_descent(bedrock[i], b, b, geometry, valid, &nb, i)
-                    } else {
-                        0.0
-                    }
+                    let (mut bound, mut tan) = (0.0f32, 0.0f32);
+                    for_each_around(geometry, valid, &nb, i, |n, a| match a {
+                        Around::Cell(j) => {
+                            let t = (bedrock[i] - bedrock[j]) * n.inv_l;
+                            bound = bound.max(t);
+                            tan = tan.max(t);
+                        }
+                        Around::Ghost(o) => {
+                            bound = f32::INFINITY;
+                            tan = tan.max((bedrock[o] - bedrock[i]) * n.inv_l);
+                        }
+                    });
+                    (bound, if valid.at(i) { tan } else { 0.0 })
                 })
                 .collect()
         });
-        for (cell, d) in self.cells.iter_mut().zip(descents) {
-            cell.bedrock_tan = d;
+        self.bedrock_descent = descents.iter().map(|d| d.0).collect();
+        for (cell, d) in self.cells.iter_mut().zip(&descents) {
+            cell.bedrock_tan = d.1;
         }
-        self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
-        self.key_mask = mask.map(<[bool]>::to_vec);
-        let nb = neighbours(geometry);
-        let bedrock = &terrain.bedrock;
-        self.bedrock_descent.resize(bedrock.len(), 0.0);
-        with_validity!(terrain.mask(), |valid| {
-            self.bedrock_descent
-                .par_iter_mut()
-                .enumerate()
-                .for_each(|(i, d)| {
-                    let mut best = 0.0f32;
-                    for_each_around(geometry, valid, &nb, i, |n, a| match a {
-                        Around::Cell(j) => best = best.max((bedrock[i] - bedrock[j]) * n.inv_l),
-                        Around::Ghost(_) => best = f32::INFINITY,
-                    });
-                    *d = best;
-                });
-        });
     }
 }
 
