@@ -343,7 +343,8 @@ def cover(
     ``**params`` are the method's keys of a cover parameter file (``depth_m``, ``radius_m``,
     ``overhang``... for diffusion; ``depth_m``, ``passes``, ``material={"aor_deg": 45}``...
     for Fearing). Returns ``{"vertices": (N, 3) float32 in the mesh file's axes and units (as
-    snow.obj), "faces": (M, 3) uint32 counter-clockwise triangles, "report": dict}``.
+    snow.obj), "faces": (M, 3) uint32 counter-clockwise triangles, "report": dict}``, the report
+    with the keys of ``snowscape cover``'s report.json (no files are written: ``outputs`` is empty).
     """
     v, f, report = _snowscape.cover(
         os.fspath(mesh_path), str(method), str(up), float(scale), json.dumps(params)
@@ -373,7 +374,8 @@ def transport(
     7.I on the DEM, with a wind grid fitted to it).
 
     Returns the rasters ``depth``, ``density``, ``q_salt``, ``q_susp``, ``q_subl``,
-    ``precipitation``, ``wind_u``, ``wind_v`` and ``"report"`` (mass budget, wind, flakes).
+    ``precipitation``, ``wind_u``, ``wind_v`` and ``"report"`` (the keys of ``snowscape
+    transport``'s report.json: scenario, grids, wind, flakes, depth, ``mass_budget`` in kg, timings).
     """
     native = None if dem is None else _as_raster(dem)._native()
     rasters, report = _snowscape.transport(

@@ -10,7 +10,7 @@ use snowscape::avalanche::{
     AvalancheError, AvalancheParams, AvalancheWorkspace, ReleasedCells, RestOutcome,
 };
 use snowscape::avalanche_release::{ReleaseSpec, release_terrain};
-use snowscape::cover::CoverParameters;
+use snowscape::cover::{CoverParameters, DiffusionCoverReport, MeshInputSummary};
 use snowscape::io::ReadOptions;
 use snowscape::mesh::{SourceFrame, UpAxis, read_scene};
 use snowscape::terrain::SnowLayer;
@@ -157,6 +157,7 @@ pub(crate) fn cover<'py>(
             "method {method:?}: expected \"diffusion\" or \"fearing\""
         )));
     }
+    let up_name = up.as_str();
     let up: UpAxis = up
         .parse()
         .map_err(|e| value_err(format!("up {up:?}: {e}")))?;
@@ -174,38 +175,33 @@ pub(crate) fn cover<'py>(
         )));
     }
     let (snow, report) = py.detach(|| -> PyResult<_> {
+        let t0 = std::time::Instant::now();
         let (scene, mesh_report) = read_scene(&mesh, &frame).map_err(py_err)?;
-        let input = serde_json::json!({
-            "mesh": mesh.display().to_string(),
-            "objects": mesh_report.objects.len(),
-            "vertices": mesh_report.vertices(),
-            "triangles": mesh_report.triangles(),
-            "degenerate_dropped": mesh_report.degenerate_dropped(),
-            "open_edges": mesh_report.open_edges(),
-            "bounds_m": scene.bounds(),
-        });
+        // The report the command line writes as report.json (without files or a DEM).
+        let input = MeshInputSummary::new(&mesh, up_name, scale, &mesh_report, &scene);
         if method == "diffusion" {
             let c = snowscape::festenberg::cover(&scene, &file.diffusion).map_err(py_err)?;
-            let report = serde_json::json!({
-                "method": "diffusion",
-                "paper": "von Festenberg & Gumhold 2011, Diffusion-Based Snow Cover Generation, Section 5",
-                "input": input,
-                "parameters": c.resolved,
-                "stats": c.stats,
-            });
+            let report = DiffusionCoverReport::new(
+                input,
+                &c,
+                None,
+                &c.stats.timings,
+                t0.elapsed().as_secs_f64(),
+                Vec::new(),
+            );
+            let report = serde_json::to_value(&report).map_err(|e| value_err(e.to_string()))?;
             Ok((c.mesh, report))
         } else {
-            let params = file
-                .fearing_for(&scene)
-                .ok_or_else(|| value_err(format!("{}: the mesh has no triangles", mesh.display())))?;
+            let params = file.fearing_for(&scene).ok_or_else(|| {
+                value_err(format!("{}: the mesh has no triangles", mesh.display()))
+            })?;
             let c = snowscape::fearing::cover(&scene, &params).map_err(py_err)?;
-            let report = serde_json::json!({
-                "method": "fearing",
-                "paper": "Fearing 2000, Computer Modelling of Fallen Snow",
-                "input": input,
-                "parameters": params,
-                "report": c.report,
-            });
+            let mut report =
+                serde_json::to_value(&c.report).map_err(|e| value_err(e.to_string()))?;
+            let input = serde_json::to_value(&input).map_err(|e| value_err(e.to_string()))?;
+            if let Some(o) = report.as_object_mut() {
+                o.insert("input".into(), input);
+            }
             Ok((c.surface.to_mesh("snow"), report))
         }
     })?;
@@ -253,9 +249,12 @@ pub(crate) fn transport<'py>(
     uniform_precipitation: bool,
 ) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
     use snowscape::terrain::NodataMask;
+    use snowscape::transport::outputs::TransportReport;
     use snowscape::transport::scenario::{SceneSpec, run};
     use snowscape::transport_job::{Overrides, dem_heights, fit_to_scene, load_scenario};
+    let t0 = std::time::Instant::now();
     let (mut scenario, from_file) = load_scenario(scenario.as_deref()).map_err(py_err)?;
+    let dem_given = dem.is_some();
     let (geometry, heights, mask) = match dem {
         Some(d) => {
             let grid = grid_in(d)?;
@@ -302,15 +301,9 @@ pub(crate) fn transport<'py>(
         .into_iter()
         .map(|(n, v)| (n.to_string(), grid_out(py, &out.geometry, &mask, &v)))
         .collect();
-    let report = serde_json::json!({
-        "scenario": scenario.name,
-        "duration_h": scenario.duration_h,
-        "voxel_size_m": scenario.voxel_size_m,
-        "voxel_layers": scenario.voxel_layers,
-        "steps": out.steps,
-        "budget": out.budget,
-        "wind": out.wind_report,
-        "flakes": out.flakes,
-    });
-    Ok((rasters, report.to_string()))
+    // The report the command line writes as report.json.
+    let input = serde_json::json!({ "dem": dem_given, "scenario": scenario.name });
+    let report = TransportReport::new(&scenario, &out, input, t0.elapsed().as_secs_f64());
+    let report = serde_json::to_string(&report).map_err(|e| value_err(e.to_string()))?;
+    Ok((rasters, report))
 }

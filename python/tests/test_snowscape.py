@@ -199,14 +199,17 @@ def test_cover_matches_snowscape_cover(tmp_path):
     c = snowscape.cover(mesh, "diffusion", depth_m=0.5)
     assert c["vertices"].dtype == np.float32 and c["vertices"].shape[1] == 3
     assert c["faces"].dtype == np.uint32 and c["faces"].max() < len(c["vertices"])
-    s = c["report"]["stats"]
-    assert s["vertices"] == cli["snow"]["vertices"] and s["triangles"] == cli["snow"]["triangles"]
-    assert s["volume_m3"] == cli["snow"]["volume_m3"]
+    # The same report as report.json, but for the files written and the timings.
+    r = c["report"]
+    assert r["snow"] == cli["snow"] and r["sites"] == cli["sites"] and r["parameters"] == cli["parameters"]
+    assert r["input"]["triangles"] == cli["input"]["triangles"] and r["input"]["dem"] is None
+    assert r["outputs"] == [] and r["method"] == "diffusion"
     # The vertices in the file's axes: the OBJ the command line wrote lists the same points.
     first = next(l for l in (out / "snow.obj").read_text().splitlines() if l.startswith("v "))
     assert np.allclose([float(t) for t in first.split()[1:4]], c["vertices"][0], atol=1e-4)
     f = snowscape.cover(mesh, "fearing", passes=1, budget_s=1.0)
     assert len(f["faces"]) > 100 and f["report"]["method"] == "fearing"
+    assert f["report"]["input"]["objects"] == cli["input"]["objects"]
     with pytest.raises(ValueError, match=r"kernel radius \(R\) -1"):
         snowscape.cover(mesh, "diffusion", radius_m=-1.0)
     with pytest.raises(ValueError, match="no_such"):
@@ -226,8 +229,14 @@ def test_transport_bytes_equal_snowscape_transport(tmp_path):
     for name in ("depth", "q_salt", "precipitation"):
         cli = snowscape.read_dem(out / f"{name}.tif").values
         assert same_bytes(r[name].values, cli), name
-    b = r["report"]["budget"]
+    import json
+
+    # The report of snowscape transport's report.json (but for where the scene came from).
+    cli_report = json.loads((out / "report.json").read_text())
+    b = r["report"]["mass_budget"]
+    assert b == cli_report["mass_budget"] and b["unit"] == "kg"
     assert b["precipitation_in"] > 0 and abs(b["closure_error"]) < 1e-6 * b["precipitation_in"]
+    assert r["report"]["scenario"] == cli_report["scenario"] and r["report"]["steps"] == cli_report["steps"]
     with pytest.raises(ValueError, match="no scene"):
         snowscape.transport()
     with pytest.raises(ValueError, match="hours|duration_h"):

@@ -46,6 +46,22 @@ impl Default for GrowthParams {
     }
 }
 
+impl GrowthParams {
+    /// The growth animation of a cover with the lengths `r`, in `frames` frames: one unit of
+    /// time in which `σ = h0` lays the cover's open-ground depth and `D = R² / 2` spreads the
+    /// edges over the kernel radius (a heat kernel of variance `2Dt = R²`), at 0.9 of the
+    /// explicit stability limit. What `snowscape cover --growth N` animates.
+    pub fn for_cover(r: &crate::Resolved, frames: usize) -> Self {
+        Self {
+            diffusion_m2: 0.5 * r.radius_m * r.radius_m,
+            snowfall_m: r.depth_m,
+            duration: 1.0,
+            frames,
+            stability: 0.9,
+        }
+    }
+}
+
 /// What a growth run did.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct GrowthReport {

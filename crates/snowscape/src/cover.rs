@@ -17,12 +17,19 @@
 //! ```
 //!
 //! Every key is one of the parameter structs' fields (unknown keys are refused with their
-//! name), every value is range-checked before any mesh is read.
+//! name), every value is range-checked before any mesh is read. A cover's reports
+//! ([`MeshInputSummary`], [`DiffusionCoverReport`]) are typed here too, for every front end.
 
 use serde::{Deserialize, Serialize};
 use snowscape_fearing::{FearingError, FearingParams};
 use snowscape_festenberg::{CoverParams, FestenbergError};
 use std::path::Path;
+
+mod report;
+pub use report::{
+    DIFFUSION_PAPER, DemPlacement, DiffusionCoverReport, FEARING_PAPER, FearingInputSummary,
+    GrowthSummary, KernelWork, MeshInputSummary, SiteCounts, SnowMeshCounts, Turntable,
+};
 
 /// Both covers' parameters.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]

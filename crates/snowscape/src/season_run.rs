@@ -17,7 +17,6 @@ use crate::outputs::{
 };
 use crate::report::{InputSummary, MassBudget, Report, timings_object};
 use image::RgbaImage;
-use serde_json::json;
 use snowscape_io::{AtomicWriteError, write_atomic, write_bytes_atomic};
 use snowscape_render::{PreviewOptions, render_preview};
 use snowscape_season::scenario::Scenario;
@@ -47,6 +46,22 @@ pub enum ExtraParameters {
         /// Its path as given.
         scenario_file: Option<String>,
     },
+}
+
+/// A season report's `parameters`: the scenario as run, the weather periods it resolved to,
+/// the latitude and where it came from, and what the front end adds.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SeasonParameters<'a> {
+    /// Every parameter, as the scenario file would spell it.
+    pub scenario: &'a Scenario,
+    /// The weather periods the season ran (the climatology's, or the scenario's).
+    pub weather: &'a [snowscape_season::scenario::WeatherPeriod],
+    /// The latitude of the sun and the climatology, degrees north.
+    pub latitude_deg: f64,
+    /// Where the latitude came from.
+    pub latitude_source: LatitudeSource,
+    /// What the front end adds.
+    pub extra: &'a ExtraParameters,
 }
 
 /// The procedural terrain of a `demo` (`snowscape_terrain::procedural::AlpineParams`).
@@ -537,25 +552,26 @@ fn season_report(
     let phenomena: serde_json::Map<String, serde_json::Value> = winter
         .wall_seconds
         .iter()
-        .map(|(k, v)| (k.to_string(), json!((v * 1e6).round() / 1e6)))
+        .map(|(k, v)| (k.to_string(), ((v * 1e6).round() / 1e6).into()))
         .collect();
     timings_json.insert("phenomena".into(), serde_json::Value::Object(phenomena));
     let counts: serde_json::Map<String, serde_json::Value> = winter
         .event_counts()
         .iter()
-        .map(|(k, v)| (phenomenon_name(*k).to_string(), json!(v)))
+        .map(|(k, v)| (phenomenon_name(*k).to_string(), (*v).into()))
         .collect();
     Report {
         snowscape_version: env!("CARGO_PKG_VERSION"),
         command: command.into(),
         input,
-        parameters: json!({
-            "scenario": winter.scenario(),
-            "weather": winter.weather(),
-            "latitude_deg": winter.latitude_deg(),
-            "latitude_source": winter.latitude_source(),
-            "extra": extra_parameters,
-        }),
+        parameters: serde_json::to_value(SeasonParameters {
+            scenario: winter.scenario(),
+            weather: winter.weather(),
+            latitude_deg: winter.latitude_deg(),
+            latitude_source: winter.latitude_source(),
+            extra: extra_parameters,
+        })
+        .unwrap_or_default(),
         seed: winter.scenario().seed,
         threads: rayon::current_num_threads(),
         timings: timings_json,

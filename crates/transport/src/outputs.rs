@@ -5,9 +5,11 @@
 //! statistics, the mass budget with its closure error, timings). Every file is written
 //! atomically through `snowscape-io` (a synced temporary sibling renamed over the name).
 
+use crate::scenario::WindReport;
 use crate::scenario::{RunOutputs, Scenario};
+use crate::wind3d::IterationReport;
 use crate::wind3d::mean_wind_bytes;
-use serde_json::json;
+use serde::Serialize;
 use snowscape_io::{write_bytes_atomic, write_geotiff_bands};
 use snowscape_render::{PreviewOptions, encode_png, render_preview};
 use snowscape_terrain::{Grid, LayeredTerrain, NodataMask, SnowLayer};
@@ -85,54 +87,176 @@ pub fn write_outputs(
     write_bytes_atomic(&path, &png).map_err(|e| fail(&path, e))?;
     written.push(path);
     let path = dir.join("report.json");
-    let n = depth.len().max(1) as f64;
-    let b = &out.budget;
-    let report = json!({
-        "scenario": scenario,
-        "grid": {"width": g.width(), "height": g.height(), "cell_size_m": g.cell_size_x()},
-        "voxels": {"nx": out.voxels.nx, "ny": out.voxels.ny, "nz": out.voxels.nz,
-                   "size_m": out.voxels.cell},
-        "wind": {
-            "last_iteration": out.wind_report.last_iteration,
-            "mean_projection": out.wind_report.mean,
-            "residual_divergence_per_s": out.wind_report.mean.max_divergence,
-            "relative_divergence": out.wind_report.mean.relative_divergence,
-        },
-        "flakes": {
-            "landed": out.flakes.landed,
-            "lost": out.flakes.lost,
-            "side_share": out.flakes.side_share,
-            "uniform_fallback": out.precipitation_fallback,
-        },
-        "steps": out.steps,
-        "depth_m": {
-            "mean": depth.iter().map(|&d| f64::from(d)).sum::<f64>() / n,
-            "max": depth.iter().fold(0.0f32, |m, &d| m.max(d)),
-        },
-        "mass_budget": {
-            "unit": "kg",
-            "precipitation_in": b.precipitation_in,
-            "border_in": b.border_in,
-            "border_out": b.border_out,
-            "sublimation_out": b.sublimation_out,
-            "melt_out": b.melt_out,
-            "transported": b.transported,
-            "initial": b.initial_mass,
-            "final": b.final_mass,
-            "closure_error": b.closure_error,
-        },
-        "input": context.input,
-        "timings_s": {
-            "voxelise": out.times.voxelise_s,
-            "wind": out.times.wind_s,
-            "terrain_wind": out.times.terrain_wind_s,
-            "precipitation": out.times.precipitation_s,
-            "transport": out.times.transport_s,
-            "wall": context.wall_s,
-        },
-    });
+    let report = TransportReport::new(scenario, out, context.input.clone(), context.wall_s);
     let text = serde_json::to_string_pretty(&report).map_err(|e| fail(&path, e))?;
     write_bytes_atomic(&path, text.as_bytes()).map_err(|e| fail(&path, e))?;
     written.push(path);
     Ok(written)
+}
+
+/// A transport run's `report.json`: the scenario, the grids, the wind solve, the flakes, the
+/// depth reached, the mass budget (kg) and the timings. `write_outputs` writes it; the Python
+/// package returns it.
+#[derive(Debug, Clone, Serialize)]
+pub struct TransportReport<'a> {
+    /// Every parameter of the run, as the scenario file would spell it.
+    pub scenario: &'a Scenario,
+    pub grid: GridSize,
+    pub voxels: VoxelSize,
+    pub wind: WindSolve,
+    pub flakes: FlakeCounts,
+    /// Time steps of the transport.
+    pub steps: usize,
+    pub depth_m: DepthStats,
+    pub mass_budget: KgBudget,
+    /// Where the scene came from (file names, options).
+    pub input: serde_json::Value,
+    pub timings_s: TransportTimings,
+}
+
+/// The height grid.
+#[derive(Debug, Clone, Serialize)]
+pub struct GridSize {
+    pub width: usize,
+    pub height: usize,
+    pub cell_size_m: f64,
+}
+
+/// The voxel grid of the wind.
+#[derive(Debug, Clone, Serialize)]
+pub struct VoxelSize {
+    pub nx: usize,
+    pub ny: usize,
+    pub nz: usize,
+    pub size_m: f64,
+}
+
+/// The wind solve: its last iteration and the projection of the mean wind.
+#[derive(Debug, Clone, Serialize)]
+pub struct WindSolve {
+    pub last_iteration: IterationReport,
+    pub mean_projection: IterationReport,
+    /// Largest divergence left in the mean wind, s⁻¹.
+    pub residual_divergence_per_s: f64,
+    /// The same relative to `U / Δ`.
+    pub relative_divergence: f64,
+}
+
+impl From<WindReport> for WindSolve {
+    fn from(w: WindReport) -> Self {
+        Self {
+            last_iteration: w.last_iteration,
+            mean_projection: w.mean,
+            residual_divergence_per_s: w.mean.max_divergence,
+            relative_divergence: w.mean.relative_divergence,
+        }
+    }
+}
+
+/// The precipitation flakes.
+#[derive(Debug, Clone, Serialize)]
+pub struct FlakeCounts {
+    pub landed: u64,
+    pub lost: u64,
+    /// Share of the flakes that left through the sides.
+    pub side_share: f64,
+    /// Whether the precipitation fell back to a uniform map.
+    pub uniform_fallback: bool,
+}
+
+/// Mean and deepest snow, m.
+#[derive(Debug, Clone, Serialize)]
+pub struct DepthStats {
+    pub mean: f64,
+    pub max: f32,
+}
+
+/// The mass budget, kg, closing on `closure_error`.
+#[derive(Debug, Clone, Serialize)]
+pub struct KgBudget {
+    pub unit: &'static str,
+    pub precipitation_in: f64,
+    pub border_in: f64,
+    pub border_out: f64,
+    pub sublimation_out: f64,
+    pub melt_out: f64,
+    pub transported: f64,
+    pub initial: f64,
+    #[serde(rename = "final")]
+    pub final_mass: f64,
+    pub closure_error: f64,
+}
+
+/// Seconds per stage and of the whole command.
+#[derive(Debug, Clone, Serialize)]
+pub struct TransportTimings {
+    pub voxelise: f64,
+    pub wind: f64,
+    pub terrain_wind: f64,
+    pub precipitation: f64,
+    pub transport: f64,
+    pub wall: f64,
+}
+
+impl<'a> TransportReport<'a> {
+    /// The report of run `out` of `scenario`; `input` says where the scene came from, `wall_s`
+    /// is the whole job's time.
+    pub fn new(
+        scenario: &'a Scenario,
+        out: &RunOutputs,
+        input: serde_json::Value,
+        wall_s: f64,
+    ) -> Self {
+        let g = &out.geometry;
+        let depth = out.state.depth();
+        let n = depth.len().max(1) as f64;
+        let b = &out.budget;
+        Self {
+            scenario,
+            grid: GridSize {
+                width: g.width(),
+                height: g.height(),
+                cell_size_m: g.cell_size_x(),
+            },
+            voxels: VoxelSize {
+                nx: out.voxels.nx,
+                ny: out.voxels.ny,
+                nz: out.voxels.nz,
+                size_m: out.voxels.cell,
+            },
+            wind: out.wind_report.into(),
+            flakes: FlakeCounts {
+                landed: out.flakes.landed,
+                lost: out.flakes.lost,
+                side_share: out.flakes.side_share,
+                uniform_fallback: out.precipitation_fallback,
+            },
+            steps: out.steps,
+            depth_m: DepthStats {
+                mean: depth.iter().map(|&d| f64::from(d)).sum::<f64>() / n,
+                max: depth.iter().fold(0.0f32, |m, &d| m.max(d)),
+            },
+            mass_budget: KgBudget {
+                unit: "kg",
+                precipitation_in: b.precipitation_in,
+                border_in: b.border_in,
+                border_out: b.border_out,
+                sublimation_out: b.sublimation_out,
+                melt_out: b.melt_out,
+                transported: b.transported,
+                initial: b.initial_mass,
+                final_mass: b.final_mass,
+                closure_error: b.closure_error,
+            },
+            input,
+            timings_s: TransportTimings {
+                voxelise: out.times.voxelise_s,
+                wind: out.times.wind_s,
+                terrain_wind: out.times.terrain_wind_s,
+                precipitation: out.times.precipitation_s,
+                transport: out.times.transport_s,
+                wall: wall_s,
+            },
+        }
+    }
 }

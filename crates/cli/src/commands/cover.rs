@@ -10,16 +10,18 @@ use crate::cli::GlobalArgs;
 use crate::dem_input::DemInputArgs;
 use crate::failure::{BAD_INPUT, ExitCodeExt, Failure};
 use crate::outputs::{earlier_outputs, prepare_dir, write_png, write_report};
-use crate::report::{InputSummary, timings_object};
+use crate::report::InputSummary;
 use anyhow::{Context, anyhow, bail};
 use clap::{Args, ValueEnum};
-use serde_json::json;
-use snowscape::cover::CoverParameters;
+use snowscape::cover::{
+    CoverParameters, DemPlacement, DiffusionCoverReport, FearingInputSummary, GrowthSummary,
+    MeshInputSummary, Turntable,
+};
 use snowscape_festenberg::{CoverParams, FestenbergError, GrowthParams, cover, grow_cover};
 use snowscape_mesh::preview::{PreviewOptions, render_turntable, write_preview};
 use snowscape_mesh::terrain::{grid_object, map_to_scene, place_scene_on_grid};
 use snowscape_mesh::write::{write_glb, write_obj};
-use snowscape_mesh::{MeshReport, Scene, SceneObject, SourceFrame, UpAxis, read_scene};
+use snowscape_mesh::{Scene, SceneObject, SourceFrame, UpAxis, read_scene};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -122,11 +124,10 @@ pub struct CoverArgs {
 /// What the front part read: the scene (mesh, and terrain when on a DEM) and its summary.
 pub struct CoverInput {
     pub scene: Scene,
-    pub mesh_report: MeshReport,
+    /// What was read: the mesh, the DEM it stands on, the parameter file.
+    pub summary: MeshInputSummary,
     /// The region to cover, scene metres (`None`: the scene's bounds).
     pub extent_m: Option<[f64; 4]>,
-    /// The DEM, where the mesh stands and the ground height there.
-    pub dem: Option<serde_json::Value>,
     pub read_s: f64,
     /// The outputs an earlier run left in the output folder.
     pub earlier: Vec<String>,
@@ -206,17 +207,19 @@ fn read_input(args: &CoverArgs) -> anyhow::Result<CoverInput> {
         }
         scene.objects.push(terrain);
         extent_m = Some(e);
-        dem = Some(json!({
-            "terrain": InputSummary::of(&path.display().to_string(), &grid),
-            "at_scene_m": [x, y],
-            "ground_m": ground,
-        }));
+        dem = Some(DemPlacement {
+            terrain: InputSummary::of(&path.display().to_string(), &grid),
+            at_scene_m: [x, y],
+            ground_m: ground,
+        });
     }
+    let mut summary = MeshInputSummary::new(&args.mesh, &args.up, args.scale, &mesh_report, &scene);
+    summary.dem = dem;
+    summary.parameters_file = args.parameters.as_ref().map(|p| p.display().to_string());
     Ok(CoverInput {
         scene,
-        mesh_report,
+        summary,
         extent_m,
-        dem,
         read_s: t0.elapsed().as_secs_f64(),
         earlier: earlier_outputs(&args.out),
     })
@@ -343,19 +346,10 @@ fn cover_diffusion(
         stage("turntable", &mut || write_turntable(dir, scene, meshes, n)).job_failed()?;
         files.push("turntable.gif".into());
     }
-    let mut growth_report = serde_json::Value::Null;
+    let mut growth_report = None;
     if let Some(frames) = args.growth {
         let t = Instant::now();
-        let r = &c.resolved;
-        // One unit of time: σ = h0 lays h0 on open ground; D = R²/2 spreads the edges over the
-        // kernel radius (a heat kernel of variance 2Dt = R²).
-        let growth = GrowthParams {
-            diffusion_m2: 0.5 * r.radius_m * r.radius_m,
-            snowfall_m: r.depth_m,
-            duration: 1.0,
-            frames,
-            stability: 0.9,
-        };
+        let growth = GrowthParams::for_cover(&c.resolved, frames);
         let gdir = dir.join("growth");
         std::fs::create_dir_all(&gdir)
             .with_context(|| format!("cannot create {}", gdir.display()))
@@ -376,62 +370,26 @@ fn cover_diffusion(
         )
         .job_failed()?;
         timings.push(("growth".into(), t.elapsed().as_secs_f64()));
-        growth_report = json!({ "parameters": growth, "run": g });
+        growth_report = Some(GrowthSummary {
+            parameters: growth,
+            run: g,
+        });
     }
     files.push("report.json".into());
-    let s = &c.stats;
-    let report = json!({
-        "snowscape_version": env!("CARGO_PKG_VERSION"),
-        "command": "cover",
-        "method": "diffusion",
-        "paper": "von Festenberg & Gumhold 2011, Diffusion-Based Snow Cover Generation, Section 5",
-        "input": {
-            "mesh": args.mesh.display().to_string(),
-            "up": args.up,
-            "metres_per_unit": args.scale,
-            "objects": input.mesh_report.objects.len(),
-            "vertices": input.mesh_report.vertices(),
-            "triangles": input.mesh_report.triangles(),
-            "degenerate_dropped": input.mesh_report.degenerate_dropped(),
-            "open_edges": input.mesh_report.open_edges(),
-            "bounds_m": scene.bounds(),
-            "dem": input.dem,
-            "parameters_file": args.parameters.as_ref().map(|p| p.display().to_string()),
-        },
-        "parameters": c.resolved,
-        "sites": {
-            "columns": s.columns,
-            "ground_sites": s.ground_sites,
-            "bridge_sites": s.bridge_sites,
-            "covered_dropped": s.covered_dropped,
-            "layers": s.layers,
-            "snowy_sites": s.snowy_sites,
-        },
-        "kernel": {
-            "columns_per_kernel": s.kernel_columns,
-            "members_visited": s.members_visited,
-            "seconds": s.timing("kernel"),
-            "sites_per_s": s.kernel_sites_per_s(),
-        },
-        "snow": {
-            "volume_m3": s.volume_m3,
-            "max_height_m": s.max_height_m,
-            "vertices": s.vertices,
-            "triangles": s.triangles,
-            "quads": s.quads,
-            "corner_triangles": s.corner_triangles,
-            "boundary_loops": s.boundary_loops,
-            "uv_propagated_vertices": s.uv_propagated,
-            "uv_seam_copies": s.seam_copies,
-        },
-        "growth": growth_report,
-        "threads": rayon::current_num_threads(),
-        "timings_s": timings_object(&timings),
-        "wall_s": t0.elapsed().as_secs_f64(),
-        "outputs": files,
-    });
+    let report = DiffusionCoverReport::new(
+        input.summary.clone(),
+        &c,
+        growth_report,
+        &timings,
+        t0.elapsed().as_secs_f64(),
+        files,
+    );
+    let report = serde_json::to_value(&report)
+        .context("report.json")
+        .job_failed()?;
     write_report(dir, &input.earlier, report).job_failed()?;
     if !global.quiet {
+        let s = &c.stats;
         println!(
             "cover (diffusion): {} sites + {} bridge sites, snow {} vertices / {} triangles, \
              max {:.3} m, kernel {:.0} sites/s, {:.2} s -> {}",
@@ -504,23 +462,18 @@ fn cover_fearing(
             .job_failed()?;
         write_turntable(&args.out, scene, &meshes, n).job_failed()?;
     }
-    let summary = json!({
-        "mesh": args.mesh.display().to_string(),
-        "up": args.up,
-        "metres_per_unit": args.scale,
-        "objects": input.mesh_report.objects.len(),
-        "vertices": input.mesh_report.vertices(),
-        "triangles": input.mesh_report.triangles(),
-        "degenerate_dropped": input.mesh_report.degenerate_dropped(),
-        "open_edges": input.mesh_report.open_edges(),
-        "non_manifold_edges": input.mesh_report.non_manifold_edges(),
-        "bounds_m": scene.bounds(),
-        "dem": input.dem,
-        "parameters_file": args.parameters.as_ref().map(|p| p.display().to_string()),
-        "read_s": input.read_s,
-        "wall_s": t0.elapsed().as_secs_f64(),
-        "turntable": args.turntable.map(|n| json!({"file": "turntable.gif", "frames": n})),
-    });
+    let summary = FearingInputSummary {
+        mesh: input.summary.clone(),
+        read_s: input.read_s,
+        wall_s: t0.elapsed().as_secs_f64(),
+        turntable: args.turntable.map(|frames| Turntable {
+            file: "turntable.gif",
+            frames,
+        }),
+    };
+    let summary = serde_json::to_value(&summary)
+        .context("report.json")
+        .job_failed()?;
     snowscape_fearing::write_outputs(&args.out, scene, &c, Some(summary)).map_err(|e| {
         let code = match e {
             FearingError::NoSnow { .. } | FearingError::Mesh(_) | FearingError::Write(_) => {
