@@ -529,16 +529,17 @@ impl Session {
                 self.winter = *winter;
                 let dropped = self.timeline.push(&self.winter, &self.paint);
                 self.clear_undo();
-                self.log(
-                    serde_json::json!({"action": "step", "from": from, "to": self.winter.day()}),
-                );
+                self.log(crate::history::Action::Step {
+                    from,
+                    to: self.winter.day(),
+                });
                 out.extend(self.everything());
                 out.extend(self.dropped_notice(dropped));
             }
             JobOutcome::SetScenario(mut next) => {
                 next.history = std::mem::take(&mut self.history);
                 self.replace_with(*next);
-                self.log(serde_json::json!({"action": "set_scenario"}));
+                self.log(crate::history::Action::SetScenario);
                 out.extend(self.everything());
             }
             JobOutcome::Loaded { session, name } => {

@@ -25,6 +25,7 @@
 pub mod access;
 pub mod assets;
 pub mod brush;
+pub mod history;
 pub mod job;
 pub mod live;
 pub mod page_scenario;

@@ -10,6 +10,7 @@
 //! and once resolved (symbolic links followed) still inside the canonical project folder.
 
 use crate::brush::PaintMaps;
+use crate::history::{Action, ProjectHistory};
 use crate::session::Session;
 use snowscape_io::{ReadOptions, read_dem, read_terrain, write_bytes_atomic, write_geotiff};
 use snowscape_season::scenario::Scenario;
@@ -69,7 +70,7 @@ pub struct ProjectContents {
     /// Where the session's terrain came from.
     pub source: String,
     pub snapshot_days: Vec<f64>,
-    pub history: Vec<serde_json::Value>,
+    pub history: Vec<Action>,
 }
 
 impl ProjectContents {
@@ -180,8 +181,8 @@ impl ProjectDir {
                     let day = self
                         .read(&format!("projects/{name}/history.json"), 1 << 24)
                         .ok()
-                        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-                        .and_then(|h| h.get("day").and_then(serde_json::Value::as_f64));
+                        .and_then(|b| serde_json::from_slice::<ProjectHistory>(&b).ok())
+                        .map(|h| h.day);
                     SavedProject { name, day }
                 })
             })
@@ -273,12 +274,12 @@ impl ProjectDir {
             .map_err(|e| content("checkpoint", &p)(e.to_string()))?;
         write_bytes_atomic(&p, &bytes).map_err(|e| content("checkpoint", &p)(e.to_string()))?;
         let p = put("history.json");
-        let history = serde_json::json!({
-            "source": s.source,
-            "day": w.day(),
-            "snapshot_days": s.snapshot_days,
-            "actions": s.history,
-        });
+        let history = ProjectHistory {
+            source: s.source.clone(),
+            day: w.day(),
+            snapshot_days: s.snapshot_days.clone(),
+            actions: s.history.clone(),
+        };
         let text = serde_json::to_vec_pretty(&history)
             .map_err(|e| content("history", &p)(e.to_string()))?;
         write_bytes_atomic(&p, &text).map_err(|e| content("history", &p)(e.to_string()))?;
@@ -338,17 +339,21 @@ impl ProjectDir {
             }
         }
         let p = file("history.json")?;
-        let history: serde_json::Value = std::fs::read(&p)
+        // The history is a record, not the state: one that cannot be read (an older or edited
+        // file) starts afresh rather than refusing the project.
+        let history: Option<ProjectHistory> = std::fs::read(&p)
             .ok()
-            .and_then(|b| serde_json::from_slice(&b).ok())
-            .unwrap_or_default();
-        let source = history["source"].as_str().unwrap_or(name).to_string();
+            .and_then(|b| serde_json::from_slice(&b).ok());
+        let source = history
+            .as_ref()
+            .map_or_else(|| name.to_string(), |h| h.source.clone());
         let mut s = Session::with_paint(winter, paint, source);
-        if let Some(a) = history["actions"].as_array() {
-            s.history = a.clone();
+        if let Some(h) = history {
+            s.history = h.actions;
         }
-        s.history
-            .push(serde_json::json!({"action": "load", "name": name}));
+        s.history.push(Action::Load {
+            name: name.to_string(),
+        });
         Ok(s)
     }
 }

@@ -10,6 +10,7 @@
 //! out and [`Session::finish_job`] takes back, so that the server can run it on a worker.
 
 use crate::brush::{self, CellRect, Dab, Edit, PaintMaps};
+use crate::history::Action;
 use crate::job::{Job, JobOutcome, JobProgress, RunningJob};
 use crate::live::{LiveAvalanche, LiveSkiers, skier_progress, tiles_near};
 use crate::protocol::{BrushTarget, ClientMessage, ErrorCode, ServerMessage};
@@ -139,7 +140,7 @@ pub struct Session {
     pub(crate) job: Option<RunningJob>,
     pub(crate) job_seq: u64,
     /// What the user did, in order (saved with the project).
-    pub(crate) history: Vec<serde_json::Value>,
+    pub(crate) history: Vec<crate::history::Action>,
 }
 
 fn refuse<T>(code: ErrorCode, message: impl Into<String>) -> Result<T, Refusal> {
@@ -413,7 +414,12 @@ impl Session {
         }
     }
 
-    pub(crate) fn log(&mut self, entry: serde_json::Value) {
+    /// What the user did in this session, in order (a saved project's `history.json`).
+    pub fn history(&self) -> &[Action] {
+        &self.history
+    }
+
+    pub(crate) fn log(&mut self, entry: crate::history::Action) {
         self.history.push(entry);
     }
 
@@ -517,7 +523,12 @@ impl Session {
                     Some(e) if e.stroke == stroke => e,
                     other => {
                         self.undo.extend(other);
-                        self.log(serde_json::json!({"action": "brush", "stroke": stroke, "op": op, "target": target, "day": self.winter.day()}));
+                        self.log(Action::Brush {
+                            stroke,
+                            op,
+                            target,
+                            day: self.winter.day(),
+                        });
                         Edit {
                             stroke,
                             ..Edit::default()
@@ -606,7 +617,11 @@ impl Session {
                 self.undo.clear();
                 self.redo.clear();
                 self.timeline.mark_edited();
-                self.log(serde_json::json!({"action": "avalanche", "col": col, "row": row, "day": self.winter.day()}));
+                self.log(Action::Avalanche {
+                    col,
+                    row,
+                    day: self.winter.day(),
+                });
                 let mut out = self.layer_frames(&tiles);
                 out.push(Out::All(text(&ServerMessage::Avalanche(progress))));
                 out.push(self.state_out());
@@ -668,7 +683,11 @@ impl Session {
         self.redo.clear();
         self.timeline.mark_edited();
         let progress = skier_progress(&s.area, &self.winter.terrain, 0.0);
-        self.log(serde_json::json!({"action": "skier", "col": col, "row": row, "day": self.winter.day()}));
+        self.log(Action::Skier {
+            col,
+            row,
+            day: self.winter.day(),
+        });
         Ok(vec![
             Out::All(text(&ServerMessage::Skiers(progress))),
             self.state_out(),

@@ -312,6 +312,20 @@ fn save_and_load_round_trip_in_the_project_folder() {
         "{saved}"
     );
     assert!(tmp.path().join("projects/p1/checkpoint.bin").is_file());
+    // history.json: what the user did, in order, with its keys.
+    let history: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(tmp.path().join("projects/p1/history.json")).unwrap(),
+    )
+    .unwrap();
+    let actions: Vec<&str> = history["actions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["action"].as_str().unwrap())
+        .collect();
+    assert_eq!(actions, ["step", "brush", "brush"], "{history}");
+    assert_eq!(history["actions"][1]["target"], "powder");
+    assert_eq!(history["day"], s.summary().day);
     let saved = s.summary();
     let layers = s.terrain().snow.clone();
     let paint = s.paint().clone();
@@ -321,6 +335,17 @@ fn save_and_load_round_trip_in_the_project_folder() {
         .unwrap();
     assert_eq!(s.summary().day, saved.day);
     assert_eq!(s.terrain().snow, layers);
+    let actions: Vec<&str> = s
+        .history()
+        .iter()
+        .map(|a| match a {
+            snowscape_editor::history::Action::Step { .. } => "step",
+            snowscape_editor::history::Action::Brush { .. } => "brush",
+            snowscape_editor::history::Action::Load { .. } => "load",
+            _ => "other",
+        })
+        .collect();
+    assert_eq!(actions, ["step", "brush", "brush", "load"]);
     assert_eq!(s.paint(), &paint);
     let e = s
         .handle(

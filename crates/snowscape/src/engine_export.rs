@@ -36,6 +36,7 @@ use image::ExtendedColorType;
 use serde::Serialize;
 use snowscape_io::{ReadOptions, TiffRows, write_atomic, write_bytes_atomic, write_exr};
 use snowscape_terrain::{Grid, GridGeometry, SnowLayer};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Landscape sizes Unreal recommends (per axis), quads + 1.
@@ -102,8 +103,50 @@ pub struct EngineExport {
     /// Distance between samples (x, y), m.
     pub sample_spacing_m: [f64; 2],
     /// The engine's import settings.
-    pub import: serde_json::Value,
+    pub import: ImportSettings,
     pub files: Vec<String>,
+}
+
+/// What to type into an engine's import dialog for the exported heightmaps.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum ImportSettings {
+    /// Unreal's Landscape import (scales in cm per sample, the Z scale per 1/512 of the range).
+    Unreal {
+        dialog: &'static str,
+        scale_x: f64,
+        scale_y: f64,
+        scale_z: f64,
+        location_z_cm: f64,
+        /// Samples (width, height).
+        resolution: [usize; 2],
+        /// Samples per tile side, if tiled.
+        tile_samples: Option<usize>,
+        heightmap_code_to_height_m: String,
+    },
+    /// Unity's Terrain Import Raw.
+    Unity {
+        dialog: &'static str,
+        heightmap_resolution: usize,
+        terrain_width_m: f64,
+        terrain_length_m: f64,
+        terrain_height_m: f64,
+        position_y_m: f64,
+        /// The layer of each channel (RGBA) of each splat map.
+        splatmaps: BTreeMap<&'static str, Vec<&'static str>>,
+        control_texture_resolution: usize,
+    },
+    /// Godot's HTerrain add-on import.
+    Godot {
+        add_on: &'static str,
+        heightmap: &'static str,
+        min_height_m: f64,
+        max_height_m: f64,
+        resolution: usize,
+        cell_size_m: f64,
+        /// The layer of each channel (RGBA) of the splat map.
+        splatmap: BTreeMap<&'static str, Vec<&'static str>>,
+    },
 }
 
 /// A run raster opened for windows of rows, with its path (for errors).
@@ -481,16 +524,16 @@ pub fn export_run(
                 }
             }
             let z_scale = (hi - lo) * 12800.0 / 65535.0;
-            serde_json::json!({
-                "dialog": "Landscape mode > Manage > Import from File (heightmap_bedrock.png, or its tiles); one paint layer per weight map",
-                "scale_x": spacing[0] * 100.0,
-                "scale_y": spacing[1] * 100.0,
-                "scale_z": z_scale,
-                "location_z_cm": lo * 100.0 + 256.0 * z_scale,
-                "resolution": size,
-                "tile_samples": options.tile,
-                "heightmap_code_to_height_m": format!("z = {lo} + code / 65535 * {}", hi - lo),
-            })
+            ImportSettings::Unreal {
+                dialog: "Landscape mode > Manage > Import from File (heightmap_bedrock.png, or its tiles); one paint layer per weight map",
+                scale_x: spacing[0] * 100.0,
+                scale_y: spacing[1] * 100.0,
+                scale_z: z_scale,
+                location_z_cm: lo * 100.0 + 256.0 * z_scale,
+                resolution: size,
+                tile_samples: options.tile,
+                heightmap_code_to_height_m: format!("z = {lo} + code / 65535 * {}", hi - lo),
+            }
         }
         Engine::Unity => {
             for (name, h) in &heightmaps {
@@ -505,16 +548,22 @@ pub fn export_run(
                 write_png(&out.join(&file), (n, n), &splat, ExtendedColorType::Rgba8)?;
                 files.push(file);
             }
-            serde_json::json!({
-                "dialog": "Terrain > Terrain Settings > Import Raw: depth 16 bit, byte order Windows, flip vertically (row 0 of the file is north)",
-                "heightmap_resolution": size[0],
-                "terrain_width_m": extent[0],
-                "terrain_length_m": extent[1],
-                "terrain_height_m": hi - lo,
-                "position_y_m": lo,
-                "splatmaps": {"splatmap_0.png": ["compacted", "stable", "unstable", "powder"], "splatmap_1.png": ["rock"]},
-                "control_texture_resolution": n,
-            })
+            ImportSettings::Unity {
+                dialog: "Terrain > Terrain Settings > Import Raw: depth 16 bit, byte order Windows, flip vertically (row 0 of the file is north)",
+                heightmap_resolution: size[0],
+                terrain_width_m: extent[0],
+                terrain_length_m: extent[1],
+                terrain_height_m: hi - lo,
+                position_y_m: lo,
+                splatmaps: BTreeMap::from([
+                    (
+                        "splatmap_0.png",
+                        vec!["compacted", "stable", "unstable", "powder"],
+                    ),
+                    ("splatmap_1.png", vec!["rock"]),
+                ]),
+                control_texture_resolution: n,
+            }
         }
         Engine::Godot => {
             for (name, h) in &heightmaps {
@@ -545,15 +594,18 @@ pub fn export_run(
                 ExtendedColorType::Rgba8,
             )?;
             files.push("splatmap.png".into());
-            serde_json::json!({
-                "add_on": "HTerrain (Zylann's Heightmap Terrain, Godot 4): Import dialog",
-                "heightmap": "heightmap_bedrock.raw (16-bit little endian) with the min and max heights below, or heightmap_bedrock.exr (32-bit float, metres)",
-                "min_height_m": lo,
-                "max_height_m": hi,
-                "resolution": size[0],
-                "cell_size_m": spacing[0],
-                "splatmap": {"splatmap.png": ["rock", "compacted + stable", "unstable", "powder"]},
-            })
+            ImportSettings::Godot {
+                add_on: "HTerrain (Zylann's Heightmap Terrain, Godot 4): Import dialog",
+                heightmap: "heightmap_bedrock.raw (16-bit little endian) with the min and max heights below, or heightmap_bedrock.exr (32-bit float, metres)",
+                min_height_m: lo,
+                max_height_m: hi,
+                resolution: size[0],
+                cell_size_m: spacing[0],
+                splatmap: BTreeMap::from([(
+                    "splatmap.png",
+                    vec!["rock", "compacted + stable", "unstable", "powder"],
+                )]),
+            }
         }
     };
     let report = EngineExport {
