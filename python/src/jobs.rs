@@ -249,7 +249,7 @@ pub(crate) fn transport<'py>(
     uniform_precipitation: bool,
 ) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
     use snowscape::terrain::NodataMask;
-    use snowscape::transport::outputs::TransportReport;
+    use snowscape::transport_job::TransportReport;
     use snowscape::transport::scenario::{SceneSpec, run};
     use snowscape::transport_job::{Overrides, dem_heights, fit_to_scene, load_scenario};
     let t0 = std::time::Instant::now();

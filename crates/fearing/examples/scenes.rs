@@ -1,7 +1,7 @@
-//! Covers the scenes built in code and writes their outputs:
+//! Covers the scenes built in code and writes their snow meshes (GLB, OBJ):
 //! `cargo run --release -p snowscape-fearing --example scenes -- [plane|roof|box|basin|roof_and_basin] [OUT_DIR]`.
 
-use snowscape_fearing::{FearingParams, Material, cover, scenes, write_outputs};
+use snowscape_fearing::{FearingParams, Material, cover, scenes};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -61,5 +61,10 @@ fn main() {
             p.stability.left_scene_m3
         );
     }
-    write_outputs(std::path::Path::new(&out), &scene, &c, None).expect("outputs");
+    // The snow meshes (`snowscape cover --method fearing` also writes a preview and a report).
+    let out = std::path::Path::new(&out);
+    std::fs::create_dir_all(out).expect("output folder");
+    let meshes = c.meshes();
+    snowscape_mesh::write::write_glb(&out.join("snow.glb"), &meshes, &scene.frame).expect("glb");
+    snowscape_mesh::write::write_obj(&out.join("snow.obj"), &meshes, &scene.frame).expect("obj");
 }

@@ -1,12 +1,12 @@
 //! Covers every shared mesh (and the ~100k-triangle scene of bunnies and teapots) with the
-//! default snow and prints sites, flakes, flakes/s and seconds; writes outputs under
+//! default snow and prints sites, flakes, flakes/s and seconds; writes the snow meshes under
 //! `out/fearing_meshes/<name>/`. Needs ../shared/data/meshes beside the checkout.
 //! `cargo run --release -p snowscape-fearing --example shared_meshes [-- NAME...]`
 
 #[path = "../benches/common/mod.rs"]
 mod common;
 
-use snowscape_fearing::{FearingParams, cover, write_outputs};
+use snowscape_fearing::{FearingParams, cover};
 
 fn main() {
     let only: Vec<String> = std::env::args().skip(1).collect();
@@ -47,12 +47,10 @@ fn main() {
             r.mass.closure_error_m3,
             r.max_depth_m
         );
-        write_outputs(
-            &std::path::Path::new("out/fearing_meshes").join(&name),
-            &scene,
-            &c,
-            None,
-        )
-        .unwrap();
+        let out = std::path::Path::new("out/fearing_meshes").join(&name);
+        std::fs::create_dir_all(&out).unwrap();
+        let meshes = c.meshes();
+        snowscape_mesh::write::write_glb(&out.join("snow.glb"), &meshes, &scene.frame).unwrap();
+        snowscape_mesh::write::write_obj(&out.join("snow.obj"), &meshes, &scene.frame).unwrap();
     }
 }

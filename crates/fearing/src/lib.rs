@@ -11,8 +11,10 @@
 //! - [`stability`] (4.1, 4.2, 4.4) with [`edge_transit`] (4.3): angle-of-repose avalanches with
 //!   obstacle tests and projectile particles over edges; any AOR and material ([`params`]);
 //! - [`surface`] (3.7, 5): the snow mesh with closing walls, optional smoothing;
-//! - [`output`]: `snow.glb`, `snow.obj`, `preview.png`, `report.json`; [`scenes`]: scenes built
-//!   in code (plane, roof, box, basin).
+//! - [`scenes`]: scenes built in code (plane, roof, box, basin).
+//!
+//! A cover returns data ([`FearingCover`], its [`FearingCover::meshes`] and report); its files are
+//! written by `snowscape::cover::write_fearing_outputs`.
 //!
 //! Entry point: [`cover`]. A cover is a function of (scene, parameters, seed) whatever the
 //! thread count, as long as the flake budget and not the time budget ends each pass.
@@ -26,7 +28,6 @@ pub mod flakes;
 pub mod importance;
 pub mod launch_sites;
 pub mod obstacles;
-pub mod output;
 pub mod params;
 pub mod report;
 pub mod scenes;
@@ -39,7 +40,6 @@ pub mod wind_transport;
 pub use edge_groups::Topology;
 pub use error::FearingError;
 pub use launch_sites::LaunchSites;
-pub use output::write_outputs;
 pub use params::{FearingParams, Material, SkyWeight, StabilityParams};
 pub use report::FearingReport;
 pub use surface::SnowSurface;
@@ -59,6 +59,15 @@ pub struct FearingCover {
 }
 
 impl FearingCover {
+    /// The meshes of the cover, in the order its files hold them: the snow surface (`snow`),
+    /// then the dusting of the faces too steep to hold snow, if any (an alpha-masked texture
+    /// travels with it).
+    pub fn meshes(&self) -> Vec<snowscape_mesh::SnowMesh> {
+        let mut meshes = vec![self.surface.to_mesh("snow")];
+        meshes.extend(self.dusting.clone());
+        meshes
+    }
+
     /// Snow depth (m) and base position of every site.
     pub fn site_depths(&self) -> Vec<([f64; 3], f64)> {
         self.topology

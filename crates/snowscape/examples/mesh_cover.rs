@@ -58,7 +58,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "fearing: {} flakes shot ({:.0}/s), {} sites, mean depth {:.3} m, max {:.3} m",
         r.flakes_shot, r.flakes_per_s, r.sites_final, r.mean_depth_m, r.max_depth_m
     );
-    let files = snowscape::fearing::write_outputs(&out.join("fearing"), &scene, &flakes, None)?;
+    let files =
+        snowscape::cover::write_fearing_outputs(&out.join("fearing"), &scene, &flakes, None)?;
     println!("wrote 2 + {} files into {}", files.len(), out.display());
     Ok(())
 }

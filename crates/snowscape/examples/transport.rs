@@ -5,8 +5,8 @@
 //! `cargo run --release -p snowscape --example transport -- [HOURS] [OUT]` (defaults: 2 h,
 //! `out/example_transport`).
 
-use snowscape::transport::outputs::{RunContext, write_outputs};
 use snowscape::transport::scenario::{Scenario, run, shipped_scenario};
+use snowscape::transport_job::{RunContext, write_outputs};
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -25,7 +25,9 @@ use snowscape_fearing::{FearingError, FearingParams};
 use snowscape_festenberg::{CoverParams, FestenbergError};
 use std::path::Path;
 
+mod outputs;
 mod report;
+pub use outputs::write_fearing_outputs;
 pub use report::{
     DIFFUSION_PAPER, DemPlacement, DiffusionCoverReport, FEARING_PAPER, FearingInputSummary,
     GrowthSummary, KernelWork, MeshInputSummary, SiteCounts, SnowMeshCounts, Turntable,

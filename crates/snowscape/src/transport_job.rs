@@ -1,11 +1,18 @@
 //! One 3D transport run's inputs (Jubert 2018, `snowscape::transport`), the path `snowscape
 //! transport` and the Python package's `snowscape.transport` share: which scenario (a file, a
 //! shipped one, or the Table 7.I weather on the input scene), a DEM as the scene's heights,
-//! and the wind grid fitted to the scene when no scenario file sets it.
+//! and the wind grid fitted to the scene when no scenario file sets it; and the files of a
+//! run ([`write_outputs`], the typed [`TransportReport`]).
 
 use snowscape_terrain::{Grid, GridGeometry};
 use snowscape_transport::scenario::{Scenario, SceneSpec, fit_voxels, shipped_scenario};
 use std::path::Path;
+
+mod outputs;
+pub use outputs::{
+    DepthStats, FlakeCounts, GridSize, KgBudget, OutputError as TransportOutputError, RunContext,
+    TransportReport, TransportTimings, VoxelSize, WindSolve, write_outputs,
+};
 
 /// Columns of the wind grid fitted to a scene without a scenario file.
 pub const FITTED_COLUMNS: usize = 128;

@@ -4,7 +4,6 @@
 //! precipitation map and the SnowTran-3D transport model of Liston & Sturm (1998) on a 2D
 //! height map. This crate implements, module by module:
 //!
-//! - [`outputs`]: the files of a run (GeoTIFF maps, mean 3D wind, preview, report).
 //! - [`params`]: the user parameters of Table 6.I and a piecewise-constant weather timeline.
 //! - [`physics`]: the per-cell formulas of Section 5.5 and Annex I (snow density, threshold
 //!   and actual friction velocity by Newton-Raphson, saltation capacity and fetch rule,
@@ -21,7 +20,6 @@
 
 pub mod error;
 mod float_ops;
-pub mod outputs;
 pub mod params;
 pub mod physics;
 pub mod precipitation;

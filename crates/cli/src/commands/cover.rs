@@ -455,8 +455,7 @@ fn cover_fearing(
     }
     let c = snowscape_fearing::cover(scene, &params).bad_input()?;
     if let Some(n) = args.turntable {
-        let mut meshes = vec![c.surface.to_mesh("snow")];
-        meshes.extend(c.dusting.clone());
+        let meshes = c.meshes();
         std::fs::create_dir_all(&args.out)
             .with_context(|| format!("cannot create {}", args.out.display()))
             .job_failed()?;
@@ -474,7 +473,7 @@ fn cover_fearing(
     let summary = serde_json::to_value(&summary)
         .context("report.json")
         .job_failed()?;
-    snowscape_fearing::write_outputs(&args.out, scene, &c, Some(summary)).map_err(|e| {
+    snowscape::cover::write_fearing_outputs(&args.out, scene, &c, Some(summary)).map_err(|e| {
         let code = match e {
             FearingError::NoSnow { .. } | FearingError::Mesh(_) | FearingError::Write(_) => {
                 crate::failure::JOB_FAILED

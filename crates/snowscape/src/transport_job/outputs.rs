@@ -1,22 +1,20 @@
 //! The files of a transport run (issue 6, item 7): `depth.tif`, `density.tif`,
 //! `q_salt.tif`, `q_susp.tif`, `q_subl.tif`, `precipitation.tif`, `wind2d.tif` (2 bands:
-//! east, north m s⁻¹), `wind3d.bin` (the mean 3D wind, [`crate::wind3d::mean_wind_bytes`]),
+//! east, north m s⁻¹), `wind3d.bin` (the mean 3D wind, [`snowscape_transport::wind3d::mean_wind_bytes`]),
 //! `preview.png` (shaded relief with the snow) and `report.json` (scenario, wind and flake
 //! statistics, the mass budget with its closure error, timings). Every file is written
 //! atomically through `snowscape-io` (a synced temporary sibling renamed over the name).
 
-use crate::scenario::WindReport;
-use crate::scenario::{RunOutputs, Scenario};
-use crate::wind3d::IterationReport;
-use crate::wind3d::mean_wind_bytes;
 use serde::Serialize;
 use snowscape_io::{write_bytes_atomic, write_geotiff_bands};
 use snowscape_render::{PreviewOptions, encode_png, render_preview};
 use snowscape_terrain::{Grid, LayeredTerrain, NodataMask, SnowLayer};
+use snowscape_transport::scenario::{RunOutputs, Scenario, WindReport};
+use snowscape_transport::wind3d::{IterationReport, mean_wind_bytes};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
-/// A file that could not be written.
+/// A file of a transport run that could not be written.
 #[derive(Debug, Error)]
 #[error("cannot write {path}: {message}")]
 pub struct OutputError {
@@ -258,5 +256,51 @@ impl<'a> TransportReport<'a> {
                 wall: wall_s,
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use snowscape_transport::scenario::{SceneSpec, run, shipped_scenario};
+
+    /// The castle on a coarse grid for two hours: every file is written and the report carries
+    /// the run's budget.
+    #[test]
+    fn every_file_is_written_and_the_report_carries_the_budget() {
+        let mut s = Scenario::from_toml(shipped_scenario("castle").unwrap()).unwrap();
+        s.scene = SceneSpec::Castle {
+            size_m: 850.0,
+            cell_m: 25.0,
+        };
+        s.voxel_size_m = 34.0;
+        s.voxel_layers = 8;
+        s.wind_iterations = 2;
+        s.flakes.count = 5_000;
+        s.duration_h = 2.0;
+        s.transport.time_step_s = 1800.0;
+        s.validate().unwrap();
+        let (g, z) = s.build_scene().unwrap().unwrap();
+        let out = run(&s, &g, &z).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let files = write_outputs(dir.path(), &s, &z, &out, &RunContext::default()).unwrap();
+        assert_eq!(files.len(), 10);
+        for f in &files {
+            assert!(
+                f.is_file() && std::fs::metadata(f).unwrap().len() > 0,
+                "{f:?}"
+            );
+        }
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("report.json")).unwrap())
+                .unwrap();
+        let b = &report["mass_budget"];
+        assert_eq!(
+            b["closure_error"].as_f64().unwrap(),
+            out.budget.closure_error
+        );
+        assert_eq!(b["final"].as_f64().unwrap(), out.budget.final_mass);
+        assert_eq!(report["steps"], out.steps);
+        assert_eq!(report["grid"]["width"], g.width());
     }
 }

@@ -1,0 +1,111 @@
+//! The files of a Fearing cover: `snow.glb` and `snow.obj` (+ `snow.mtl`), the snow mesh alone,
+//! in the input's own axes and units so it lies on the input scene; `preview.png`, a CPU render
+//! of the scene with its snow; `report.json` (the
+//! [`FearingReport`](snowscape_fearing::FearingReport), with whatever the caller adds under
+//! `input`). Every file is written atomically.
+
+use snowscape_fearing::{FearingCover, FearingError};
+use snowscape_mesh::{Scene, preview};
+use std::path::{Path, PathBuf};
+
+/// Writes the outputs into `dir` (created if needed); returns the files written. `input` goes
+/// into the report as its `input` member (the CLI puts the mesh summary there).
+pub fn write_fearing_outputs(
+    dir: &Path,
+    scene: &Scene,
+    cover: &FearingCover,
+    input: Option<serde_json::Value>,
+) -> Result<Vec<PathBuf>, FearingError> {
+    std::fs::create_dir_all(dir).map_err(|source| snowscape_mesh::MeshError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let meshes = cover.meshes();
+    if meshes[0].triangles.is_empty() {
+        return Err(FearingError::NoSnow {
+            sites: cover.topology.leaves.len(),
+            min_depth_m: cover
+                .report
+                .params
+                .as_ref()
+                .map_or(0.0, |p| p.min_surface_depth_m),
+        });
+    }
+    let glb = dir.join("snow.glb");
+    snowscape_mesh::write::write_glb(&glb, &meshes, &scene.frame)?;
+    let obj = dir.join("snow.obj");
+    snowscape_mesh::write::write_obj(&obj, &meshes, &scene.frame)?;
+    let png = dir.join("preview.png");
+    // The preview draws triangles opaque: the dusting would show as solid snow, so it is left out.
+    preview::write_preview(
+        &png,
+        scene,
+        &meshes[..1],
+        &preview::PreviewOptions::default(),
+    )?;
+    let json = dir.join("report.json");
+    let mut report = serde_json::to_value(&cover.report)?;
+    if let (Some(input), Some(obj)) = (input, report.as_object_mut()) {
+        obj.insert("input".into(), input);
+    }
+    snowscape_io::write_bytes_atomic(&json, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    let mut files = vec![glb, obj, dir.join("snow.mtl")];
+    if meshes.len() > 1 {
+        files.push(dir.join("snow_1.png"));
+    }
+    files.extend([png, json]);
+    Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use snowscape_fearing::{FearingParams, cover, scenes};
+
+    /// A 70° face over open ground: its snow slides off, but it saw the sky, so its dusting is
+    /// written beside the snow (its texture and an object of the OBJ).
+    #[test]
+    fn the_dusting_is_written_with_the_snow() {
+        let face = snowscape_mesh::SceneObject {
+            frame: Default::default(),
+            name: "face".into(),
+            positions: vec![
+                [0.0, -1.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [-1.0, 1.0, 2.75],
+                [-1.0, -1.0, 2.75],
+            ],
+            normals: None,
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let scene = Scene {
+            objects: vec![scenes::plane("ground", 6.0, 0.0), face],
+            frame: scenes::frame(),
+        };
+        let params = FearingParams {
+            target_sites: 2000,
+            flakes_per_site: 16,
+            ..FearingParams::default()
+        };
+        let c = cover(&scene, &params).unwrap();
+        assert_eq!(c.meshes().len(), 2, "the snow and a dusting");
+        let out = tempfile::tempdir().unwrap();
+        let files = write_fearing_outputs(out.path(), &scene, &c, None).unwrap();
+        for name in [
+            "snow.glb",
+            "snow.obj",
+            "snow.mtl",
+            "snow_1.png",
+            "preview.png",
+            "report.json",
+        ] {
+            assert!(files.contains(&out.path().join(name)), "{name}: {files:?}");
+        }
+        let obj = std::fs::read_to_string(out.path().join("snow.obj")).unwrap();
+        assert!(obj.contains("dusting"), "the OBJ holds the dusting object");
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap())
+                .unwrap();
+        assert_eq!(report["method"], "fearing");
+    }
+}
