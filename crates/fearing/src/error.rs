@@ -31,15 +31,6 @@ pub enum FearingError {
     /// No snow lies deep enough to make a surface.
     #[error("no snow settled: none of the {sites} launch sites holds {min_depth_m} m or more")]
     NoSnow { sites: usize, min_depth_m: f64 },
-    /// Writing an output failed.
-    #[error(transparent)]
-    Mesh(#[from] snowscape_mesh::MeshError),
-    /// Writing the report failed.
-    #[error(transparent)]
-    Write(#[from] snowscape_io::AtomicWriteError),
-    /// The report could not be encoded.
-    #[error("cannot encode the report: {0}")]
-    Json(#[from] serde_json::Error),
 }
 
 /// Shorthand for a [`FearingError::InvalidParameter`].

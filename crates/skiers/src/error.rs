@@ -1,6 +1,5 @@
 //! Typed errors of the ski-track module. Each variant carries the offending values.
 
-use std::path::PathBuf;
 use thiserror::Error;
 
 /// A bad input to the ski tracks, or an output that could not be written.
@@ -118,25 +117,11 @@ pub enum SkiError {
         /// Why.
         reason: &'static str,
     },
-    /// An output file could not be written (nothing is left at the path).
-    #[error(transparent)]
-    Write(#[from] snowscape_io::AtomicWriteError),
     /// The PNG encoder failed.
-    #[error("cannot encode PNG {path}: {source}")]
+    #[error("cannot encode the track PNG: {source}")]
     Png {
-        /// Output path.
-        path: PathBuf,
         /// Encoder error.
         #[source]
         source: image::ImageError,
-    },
-    /// JSON serialisation failed.
-    #[error("cannot write JSON {path}: {source}")]
-    Json {
-        /// Output path.
-        path: PathBuf,
-        /// Serialiser error.
-        #[source]
-        source: serde_json::Error,
     },
 }

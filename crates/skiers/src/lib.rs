@@ -27,9 +27,9 @@
 
 pub mod area;
 pub mod effects;
+pub mod encode;
 pub mod error;
 pub mod frame;
-pub mod output;
 pub mod params;
 pub mod refine;
 pub mod skier;
@@ -41,8 +41,8 @@ pub use area::{FinishedSkier, SkiArea, SkiScratch, SkierReport, step};
 pub use effects::{
     Compaction, TriggerCandidate, compact_cell, snow_water_equivalent, trigger_probability,
 };
+pub use encode::{PngDepth, TrackPng, TrackSidecar, encode_track_png, tracks_geojson};
 pub use error::SkiError;
-pub use output::{PngDepth, tracks_geojson, write_track_png, write_tracks_geojson};
 pub use params::SkiParams;
 pub use refine::{effective_slope, turn_frequency};
 pub use skier::{Skier, SteeringChoice, StopReason, Track};

@@ -1,11 +1,11 @@
-//! Outputs: GeoJSON in the DEM's CRS, the georeferenced track PNG, atomic writes.
+//! The tracks as file contents: GeoJSON in the DEM's CRS, the georeferenced track PNG (the
+//! files themselves are written by `snowscape::outputs`, tested there).
 
 mod common;
 
 use snowscape_skiers::frame::map_extent;
 use snowscape_skiers::{
-    PngDepth, SkiArea, SkiError, SkiParams, SkiScratch, Terminus, step, write_track_png,
-    write_tracks_geojson,
+    PngDepth, SkiArea, SkiParams, SkiScratch, Terminus, encode_track_png, step, tracks_geojson,
 };
 use snowscape_terrain::LayeredTerrain;
 
@@ -28,10 +28,9 @@ fn skied_area() -> (SkiParams, SkiArea, LayeredTerrain) {
 #[test]
 fn geojson_lines_lie_inside_the_dem_in_its_crs() {
     let (_, area, _) = skied_area();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("tracks.geojson");
-    write_tracks_geojson(&path, &area).unwrap();
-    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    // Through its text, as a file holds it.
+    let v: serde_json::Value =
+        serde_json::from_slice(&serde_json::to_vec(&tracks_geojson(&area)).unwrap()).unwrap();
     assert_eq!(v["type"], "FeatureCollection");
     assert_eq!(v["crs"]["properties"]["name"], "EPSG:31287");
     let features = v["features"].as_array().unwrap();
@@ -101,14 +100,9 @@ fn geojson_without_epsg_has_no_crs_member() {
 #[test]
 fn track_png_reads_back_with_its_georeferencing() {
     let (_, area, t) = skied_area();
-    let dir = tempfile::tempdir().unwrap();
-    for (depth, name) in [
-        (PngDepth::Sixteen, "tracks16.png"),
-        (PngDepth::Eight, "tracks8.png"),
-    ] {
-        let path = dir.path().join(name);
-        write_track_png(&path, area.texture(), t.geometry(), depth).unwrap();
-        let img = image::open(&path).unwrap();
+    for depth in [PngDepth::Sixteen, PngDepth::Eight] {
+        let encoded = encode_track_png(area.texture(), t.geometry(), depth).unwrap();
+        let img = image::load_from_memory(&encoded.png).unwrap();
         assert_eq!((img.width(), img.height()), (192, 192));
         let tex = area.texture();
         let (top, codes): (f32, Vec<u16>) = match depth {
@@ -131,30 +125,18 @@ fn track_png_reads_back_with_its_georeferencing() {
             }
         }
         assert!(nonzero > 200, "{nonzero}");
-        let side: serde_json::Value = serde_json::from_slice(
-            &std::fs::read(dir.path().join(format!("{name}.json"))).unwrap(),
-        )
-        .unwrap();
+        let side = serde_json::to_value(&encoded.sidecar).unwrap();
         assert_eq!(side["format"], "snowscape-ski-tracks");
         assert_eq!(side["width"], 192);
         assert_eq!(side["texels_per_cell"], 4);
         assert_eq!(side["transform"]["pixel_width"], 2.5);
         assert_eq!(side["transform"]["origin_x"], 166_773.0);
         assert_eq!(side["crs_name"], "EPSG:31287");
-        let world = std::fs::read_to_string(path.with_extension("pgw")).unwrap();
-        let w: Vec<f64> = world.lines().map(|l| l.parse().unwrap()).collect();
+        let w: Vec<f64> = encoded
+            .world_file
+            .lines()
+            .map(|l| l.parse().unwrap())
+            .collect();
         assert_eq!(w, vec![2.5, 0.0, 0.0, -2.5, 166_774.25, 353_586.75]);
     }
-    // Only the three files per PNG are left: no temporary files.
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 6);
-}
-
-#[test]
-fn unwritable_outputs_are_typed_errors_and_leave_nothing() {
-    let (_, area, t) = skied_area();
-    let missing = std::path::Path::new("/nonexistent-snowscape-skiers/t.png");
-    let e = write_track_png(missing, area.texture(), t.geometry(), PngDepth::Sixteen).unwrap_err();
-    assert!(matches!(e, SkiError::Write(_)), "{e}");
-    let e = write_tracks_geojson(&missing.with_extension("geojson"), &area).unwrap_err();
-    assert!(matches!(e, SkiError::Write(_)), "{e}");
 }

@@ -46,6 +46,22 @@ pub enum OutputError {
     /// `report.json` could not be encoded.
     #[error("cannot encode report.json: {0}")]
     Report(#[source] serde_json::Error),
+    /// A JSON file could not be encoded.
+    #[error("cannot encode {path}: {source}")]
+    Json {
+        path: PathBuf,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The ski tracks could not be encoded.
+    #[error(transparent)]
+    Ski(#[from] snowscape_skiers::SkiError),
+    /// A mesh file could not be written.
+    #[error(transparent)]
+    Mesh(#[from] snowscape_mesh::MeshError),
+    /// A Fearing cover has nothing to write (no snow settled).
+    #[error(transparent)]
+    Fearing(#[from] snowscape_fearing::FearingError),
 }
 
 /// The result of an output.
@@ -358,4 +374,106 @@ pub fn write_state(
     write_previews(&mut out, terrain, view)?;
     write_glb(&mut out, terrain)?;
     Ok(out.files)
+}
+/// Writes `texture` (over `geometry`, the terrain grid) as a grayscale PNG at `path`, with its
+/// JSON sidecar `<path>.json` and world file `<stem>.pgw`
+/// ([`snowscape_skiers::encode_track_png`]), each atomically.
+pub fn write_track_png(
+    path: &Path,
+    texture: &snowscape_skiers::TrackTexture,
+    geometry: &snowscape_terrain::GridGeometry,
+    depth: snowscape_skiers::PngDepth,
+) -> Result<()> {
+    let encoded = snowscape_skiers::encode_track_png(texture, geometry, depth)?;
+    let mut json_path = path.as_os_str().to_owned();
+    json_path.push(".json");
+    let json_path = PathBuf::from(json_path);
+    let json = serde_json::to_vec_pretty(&encoded.sidecar).map_err(|source| OutputError::Json {
+        path: json_path.clone(),
+        source,
+    })?;
+    write_bytes_atomic(path, &encoded.png)?;
+    write_bytes_atomic(&json_path, &json)?;
+    write_bytes_atomic(&path.with_extension("pgw"), encoded.world_file.as_bytes())?;
+    Ok(())
+}
+
+/// Writes the tracks of `area` as GeoJSON ([`snowscape_skiers::tracks_geojson`]) at `path`,
+/// atomically.
+pub fn write_tracks_geojson(path: &Path, area: &snowscape_skiers::SkiArea) -> Result<()> {
+    let bytes = serde_json::to_vec(&snowscape_skiers::tracks_geojson(area)).map_err(|source| {
+        OutputError::Json {
+            path: path.to_path_buf(),
+            source,
+        }
+    })?;
+    write_bytes_atomic(path, &bytes)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use snowscape_skiers::{PngDepth, SkiArea, SkiParams, SkiScratch, Terminus, step};
+    use snowscape_terrain::{Grid, GridGeometry};
+
+    /// Twelve skiers for 30 s on a 30° slope under 0.5 m of snow.
+    fn skied() -> (SkiArea, LayeredTerrain) {
+        let params = SkiParams {
+            texels_per_cell: 2,
+            ..SkiParams::default()
+        };
+        let g = GridGeometry::square(24, 48, 10.0).unwrap();
+        let tan = 30f64.to_radians().tan();
+        let bedrock = Grid::from_fn(g, |c, r| (2000.0 - tan * 10.0 * r as f64 - c as f64) as f32);
+        let mut t = LayeredTerrain::from_bedrock(bedrock);
+        t.layer_mut(SnowLayer::Stable).fill(0.5);
+        let mut area = SkiArea::new(&params, &t, Terminus::LocalMinima, 4).unwrap();
+        area.spawn_weighted(&params, &t, 12).unwrap();
+        let mut scratch = SkiScratch::default();
+        for _ in 0..30 {
+            step(&params, &mut area, &mut t, &mut scratch, 1.0).unwrap();
+        }
+        (area, t)
+    }
+
+    #[test]
+    fn ski_tracks_are_written_whole_with_their_sidecars() {
+        let (area, t) = skied();
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("ski_tracks.png");
+        write_track_png(&png, area.texture(), t.geometry(), PngDepth::Sixteen).unwrap();
+        write_tracks_geojson(&dir.path().join("ski_tracks.geojson"), &area).unwrap();
+        let img = image::open(&png).unwrap();
+        let (w, h) = area.texture().size();
+        assert_eq!((img.width() as usize, img.height() as usize), (w, h));
+        let sidecar: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("ski_tracks.png.json")).unwrap())
+                .unwrap();
+        assert_eq!(sidecar["format"], "snowscape-ski-tracks");
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("ski_tracks.pgw"))
+                .unwrap()
+                .lines()
+                .count(),
+            6
+        );
+        let geojson: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("ski_tracks.geojson")).unwrap())
+                .unwrap();
+        assert_eq!(geojson["features"].as_array().unwrap().len(), 12);
+        // The four files and no temporary ones.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 4);
+    }
+
+    #[test]
+    fn unwritable_ski_tracks_are_typed_errors_and_leave_nothing() {
+        let (area, t) = skied();
+        let missing = Path::new("/nonexistent-snowscape-outputs/t.png");
+        let e =
+            write_track_png(missing, area.texture(), t.geometry(), PngDepth::Sixteen).unwrap_err();
+        assert!(matches!(e, OutputError::Write(_)), "{e}");
+        let e = write_tracks_geojson(&missing.with_extension("geojson"), &area).unwrap_err();
+        assert!(matches!(e, OutputError::Write(_)), "{e}");
+    }
 }

@@ -508,7 +508,7 @@ fn write_ski_tracks(out: &mut Written, winter: &Winter) -> Result<(), SeasonJobE
     let Some(area) = winter.ski_area() else {
         return Ok(());
     };
-    snowscape_skiers::write_track_png(
+    crate::outputs::write_track_png(
         &out.path("ski_tracks.png"),
         area.texture(),
         winter.terrain.geometry(),
@@ -516,7 +516,7 @@ fn write_ski_tracks(out: &mut Written, winter: &Winter) -> Result<(), SeasonJobE
     )?;
     out.files.push("ski_tracks.png.json".into());
     out.files.push("ski_tracks.pgw".into());
-    snowscape_skiers::write_tracks_geojson(&out.path("ski_tracks.geojson"), area)?;
+    crate::outputs::write_tracks_geojson(&out.path("ski_tracks.geojson"), area)?;
     Ok(())
 }
 

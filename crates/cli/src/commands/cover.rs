@@ -416,7 +416,7 @@ fn cover_fearing(
     depth_set: bool,
     t0: Instant,
 ) -> Result<(), Failure> {
-    use snowscape_fearing::{FearingError, Material};
+    use snowscape_fearing::Material;
     let scene = &input.scene;
     // The file's values, each flag given overriding its own.
     let mut params = file;
@@ -473,18 +473,8 @@ fn cover_fearing(
     let summary = serde_json::to_value(&summary)
         .context("report.json")
         .job_failed()?;
-    snowscape::cover::write_fearing_outputs(&args.out, scene, &c, Some(summary)).map_err(|e| {
-        let code = match e {
-            FearingError::NoSnow { .. } | FearingError::Mesh(_) | FearingError::Write(_) => {
-                crate::failure::JOB_FAILED
-            }
-            _ => BAD_INPUT,
-        };
-        Failure {
-            code,
-            error: e.into(),
-        }
-    })?;
+    // Nothing to write (no snow settled) or a file that cannot be written: the job failed.
+    snowscape::cover::write_fearing_outputs(&args.out, scene, &c, Some(summary)).job_failed()?;
     if !global.quiet {
         let r = &c.report;
         println!(

@@ -4,6 +4,7 @@
 //! [`FearingReport`](snowscape_fearing::FearingReport), with whatever the caller adds under
 //! `input`). Every file is written atomically.
 
+use crate::outputs::OutputError;
 use snowscape_fearing::{FearingCover, FearingError};
 use snowscape_mesh::{Scene, preview};
 use std::path::{Path, PathBuf};
@@ -15,21 +16,21 @@ pub fn write_fearing_outputs(
     scene: &Scene,
     cover: &FearingCover,
     input: Option<serde_json::Value>,
-) -> Result<Vec<PathBuf>, FearingError> {
-    std::fs::create_dir_all(dir).map_err(|source| snowscape_mesh::MeshError::Io {
+) -> Result<Vec<PathBuf>, OutputError> {
+    std::fs::create_dir_all(dir).map_err(|source| OutputError::CreateFolder {
         path: dir.to_path_buf(),
         source,
     })?;
     let meshes = cover.meshes();
     if meshes[0].triangles.is_empty() {
-        return Err(FearingError::NoSnow {
+        return Err(OutputError::Fearing(FearingError::NoSnow {
             sites: cover.topology.leaves.len(),
             min_depth_m: cover
                 .report
                 .params
                 .as_ref()
                 .map_or(0.0, |p| p.min_surface_depth_m),
-        });
+        }));
     }
     let glb = dir.join("snow.glb");
     snowscape_mesh::write::write_glb(&glb, &meshes, &scene.frame)?;
@@ -44,11 +45,12 @@ pub fn write_fearing_outputs(
         &preview::PreviewOptions::default(),
     )?;
     let json = dir.join("report.json");
-    let mut report = serde_json::to_value(&cover.report)?;
+    let mut report = serde_json::to_value(&cover.report).map_err(OutputError::Report)?;
     if let (Some(input), Some(obj)) = (input, report.as_object_mut()) {
         obj.insert("input".into(), input);
     }
-    snowscape_io::write_bytes_atomic(&json, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    let text = serde_json::to_string_pretty(&report).map_err(OutputError::Report)?;
+    snowscape_io::write_bytes_atomic(&json, text.as_bytes())?;
     let mut files = vec![glb, obj, dir.join("snow.mtl")];
     if meshes.len() > 1 {
         files.push(dir.join("snow_1.png"));

@@ -1,22 +1,22 @@
-//! Outputs: the track texture as a georeferenced grayscale PNG, the tracks as GeoJSON.
+//! The tracks as file contents: the track texture as a georeferenced grayscale PNG, the tracks
+//! as GeoJSON. The files are written by `snowscape::outputs` (`write_track_png`,
+//! `write_tracks_geojson`).
 //!
-//! **PNG.** [`write_track_png`] writes the texture as 8- or 16-bit grayscale, code
-//! `round(intensity · (2^bits − 1))`, row 0 north, plus two sidecars:
-//! - `<file>.json` (e.g. `tracks.png.json`): `{"format":"snowscape-ski-tracks", "bits",
-//!   "encoding", "width", "height", "texels_per_cell", "grid_width", "grid_height",
+//! **PNG.** [`encode_track_png`] encodes the texture as 8- or 16-bit grayscale, code
+//! `round(intensity · (2^bits − 1))`, row 0 north, with two sidecars:
+//! - `<file>.json` (e.g. `tracks.png.json`, a [`TrackSidecar`]): `{"format":"snowscape-ski-tracks",
+//!   "bits", "encoding", "width", "height", "texels_per_cell", "grid_width", "grid_height",
 //!   "transform":{origin_x, origin_y, pixel_width, pixel_height}, "crs", "crs_name"}` with the
 //!   transform of the texel corners in CRS units (the snowscape heightmap sidecar's layout);
 //! - an ESRI world file `<stem>.pgw` (pixel width, 0, 0, −pixel height, map x and y of the
 //!   centre of the upper-left texel), which GIS tools read beside a PNG.
 //!
-//! **GeoJSON.** [`write_tracks_geojson`] writes a `FeatureCollection` with one `LineString`
-//! per track (refined-track vertices, map coordinates of the DEM's CRS) and the properties
-//! `skier`, `start_time_s`, `end_time_s`, `length_m` (horizontal length of the refined track),
+//! **GeoJSON.** [`tracks_geojson`] is a `FeatureCollection` with one `LineString` per track
+//! (refined-track vertices, map coordinates of the DEM's CRS) and the properties `skier`,
+//! `start_time_s`, `end_time_s`, `length_m` (horizontal length of the refined track),
 //! `coarse_length_m`, `stop` and `active`. When the grid has an EPSG code the collection
 //! carries the legacy (2008 GeoJSON) member `"crs": {"type": "name", "properties": {"name":
 //! "EPSG:xxxx"}}`, which GDAL/QGIS read; RFC 7946 readers ignore it.
-//!
-//! Every file is written atomically (temporary file, sync, rename) through `snowscape-io`.
 
 use crate::area::SkiArea;
 use crate::frame::local_to_map;
@@ -26,9 +26,7 @@ use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 use serde::Serialize;
 use serde_json::{Value, json};
-use snowscape_io::{write_atomic, write_bytes_atomic};
 use snowscape_terrain::{Crs, GeoTransform, GridGeometry};
-use std::path::{Path, PathBuf};
 
 /// Bit depth of the track PNG.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, Serialize)]
@@ -42,19 +40,36 @@ pub enum PngDepth {
 
 /// The JSON sidecar of a track PNG.
 #[derive(Debug, Clone, Serialize)]
-struct TrackSidecar {
-    format: &'static str,
-    bits: u32,
-    encoding: String,
-    width: usize,
-    height: usize,
-    texels_per_cell: usize,
-    grid_width: usize,
-    grid_height: usize,
-    texel_size_m: [f64; 2],
-    transform: GeoTransform,
-    crs: Option<Crs>,
-    crs_name: Option<String>,
+pub struct TrackSidecar {
+    pub format: &'static str,
+    /// Bits per texel.
+    pub bits: u32,
+    /// How a code maps to an intensity.
+    pub encoding: String,
+    /// Texels along x and y.
+    pub width: usize,
+    pub height: usize,
+    pub texels_per_cell: usize,
+    /// The terrain grid's cells along x and y.
+    pub grid_width: usize,
+    pub grid_height: usize,
+    /// Texel size (x, y), m.
+    pub texel_size_m: [f64; 2],
+    /// The texel corners in CRS units.
+    pub transform: GeoTransform,
+    pub crs: Option<Crs>,
+    pub crs_name: Option<String>,
+}
+
+/// A track PNG and its two sidecars, encoded.
+#[derive(Debug, Clone)]
+pub struct TrackPng {
+    /// The PNG file.
+    pub png: Vec<u8>,
+    /// `<file>.json`.
+    pub sidecar: TrackSidecar,
+    /// `<stem>.pgw`, the ESRI world file.
+    pub world_file: String,
 }
 
 /// The geometry of the texture: the grid's extent with `texels_per_cell` times finer cells.
@@ -72,20 +87,13 @@ pub fn texture_geometry(
         })
 }
 
-fn sidecar_path(path: &Path, ext: &str) -> PathBuf {
-    let mut s = path.as_os_str().to_owned();
-    s.push(ext);
-    PathBuf::from(s)
-}
-
-/// Writes `texture` (over `geometry`, the terrain grid) as a grayscale PNG at `path`, with its
-/// JSON sidecar `<path>.json` and world file `<stem>.pgw`, all atomically.
-pub fn write_track_png(
-    path: &Path,
+/// `texture` (over `geometry`, the terrain grid) as a grayscale PNG, with its JSON sidecar and
+/// world file.
+pub fn encode_track_png(
     texture: &TrackTexture,
     geometry: &GridGeometry,
     depth: PngDepth,
-) -> Result<(), SkiError> {
+) -> Result<TrackPng, SkiError> {
     let (w, h) = texture.size();
     let tg = texture_geometry(texture, geometry)?;
     let too_big = || SkiError::TextureTooLarge {
@@ -124,14 +132,10 @@ pub fn write_track_png(
         PngDepth::Eight => ExtendedColorType::L8,
         PngDepth::Sixteen => ExtendedColorType::L16,
     };
-    write_atomic(path, |out| {
-        PngEncoder::new(out)
-            .write_image(&pixels, w32, h32, color)
-            .map_err(|source| SkiError::Png {
-                path: path.to_path_buf(),
-                source,
-            })
-    })?;
+    let mut png = Vec::new();
+    PngEncoder::new(&mut png)
+        .write_image(&pixels, w32, h32, color)
+        .map_err(|source| SkiError::Png { source })?;
     let t = *tg.transform();
     let sidecar = TrackSidecar {
         format: "snowscape-ski-tracks",
@@ -150,21 +154,18 @@ pub fn write_track_png(
             Crs::Wkt(wkt) => wkt.clone(),
         }),
     };
-    let json_path = sidecar_path(path, ".json");
-    let json = serde_json::to_vec_pretty(&sidecar).map_err(|source| SkiError::Json {
-        path: json_path.clone(),
-        source,
-    })?;
-    write_bytes_atomic(&json_path, &json)?;
-    let world = format!(
+    let world_file = format!(
         "{}\n0\n0\n{}\n{}\n{}\n",
         t.pixel_width,
         -t.pixel_height,
         t.origin_x + 0.5 * t.pixel_width,
         t.origin_y - 0.5 * t.pixel_height
     );
-    write_bytes_atomic(&path.with_extension("pgw"), world.as_bytes())?;
-    Ok(())
+    Ok(TrackPng {
+        png,
+        sidecar,
+        world_file,
+    })
 }
 
 fn feature(track: &Track, geometry: &GridGeometry, active: bool) -> Value {
@@ -212,14 +213,4 @@ pub fn tracks_geojson(area: &SkiArea) -> Value {
         fc["crs"] = json!({ "type": "name", "properties": { "name": format!("EPSG:{code}") } });
     }
     fc
-}
-
-/// Writes [`tracks_geojson`] to `path`, atomically.
-pub fn write_tracks_geojson(path: &Path, area: &SkiArea) -> Result<(), SkiError> {
-    let bytes = serde_json::to_vec(&tracks_geojson(area)).map_err(|source| SkiError::Json {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    write_bytes_atomic(path, &bytes)?;
-    Ok(())
 }
