@@ -4,7 +4,7 @@
 // the user's actions (crates/editor/src/protocol.rs lists the messages).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { applyFrame } from './wire.js';
+import { applyFrame, setProtocol } from './wire.js';
 import { bareColour, colourOf, LEGENDS, rampColour } from './shade.js';
 import { setupPanels } from './panels.js';
 
@@ -674,6 +674,25 @@ function loop() {
   }
   requestAnimationFrame(loop);
 }
+// The frame layout and the weather fields come from the server before the socket opens.
+async function start() {
+  for (;;) {
+    try {
+      const r = await fetch('/api/protocol');
+      if (r.ok) {
+        const p = await r.json();
+        setProtocol(p);
+        panels.setProtocol(p);
+        break;
+      }
+      status(`cannot read the protocol: HTTP ${r.status}; retrying`);
+    } catch (e) {
+      status(`cannot read the protocol: ${e}; retrying`);
+    }
+    await new Promise((ok) => setTimeout(ok, 1000));
+  }
+  connect();
+}
 resize();
-connect();
+start();
 loop();

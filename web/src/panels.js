@@ -3,12 +3,15 @@
 // range and choices the server generates from the Rust parameter types: GET /api/parameters),
 // undo/redo, save/load/export, and cancel for the running job or live event.
 const $ = (id) => document.getElementById(id);
-const WEATHER = ['from_day', 'sea_level_temperature_c', 'wind_from_deg', 'wind_speed_m_s', 'rain_snow_altitude_m', 'snowfall_per_week'];
 
 export function setupPanels(app, send) {
   let playing = false;
   let waiting = false;
   let weather = [];
+  // The weather period's fields (name, label, unit, optional) and the period "add" starts from
+  // in an empty table: the server's (GET /api/protocol), set by setProtocol.
+  let weatherFields = [];
+  let weatherDefault = null;
   let paramsShownFor = null;
   // path -> { help, doc, kind, min, max, choices } from the server (empty until it answers).
   let catalogue = new Map();
@@ -62,11 +65,14 @@ export function setupPanels(app, send) {
     body.innerHTML = '';
     weather.forEach((w, i) => {
       const tr = document.createElement('tr');
-      for (const k of WEATHER) {
+      for (const f of weatherFields) {
+        const k = f.name;
         const td = document.createElement('td');
         const inp = document.createElement('input');
-        inp.type = 'number'; inp.value = w[k]; inp.step = 'any';
-        inp.onchange = () => { w[k] = Number(inp.value); };
+        inp.type = 'number'; inp.value = w[k] ?? ''; inp.step = 'any';
+        if (f.optional) inp.placeholder = 'default';
+        // An optional field left empty takes the scenario's default.
+        inp.onchange = () => { w[k] = f.optional && inp.value === '' ? null : Number(inp.value); };
         td.appendChild(inp); tr.appendChild(td);
       }
       const del = document.createElement('button');
@@ -76,7 +82,8 @@ export function setupPanels(app, send) {
     });
   }
   $('weather-add').onclick = () => {
-    const last = weather[weather.length - 1] || { from_day: 0, sea_level_temperature_c: 5, wind_from_deg: 300, wind_speed_m_s: 8, rain_snow_altitude_m: 1000, snowfall_per_week: 1 };
+    const last = weather[weather.length - 1] || weatherDefault;
+    if (!last) return;
     weather.push({ ...last, from_day: last.from_day + 10 });
     renderWeather();
   };
@@ -170,6 +177,21 @@ export function setupPanels(app, send) {
   };
 
   return {
+    // The server's protocol description: the weather table's columns.
+    setProtocol(p) {
+      weatherFields = p.weather_fields;
+      weatherDefault = p.weather_default;
+      const head = $('weather-head');
+      head.innerHTML = '';
+      for (const f of weatherFields) {
+        const th = document.createElement('th');
+        th.append(f.label, document.createElement('br'), f.unit);
+        th.title = f.name + (f.optional ? ' (optional: empty takes the scenario default)' : '');
+        head.appendChild(th);
+      }
+      head.appendChild(document.createElement('th'));
+      renderWeather();
+    },
     onState(s) {
       $('cancel').disabled = !s.busy;
       $('scrub').max = String(Math.max(0, s.snapshots.length - 1));

@@ -1,15 +1,21 @@
 // Decoder of the server's binary tile frames (crates/editor/src/wire.rs documents the layout).
-export const MAGIC = 0x31575353; // "SSW1" little-endian
-export const NODATA = 65535;
-export const CHANNELS = ['bedrock', 'compacted', 'stable', 'unstable', 'powder', 'flow',
-  'temperature', 'sun', 'wind', 'avalanche_probability', 'ski_area'];
+// The magic number, the nodata code and the channel names by id are the server's
+// (GET /api/protocol, crates/editor/src/page_protocol.rs): every frame is refused until
+// setProtocol has them.
+const protocol = { magic: null, nodata: null, channels: [] };
+
+export function setProtocol(p) {
+  protocol.magic = p.frame_magic;
+  protocol.nodata = p.nodata;
+  protocol.channels = p.channels.slice();
+}
 
 // Decodes `buf` (ArrayBuffer) into `grids` (name -> Float32Array of width*height); returns
 // { channel, tiles: [[tx, ty]...], tile, width, height } or null for a malformed frame.
 export function applyFrame(buf, grids) {
   const dv = new DataView(buf);
-  if (buf.byteLength < 32 || dv.getUint32(0, true) !== MAGIC) return null;
-  const channel = CHANNELS[dv.getUint8(4)];
+  if (buf.byteLength < 32 || protocol.magic === null || dv.getUint32(0, true) !== protocol.magic) return null;
+  const channel = protocol.channels[dv.getUint8(4)];
   if (!channel) return null;
   const tile = dv.getUint16(6, true);
   const width = dv.getUint32(8, true);
@@ -35,7 +41,7 @@ export function applyFrame(buf, grids) {
       const row = (r0 + r) * width + c0;
       for (let c = 0; c < w; c++) {
         const q = dv.getUint16(o, true);
-        g[row + c] = q === NODATA ? NaN : offset + q * scale;
+        g[row + c] = q === protocol.nodata ? NaN : offset + q * scale;
         o += 2;
       }
     }

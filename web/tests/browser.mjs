@@ -241,6 +241,30 @@ await check('the parameter panel: sections with help, ranges and choices from th
   await page.screenshot({ path: `${shots}/editor_parameters.png` });
 });
 
+await check('the weather table has a column per field of the Rust weather period; an empty optional field is sent as its default', async () => {
+  const proto = await (await fetch(`${base}/api/protocol`)).json();
+  const heads = await page.$$eval('#weather-head th', (ths) => ths.map((t) => t.textContent));
+  assert.deepEqual(heads.slice(0, -1), proto.weather_fields.map((f) => `${f.label}${f.unit}`));
+  assert.ok(heads.includes('precip.mm/day'), heads.join(' | '));
+  const rows = await page.$$eval('#weather tbody tr', (trs) => trs.map((tr) => tr.querySelectorAll('input').length));
+  assert.ok(rows.length >= 1 && rows.every((n) => n === proto.weather_fields.length), `${rows}`);
+  // Add a period, set its precipitation, apply: the scenario holds it; the others stay default.
+  await page.click('#weather-add');
+  const last = '#weather tbody tr:last-child input';
+  const n = proto.weather_fields.findIndex((f) => f.name === 'precipitation_mm_per_day');
+  await page.locator(last).nth(n).fill('4.5');
+  await page.locator(last).nth(n).dispatchEvent('change');
+  page.once('dialog', (d) => d.accept());
+  await page.click('#weather-apply');
+  await page.waitForFunction(() => {
+    const w = window.snowscape.state.scenario.weather;
+    return w.length >= 2 && w[w.length - 1].precipitation_mm_per_day === 4.5;
+  }, null, { timeout: 60000 });
+  const w = await page.evaluate(() => window.snowscape.state.scenario.weather);
+  assert.ok(w.slice(0, -1).every((p) => p.precipitation_mm_per_day === undefined || p.precipitation_mm_per_day === null), JSON.stringify(w));
+  await page.locator('#weather').screenshot({ path: `${shots}/editor_weather.png` });
+});
+
 await check('a long step runs on a worker: another tab is answered meanwhile, and cancel stops it', async () => {
   // A season long and busy enough that the step cannot end before the test cancels it on
   // any machine (a 99-day step of the default season took under a second).

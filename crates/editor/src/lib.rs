@@ -28,6 +28,7 @@ pub mod brush;
 pub mod history;
 pub mod job;
 pub mod live;
+pub mod page_protocol;
 pub mod page_scenario;
 pub mod painted;
 pub mod project;

@@ -456,6 +456,7 @@ fn router(config: ServeConfig, gate: Arc<Gate>) -> Router {
         .route("/api/state", get(state_handler))
         .route("/api/cell", get(cell_handler))
         .route("/api/parameters", get(parameters_handler))
+        .route("/api/protocol", get(protocol_handler))
         .route("/api/projects", get(projects_handler))
         .route("/api/export/{name}", get(export_zip_handler))
         .route(
@@ -599,6 +600,10 @@ async fn export_zip_handler(
 
 /// The parameter catalogue (built once, on first use, off the async workers: its ranges are
 /// found by a few thousand validations).
+async fn protocol_handler() -> Response {
+    axum::Json(crate::page_protocol::PageProtocol::new()).into_response()
+}
+
 async fn parameters_handler() -> Response {
     match tokio::task::spawn_blocking(snowscape_season::parameter_catalogue::parameter_catalogue)
         .await

@@ -65,6 +65,38 @@ pub enum Channel {
 }
 
 impl Channel {
+    /// Every channel, in the order of its id.
+    pub const ALL: [Channel; 11] = [
+        Channel::Bedrock,
+        Channel::Compacted,
+        Channel::Stable,
+        Channel::Unstable,
+        Channel::Powder,
+        Channel::Flow,
+        Channel::Temperature,
+        Channel::Sun,
+        Channel::Wind,
+        Channel::AvalancheProbability,
+        Channel::SkiArea,
+    ];
+
+    /// The channel's name on the page.
+    pub fn name(self) -> &'static str {
+        match self {
+            Channel::Bedrock => "bedrock",
+            Channel::Compacted => "compacted",
+            Channel::Stable => "stable",
+            Channel::Unstable => "unstable",
+            Channel::Powder => "powder",
+            Channel::Flow => "flow",
+            Channel::Temperature => "temperature",
+            Channel::Sun => "sun",
+            Channel::Wind => "wind",
+            Channel::AvalancheProbability => "avalanche_probability",
+            Channel::SkiArea => "ski_area",
+        }
+    }
+
     /// The snow-layer channels, in the order of [`snowscape_terrain::SnowLayer::ALL`].
     pub const LAYERS: [Channel; 4] = [
         Channel::Compacted,
