@@ -5,7 +5,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { applyFrame, setProtocol } from './wire.js';
-import { bareColour, colourOf, LEGENDS, rampColour } from './shade.js';
+import { bareColour, colourOf, LEGENDS, rampColour, setColours } from './shade.js';
 import { setupPanels } from './panels.js';
 
 const $ = (id) => document.getElementById(id);
@@ -682,6 +682,8 @@ async function start() {
       if (r.ok) {
         const p = await r.json();
         setProtocol(p);
+        setColours(p.colours);
+        renderLegend();
         panels.setProtocol(p);
         break;
       }

@@ -7,10 +7,22 @@ const ROCK = [0.45, 0.42, 0.38];
 const GRASS = [0.34, 0.40, 0.23], SCREE = [0.33, 0.31, 0.29];
 // Snow: bright and faintly blue (the sky light fills its shadows with blue); deep snow a little
 // bluer, as light scattered inside it is.
-const SNOW = [0.97, 0.98, 1.0], DEEP_SNOW = [0.80, 0.88, 1.0];
-const LAYER = { compacted: [0.55, 0.62, 0.72], stable: [0.96, 0.97, 1.0], unstable: [0.95, 0.45, 0.3], powder: [0.75, 0.92, 1.0] };
-const VIRIDIS = [[0.267, 0.005, 0.329], [0.229, 0.322, 0.546], [0.128, 0.567, 0.551], [0.369, 0.789, 0.383], [0.993, 0.906, 0.144]];
-const BLUE = [0.18, 0.38, 0.85], PURPLE = [0.6, 0.2, 0.72], BLACK = [0, 0, 0], RED = [0.85, 0.1, 0.1];
+// The previews' colours (snow, layers, the Fig. 11 stability map, viridis) are the server's
+// (GET /api/protocol, crates/render/src/colour.rs), set in place by setColours before the first
+// frame; the arrays start black.
+const SNOW = [0, 0, 0], DEEP_SNOW = [0.80, 0.88, 1.0];
+const LAYER = { compacted: [0, 0, 0], stable: [0, 0, 0], unstable: [0, 0, 0], powder: [0, 0, 0] };
+const VIRIDIS = [[0, 0, 0], [0, 0, 0]];
+const BLUE = [0, 0, 0], PURPLE = [0, 0, 0], BLACK = [0, 0, 0], RED = [0.85, 0.1, 0.1];
+
+export function setColours(c) {
+  SNOW.splice(0, 3, ...c.snow);
+  for (const k of Object.keys(LAYER)) LAYER[k].splice(0, 3, ...c.layers[k]);
+  BLACK.splice(0, 3, ...c.stability.no_snow);
+  BLUE.splice(0, 3, ...c.stability.stable);
+  PURPLE.splice(0, 3, ...c.stability.unstable);
+  VIRIDIS.splice(0, VIRIDIS.length, ...c.viridis.map((rgb) => rgb.slice()));
+}
 
 // The legend of each shading mode, with a fixed physical range (the same colours mean the same
 // values in every tab, at every step and on every terrain): a ramp from `lo` to `hi` (values

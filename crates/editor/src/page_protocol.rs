@@ -1,10 +1,15 @@
 //! What the page reads from the server instead of copying it (`GET /api/protocol`): the tile
 //! frames' channels in the order of their ids ([`Channel`]), the frame's magic number and nodata
-//! code, and the fields of a weather period ([`WeatherPeriod`]) with their units, so that the
-//! page's weather table has one column per field of the Rust type.
+//! code, the fields of a weather period ([`WeatherPeriod`]) with their units, so that the
+//! page's weather table has one column per field of the Rust type, and the colours the
+//! previews use (`snowscape_render::colour`: snow, layers, the Fig. 11 stability map, viridis),
+//! so that the page and the previews show a layer or a value in the same colour.
 
 use crate::wire::{Channel, MAGIC, NODATA};
 use serde::Serialize;
+use snowscape_render::colour::{
+    LAYER_COLOURS, Rgb, SNOW_WHITE, STABILITY_BLACK, STABILITY_BLUE, STABILITY_PURPLE, VIRIDIS,
+};
 use snowscape_season::scenario::WeatherPeriod;
 
 /// One field of a weather period, as the page's weather table shows it.
@@ -81,6 +86,39 @@ pub struct PageProtocol {
     /// westerly (Cordonnier 2018 Table 2's wind direction of the examples, one snowfall a week,
     /// §5.1).
     pub weather_default: WeatherPeriod,
+    pub colours: PageColours,
+}
+
+/// The previews' colours (linear RGB in [0, 1]).
+#[derive(Debug, Clone, Serialize)]
+pub struct PageColours {
+    /// Snow.
+    pub snow: Rgb,
+    /// Each layer's tint.
+    pub layers: LayerColours,
+    /// The stability map of Cordonnier 2018 Fig. 11.
+    pub stability: StabilityColours,
+    /// The ramp of scalar fields, evenly spaced stops from low to high.
+    pub viridis: &'static [Rgb],
+}
+
+/// Each layer's tint.
+#[derive(Debug, Clone, Serialize)]
+pub struct LayerColours {
+    pub compacted: Rgb,
+    pub stable: Rgb,
+    pub unstable: Rgb,
+    pub powder: Rgb,
+}
+
+/// The stability map's classes.
+#[derive(Debug, Clone, Serialize)]
+pub struct StabilityColours {
+    pub no_snow: Rgb,
+    /// Compacted or stable snow on top.
+    pub stable: Rgb,
+    /// Unstable snow or powder on top.
+    pub unstable: Rgb,
 }
 
 impl PageProtocol {
@@ -99,6 +137,21 @@ impl PageProtocol {
                 rain_snow_altitude_m: 1000.0,
                 snowfall_per_week: 1.0,
                 precipitation_mm_per_day: None,
+            },
+            colours: PageColours {
+                snow: SNOW_WHITE,
+                layers: LayerColours {
+                    compacted: LAYER_COLOURS[0],
+                    stable: LAYER_COLOURS[1],
+                    unstable: LAYER_COLOURS[2],
+                    powder: LAYER_COLOURS[3],
+                },
+                stability: StabilityColours {
+                    no_snow: STABILITY_BLACK,
+                    stable: STABILITY_BLUE,
+                    unstable: STABILITY_PURPLE,
+                },
+                viridis: &VIRIDIS,
             },
         }
     }
