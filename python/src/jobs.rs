@@ -196,12 +196,9 @@ pub(crate) fn cover<'py>(
                 value_err(format!("{}: the mesh has no triangles", mesh.display()))
             })?;
             let c = snowscape::fearing::cover(&scene, &params).map_err(py_err)?;
-            let mut report =
-                serde_json::to_value(&c.report).map_err(|e| value_err(e.to_string()))?;
             let input = serde_json::to_value(&input).map_err(|e| value_err(e.to_string()))?;
-            if let Some(o) = report.as_object_mut() {
-                o.insert("input".into(), input);
-            }
+            let report = snowscape::cover::fearing_report(&c, Some(input))
+                .map_err(|e| value_err(e.to_string()))?;
             Ok((c.surface.to_mesh("snow"), report))
         }
     })?;
@@ -249,9 +246,10 @@ pub(crate) fn transport<'py>(
     uniform_precipitation: bool,
 ) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
     use snowscape::terrain::NodataMask;
-    use snowscape::transport_job::TransportReport;
     use snowscape::transport::scenario::{SceneSpec, run};
-    use snowscape::transport_job::{Overrides, dem_heights, fit_to_scene, load_scenario};
+    use snowscape::transport_job::{
+        Overrides, TransportReport, dem_heights, fit_to_scene, load_scenario,
+    };
     let t0 = std::time::Instant::now();
     let (mut scenario, from_file) = load_scenario(scenario.as_deref()).map_err(py_err)?;
     let dem_given = dem.is_some();

@@ -27,7 +27,7 @@ use std::path::Path;
 
 mod outputs;
 mod report;
-pub use outputs::write_fearing_outputs;
+pub use outputs::{fearing_report, write_fearing_outputs};
 pub use report::{
     DIFFUSION_PAPER, DemPlacement, DiffusionCoverReport, FEARING_PAPER, FearingInputSummary,
     GrowthSummary, KernelWork, MeshInputSummary, SiteCounts, SnowMeshCounts, Turntable,

@@ -375,6 +375,7 @@ pub fn write_state(
     write_glb(&mut out, terrain)?;
     Ok(out.files)
 }
+
 /// Writes `texture` (over `geometry`, the terrain grid) as a grayscale PNG at `path`, with its
 /// JSON sidecar `<path>.json` and world file `<stem>.pgw`
 /// ([`snowscape_skiers::encode_track_png`]), each atomically.

@@ -168,8 +168,6 @@ pub enum SeasonJobError {
     Output(#[from] OutputError),
     #[error("environment map {0} is missing")]
     MissingMap(&'static str),
-    #[error(transparent)]
-    Skiers(#[from] snowscape_skiers::SkiError),
 }
 
 impl SeasonJobError {

@@ -45,10 +45,7 @@ pub fn write_fearing_outputs(
         &preview::PreviewOptions::default(),
     )?;
     let json = dir.join("report.json");
-    let mut report = serde_json::to_value(&cover.report).map_err(OutputError::Report)?;
-    if let (Some(input), Some(obj)) = (input, report.as_object_mut()) {
-        obj.insert("input".into(), input);
-    }
+    let report = fearing_report(cover, input).map_err(OutputError::Report)?;
     let text = serde_json::to_string_pretty(&report).map_err(OutputError::Report)?;
     snowscape_io::write_bytes_atomic(&json, text.as_bytes())?;
     let mut files = vec![glb, obj, dir.join("snow.mtl")];
@@ -57,6 +54,20 @@ pub fn write_fearing_outputs(
     }
     files.extend([png, json]);
     Ok(files)
+}
+
+/// A Fearing cover's report (its [`FearingReport`](snowscape_fearing::FearingReport)) with
+/// `input` (what the front end read) as its `input` member: `report.json`, and what the Python
+/// package returns.
+pub fn fearing_report(
+    cover: &FearingCover,
+    input: Option<serde_json::Value>,
+) -> serde_json::Result<serde_json::Value> {
+    let mut report = serde_json::to_value(&cover.report)?;
+    if let (Some(input), Some(obj)) = (input, report.as_object_mut()) {
+        obj.insert("input".into(), input);
+    }
+    Ok(report)
 }
 
 #[cfg(test)]
