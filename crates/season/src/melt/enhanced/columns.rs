@@ -231,17 +231,25 @@ fn lanes(f: impl Fn(usize) -> f32) -> [f32; LANES] {
     std::array::from_fn(f)
 }
 
-/// Up to [`LANES`] values, the rest 0 (an empty cell).
+/// Up to [`LANES`] values, the rest 0 (an empty cell). A full group is one fixed-size copy
+/// (one vector load): a copy of a slice's length went through a call to `memmove` per load.
 #[inline(always)]
 fn load(v: &[f32]) -> [f32; LANES] {
+    if let Ok(full) = <[f32; LANES]>::try_from(v) {
+        return full;
+    }
     let mut a = [0.0; LANES];
     a[..v.len()].copy_from_slice(v);
     a
 }
 
-/// The first `out.len()` lanes of `a`.
+/// The first `out.len()` lanes of `a` (a full group in one fixed-size store).
 #[inline(always)]
 fn store(out: &mut [f32], a: [f32; LANES]) {
+    if let Ok(full) = <&mut [f32; LANES]>::try_from(&mut *out) {
+        *full = a;
+        return;
+    }
     let n = out.len();
     out.copy_from_slice(&a[..n]);
 }
