@@ -155,7 +155,7 @@ fn melt_rows<V: Validity>(
                     let layers = [&mut c[col], &mut s[col], &mut u[col], &mut p[col]];
                     removed[col] = remove_top_down(layers, depth);
                 }
-                removed.iter().map(|&r| r as f64).sum::<f64>()
+                crate::row_sum(removed)
             },
         )
         .collect()

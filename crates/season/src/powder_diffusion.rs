@@ -355,7 +355,7 @@ fn update_pass<V: Validity>(
                         }
                     }
                 }
-                let moved = moved_row.iter().map(|&m| m as f64).sum::<f64>();
+                let moved = crate::row_sum(moved_row);
                 (moved, border)
             },
         )

@@ -266,18 +266,18 @@ impl RowTransfers {
         }
     }
 
-    /// Row totals in the order of [`StabilityReport`]'s first five fields, m.
+    /// Row totals in the order of [`StabilityReport`]'s first five fields, m (each a
+    /// [`crate::row_sum`]; the exchange split into its two directions in place).
     fn sums(&self) -> [f64; 5] {
-        let mut sums = [0.0f64; 5];
-        for k in 0..self.exchanged.len() {
-            let e = self.exchanged[k];
-            sums[0] += self.aged_stable[k] as f64;
-            sums[1] += self.aged_unstable[k] as f64;
-            sums[2] += e.max(0.0) as f64;
-            sums[3] += (-e).max(0.0) as f64;
-            sums[4] += self.compacted[k] as f64;
-        }
-        sums
+        let stabilised = crate::row_sum_by(&self.exchanged, |e| e.max(0.0));
+        let destabilised = crate::row_sum_by(&self.exchanged, |e| (-e).max(0.0));
+        [
+            crate::row_sum(&self.aged_stable),
+            crate::row_sum(&self.aged_unstable),
+            stabilised,
+            destabilised,
+            crate::row_sum(&self.compacted),
+        ]
     }
 }
 

@@ -641,7 +641,7 @@ impl Coefficients {
             &mut sc.sums,
         );
         let [s_rd, s_rw, s_md, s_mw, s_rain, s_ro] = sums;
-        let total = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>();
+        let total = |v: &[f32]| crate::row_sum(v);
         let [s_rd, s_rw, s_md, s_mw, s_rain, s_ro] =
             [s_rd, s_rw, s_md, s_mw, s_rain, s_ro].map(|v| &**v);
         RowSums {

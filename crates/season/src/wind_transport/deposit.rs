@@ -131,13 +131,11 @@ pub(super) fn run<V: Validity>(
                         general(col, buf, &mut un[col], &mut pw[col]);
                     }
                 }
-                let mut sums = [0.0f64; 3];
-                for k in 0..w {
-                    sums[0] += buf.deposited[k] as f64;
-                    sums[1] += buf.slab[k] as f64;
-                    sums[2] += buf.tamped[k] as f64;
-                }
-                sums
+                [
+                    crate::row_sum(&buf.deposited[..w]),
+                    crate::row_sum(&buf.slab[..w]),
+                    crate::row_sum(&buf.tamped[..w]),
+                ]
             },
         )
         .collect()

@@ -78,8 +78,7 @@ pub(super) fn run<V: Validity>(
                     general(col, &mut ox[col], &mut oy[col]);
                 }
             }
-            let eroded = ox.iter().zip(oy.iter());
-            let eroded = eroded.map(|(x, y)| (x.abs() + y.abs()) as f64).sum::<f64>();
+            let eroded = crate::row_sum_pairs(ox, oy, |x, y| x.abs() + y.abs());
             [eroded, border]
         })
         .collect()
