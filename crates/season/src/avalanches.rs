@@ -254,6 +254,7 @@ pub fn hazard(
         lambda: std::mem::take(out),
         row_sums: Vec::new(),
         total: 0.0,
+        zeroed: false,
     };
     let sources = HazardSources {
         skiers,
@@ -323,6 +324,10 @@ pub struct HazardMap {
     row_sums: Vec<f64>,
     /// Sum of the row sums in row order (the Avalanche-Start rate), 1/day.
     total: f64,
+    /// `lambda` and `row_sums` hold only zeros (nothing releases), so a map without sources
+    /// need not be cleared again: a season without natural releases computed it after every
+    /// melt and snowfall event, writing the whole map each time.
+    zeroed: bool,
 }
 
 impl HazardMap {
@@ -341,11 +346,16 @@ impl HazardMap {
     ) -> f64 {
         let g = terrain.geometry();
         let (w, h) = (g.width(), g.height());
+        let nothing_releases = !params.natural && sources.none_but_natural(params);
+        if nothing_releases && self.zeroed && self.lambda.len() == w * h {
+            return 0.0;
+        }
         self.lambda.clear();
         self.lambda.resize(w * h, 0.0);
         self.row_sums.clear();
         self.row_sums.resize(h, 0.0);
-        if !params.natural && sources.none_but_natural(params) {
+        self.zeroed = nothing_releases;
+        if nothing_releases {
             // Nothing releases: every λ is 0.
             self.total = 0.0;
             return 0.0;
@@ -392,6 +402,7 @@ impl HazardMap {
         if !params.natural && sources.none_but_natural(params) {
             return 0.0;
         }
+        self.zeroed = false;
         let mut last_row = usize::MAX;
         for &i in cells {
             self.lambda[i] = cell_hazard(params, terrain, slope_deg, sources, i);

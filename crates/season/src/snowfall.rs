@@ -389,9 +389,11 @@ pub fn add_precipitation(
                 || vec![0.0f32; w],
                 |gradient, (row, ((((st, un), pw), age), rain))| {
                     row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
-                    let mut sums = [0.0f64; 3];
+                    // Four interleaved partial sums of each term (as `crate::row_sum`).
+                    let mut sums = [[0.0f64; 4]; 3];
                     for col in 0..w {
                         let i = row * w + col;
+                        let lane = col % 4;
                         if !valid.at(i) {
                             continue;
                         }
@@ -399,7 +401,7 @@ pub fn add_precipitation(
                         let oro = maps.orographic[i];
                         let (swe, r) = (s_ref * oro, r_ref * oro);
                         rain[col] += r;
-                        sums[2] += r as f64;
+                        sums[2][lane] += r as f64;
                         if swe <= 0.0 {
                             continue;
                         }
@@ -417,10 +419,10 @@ pub fn add_precipitation(
                         if swe >= reset {
                             age[col] = 0.0;
                         }
-                        sums[0] += dp as f64 + du as f64 + ds as f64;
-                        sums[1] += (wp + wu + ws) as f64;
+                        sums[0][lane] += dp as f64 + du as f64 + ds as f64;
+                        sums[1][lane] += (wp + wu + ws) as f64;
                     }
-                    sums
+                    sums.map(|a| (a[0] + a[1]) + (a[2] + a[3]))
                 },
             )
             .collect()

@@ -409,7 +409,9 @@ struct RowScratch {
     absorbed: Vec<f32>,
     cooling: Vec<f32>,
     warm: Vec<f32>,
-    rain: Vec<f32>,
+    /// Zeros: the rain of a window without any.
+    no_rain: Vec<f32>,
+    /// 1 on valid cells, 0 on nodata (all ones without a mask).
     keep: Vec<f32>,
     /// refrozen depth, refrozen water, melted depth, melt water, rain on snow, runoff.
     sums: [Vec<f32>; 6],
@@ -419,7 +421,7 @@ impl RowScratch {
     fn new(w: usize) -> Self {
         Self {
             shortwave: vec![0.0; w],
-            rain: vec![0.0; w],
+            no_rain: vec![0.0; w],
             keep: vec![1.0; w],
             absorbed: vec![0.0; w],
             cooling: vec![0.0; w],
@@ -614,18 +616,14 @@ impl Coefficients {
             sc.absorbed[col] = 1.0 - self.albedo_at(st.age[col], st.melting[col] > 0.5);
             (sc.cooling[col], sc.warm[col]) = self.degree_hours.at(o);
         }
-        match invalid {
-            Some(v) => {
-                for (k, &bad) in sc.keep.iter_mut().zip(&v[..w]) {
-                    *k = if bad { 0.0 } else { 1.0 };
-                }
+        // Without a mask `keep` stays all ones, and without rain the zeros of `no_rain` are
+        // read (no per-row copies).
+        if let Some(v) = invalid {
+            for (k, &bad) in sc.keep.iter_mut().zip(&v[..w]) {
+                *k = if bad { 0.0 } else { 1.0 };
             }
-            None => sc.keep.fill(1.0),
         }
-        match rain {
-            Some(r) => sc.rain.copy_from_slice(r),
-            None => sc.rain.fill(0.0),
-        }
+        let rain = rain.unwrap_or(&sc.no_rain);
         let sums = column_updates(
             &self.scalars,
             Columns {
@@ -634,7 +632,7 @@ impl Coefficients {
                 absorbed: &sc.absorbed,
                 cooling: &sc.cooling,
                 warm: &sc.warm,
-                rain: &sc.rain,
+                rain,
                 keep: &sc.keep,
             },
             st,
