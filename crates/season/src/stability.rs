@@ -281,10 +281,11 @@ impl RowTransfers {
     }
 }
 
-/// Applies the three transfers to one row of cells (branch-free, so it vectorises) and
-/// records them in `out`. Nodata cells hold no snow and a zero gradient, so every transfer
-/// there is a share of nothing: they need no test (and a NaN temperature clamps to a finite
-/// rate).
+/// Applies the three transfers to one row of cells (branch-free, so it vectorises: AVX2 where
+/// the CPU has it, the same bits as SSE since Rust does not fuse multiply-adds) and records
+/// them in `out`. Nodata cells hold no snow and a zero gradient, so every transfer there is a
+/// share of nothing: they need no test (and a NaN temperature clamps to a finite rate).
+#[multiversion::multiversion(targets("x86_64+avx2"))]
 fn row_update(
     k: &Coefficients,
     [c, s, u, p]: [&mut [f32]; 4],
