@@ -46,7 +46,13 @@ pub(crate) fn ordered_sum(rows: &[f64]) -> f64 {
 }
 
 /// Lanes of [`row_sum`].
-const SUM_LANES: usize = 4;
+pub(crate) const SUM_LANES: usize = 4;
+
+/// The total of [`SUM_LANES`] partial sums, added in a fixed order.
+#[inline(always)]
+pub(crate) fn lane_total(acc: [f64; SUM_LANES]) -> f64 {
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
 
 /// `Σ v` in f64 over one row of a budget term, in [`SUM_LANES`] interleaved partial sums
 /// added in a fixed order at the end: the same bits for any thread count (one thread sums a
@@ -73,7 +79,7 @@ pub(crate) fn row_sum_pairs(a: &[f32], b: &[f32], f: impl Fn(f32, f32) -> f32) -
     for k in full..n {
         acc[0] += f64::from(f(a[k], b[k]));
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3])
+    lane_total(acc)
 }
 
 /// [`row_sum`] of `f(v[k])`.
@@ -90,5 +96,5 @@ pub(crate) fn row_sum_by(v: &[f32], f: impl Fn(f32) -> f32) -> f64 {
     for &x in rest {
         acc[0] += f64::from(f(x));
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3])
+    lane_total(acc)
 }

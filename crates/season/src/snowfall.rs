@@ -390,10 +390,10 @@ pub fn add_precipitation(
                 |gradient, (row, ((((st, un), pw), age), rain))| {
                     row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
                     // Four interleaved partial sums of each term (as `crate::row_sum`).
-                    let mut sums = [[0.0f64; 4]; 3];
+                    let mut sums = [[0.0f64; crate::SUM_LANES]; 3];
                     for col in 0..w {
                         let i = row * w + col;
-                        let lane = col % 4;
+                        let lane = col % crate::SUM_LANES;
                         if !valid.at(i) {
                             continue;
                         }
@@ -422,7 +422,7 @@ pub fn add_precipitation(
                         sums[0][lane] += dp as f64 + du as f64 + ds as f64;
                         sums[1][lane] += (wp + wu + ws) as f64;
                     }
-                    sums.map(|a| (a[0] + a[1]) + (a[2] + a[3]))
+                    sums.map(crate::lane_total)
                 },
             )
             .collect()
