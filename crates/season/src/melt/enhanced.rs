@@ -362,7 +362,7 @@ pub fn step(
                 let base = row * w;
                 let snowy = (0..w).any(|k| c[k] + s[k] + u[k] + p[k] > 0.0);
                 if snowy {
-                    k.row_shortwave(forcing, base, &mut scratch.shortwave);
+                    row_shortwave(k.threshold, forcing, base, &mut scratch.shortwave);
                 } else {
                     scratch.shortwave.fill(0.0);
                 }
@@ -555,48 +555,6 @@ impl Coefficients {
         t[k] + f * (t[k + 1] - t[k])
     }
 
-    /// `Σ_h w_h [T_h > T_T] I_sw,h` (W h/m²) of the cells of one row starting at cell `base`,
-    /// hour by hour over the row (vectorisable), skipping hours too cold anywhere in the row.
-    fn row_shortwave(&self, f: &MeltForcing, base: usize, out: &mut [f32]) {
-        out.fill(0.0);
-        let w = out.len();
-        let off = &f.lapse_offset_c[base..base + w];
-        let svf = &f.sky_view_factor[base..base + w];
-        let warmest_offset = off.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-        let thr = self.threshold;
-        for h in f.hours {
-            if h.sea_level_c + warmest_offset <= thr {
-                continue;
-            }
-            let (t0, wt) = (h.sea_level_c, h.weight);
-
-            match h.beam {
-                Some(beam) => {
-                    let beam = &beam[base..base + w];
-                    let refl = &f.reflected[h.month][base..base + w];
-                    let (direct, diffuse, reflected) = (
-                        wt * h.direct_w_m2 * (1.0 / 255.0),
-                        wt * h.diffuse_w_m2,
-                        wt * h.reflected_w_m2,
-                    );
-                    for ((((o, &b), &r), &v), &z) in
-                        out.iter_mut().zip(beam).zip(refl).zip(svf).zip(off)
-                    {
-                        let sw = diffuse * v + direct * b as f32 + reflected * r;
-                        *o += if t0 + z > thr { sw } else { 0.0 };
-                    }
-                }
-                None if h.diffuse_w_m2 > 0.0 => {
-                    let diffuse = wt * h.diffuse_w_m2;
-                    for ((o, &v), &z) in out.iter_mut().zip(svf).zip(off) {
-                        *o += if t0 + z > thr { diffuse * v } else { 0.0 };
-                    }
-                }
-                None => {}
-            }
-        }
-    }
-
     /// The window on one row starting at cell `base` (module docs), in two passes: the
     /// table lookups, then the column updates written without data-dependent branches, so
     /// the cells of a row overlap in the pipeline (and vectorise) instead of waiting on one
@@ -649,6 +607,51 @@ impl Coefficients {
             melt_water: total(s_mw),
             rain: total(s_rain),
             runoff: total(s_ro),
+        }
+    }
+}
+
+/// `Σ_h w_h [T_h > T_T] I_sw,h` (W h/m²) of the cells of one row starting at cell `base`
+/// (`threshold` = `T_T`), hour by hour over the row (vectorised: AVX2 where the CPU has it, the
+/// same bits as SSE since Rust does not fuse multiply-adds), skipping hours too cold anywhere
+/// in the row.
+#[multiversion::multiversion(targets("x86_64+avx2"))]
+fn row_shortwave(threshold: f32, f: &MeltForcing, base: usize, out: &mut [f32]) {
+    out.fill(0.0);
+    let w = out.len();
+    let off = &f.lapse_offset_c[base..base + w];
+    let svf = &f.sky_view_factor[base..base + w];
+    let warmest_offset = off.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let thr = threshold;
+    for h in f.hours {
+        if h.sea_level_c + warmest_offset <= thr {
+            continue;
+        }
+        let (t0, wt) = (h.sea_level_c, h.weight);
+
+        match h.beam {
+            Some(beam) => {
+                let beam = &beam[base..base + w];
+                let refl = &f.reflected[h.month][base..base + w];
+                let (direct, diffuse, reflected) = (
+                    wt * h.direct_w_m2 * (1.0 / 255.0),
+                    wt * h.diffuse_w_m2,
+                    wt * h.reflected_w_m2,
+                );
+                for ((((o, &b), &r), &v), &z) in
+                    out.iter_mut().zip(beam).zip(refl).zip(svf).zip(off)
+                {
+                    let sw = diffuse * v + direct * b as f32 + reflected * r;
+                    *o += if t0 + z > thr { sw } else { 0.0 };
+                }
+            }
+            None if h.diffuse_w_m2 > 0.0 => {
+                let diffuse = wt * h.diffuse_w_m2;
+                for ((o, &v), &z) in out.iter_mut().zip(svf).zip(off) {
+                    *o += if t0 + z > thr { diffuse * v } else { 0.0 };
+                }
+            }
+            None => {}
         }
     }
 }
