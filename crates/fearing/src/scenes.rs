@@ -77,6 +77,27 @@ pub fn roof(ground: f32, roof: f32, height: f32, thickness: f32) -> Scene {
     }
 }
 
+/// A 2 m wide face leaning 70° (steeper than snow's 50° angle of repose) over open ground
+/// `ground` metres wide: its snow slides off, but it sees the sky (a dusting).
+pub fn steep_face(ground: f32) -> Scene {
+    let face = SceneObject {
+        frame: Default::default(),
+        name: "face".into(),
+        positions: vec![
+            [0.0, -1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [-1.0, 1.0, 2.75],
+            [-1.0, -1.0, 2.75],
+        ],
+        normals: None,
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    Scene {
+        objects: vec![plane("ground", ground, 0.0), face],
+        frame: frame(),
+    }
+}
+
 /// A box `size` wide and `height` tall standing on ground `ground` metres wide.
 pub fn box_on_ground(ground: f32, size: f32, height: f32) -> Scene {
     let h = 0.5 * size;

@@ -543,22 +543,7 @@ fn bad_parameters_name_the_value() {
 fn swept_steep_faces_get_flake_dusting() {
     // A 70° face (steeper than the 50° AOR) over open ground: its snow slides off, but it saw
     // the sky, so it gets a dense dusting; the ground gets a surface.
-    let face = snowscape_mesh::SceneObject {
-        frame: Default::default(),
-        name: "face".into(),
-        positions: vec![
-            [0.0, -1.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [-1.0, 1.0, 2.75],
-            [-1.0, -1.0, 2.75],
-        ],
-        normals: None,
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-    };
-    let scene = Scene {
-        objects: vec![scenes::plane("ground", 6.0, 0.0), face],
-        frame: scenes::frame(),
-    };
+    let scene = scenes::steep_face(6.0);
     let c = cover(&scene, &quick(Material::snow())).unwrap();
     let d = c.dusting.as_ref().expect("a dusting mesh");
     assert!(d.triangles.len() > 50, "{}", d.triangles.len());

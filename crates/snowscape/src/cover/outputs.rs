@@ -79,22 +79,7 @@ mod tests {
     /// written beside the snow (its texture and an object of the OBJ).
     #[test]
     fn the_dusting_is_written_with_the_snow() {
-        let face = snowscape_mesh::SceneObject {
-            frame: Default::default(),
-            name: "face".into(),
-            positions: vec![
-                [0.0, -1.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [-1.0, 1.0, 2.75],
-                [-1.0, -1.0, 2.75],
-            ],
-            normals: None,
-            triangles: vec![[0, 1, 2], [0, 2, 3]],
-        };
-        let scene = Scene {
-            objects: vec![scenes::plane("ground", 6.0, 0.0), face],
-            frame: scenes::frame(),
-        };
+        let scene = scenes::steep_face(6.0);
         let params = FearingParams {
             target_sites: 2000,
             flakes_per_site: 16,

@@ -10,6 +10,7 @@ use snowscape_io::{write_bytes_atomic, write_geotiff_bands};
 use snowscape_render::{PreviewOptions, encode_png, render_preview};
 use snowscape_terrain::{Grid, LayeredTerrain, NodataMask, SnowLayer};
 use snowscape_transport::scenario::{RunOutputs, Scenario, WindReport};
+use snowscape_transport::step::MassBudget;
 use snowscape_transport::wind3d::{IterationReport, mean_wind_bytes};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -169,20 +170,12 @@ pub struct DepthStats {
     pub max: f32,
 }
 
-/// The mass budget, kg, closing on `closure_error`.
+/// The mass budget with its unit (kg), closing on `closure_error`.
 #[derive(Debug, Clone, Serialize)]
 pub struct KgBudget {
     pub unit: &'static str,
-    pub precipitation_in: f64,
-    pub border_in: f64,
-    pub border_out: f64,
-    pub sublimation_out: f64,
-    pub melt_out: f64,
-    pub transported: f64,
-    pub initial: f64,
-    #[serde(rename = "final")]
-    pub final_mass: f64,
-    pub closure_error: f64,
+    #[serde(flatten)]
+    pub budget: MassBudget,
 }
 
 /// Seconds per stage and of the whole command.
@@ -208,7 +201,6 @@ impl<'a> TransportReport<'a> {
         let g = &out.geometry;
         let depth = out.state.depth();
         let n = depth.len().max(1) as f64;
-        let b = &out.budget;
         Self {
             scenario,
             grid: GridSize {
@@ -236,15 +228,7 @@ impl<'a> TransportReport<'a> {
             },
             mass_budget: KgBudget {
                 unit: "kg",
-                precipitation_in: b.precipitation_in,
-                border_in: b.border_in,
-                border_out: b.border_out,
-                sublimation_out: b.sublimation_out,
-                melt_out: b.melt_out,
-                transported: b.transported,
-                initial: b.initial_mass,
-                final_mass: b.final_mass,
-                closure_error: b.closure_error,
+                budget: out.budget,
             },
             input,
             timings_s: TransportTimings {

@@ -127,9 +127,11 @@ pub struct MassBudget {
     pub melt_out: f64,
     /// Snow moved between cells by saltation and suspension (sent downwind).
     pub transported: f64,
-    /// Stored snow at the start.
+    /// Stored snow at the start (`initial` in a report).
+    #[serde(rename = "initial")]
     pub initial_mass: f64,
-    /// Stored snow at the end.
+    /// Stored snow at the end (`final` in a report).
+    #[serde(rename = "final")]
     pub final_mass: f64,
     /// `final − initial − (in − out)`: rounding only.
     pub closure_error: f64,
