@@ -137,6 +137,11 @@ pub(crate) fn check_range(
 pub(crate) trait Validity: Sync {
     /// Whether cell `i` holds data.
     fn at(&self, i: usize) -> bool;
+    /// The validity of the cells `cells` of the grid, indexed from the window's first cell
+    /// (a block of whole rows is a grid of its own).
+    fn window(&self, cells: std::ops::Range<usize>) -> Self
+    where
+        Self: Sized;
 }
 
 /// Every cell holds data: the test folds away.
@@ -147,6 +152,9 @@ impl Validity for AllValid {
     fn at(&self, _i: usize) -> bool {
         true
     }
+    fn window(&self, _cells: std::ops::Range<usize>) -> Self {
+        AllValid
+    }
 }
 
 /// Per-cell nodata flags (`true` = nodata).
@@ -156,6 +164,9 @@ impl Validity for Masked<'_> {
     #[inline(always)]
     fn at(&self, i: usize) -> bool {
         !self.0[i]
+    }
+    fn window(&self, cells: std::ops::Range<usize>) -> Self {
+        Masked(&self.0[cells])
     }
 }
 

@@ -86,15 +86,26 @@
 //! rest, so the shares add up to the depth removed): the volume is conserved but for the
 //! border outflow.
 //!
+//! **Parallel strips.** The grid is swept as two strips of rows (its halves, fixed by the
+//! grid, not by the threads), each in its own order (the order above, within the strip) on its
+//! own thread. A strip sees the row of its neighbour beside it (its halo) as that neighbour
+//! expects to keep it (surface at the start less its excess), as a cell the sweep has passed:
+//! the no-overtaking limit applies to it. Snow sent there waits until the next phase, when the
+//! neighbour takes it in and sweeps again from its receivers, seeing every cell it does not
+//! reach as it rests; phases repeat until no snow crosses (at most 1024; what is left then is
+//! reported as unsettled). Phases after the first are short: what crosses is the tail of
+//! debris flows.
+//!
 //! **Cost and determinism.** A row-parallel pass finds the cells over their holding depth (a
 //! pure function of each cell; a bound from the cached bedrock descent passes over the cells
-//! that cannot be steep enough); a step without any returns at once. The sweep is sequential
-//! in the fixed order and visits only the cells that shed or receive (a bitset of pending
-//! positions), setting up a cell's surfaces the first time it looks at it, so that a step
-//! costs what its cascade touches rather than the grid; holding depths come from a table in
-//! `tan / (1 + tan)` (cached in the scratch) and a receiving cell's fixed point from regula
-//! falsi over the steepest rise at each of the three neighbour distances. The step is
-//! bit-identical for any thread count.
+//! that cannot be steep enough); a step without any returns at once. Each strip's sweep visits
+//! only the cells that shed or receive (a bitset of pending positions), setting up a cell's
+//! surfaces the first time it looks at it, so that a step costs what its cascade touches
+//! rather than the grid; holding depths come from a table in `tan / (1 + tan)` (cached in the
+//! scratch) and a receiving cell's fixed point from tables over the steepest rise at each of
+//! the three neighbour distances. Strips and phases are fixed by the grid and the snow, and
+//! snow crossing between strips is taken in in strip order: the step is bit-identical for any
+//! thread count.
 //!
 //! **Time.** Shedding is a release to rest, not a rate: `dt_days` is validated and otherwise
 //! unused; call the step after the snow cover changed (snowfall, wind). A season calls it
@@ -322,30 +333,24 @@ impl SheddingReport {
     }
 }
 
-/// Reusable buffers of the shedding step; the bedrock order is cached here.
+/// Reusable buffers of the shedding step; the strips and their bedrock orders are cached here.
 #[derive(Debug, Clone, Default)]
 pub struct SheddingScratch {
-    /// Bedrock and mask the cached order was built for.
+    /// Bedrock and mask the cached strips were built for.
     key_bedrock: Vec<u32>,
     key_mask: Option<Vec<bool>>,
-    /// Valid cells, each after the neighbours above it (`upslope_first_order`).
-    order: Vec<u32>,
+    /// The strips of rows swept in parallel, each with its order and its cells' state.
+    strips: Vec<Strip>,
     /// Steepest descent of the bedrock alone to the valid neighbours (tan; infinite for cells
     /// on the border or beside nodata): with the compacted snow on a cell, a bound on the
     /// slope of its bed that spares the cells far from `min_slope_deg` a full evaluation.
     bedrock_descent: Vec<f32>,
-    /// Each cell's rank in `order` and its state in the sweep.
-    cells: Vec<CellState>,
     generation: u32,
     /// The holding table and the parameters it was built for.
     holding: Option<(SheddingParams, HoldingTable)>,
     /// The depths receiving cells keep at each neighbour distance (for the holding table
     /// above), and the `1 / distance` they were built for.
     retained: Option<([u32; 3], [RetainedTable; 3])>,
-    queue: BinaryHeap<u64>,
-    /// One bit per rank: the cells the sweep has still to visit (over their holding depth,
-    /// or received snow ahead of the sweep).
-    pending: Vec<u64>,
 }
 
 /// Over its holding depth and steep enough to shed its own snow.
@@ -356,6 +361,12 @@ const RECEIVED: u8 = 2;
 const QUEUED: u8 = 4;
 /// Shed snow in this step.
 const SHED: u8 = 8;
+/// A cell of a neighbouring strip, in a strip's halo.
+const HALO: u8 = 16;
+/// Waiting for the sweep (its rank's bit is set in the strip's pending bits).
+const PENDING: u8 = 32;
+/// Its surface changed in this phase (listed in the strip's `dirty`).
+const DIRTY: u8 = 64;
 
 /// Depths below this (m) are not shed: f32 round-off of a column, not snow.
 const MIN_SHED_M: f32 = 1e-6;
@@ -410,40 +421,43 @@ impl Default for CellState {
     }
 }
 
-/// Sets up cell `i`'s bed, surface at the start and surface of the sweep and its flags from
-/// the snow it has, unless its stamp says this step (`generation`) already did: the same sums
-/// as `LayeredTerrain::surface`.
-#[inline]
+/// Sets up cell `i` of a strip's window (its bed, surface at the start, surface of the sweep
+/// and flags) from its `column` (bedrock, then compacted, stable, unstable and powder snow),
+/// unless its stamp says this step (`generation`) already did: the same sums as
+/// `LayeredTerrain::surface`.
+#[inline(always)]
 fn set_up(
     i: usize,
     generation: u32,
-    bedrock: &[f32],
-    snow: &[Vec<f32>; 4],
     cells: &mut [CellState],
+    column: impl FnOnce() -> (f32, [f32; 4]),
 ) {
     let cell = &mut cells[i];
     if cell.stamp == generation {
         return;
     }
     cell.stamp = generation;
-    let [c, st, u, pw] = snow;
-    let b = bedrock[i];
-    cell.bed = b + c[i];
-    cell.surface0 = b + (c[i] + st[i] + u[i] + pw[i]);
+    let (b, [c, st, u, pw]) = column();
+    cell.bed = b + c;
+    cell.surface0 = b + (c + st + u + pw);
     cell.surface = cell.surface0;
     cell.flags = 0;
 }
 
-impl SheddingScratch {
-    /// Sets up cell `i`'s bed, surfaces and flags from the snow it has, the first time the
-    /// step looks at it (the same sums as `LayeredTerrain::surface`).
-    #[inline]
-    fn touch(&mut self, bedrock: &[f32], snow: &[Vec<f32>; 4], i: usize) {
-        set_up(i, self.generation, bedrock, snow, &mut self.cells);
-    }
+/// The column of a cell: `bedrock[b]` and the four layers at `snow[k]`.
+#[inline(always)]
+fn column<S: std::ops::Deref<Target = [f32]>>(
+    bedrock: &[f32],
+    b: usize,
+    snow: &[S; 4],
+    k: usize,
+) -> (f32, [f32; 4]) {
+    (bedrock[b], [snow[0][k], snow[1][k], snow[2][k], snow[3][k]])
+}
 
-    /// Rebuilds the bedrock order if the bedrock or the mask changed.
-    fn refresh_order(&mut self, terrain: &LayeredTerrain) {
+impl SheddingScratch {
+    /// Rebuilds the strips if the bedrock or the mask changed.
+    fn refresh_strips(&mut self, terrain: &LayeredTerrain) -> Result<(), PhenomenonError> {
         let mask = terrain.mask().invalid_cells();
         let same = self.key_bedrock.len() == terrain.bedrock.len()
             && self.key_mask.as_deref() == mask
@@ -453,25 +467,9 @@ impl SheddingScratch {
                 .zip(terrain.bedrock.par_iter())
                 .all(|(k, b)| *k == b.to_bits());
         if same {
-            return;
+            return Ok(());
         }
         let geometry = terrain.geometry();
-        self.order = with_validity!(terrain.mask(), |valid| upslope_first_order(
-            &terrain.bedrock,
-            geometry,
-            valid
-        ));
-        self.cells = vec![CellState::default(); terrain.bedrock.len()];
-        for (p, &i) in self.order.iter().enumerate() {
-            self.cells[i as usize].rank = p as u32;
-        }
-        let (w, h) = (geometry.width(), geometry.height());
-        for (i, cell) in self.cells.iter_mut().enumerate() {
-            let (col, row) = (i % w, i / w);
-            cell.interior = col > 0 && row > 0 && col + 1 < w && row + 1 < h;
-        }
-        self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
-        self.key_mask = mask.map(<[bool]>::to_vec);
         // Per cell in one pass: the bound of `bedrock_descent` (infinite beside the border or
         // nodata) and the descent with the border continued ([`steepest_descent`] on the
         // bedrock, the same terms in the same order).
@@ -498,9 +496,16 @@ impl SheddingScratch {
                 .collect()
         });
         self.bedrock_descent = descents.iter().map(|d| d.0).collect();
-        for (cell, d) in self.cells.iter_mut().zip(&descents) {
-            cell.bedrock_tan = d.1;
-        }
+        let bedrock_tan: Vec<f32> = descents.iter().map(|d| d.1).collect();
+        self.strips = with_validity!(terrain.mask(), |valid| {
+            strip_rows(geometry.height())
+                .into_par_iter()
+                .map(|rows| Strip::new(rows, bedrock, geometry, valid, &bedrock_tan))
+                .collect::<Result<_, _>>()
+        })?;
+        self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
+        self.key_mask = mask.map(<[bool]>::to_vec);
+        Ok(())
     }
 }
 
@@ -567,7 +572,8 @@ fn upslope_first_order<V: Validity>(
     order
 }
 
-/// Sheds the snow above the holding depth of every steep cell, down the slopes, in one sweep.
+/// Sheds the snow above the holding depth of every steep cell, down the slopes, in one sweep
+/// per strip of rows (and further phases for what crosses between strips).
 pub fn step(
     params: &SheddingParams,
     terrain: &mut LayeredTerrain,
@@ -587,7 +593,7 @@ pub fn step(
             reason: "the sweep indexes cells with 32 bits",
         });
     }
-    scratch.refresh_order(terrain);
+    scratch.refresh_strips(terrain)?;
     let tan_min = params.min_slope_deg.to_radians().tan() as f32;
     if scratch.holding.as_ref().is_none_or(|(p, _)| p != params) {
         scratch.holding = Some((params.clone(), HoldingTable::new(params)));
@@ -609,11 +615,11 @@ pub fn step(
     // the snow it had at the start): a step costs what its cascade touches, not the grid.
     scratch.generation = scratch.generation.wrapping_add(1);
     if scratch.generation == 0 {
-        scratch.cells.iter_mut().for_each(|c| c.stamp = 0);
+        for strip in &mut scratch.strips {
+            strip.cells.iter_mut().for_each(|c| c.stamp = 0);
+        }
         scratch.generation = 1;
     }
-    scratch.pending.clear();
-    scratch.pending.resize(n.div_ceil(64), 0);
     let inv_l = distance_inv_l(&geometry);
     let key = inv_l.map(f32::to_bits);
     let retained = match scratch.retained.take() {
@@ -629,23 +635,29 @@ pub fn step(
             [ew, ns, RetainedTable::new(&holding, inv_l[2])]
         }
     };
-    // What the neighbours above expect a cell to keep: its surface less its own excess.
-    for &(i, tan, excess) in &active {
-        let i = i as usize;
-        scratch.touch(&terrain.bedrock, &terrain.snow, i);
-        let cell = &mut scratch.cells[i];
-        cell.flags = ACTIVE;
-        cell.tan_slope = tan;
-        cell.surface0 -= excess;
-        let p = cell.rank as usize;
-        scratch.pending[p / 64] |= 1 << (p % 64);
-    }
-    let report = with_validity!(mask, |valid| cascade::sweep(
-        params, &holding, &retained, terrain, scratch, &geometry, valid
+    let tables = Tables {
+        params,
+        holding: &holding,
+        retained: &retained,
+    };
+    let report = with_validity!(mask, |valid| strips::shed_in_phases(
+        &tables,
+        terrain,
+        &mut scratch.strips,
+        valid,
+        &active,
+        scratch.generation
     ));
     scratch.holding = Some((params.clone(), holding));
     scratch.retained = Some((key, retained));
     Ok(report)
+}
+
+/// What every strip's sweep reads: the parameters and their tables.
+struct Tables<'a> {
+    params: &'a SheddingParams,
+    holding: &'a HoldingTable,
+    retained: &'a [RetainedTable; 3],
 }
 
 /// The cells over their holding depth and steep enough to shed their own snow, in index
@@ -783,7 +795,9 @@ impl HoldingTable {
 mod cascade;
 mod neighbourhood;
 mod retained;
+mod strips;
 use retained::RetainedTable;
+use strips::{Strip, strip_rows};
 
 #[cfg(test)]
 mod tests;

@@ -3,25 +3,48 @@
 
 use super::*;
 
-/// The sequential sweep in the cached order, with the queue of passed receivers.
+/// What one strip's sweep moved: depths (m) summed over cells, and counts.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct SweepTotals {
+    pub(super) moved: f64,
+    pub(super) received: f64,
+    pub(super) border: f64,
+    pub(super) cells_shed: usize,
+    pub(super) unsettled: usize,
+}
+
+/// A strip's sequential sweep in its order, with the queue of passed receivers, over its pending
+/// cells; `snow` holds the strip's own rows of the four layers.
 pub(super) fn sweep<V: Validity>(
-    params: &SheddingParams,
-    holding: &HoldingTable,
-    retained: &[RetainedTable; 3],
-    terrain: &mut LayeredTerrain,
-    scratch: &mut SheddingScratch,
-    geometry: &GridGeometry,
+    tables: &Tables,
+    bedrock: &[f32],
+    strip: &mut Strip,
+    snow: [&mut [f32]; 4],
     valid: &V,
-) -> SheddingReport {
+    generation: u32,
+) -> SweepTotals {
+    let Tables {
+        params,
+        holding,
+        retained,
+    } = *tables;
     let tan_min = params.min_slope_deg.to_radians().tan() as f32;
-    let SheddingScratch {
+    let width = strip.geometry.width();
+    let snow_offset = strip.own(width).start;
+    let valid = &valid.window(strip.window.clone());
+    let bedrock = &bedrock[strip.window.clone()];
+    let Strip {
+        window,
+        geometry,
         order,
         cells,
-        generation,
-        queue,
         pending,
+        queue,
+        dirty,
+        outbox,
+        revisits,
         ..
-    } = scratch;
+    } = strip;
     queue.clear();
     let budget = 16 * order.len() + 1024;
     let mut c = Cascade {
@@ -30,23 +53,23 @@ pub(super) fn sweep<V: Validity>(
         geometry,
         valid,
         nb: neighbours(geometry),
-        bedrock: &terrain.bedrock,
-        snow: &mut terrain.snow,
-        generation: *generation,
+        bedrock,
+        snow,
+        snow_offset,
+        window_start: window.start,
+        generation,
         cells,
+        dirty,
         tan_min,
         queue,
         pending,
+        outbox,
         sweep: 0,
         deposit: params.deposit_layer.index(),
         power: params.flow_exponent as f32,
         tan_entrain: params.entrain_min_slope_deg.to_radians().tan() as f32,
-        moved: 0.0,
-        received: 0.0,
-        border: 0.0,
-        cells_shed: 0,
+        totals: SweepTotals::default(),
     };
-    let (mut revisits, mut unsettled) = (0usize, 0usize);
     // The pending ranks in increasing order; a cell only ever becomes pending ahead of the
     // sweep, so one pass over the words finds them all.
     let mut word = 0;
@@ -61,7 +84,9 @@ pub(super) fn sweep<V: Validity>(
         *bits &= *bits - 1;
         let p = word * 64 + bit;
         c.sweep = p as u32;
-        c.shed(order[p] as usize);
+        let i = order[p] as usize;
+        c.cells[i].flags &= !PENDING;
+        c.shed(i);
         while let Some(entry) = c.queue.pop() {
             let j = !(entry as u32) as usize;
             // Current while the cell is queued with this surface; older entries of a cell that
@@ -71,23 +96,15 @@ pub(super) fn sweep<V: Validity>(
                 continue;
             }
             cell.flags &= !QUEUED;
-            if revisits >= budget {
-                unsettled += 1;
+            if *revisits >= budget {
+                c.totals.unsettled += 1;
                 continue;
             }
-            revisits += 1;
+            *revisits += 1;
             c.shed(j);
         }
     }
-    let area = geometry.cell_area();
-    SheddingReport {
-        moved_m3: c.moved * area,
-        received_m3: c.received * area,
-        border_outflow_m3: c.border * area,
-        cells_shed: c.cells_shed,
-        revisits,
-        unsettled_cells: unsettled,
-    }
+    c.totals
 }
 
 /// Queue key of cell `j`: the highest snow surface first, ties by the lower index.
@@ -103,14 +120,23 @@ struct Cascade<'a, V> {
     geometry: &'a GridGeometry,
     valid: &'a V,
     nb: [Neighbour; 8],
+    /// The strip's window of the bedrock (cells are indexed in the window).
     bedrock: &'a [f32],
-    snow: &'a mut [Vec<f32>; 4],
-    /// See [`SheddingScratch::touch`].
+    /// The strip's own rows of the snow layers, from window index `snow_offset` on.
+    snow: [&'a mut [f32]; 4],
+    snow_offset: usize,
+    /// Grid index of the window's first cell.
+    window_start: usize,
+    /// See [`set_up`].
     generation: u32,
     cells: &'a mut [CellState],
+    /// Cells whose surface changed in this phase.
+    dirty: &'a mut Vec<u32>,
     tan_min: f32,
     queue: &'a mut BinaryHeap<u64>,
     pending: &'a mut [u64],
+    /// Snow sent into the halo: grid index and depth, m.
+    outbox: &'a mut Vec<(u32, f32)>,
     /// Rank of the sweep's cell.
     sweep: u32,
     deposit: usize,
@@ -118,18 +144,16 @@ struct Cascade<'a, V> {
     /// tan of [`SheddingParams::entrain_min_slope_deg`].
     tan_entrain: f32,
 
-    /// Depths (m) summed over cells.
-    moved: f64,
-    received: f64,
-    border: f64,
-    cells_shed: usize,
+    totals: SweepTotals,
 }
 
 impl<V: Validity> Cascade<'_, V> {
-    /// Sets up cell `j` the first time the step looks at it (as [`SheddingScratch::touch`]).
-    #[inline]
+    /// Sets up cell `j` the first time the step looks at it.
+    #[inline(always)]
     fn touch(&mut self, j: usize) {
-        set_up(j, self.generation, self.bedrock, self.snow, self.cells);
+        set_up(j, self.generation, self.cells, || {
+            column(self.bedrock, j, &self.snow, j - self.snow_offset)
+        });
     }
 
     /// Sets up cell `i` and its valid neighbours: everything a visit of `i` reads.
@@ -208,8 +232,8 @@ impl<V: Validity> Cascade<'_, V> {
     /// followed by another without it, at most [`ROUNDS`] in all.
     fn shed(&mut self, i: usize) {
         self.touch_around(i);
-        let s = &self.snow;
-        let depth = s[0][i] + s[1][i] + s[2][i] + s[3][i];
+        let (s, k) = (&self.snow, i - self.snow_offset);
+        let depth = s[0][k] + s[1][k] + s[2][k] + s[3][k];
         let cell = self.cells[i];
         let keep = if cell.flags & RECEIVED != 0 {
             let base = cell.surface - depth;
@@ -313,13 +337,17 @@ impl<V: Validity> Cascade<'_, V> {
         if amount <= MIN_SHED_M {
             return (0.0, false);
         }
-        let removed = take(self.snow, i, amount);
+        let removed = take(&mut self.snow, i - self.snow_offset, amount);
         let cell = &mut self.cells[i];
         cell.surface -= removed;
-        self.moved += f64::from(removed);
+        if cell.flags & DIRTY == 0 {
+            cell.flags |= DIRTY;
+            self.dirty.push(i as u32);
+        }
+        self.totals.moved += f64::from(removed);
         if cell.flags & SHED == 0 {
             cell.flags |= SHED;
-            self.cells_shed += 1;
+            self.totals.cells_shed += 1;
         }
         // Shares in neighbour order, the last one taking the rest, so they sum to `removed`.
         let mut left = removed;
@@ -334,15 +362,26 @@ impl<V: Validity> Cascade<'_, V> {
                 continue;
             }
             match target {
-                Around::Ghost(_) => self.border += f64::from(share),
+                Around::Ghost(_) => self.totals.border += f64::from(share),
                 Around::Cell(j) => {
-                    self.snow[self.deposit][j] += share;
+                    self.totals.received += f64::from(share);
                     let cell = &mut self.cells[j];
+                    if cell.flags & HALO != 0 {
+                        // Another strip's cell: it takes the snow in the next phase (in
+                        // transit until then, like any receiver the sweep has not reached).
+                        self.outbox.push(((self.window_start + j) as u32, share));
+                        continue;
+                    }
                     cell.surface += share;
-                    self.received += f64::from(share);
+                    self.snow[self.deposit][j - self.snow_offset] += share;
+                    if cell.flags & DIRTY == 0 {
+                        cell.flags |= DIRTY;
+                        self.dirty.push(j as u32);
+                    }
                     // A receiver the sweep has passed is queued with its new surface (an older
                     // entry goes stale); the sweep reaches the others.
-                    if cell.rank > self.sweep && cell.flags & (ACTIVE | RECEIVED) == 0 {
+                    if cell.rank > self.sweep && cell.flags & PENDING == 0 {
+                        cell.flags |= PENDING;
                         let p = cell.rank as usize;
                         self.pending[p / 64] |= 1 << (p % 64);
                     }
@@ -370,7 +409,7 @@ fn distance_group(n: &Neighbour) -> usize {
 
 /// Removes `amount` m from the top of cell `i` (powder, unstable, stable, compacted); returns
 /// the depth removed.
-fn take(snow: &mut [Vec<f32>; 4], i: usize, amount: f32) -> f32 {
+fn take(snow: &mut [&mut [f32]; 4], i: usize, amount: f32) -> f32 {
     let mut left = amount;
     let mut removed = 0.0;
     for layer in [

@@ -485,7 +485,7 @@ fn the_slope_bound_passes_over_no_cell_that_sheds() {
         };
         let holding = HoldingTable::new(&p);
         let mut scratch = SheddingScratch::default();
-        scratch.refresh_order(&t);
+        scratch.refresh_strips(&t).unwrap();
         let tan_min = min_slope_deg.to_radians().tan() as f32;
         let found = with_validity!(t.mask(), |valid| over_holding_depth(
             &p, &holding, &t, &scratch, &geo, valid, tan_min
@@ -573,4 +573,82 @@ fn a_sluff_runs_over_a_40_degree_slope_without_stripping_its_own_snow() {
         "mean depth on the 40° slope {mean_40} (1 m before)"
     );
     assert!((t.snow_volume() - before).abs() <= 1e-5 * before);
+}
+
+/// A 60×64 grid whose face (70°) runs down from the first 40 cells of its slope direction onto
+/// flat ground: southwards (crossing the boundary between the two strips of rows at row 32) or
+/// eastwards (every flow within its strip). Returns the mean depth at each position along the
+/// slope, and the report.
+fn face_profile(southwards: bool) -> (Vec<f64>, SheddingReport) {
+    let (w, h) = if southwards { (60, 64) } else { (64, 60) };
+    let geo = GridGeometry::square(w, h, 5.0).unwrap();
+    let rise = 70f64.to_radians().tan() as f32 * 5.0;
+    let mut t = terrain_from(geo, move |c, r| {
+        let along = if southwards { r } else { c };
+        100.0 + rise * 40usize.saturating_sub(along) as f32
+    });
+    t.layer_mut(SnowLayer::Powder).fill(0.6);
+    t.layer_mut(SnowLayer::Stable).fill(0.4);
+    let before = t.snow_volume();
+    let report = run(&mut t, &SheddingParams::default());
+    let after = t.snow_volume() + report.border_outflow_m3;
+    assert!(
+        (after - before).abs() <= 1e-5 * before,
+        "{before} -> {after}"
+    );
+    let depth = t.total_depth();
+    let profile = (0..64)
+        .map(|along| {
+            let across = if southwards { w } else { h };
+            (0..across)
+                .map(|k| {
+                    let (c, r) = if southwards { (k, along) } else { (along, k) };
+                    f64::from(depth[r * w + c])
+                })
+                .sum::<f64>()
+                / across as f64
+        })
+        .collect();
+    (profile, report)
+}
+
+#[test]
+fn a_face_across_the_strip_boundary_sheds_as_one_within_a_strip() {
+    assert_eq!(strip_rows(64), vec![0..32, 32..64]);
+    let (across, r_across) = face_profile(true);
+    let (within, r_within) = face_profile(false);
+    assert_eq!(r_across.unsettled_cells, 0, "{r_across:?}");
+    assert_eq!(r_within.unsettled_cells, 0, "{r_within:?}");
+    // The face keeps the floor of the holding depth, across the boundary (rows 31 and 32)
+    // too; its snow lies at the foot.
+    for (along, depth) in across.iter().enumerate().take(39).skip(1) {
+        assert!(*depth <= 0.06, "row {along}: {depth}");
+    }
+    let volume = |p: &[f64]| p[39..].iter().sum::<f64>();
+    let centre = |p: &[f64]| {
+        p.iter()
+            .enumerate()
+            .skip(39)
+            .map(|(k, d)| k as f64 * d)
+            .sum::<f64>()
+            / volume(p)
+    };
+    eprintln!(
+        "debris {} m and centre {} across, {} m and {} within",
+        volume(&across),
+        centre(&across),
+        volume(&within),
+        centre(&within)
+    );
+    assert!(volume(&across) > 40.0 * 0.9, "{across:?}");
+    // The debris cone runs out as far (within half a cell: 0.23 cell apart; one sweep of the whole grid,
+    // its order breaking ties by index, puts them 0.12 cell apart).
+    assert!(
+        (centre(&across) - centre(&within)).abs() <= 0.5,
+        "{across:?} {within:?}"
+    );
+    assert!(
+        (r_across.moved_m3 - r_within.moved_m3).abs() <= 0.05 * r_within.moved_m3,
+        "{r_across:?} {r_within:?}"
+    );
 }
