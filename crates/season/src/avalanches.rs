@@ -252,9 +252,7 @@ pub fn hazard(
 ) -> f64 {
     let mut map = HazardMap {
         lambda: std::mem::take(out),
-        row_sums: Vec::new(),
-        total: 0.0,
-        zeroed: false,
+        ..HazardMap::default()
     };
     let sources = HazardSources {
         skiers,
@@ -328,6 +326,47 @@ pub struct HazardMap {
     /// need not be cleared again: a season without natural releases computed it after every
     /// melt and snowfall event, writing the whole map each time.
     zeroed: bool,
+    /// The slope window `s(θ)` of every cell, for the slopes and the window it was computed
+    /// for: the map is recomputed after every melt and snowfall event, the slopes and the
+    /// window stay.
+    window: SlopeWindowCache,
+}
+
+/// [`HazardMap::window`].
+#[derive(Debug, Clone, Default, PartialEq)]
+struct SlopeWindowCache {
+    /// The window's four slopes (bits) and the slopes (bits) the factors are for.
+    key: Option<([u64; 4], Vec<u32>)>,
+    factor: Vec<f64>,
+}
+
+impl SlopeWindowCache {
+    /// `s(θ_i)` of every cell (recomputed, row-parallel, if the slopes or the window changed).
+    fn factors(&mut self, params: &AvalancheParameters, slope_deg: &[f32]) -> &[f64] {
+        let window = [
+            params.slope_min_deg,
+            params.slope_full_deg,
+            params.slope_fall_deg,
+            params.slope_max_deg,
+        ]
+        .map(f64::to_bits);
+        let same = self.key.as_ref().is_some_and(|(k, slopes)| {
+            *k == window
+                && slopes.len() == slope_deg.len()
+                && slopes
+                    .par_iter()
+                    .zip(slope_deg.par_iter())
+                    .all(|(a, b)| *a == b.to_bits())
+        });
+        if !same {
+            self.factor = slope_deg
+                .par_iter()
+                .map(|&s| params.slope_window(f64::from(s)))
+                .collect();
+            self.key = Some((window, slope_deg.iter().map(|s| s.to_bits()).collect()));
+        }
+        &self.factor
+    }
 }
 
 impl HazardMap {
@@ -350,18 +389,51 @@ impl HazardMap {
         if nothing_releases && self.zeroed && self.lambda.len() == w * h {
             return 0.0;
         }
-        self.lambda.clear();
-        self.lambda.resize(w * h, 0.0);
-        self.row_sums.clear();
-        self.row_sums.resize(h, 0.0);
         self.zeroed = nothing_releases;
         if nothing_releases {
             // Nothing releases: every λ is 0.
+            self.lambda.clear();
+            self.lambda.resize(w * h, 0.0);
+            self.row_sums.clear();
+            self.row_sums.resize(h, 0.0);
             self.total = 0.0;
             return 0.0;
         }
+        // Every cell and every row sum is written below.
+        self.lambda.resize(w * h, 0.0);
+        self.row_sums.resize(h, 0.0);
         let unstable = terrain.layer(SnowLayer::Unstable);
         let invalid = terrain.mask().invalid_cells();
+        if invalid.is_none() && sources.skiers.is_none() && sources.painted.is_none() {
+            // Natural releases on a grid without nodata: `cell_hazard` with its slope window
+            // looked up and no sources, the same operations in the same order (no skier: `k`
+            // is 0; no paint: `+ 0`), in a straight loop.
+            let window = self.window.factors(params, slope_deg);
+            let per_cell = params.rate_per_km2_per_day * g.cell_area() / 1e6;
+            let natural = if params.natural { 1.0 } else { 0.0 };
+            let triggers = natural + params.skier_gain * 0.0;
+            let (min, reference) = (params.min_unstable_m, params.reference_unstable_m);
+            self.lambda
+                .par_chunks_mut(w)
+                .zip(self.row_sums.par_iter_mut())
+                .zip(unstable.par_chunks(w).zip(window.par_chunks(w)))
+                .for_each(|((row, sum), (unstable, window))| {
+                    for ((l, &u), &s) in row.iter_mut().zip(unstable).zip(window) {
+                        let u = f64::from(u);
+                        *l = if u < min || s == 0.0 {
+                            0.0
+                        } else {
+                            per_cell * (u / reference).min(1.0) * s * triggers
+                        };
+                    }
+                    *sum = 0.0;
+                    for &l in row.iter() {
+                        *sum += l;
+                    }
+                });
+            self.total = self.row_sums.iter().sum();
+            return self.total;
+        }
         self.lambda
             .par_chunks_mut(w)
             .zip(self.row_sums.par_iter_mut())

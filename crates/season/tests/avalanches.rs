@@ -325,3 +325,53 @@ fn avamal_avalanches_clear_steep_slopes_and_pile_at_their_foot() {
         "deposit {deposit_z} m vs scour {scour_z} m"
     );
 }
+
+#[test]
+fn natural_hazard_without_sources_has_the_bits_of_the_general_computation() {
+    // The map without skiers, paint or nodata takes a straight loop with the slope window
+    // looked up; zero paint sends it through the general cell-by-cell path.
+    let p = AvalancheParameters::default();
+    let mut t = slope_onto_flat();
+    let n = t.geometry().len();
+    for i in 0..n {
+        t.layer_mut(SnowLayer::Unstable)[i] =
+            (0.8 * snowscape_terrain::random::uniform(7, 0, i as u64)) as f32;
+    }
+    let slopes = snowscape_season::avalanches::bedrock_slopes_deg(&t);
+    let zeros = vec![0.0f32; n];
+    let mut fast = HazardMap::default();
+    let mut general = HazardMap::default();
+    let a = fast.compute(&p, &t, &slopes, &HazardSources::default());
+    let b = general.compute(
+        &p,
+        &t,
+        &slopes,
+        &HazardSources {
+            skiers: None,
+            painted: Some(&zeros),
+        },
+    );
+    assert!(a > 0.0);
+    assert_eq!(a.to_bits(), b.to_bits());
+    let bits = |m: &HazardMap| m.lambda.iter().map(|l| l.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&fast), bits(&general));
+    // The cached window follows a change of the window's slopes (the 40° slope now lies where
+    // the window falls off).
+    let q = AvalancheParameters {
+        slope_fall_deg: 38.0,
+        ..p.clone()
+    };
+    let c = fast.compute(&q, &t, &slopes, &HazardSources::default());
+    let d = general.compute(
+        &q,
+        &t,
+        &slopes,
+        &HazardSources {
+            skiers: None,
+            painted: Some(&zeros),
+        },
+    );
+    assert!(c < a);
+    assert_eq!(c.to_bits(), d.to_bits());
+    assert_eq!(bits(&fast), bits(&general));
+}
