@@ -437,11 +437,16 @@ fn set_up(
         return;
     }
     cell.stamp = generation;
-    let (b, [c, st, u, pw]) = column();
-    cell.bed = b + c;
-    cell.surface0 = b + (c + st + u + pw);
+    (cell.bed, cell.surface0) = bed_and_surface(column());
     cell.surface = cell.surface0;
     cell.flags = 0;
+}
+
+/// The bed (bedrock and compacted snow) and the snow surface of a [`column`], m: the same sums
+/// as `LayeredTerrain::surface`.
+#[inline(always)]
+fn bed_and_surface((b, [c, st, u, pw]): (f32, [f32; 4])) -> (f32, f32) {
+    (b + c, b + (c + st + u + pw))
 }
 
 /// The column of a cell: `bedrock[b]` and the four layers at `snow[k]`.

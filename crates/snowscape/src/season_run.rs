@@ -463,8 +463,11 @@ pub fn run_season(
 }
 
 /// Writes the environment maps: `sun.tif`, `sky.tif`, `irradiance.tif`, `temperature.tif`,
-/// `wind.tif` (2 bands: east and north components, m/s) and `wind_shadow.tif`.
+/// `wind_shadow.tif` and `wind.tif` (2 bands: east and north components, m/s). The files are
+/// independent and written at the same time; they are listed in that order, and the first
+/// error in that order is returned once all have finished.
 fn write_environment(out: &mut Written, terrain: &LayeredTerrain) -> Result<(), SeasonJobError> {
+    use rayon::prelude::*;
     use snowscape_environment::map_names as m;
     let map = |name: &'static str| {
         terrain
@@ -472,22 +475,47 @@ fn write_environment(out: &mut Written, terrain: &LayeredTerrain) -> Result<(), 
             .get(name)
             .ok_or(SeasonJobError::MissingMap(name))
     };
-    for (name, file) in [
+    let single = [
         (m::SUN, "sun.tif"),
         (m::SKY, "sky.tif"),
         (m::IRRADIANCE, "irradiance.tif"),
         (m::TEMPERATURE, "temperature.tif"),
         (m::WIND_SHADOW, "wind_shadow.tif"),
-    ] {
-        out.geotiff(file, &terrain.to_grid(map(name)?.clone())?)?;
+    ]
+    .into_iter()
+    .map(|(name, file)| Ok((file, map(name)?)))
+    .collect::<Result<Vec<_>, SeasonJobError>>()?;
+    let wind: [&[f32]; 2] = [map(m::WIND_U)?, map(m::WIND_V)?];
+    let (dir, cog) = (out.dir.clone(), out.cog);
+    let written: Vec<(Written, Result<(), SeasonJobError>)> = (0..=single.len())
+        .into_par_iter()
+        .map(|k| {
+            let mut files = Written::new(&dir);
+            files.cog = cog;
+            let result = match single.get(k) {
+                Some(&(file, values)) => terrain
+                    .to_grid(values.clone())
+                    .map_err(SeasonJobError::from)
+                    .and_then(|grid| Ok(files.geotiff(file, &grid)?)),
+                None => snowscape_io::write_geotiff_bands(
+                    &files.path("wind.tif"),
+                    terrain.geometry(),
+                    terrain.mask(),
+                    &wind,
+                )
+                .map_err(SeasonJobError::from),
+            };
+            (files, result)
+        })
+        .collect();
+    let mut first_error = None;
+    for (files, result) in written {
+        out.files.extend(files.files);
+        if let Err(e) = result {
+            first_error.get_or_insert(e);
+        }
     }
-    snowscape_io::write_geotiff_bands(
-        &out.path("wind.tif"),
-        terrain.geometry(),
-        terrain.mask(),
-        &[map(m::WIND_U)?, map(m::WIND_V)?],
-    )?;
-    Ok(())
+    first_error.map_or(Ok(()), Err)
 }
 
 /// Writes `avalanche_scour.tif` and `avalanche_deposit.tif`: snow thickness the season's

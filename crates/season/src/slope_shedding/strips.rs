@@ -182,10 +182,7 @@ fn halo_cell(
     let strip = &strips[owner];
     let mut cell = strip.cells[strip.local(g)];
     if cell.stamp != generation {
-        let [c, st, u, pw] = snow;
-        let b = bedrock[g];
-        cell.bed = b + c[g];
-        cell.surface0 = b + (c[g] + st[g] + u[g] + pw[g]);
+        (cell.bed, cell.surface0) = bed_and_surface(column(bedrock, g, snow, g));
     }
     // Seen as a cell the sweep has not reached (the largest rank): the surface it is expected
     // to keep, whatever it receives (in transit), and no limit on what is sent.
