@@ -88,13 +88,14 @@
 //!
 //! **Parallel strips.** The grid is swept as two strips of rows (its halves, fixed by the
 //! grid, not by the threads), each in its own order (the order above, within the strip) on its
-//! own thread. A strip sees the row of its neighbour beside it (its halo) as that neighbour
-//! expects to keep it (surface at the start less its excess), as a cell the sweep has passed:
-//! the no-overtaking limit applies to it. Snow sent there waits until the next phase, when the
-//! neighbour takes it in and sweeps again from its receivers, seeing every cell it does not
-//! reach as it rests; phases repeat until no snow crosses (at most 1024; what is left then is
-//! reported as unsettled). Phases after the first are short: what crosses is the tail of
-//! debris flows.
+//! own thread. A strip sees the row of its neighbour beside it (its halo) as cells its sweep
+//! has not reached: with the surface they are expected to keep (at the start of the step less
+//! their excess, or as they rest after a phase), whatever they receive (in transit), and no
+//! overtaking limit (seen as passed cells, they dammed a face's snow in the row above the
+//! boundary). Snow sent there waits until the next phase, when the neighbour takes it in, in
+//! strip order, and sweeps again from its receivers, seeing every cell it does not reach as it
+//! rests; phases repeat until no snow crosses (at most 1024; what is left then is reported as
+//! unsettled). Phases after the first are short: what crosses is the tail of debris flows.
 //!
 //! **Cost and determinism.** A row-parallel pass finds the cells over their holding depth (a
 //! pure function of each cell; a bound from the cached bedrock descent passes over the cells
