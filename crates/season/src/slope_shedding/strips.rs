@@ -13,7 +13,8 @@ const MIN_STRIP_ROWS: usize = 16;
 /// of threads, so the results do not either. Each boundary costs phases (a debris flow crosses
 /// it once per phase, and zigzags where it runs along it), so more strips cost more than they
 /// gain: on the benchmark's 1024² terrain, a step after 2 cm of powder on 1 m of settled snow
-/// took 80 ms in one sweep, 50 ms in two strips, 70 ms in four and 97 ms in eight (2 cores).
+/// took 73 ms in one strip, 48 ms in two, 61 ms in four and 77 ms in eight (2 cores; 80 ms in
+/// the single sweep before the strips).
 const STRIPS: usize = 2;
 
 /// The strips' own rows: `ceil(height / STRIPS)` rows each, at least [`MIN_STRIP_ROWS`].
