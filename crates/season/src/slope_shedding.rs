@@ -803,7 +803,7 @@ mod neighbourhood;
 mod retained;
 mod strips;
 use retained::RetainedTable;
-use strips::{Strip, strip_rows};
+use strips::{Strip, set_pending, strip_rows};
 
 #[cfg(test)]
 mod tests;

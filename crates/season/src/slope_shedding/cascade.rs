@@ -382,8 +382,7 @@ impl<V: Validity> Cascade<'_, V> {
                     // entry goes stale); the sweep reaches the others.
                     if cell.rank > self.sweep && cell.flags & PENDING == 0 {
                         cell.flags |= PENDING;
-                        let p = cell.rank as usize;
-                        self.pending[p / 64] |= 1 << (p % 64);
+                        set_pending(self.pending, cell.rank);
                     }
                     cell.flags |= RECEIVED;
                     if cell.rank <= self.sweep {

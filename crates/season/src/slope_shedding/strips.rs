@@ -159,14 +159,20 @@ impl Strip {
     /// Marks own cell `i` (window index) to be visited.
     #[inline]
     pub(super) fn mark_pending(&mut self, i: usize) {
-        let p = self.cells[i].rank as usize;
-        self.pending[p / 64] |= 1 << (p % 64);
+        set_pending(&mut self.pending, self.cells[i].rank);
     }
 
     /// Whether any cell waits for a visit.
     pub(super) fn has_pending(&self) -> bool {
         self.pending.iter().any(|&b| b != 0)
     }
+}
+
+/// Sets the pending bit of `rank`.
+#[inline]
+pub(super) fn set_pending(pending: &mut [u64], rank: u32) {
+    let p = rank as usize;
+    pending[p / 64] |= 1 << (p % 64);
 }
 
 /// What a strip sees of a neighbouring strip's cell in its halo: the surface it is expected to
