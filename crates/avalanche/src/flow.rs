@@ -68,13 +68,15 @@
 //! the outflow factors (a block also computes the pipes of the next block's first row, for the
 //! factors of its last row); (2) in one sweep of each row, the thickness, the pipes scaled by
 //! the outflow factors, the content per tile and the CFL maxima of the next sub-step. Away
-//! from the ghost ring and nodata cells the kernels run on four consecutive cells at a time
-//! (AVX, when the CPU has it), with the IEEE operations of the one-cell code and in the same
-//! order, so the lanes change no result.
+//! from the ghost ring and nodata cells the kernels run on eight consecutive cells at a time
+//! (AVX-512, when the CPU has it; four at a segment's end) or four (AVX), with the IEEE
+//! operations of the one-cell code and in the same order, so the lanes change no result. The
+//! constant divisors (`2·dx`, `2·dy`, `L`, `dx·dy`) are applied as multiplications by their
+//! reciprocals.
 //!
 //! **Determinism.** Every pass is a gather over rows (rayon), each row writes only its own
 //! cells, and per-row sums are added in row order (within a row, cell by cell), so results are
-//! bit-identical for any thread count and with or without the four-lane kernels.
+//! bit-identical for any thread count and any lane width.
 
 mod footprint;
 mod lanes;
@@ -99,7 +101,7 @@ use walk::*;
 pub use footprint::BedSource;
 
 use crate::friction_maps::FrictionMaps;
-use lanes::{Lanes, ld};
+use lanes::{Lanes, Simd, ld};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, NodataMask};
@@ -256,16 +258,34 @@ pub struct AvalancheScratch {
     seg2: Segments,
     /// The pipe pass's rows, per worker.
     block_rows: BlockRowsPool,
-    /// Run the one-lane kernels even where the CPU has the four-lane ones (same bits; for
-    /// the test and the benchmark that compare them).
-    scalar_kernels: bool,
+    /// The widest kernels to run, lanes (1, 4 or 8; 0: the widest the CPU has). Every width
+    /// gives the same bits (for the tests and the benchmark that compare them).
+    max_lanes: usize,
 }
 
 impl AvalancheScratch {
     /// Runs the one-lane kernels even where the CPU has AVX (`true`), or the fastest the CPU
     /// has (`false`, the default). Both give the same bits.
     pub fn set_scalar_kernels(&mut self, scalar: bool) {
-        self.scalar_kernels = scalar;
+        self.max_lanes = if scalar { 1 } else { 0 };
+    }
+
+    /// Runs kernels at most `lanes` wide (1: one cell at a time; 4: AVX; 8: AVX-512; 0: the
+    /// widest the CPU has, the default), never wider than the CPU has. Every width gives the
+    /// same bits.
+    pub fn set_max_lanes(&mut self, lanes: usize) {
+        self.max_lanes = lanes;
+    }
+
+    /// The kernels a sub-step runs.
+    fn simd(&self) -> Simd {
+        let cpu = Simd::detect();
+        match self.max_lanes {
+            0 => cpu,
+            1..=3 => Simd::Scalar,
+            4..=7 => cpu.min(Simd::Avx),
+            _ => cpu,
+        }
     }
 }
 
@@ -278,6 +298,12 @@ struct PipeGeometry {
     dx: f64,
     dy: f64,
     area: f64,
+    /// `1/(dx·dy)`, `1/(2·dx)`, `1/(2·dy)` and `−g/L` per direction: constant divisors as
+    /// factors.
+    inv_area: f64,
+    inv_two_dx: f64,
+    inv_two_dy: f64,
+    neg_g_over_len: [f64; 4],
     /// Padded height of the grid, cells.
     ph: usize,
 }
@@ -303,6 +329,10 @@ impl PipeGeometry {
             dx,
             dy,
             area: dx * dy,
+            inv_area: 1.0 / (dx * dy),
+            inv_two_dx: 1.0 / (2.0 * dx),
+            inv_two_dy: 1.0 / (2.0 * dy),
+            neg_g_over_len: [-G / dx, -G / dy, -G / ld, -G / ld],
             ph,
         }
     }
@@ -514,18 +544,23 @@ struct Consts {
     alpha: f64,
     pw: usize,
     ph: usize,
-    len: [f64; 4],
+    /// `−g/L` per owned direction: the pressure term's factor.
+    neg_g_over_len: [f64; 4],
     width: [f64; 4],
     e: [[f64; 2]; 4],
     dx: f64,
     dy: f64,
     square: bool,
     area: f64,
-    /// `2·e_SE,x`, `2·e_SE,y`, `2·dx`, `2·dy`: divisors of the velocity and gradient.
-    den_x: f64,
-    den_y: f64,
-    two_dx: f64,
-    two_dy: f64,
+    /// `1/(dx·dy)`.
+    inv_area: f64,
+    /// `1/(2·e_SE,x)`, `1/(2·e_SE,y)`, `1/(2·dx)`, `1/(2·dy)`: the velocity's and the
+    /// gradient's constant divisors, as factors (a multiplication costs a fraction of a
+    /// division).
+    inv_den_x: f64,
+    inv_den_y: f64,
+    inv_two_dx: f64,
+    inv_two_dy: f64,
     /// Padded index offset of the neighbour of each owned pipe.
     off: [usize; 4],
 }
@@ -567,17 +602,18 @@ impl Consts {
             alpha,
             pw,
             ph,
-            len: pg.len,
             width: pg.width,
             e: pg.e,
             dx: pg.dx,
             dy: pg.dy,
             square: pg.dx == pg.dy,
             area: pg.area,
-            den_x: 2.0 * pg.e[2][0],
-            den_y: 2.0 * pg.e[2][1],
-            two_dx: 2.0 * pg.dx,
-            two_dy: 2.0 * pg.dy,
+            inv_den_x: 1.0 / (2.0 * pg.e[2][0]),
+            inv_den_y: 1.0 / (2.0 * pg.e[2][1]),
+            inv_two_dx: pg.inv_two_dx,
+            inv_two_dy: pg.inv_two_dy,
+            neg_g_over_len: pg.neg_g_over_len,
+            inv_area: pg.inv_area,
             off: [1, pw, pw + 1, pw - 1],
         }
     }
@@ -676,21 +712,30 @@ struct PassRow<'a> {
     segs: &'a [[u32; 2]],
 }
 
-/// Defines `$name(simd, args..)`, running `$generic::<F4>` compiled for AVX when `simd` is
-/// set (the caller checked the CPU), else `$generic::<f64>`.
+/// Defines `$name(simd, args..)`, running `$generic::<F8>` compiled for AVX-512 or
+/// `$generic::<F4>` compiled for AVX as `simd` says (the caller checked the CPU), else
+/// `$generic::<f64>`.
 macro_rules! lanes_dispatch {
-    ($name:ident, $avx:ident, $generic:ident, ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $(,)?) => {
+    ($name:ident, $avx:ident, $avx512:ident, $generic:ident, ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty $(,)?) => {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx")]
         fn $avx($($arg: $ty),*) -> $ret {
             $generic::<lanes::F4>($($arg),*)
         }
 
-        fn $name(simd: bool, $($arg: $ty),*) -> $ret {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx,avx512f,avx512dq")]
+        fn $avx512($($arg: $ty),*) -> $ret {
+            $generic::<lanes::F8>($($arg),*)
+        }
+
+        fn $name(simd: Simd, $($arg: $ty),*) -> $ret {
             #[cfg(target_arch = "x86_64")]
-            if simd {
-                // SAFETY: `simd` is only set when the CPU has AVX (`lanes::simd_available`).
-                return unsafe { $avx($($arg),*) };
+            match simd {
+                // SAFETY: `simd` names only what the CPU has (`Simd::detect`).
+                Simd::Avx512 => return unsafe { $avx512($($arg),*) },
+                Simd::Avx => return unsafe { $avx($($arg),*) },
+                Simd::Scalar => {}
             }
             let _ = simd;
             $generic::<f64>($($arg),*)
@@ -701,6 +746,7 @@ macro_rules! lanes_dispatch {
 lanes_dispatch!(
     vel_row,
     vel_row_avx,
+    vel_row_avx512,
     vel_row_lanes,
     (
         k: &Consts,
@@ -714,6 +760,7 @@ lanes_dispatch!(
 lanes_dispatch!(
     pipes_row,
     pipes_row_avx,
+    pipes_row_avx512,
     pipes_row_lanes,
     (
         params: &AvalancheParams,
@@ -727,6 +774,7 @@ lanes_dispatch!(
 lanes_dispatch!(
     factor_row,
     factor_row_avx,
+    factor_row_avx512,
     factor_row_lanes,
     (
         k: &Consts,
@@ -739,6 +787,7 @@ lanes_dispatch!(
 lanes_dispatch!(
     update_row,
     update_row_avx,
+    update_row_avx512,
     update_row_lanes,
     (
         k: &Consts,
@@ -754,7 +803,7 @@ lanes_dispatch!(
 mod tests {
     use super::*;
 
-    /// The four-lane kernels give the bits of the one-lane (scalar) ones: random bed and
+    /// The four- and eight-lane kernels give the bits of the one-lane (scalar) ones: random bed and
     /// depths, nodata cells, both borders, dry, wet and mixed snow, square and oblong cells.
     #[test]
     fn lanes_match_scalar() {
@@ -818,20 +867,23 @@ mod tests {
                     s.set_friction_maps(&FrictionMaps::new(&g, Some(mu), Some(xi)).unwrap())
                         .unwrap();
                 }
-                let run = |scalar: bool| {
+                let run = |lanes: usize| {
                     let mut st = s.clone();
                     let mut scratch = AvalancheScratch::default();
-                    scratch.set_scalar_kernels(scalar);
+                    scratch.set_max_lanes(lanes);
                     let reports: Vec<AvalancheReport> = (0..12)
                         .map(|_| step(&params, &mut st, &mut scratch, 0.3).unwrap())
                         .collect();
                     (st, reports)
                 };
-                let (a, ra) = run(true);
-                let (b, rb) = run(false);
+                let (a, ra) = run(1);
                 assert!(ra.iter().map(|r| r.substeps).sum::<usize>() > 20);
-                assert_eq!(a, b, "case {case} {law:?} maps {maps}");
-                assert_eq!(ra, rb, "case {case} {law:?} maps {maps}");
+                // Four lanes (AVX) and eight (AVX-512), where the CPU has them.
+                for lanes in [4, 8] {
+                    let (b, rb) = run(lanes);
+                    assert_eq!(a, b, "case {case} {law:?} maps {maps} lanes {lanes}");
+                    assert_eq!(ra, rb, "case {case} {law:?} maps {maps} lanes {lanes}");
+                }
             }
         }
     }

@@ -1,7 +1,8 @@
-//! Lanes of `f64` for the flow kernels: one kernel source runs on one cell (`f64`) or on
-//! four consecutive cells of a row (AVX, `F4`). Every lane operation is the IEEE operation
-//! of the scalar code (no fused multiply-add, no reassociation), so the two give bit-identical
-//! results and the choice of path (CPU features) never changes a result.
+//! Lanes of `f64` for the flow kernels: one kernel source runs on one cell (`f64`), on four
+//! consecutive cells of a row (AVX, `F4`) or on eight (AVX-512, `F8`, with four-lane and
+//! one-lane visits for the rest of a segment). Every lane operation is the IEEE operation of
+//! the scalar code (no fused multiply-add, no reassociation), so all give bit-identical results
+//! and the choice of path (CPU features) never changes a result.
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -16,6 +17,8 @@ pub(super) trait Lanes:
 {
     const N: usize;
     type M: Copy;
+    /// Half as many lanes (`f64` for one and four lanes): the kernel for a segment's end.
+    type Half: Lanes;
     fn splat(x: f64) -> Self;
     fn store(self, s: &mut [f64], i: usize);
     /// Lanes `p[0..N]`.
@@ -51,6 +54,7 @@ pub(super) trait Lanes:
 impl Lanes for f64 {
     const N: usize = 1;
     type M = bool;
+    type Half = f64;
     #[inline(always)]
     fn splat(x: f64) -> Self {
         x
@@ -178,6 +182,7 @@ mod avx {
     impl Lanes for F4 {
         const N: usize = 4;
         type M = __m256d;
+        type Half = f64;
         #[inline(always)]
         fn splat(x: f64) -> Self {
             F4(unsafe { _mm256_set1_pd(x) })
@@ -282,15 +287,181 @@ mod avx {
     }
 }
 
-/// Whether the four-lane path can run on this CPU.
-pub(super) fn simd_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx")
+#[cfg(target_arch = "x86_64")]
+pub(super) use avx512::F8;
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use super::{F4, Lanes};
+    use std::arch::x86_64::*;
+    use std::ops::{Add, Div, Mul, Neg, Sub};
+
+    /// Eight `f64` lanes in an AVX-512 register. Only used inside functions compiled with the
+    /// `avx512f` and `avx512dq` target features (where these wrappers inline), after checking
+    /// that the CPU has them.
+    #[derive(Clone, Copy)]
+    pub(in crate::flow) struct F8(__m512d);
+
+    macro_rules! binop {
+        ($tr:ident, $f:ident, $intr:ident) => {
+            impl $tr for F8 {
+                type Output = F8;
+                #[inline(always)]
+                fn $f(self, o: F8) -> F8 {
+                    // SAFETY: F8 only exists where the CPU supports AVX-512F.
+                    F8(unsafe { $intr(self.0, o.0) })
+                }
+            }
+        };
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
+    binop!(Add, add, _mm512_add_pd);
+    binop!(Sub, sub, _mm512_sub_pd);
+    binop!(Mul, mul, _mm512_mul_pd);
+    binop!(Div, div, _mm512_div_pd);
+
+    impl Neg for F8 {
+        type Output = F8;
+        #[inline(always)]
+        fn neg(self) -> F8 {
+            // SAFETY: as above (and AVX-512DQ).
+            F8(unsafe { _mm512_xor_pd(self.0, _mm512_set1_pd(-0.0)) })
+        }
+    }
+
+    // SAFETY (every block below): F8 only exists where the CPU supports AVX-512F and DQ; loads
+    // and stores go through bounds-checked slices.
+    impl Lanes for F8 {
+        const N: usize = 8;
+        type M = __mmask8;
+        type Half = F4;
+        #[inline(always)]
+        fn splat(x: f64) -> Self {
+            F8(unsafe { _mm512_set1_pd(x) })
+        }
+        #[inline(always)]
+        fn store(self, s: &mut [f64], i: usize) {
+            let s = &mut s[i..i + 8];
+            unsafe { _mm512_storeu_pd(s.as_mut_ptr(), self.0) }
+        }
+        #[inline(always)]
+        unsafe fn load_ptr(p: *const f64) -> Self {
+            // (And the caller's contract.)
+            F8(unsafe { _mm512_loadu_pd(p) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            F8(unsafe { _mm512_sqrt_pd(self.0) })
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            F8(unsafe { _mm512_andnot_pd(_mm512_set1_pd(-0.0), self.0) })
+        }
+        #[inline(always)]
+        fn signum(self) -> Self {
+            F8(unsafe {
+                _mm512_or_pd(
+                    _mm512_and_pd(self.0, _mm512_set1_pd(-0.0)),
+                    _mm512_set1_pd(1.0),
+                )
+            })
+        }
+        #[inline(always)]
+        fn max(self, o: Self) -> Self {
+            F8(unsafe { _mm512_max_pd(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn le(self, o: Self) -> __mmask8 {
+            unsafe { _mm512_cmp_pd_mask::<_CMP_LE_OQ>(self.0, o.0) }
+        }
+        #[inline(always)]
+        fn lt(self, o: Self) -> __mmask8 {
+            unsafe { _mm512_cmp_pd_mask::<_CMP_LT_OQ>(self.0, o.0) }
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> __mmask8 {
+            unsafe { _mm512_cmp_pd_mask::<_CMP_GT_OQ>(self.0, o.0) }
+        }
+        #[inline(always)]
+        fn ne(self, o: Self) -> __mmask8 {
+            unsafe { _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(self.0, o.0) }
+        }
+        #[inline(always)]
+        fn and(a: __mmask8, b: __mmask8) -> __mmask8 {
+            a & b
+        }
+        #[inline(always)]
+        fn or(a: __mmask8, b: __mmask8) -> __mmask8 {
+            a | b
+        }
+        #[inline(always)]
+        fn all(m: __mmask8) -> bool {
+            m == 0xFF
+        }
+        #[inline(always)]
+        fn any(m: __mmask8) -> bool {
+            m != 0
+        }
+        #[inline(always)]
+        fn bits(m: __mmask8) -> u32 {
+            m as u32
+        }
+        #[inline(always)]
+        fn select(m: __mmask8, a: Self, b: Self) -> Self {
+            // (`mask_blend` takes its second operand where the mask is set.)
+            F8(unsafe { _mm512_mask_blend_pd(m, b.0, a.0) })
+        }
+        #[inline(always)]
+        fn lane(self, i: usize) -> f64 {
+            let mut out = [0.0; 8];
+            unsafe { _mm512_storeu_pd(out.as_mut_ptr(), self.0) };
+            out[i]
+        }
+        #[inline(always)]
+        fn split_exponent(self) -> (Self, Self) {
+            unsafe {
+                let mantissa = _mm512_castsi512_pd(_mm512_set1_epi64(0x000f_ffff_ffff_ffff));
+                let m = _mm512_or_pd(_mm512_and_pd(self.0, mantissa), _mm512_set1_pd(1.0));
+                // The biased exponent of each lane, made a double exactly by the 2^52 trick.
+                let bits = _mm512_castpd_si512(self.0);
+                let biased =
+                    _mm512_and_si512(_mm512_srli_epi64::<52>(bits), _mm512_set1_epi64(0x7ff));
+                let magic = _mm512_set1_epi64(0x4330_0000_0000_0000);
+                let two52 = _mm512_set1_pd(4_503_599_627_370_496.0);
+                let e = _mm512_sub_pd(_mm512_castsi512_pd(_mm512_or_si512(biased, magic)), two52);
+                (F8(m), F8(_mm512_sub_pd(e, _mm512_set1_pd(1023.0))))
+            }
+        }
+    }
+}
+
+/// The widest lanes the flow kernels can run on this CPU (ordered by width).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) enum Simd {
+    /// One cell at a time.
+    Scalar,
+    /// Four cells (AVX).
+    Avx,
+    /// Eight cells (AVX-512F and DQ), four and one at a segment's end.
+    Avx512,
+}
+
+impl Simd {
+    /// The widest this CPU has (decided once per process).
+    pub(super) fn detect() -> Simd {
+        static DETECTED: std::sync::OnceLock<Simd> = std::sync::OnceLock::new();
+        *DETECTED.get_or_init(|| {
+            #[cfg(target_arch = "x86_64")]
+            {
+                use std::arch::is_x86_feature_detected as has;
+                if has!("avx512f") && has!("avx512dq") && has!("avx") {
+                    return Simd::Avx512;
+                }
+                if has!("avx") {
+                    return Simd::Avx;
+                }
+            }
+            Simd::Scalar
+        })
     }
 }
 
@@ -355,7 +526,7 @@ mod tests {
         assert!(worst < 1e-14, "relative error {worst:e}");
         assert_eq!(ln_at_least_one::<f64>(1.0), 0.0);
         #[cfg(target_arch = "x86_64")]
-        if simd_available() {
+        if Simd::detect() != Simd::Scalar {
             // Four lanes give the one-lane bits.
             let xs = [1.0, 2.5, 77.7, 1.0e6];
             // SAFETY: `xs` holds 4 values; AVX is available.
@@ -363,6 +534,22 @@ mod tests {
             let l = ln_at_least_one::<F4>(v);
             for (i, &x) in xs.iter().enumerate() {
                 assert_eq!(l.lane(i).to_bits(), ln_at_least_one::<f64>(x).to_bits());
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        if Simd::detect() == Simd::Avx512 {
+            // So do eight.
+            let xs = [1.0, 2.5, 77.7, 1.0e6, 1.5, 3.0e-0, 1.0e11, 42.0];
+            #[target_feature(enable = "avx512f,avx512dq")]
+            fn eight(xs: &[f64; 8]) -> [u64; 8] {
+                // SAFETY: `xs` holds 8 values; the caller checked AVX-512.
+                let l = ln_at_least_one::<F8>(unsafe { F8::load_ptr(xs.as_ptr()) });
+                std::array::from_fn(|i| l.lane(i).to_bits())
+            }
+            // SAFETY: AVX-512F and DQ are available (checked above).
+            let got = unsafe { eight(&xs) };
+            for (g, &x) in got.iter().zip(&xs) {
+                assert_eq!(*g, ln_at_least_one::<f64>(x).to_bits());
             }
         }
     }

@@ -27,6 +27,11 @@ pub(super) fn vel_row_lanes<V: Lanes>(
                 // the stencil lies in the padded arrays (all of length `pw·ph`).
                 unsafe { cell_flow_lanes::<V>(k, inp, kk, out, c) }
             }
+            Visit::Half => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { cell_flow_lanes::<V::Half>(k, inp, kk, out, c) }
+            }
             Visit::One => {
                 // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
                 // the stencil lies in the padded arrays (all of length `pw·ph`).
@@ -66,20 +71,20 @@ unsafe fn cell_flow_lanes<V: Lanes>(
         let p1 = half * (ld::<V>(p[1], kk) + ld::<V>(p[1], kk - pw));
         let p2 = half * (ld::<V>(p[2], kk) + ld::<V>(p[2], kk - pw - 1));
         let p3 = half * (ld::<V>(p[3], kk) + ld::<V>(p[3], kk - pw + 1));
-        let vx_d = (p2 - p3) / V::splat(k.den_x);
-        let vy_d = (p2 + p3) / V::splat(k.den_y);
+        let vx_d = (p2 - p3) * V::splat(k.inv_den_x);
+        let vy_d = (p2 + p3) * V::splat(k.inv_den_y);
         let vx = half * (p0 + vx_d);
         let vy = half * (p1 + vy_d);
         let a = |i: usize| ld::<V>(inp.bed, i) + ld::<V>(inp.h, i);
-        let (two_dx, two_dy) = (V::splat(k.two_dx), V::splat(k.two_dy));
-        let mut gx = (a(kk + 1) - a(kk - 1)) / two_dx;
-        let mut gy = (a(kk + pw) - a(kk - pw)) / two_dy;
+        let (inv_two_dx, inv_two_dy) = (V::splat(k.inv_two_dx), V::splat(k.inv_two_dy));
+        let mut gx = (a(kk + 1) - a(kk - 1)) * inv_two_dx;
+        let mut gy = (a(kk + pw) - a(kk - pw)) * inv_two_dy;
         let mut c2 = V::splat(1.0);
         if k.projected {
             // [`projected_gradient`] in lanes.
             let b = |i: usize| ld::<V>(inp.bed, i);
-            let bx = (b(kk + 1) - b(kk - 1)) / two_dx;
-            let by = (b(kk + pw) - b(kk - pw)) / two_dy;
+            let bx = (b(kk + 1) - b(kk - 1)) * inv_two_dx;
+            let by = (b(kk + pw) - b(kk - pw)) * inv_two_dy;
             c2 = V::splat(1.0) / (V::splat(1.0) + (bx * bx + by * by));
             gx = c2 * (bx + c2 * (gx - bx));
             gy = c2 * (by + c2 * (gy - by));
@@ -112,8 +117,8 @@ pub(super) fn cell_flow_border(
             None => own,
         };
     }
-    let vx_d = (p[2] - p[3]) / k.den_x;
-    let vy_d = (p[2] + p[3]) / k.den_y;
+    let vx_d = (p[2] - p[3]) * k.inv_den_x;
+    let vy_d = (p[2] + p[3]) * k.inv_den_y;
     let (vx, vy) = (0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d));
     let [gx, gy, c2] = match surface_gradient(pg, inp.h, inp.bed, inp.nodata, k.pw, kk) {
         None => [f64::NAN; 3],
@@ -171,6 +176,11 @@ pub(super) fn pipes_row_lanes<V: Lanes>(
                 // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
                 // the stencil lies in the padded arrays (all of length `pw·ph`).
                 unsafe { owner_lanes::<V>(k, inp, kk, np, fl, c) }
+            }
+            Visit::Half => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { owner_lanes::<V::Half>(k, inp, kk, np, fl, c) }
             }
             Visit::One => {
                 // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
@@ -329,11 +339,11 @@ unsafe fn pipe_lanes<V: Lanes>(
         let u0 = ld::<V>(inp.pipes[d], kk);
         let a = if k.projected {
             let db = ld::<V>(inp.bed, j) - ld::<V>(inp.bed, kk);
-            V::splat(-G) * (c2 * (db + c2 * (hj - hk))) / V::splat(k.len[d])
+            (c2 * (db + c2 * (hj - hk))) * V::splat(k.neg_g_over_len[d])
         } else {
             let ak = ld::<V>(inp.bed, kk) + hk;
             let aj = ld::<V>(inp.bed, j) + hj;
-            V::splat(-G) * (aj - ak) / V::splat(k.len[d])
+            (aj - ak) * V::splat(k.neg_g_over_len[d])
         };
         let mut u = u0 + V::splat(k.dt) * a;
         if k.adv {

@@ -19,7 +19,7 @@ pub(super) fn substep(
 ) -> SubReport {
     let (pw, ph) = (state.pw, state.ph);
     let k = Consts::new(params, pg, pw, ph, dt);
-    let simd = lanes::simd_available() && !scratch.scalar_kernels;
+    let simd = scratch.simd();
     scratch.seg3.build(&state.tiles, 3, pw, ph);
     scratch.seg2.build(&state.tiles, 2, pw, ph);
     let AvalancheScratch {
@@ -30,7 +30,7 @@ pub(super) fn substep(
         seg3,
         seg2,
         block_rows,
-        scalar_kernels: _,
+        max_lanes: _,
     } = scratch;
     block_rows.reserve_workers();
     let block_rows = &*block_rows;

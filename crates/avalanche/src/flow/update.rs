@@ -22,6 +22,11 @@ pub(super) fn factor_row_lanes<V: Lanes>(
                 // the stencil lies in the padded arrays (all of length `pw·ph`).
                 unsafe { factor_lanes::<V>(k, inp, kk, out, c) }
             }
+            Visit::Half => {
+                // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
+                // the stencil lies in the padded arrays (all of length `pw·ph`).
+                unsafe { factor_lanes::<V::Half>(k, inp, kk, out, c) }
+            }
             Visit::One => {
                 // SAFETY: `walk` only gives lane visits in the inner region of this pass, where
                 // the stencil lies in the padded arrays (all of length `pw·ph`).
@@ -118,6 +123,12 @@ pub(super) fn update_row_lanes<V: Lanes>(
         wave: zero,
         flowing: 0,
     };
+    let half = V::Half::splat(0.0);
+    let mut acc_half = Acc {
+        umax: half,
+        wave: half,
+        flowing: 0,
+    };
     let mut acc1 = Acc {
         umax: 0.0,
         wave: 0.0,
@@ -159,9 +170,13 @@ pub(super) fn update_row_lanes<V: Lanes>(
     for (c, visit) in walk(seg3, lo, hi, None, V::N) {
         let kk = r * pw + c;
         let bits = match visit {
-            Visit::Chunk | Visit::One => {
+            Visit::Chunk | Visit::Half | Visit::One => {
                 let (inside, edge) = in2(c);
-                let n = if visit == Visit::Chunk { V::N } else { 1 };
+                let n = match visit {
+                    Visit::Chunk => V::N,
+                    Visit::Half => V::Half::N,
+                    _ => 1,
+                };
                 // SAFETY (the three calls): `walk` only gives lane visits in the inner region
                 // of this pass, where the stencil lies in the padded arrays (all of length
                 // `pw·ph`).
@@ -176,13 +191,25 @@ pub(super) fn update_row_lanes<V: Lanes>(
                     }
                 } else if (inside && c + n - 1 <= edge) || (!inside && c + n - 1 < edge) {
                     // All lanes in seg2, or none.
-                    unsafe {
-                        let cell = LaneCell {
-                            index: kk,
-                            col: c,
-                            thick: inside,
-                        };
-                        update_lanes::<V>(k, inp, cell, hrow, prow, &mut acc, &mut moved)
+                    let cell = LaneCell {
+                        index: kk,
+                        col: c,
+                        thick: inside,
+                    };
+                    if n == V::N {
+                        unsafe { update_lanes::<V>(k, inp, cell, hrow, prow, &mut acc, &mut moved) }
+                    } else {
+                        unsafe {
+                            update_lanes::<V::Half>(
+                                k,
+                                inp,
+                                cell,
+                                hrow,
+                                prow,
+                                &mut acc_half,
+                                &mut moved,
+                            )
+                        }
                     }
                 } else {
                     let mut bits = 0;
@@ -218,7 +245,7 @@ pub(super) fn update_row_lanes<V: Lanes>(
                             );
                         }
                     }
-                    let mut hn = hrow[c] + dv / k.area;
+                    let mut hn = hrow[c] + dv * k.inv_area;
                     if hn < 0.0 {
                         hn = 0.0;
                     }
@@ -280,12 +307,16 @@ pub(super) fn update_row_lanes<V: Lanes>(
         st.tiles += 1;
     }
     st.moved = moved;
-    st.flowing = acc.flowing + acc1.flowing;
+    st.flowing = acc.flowing + acc_half.flowing + acc1.flowing;
     st.umax = acc1.umax;
     st.wave = acc1.wave;
     for i in 0..V::N {
         st.umax = st.umax.max(acc.umax.lane(i));
         st.wave = st.wave.max(acc.wave.lane(i));
+    }
+    for i in 0..V::Half::N {
+        st.umax = st.umax.max(acc_half.umax.lane(i));
+        st.wave = st.wave.max(acc_half.wave.lane(i));
     }
     st
 }
@@ -398,7 +429,7 @@ unsafe fn update_lanes<V: Lanes>(
             }
         }
         if thick {
-            let hn = ld::<V>(hrow, c) + dv / V::splat(k.area);
+            let hn = ld::<V>(hrow, c) + dv * V::splat(k.inv_area);
             let hn = V::select(hn.lt(zero), zero, hn);
             hn.store(hrow, c);
             acc.flowing += V::bits(hn.gt(zero)).count_ones() as usize;
@@ -462,9 +493,9 @@ pub(super) fn pipe_update(
     };
     let c2 = pipe_mean(C2);
     let a = if k.projected {
-        -G * (c2 * ((bed[j] - bed[kk]) + c2 * (hj - hi))) / pg.len[d]
+        (c2 * ((bed[j] - bed[kk]) + c2 * (hj - hi))) * pg.neg_g_over_len[d]
     } else {
-        -G * ((bed[j] + hj) - (bed[kk] + hi)) / pg.len[d]
+        ((bed[j] + hj) - (bed[kk] + hi)) * pg.neg_g_over_len[d]
     };
     let vp = [
         0.5 * (vel[VX][kk - vb] + vel[VX][j - vb]),
@@ -593,8 +624,8 @@ fn gradient(
     }
     let ak = a(k);
     let side = |i: usize| if nodata[i] { ak } else { a(i) };
-    let gx = (side(k + 1) - side(k - 1)) / (2.0 * pg.dx);
-    let gy = (side(k + pw) - side(k - pw)) / (2.0 * pg.dy);
+    let gx = (side(k + 1) - side(k - 1)) * pg.inv_two_dx;
+    let gy = (side(k + pw) - side(k - pw)) * pg.inv_two_dy;
     Some([gx, gy])
 }
 

@@ -5,6 +5,8 @@
 pub(super) enum Visit {
     /// `V::N` cells from this one, all away from the ghost ring and walls: the lane kernel.
     Chunk,
+    /// `V::Half::N` such cells (eight-lane kernels only): the half-width lane kernel.
+    Half,
     /// One such cell: the lane kernel on one lane.
     One,
     /// A cell near the ghost ring or a wall: the general code.
@@ -12,7 +14,8 @@ pub(super) enum Visit {
 }
 
 /// The cells of `segs` and how to visit them: columns `lo..=hi` not flagged in `wall` run
-/// the lane kernels (in chunks of `lanes`), the others the general code. (An iterator, not a
+/// the lane kernels (in chunks of `lanes`; with eight lanes, a segment's end in a chunk of four
+/// where it fits), the others the general code. (An iterator, not a
 /// callback, so that the kernels are compiled inside the caller, with its target features.)
 pub(super) struct Walk<'a> {
     segs: &'a [[u32; 2]],
@@ -67,9 +70,14 @@ impl Iterator for Walk<'_> {
         let c = self.c;
         if c >= self.lo && c <= self.hi && self.clear(c) {
             let n = self.lanes;
-            if n > 1 && c + n - 1 <= self.b.min(self.hi) && (c + 1..c + n).all(|i| self.clear(i)) {
+            let end = self.b.min(self.hi);
+            if n > 1 && c + n - 1 <= end && (c + 1..c + n).all(|i| self.clear(i)) {
                 self.c += n;
                 return Some((c, Visit::Chunk));
+            }
+            if n == 8 && c + 3 <= end && (c + 1..c + 4).all(|i| self.clear(i)) {
+                self.c += 4;
+                return Some((c, Visit::Half));
             }
             self.c += 1;
             return Some((c, Visit::One));
