@@ -23,24 +23,28 @@ impl AvalancheState {
         if threshold.is_nan() || threshold <= 0.0 || self.active.is_none() {
             return 0.0;
         }
-        let mut cells = Vec::new();
+        // Settled in place, in one visit: a cell that settles was below the threshold and
+        // stays below it (0), so its neighbours' tests read the same answer either way.
+        let mut volume = 0.0;
+        let (w, hgt) = (self.geometry.width(), self.geometry.height());
         // Grid cells only: the ghost ring never holds snow at rest.
-        for (r0, r1, c0, c1) in self.content_cells() {
+        for t in 0..self.tiles.occupied().len() {
+            let Some((r0, r1, c0, c1)) =
+                self.tiles.content_box(t).and_then(|b| grid_box(b, w, hgt))
+            else {
+                continue;
+            };
             for r in r0..=r1 {
                 for c in c0..=c1 {
                     let k = self.pad(c, r);
                     let hk = self.h[k];
                     if hk > 0.0 && hk < threshold && self.neighbours_below(k, threshold) {
-                        cells.push(k);
+                        volume += hk;
+                        self.settled[k] += hk;
+                        self.h[k] = 0.0;
                     }
                 }
             }
-        }
-        let mut volume = 0.0;
-        for &k in &cells {
-            volume += self.h[k];
-            self.settled[k] += self.h[k];
-            self.h[k] = 0.0;
         }
         volume * self.geometry.cell_area()
     }
@@ -67,11 +71,7 @@ impl AvalancheState {
         let (w, hgt) = (self.geometry.width(), self.geometry.height());
         self.tiles
             .content_boxes()
-            .filter_map(move |(r0, r1, c0, c1)| {
-                let (r0, r1) = (r0.max(1) - 1, r1.min(hgt).checked_sub(1)?);
-                let (c0, c1) = (c0.max(1) - 1, c1.min(w).checked_sub(1)?);
-                (r0 <= r1 && c0 <= c1).then_some((r0, r1, c0, c1))
-            })
+            .filter_map(move |b| grid_box(b, w, hgt))
     }
 
     /// Thickness of the films settled so far (row-major), m.
@@ -121,4 +121,16 @@ impl AvalancheState {
         }
         out
     }
+}
+
+/// A padded box `(r0, r1, c0, c1)` in grid cells of a `w x hgt` grid (`None`: in the ghost
+/// ring only).
+fn grid_box(
+    (r0, r1, c0, c1): (usize, usize, usize, usize),
+    w: usize,
+    hgt: usize,
+) -> Option<(usize, usize, usize, usize)> {
+    let (r0, r1) = (r0.max(1) - 1, r1.min(hgt).checked_sub(1)?);
+    let (c0, c1) = (c0.max(1) - 1, c1.min(w).checked_sub(1)?);
+    (r0 <= r1 && c0 <= c1).then_some((r0, r1, c0, c1))
 }

@@ -98,6 +98,13 @@ impl TileSet {
         })
     }
 
+    /// The content box of the `t`-th occupied tile (row-major tile order), inclusive padded
+    /// `(r0, r1, c0, c1)`.
+    pub(crate) fn content_box(&self, t: usize) -> Option<(usize, usize, usize, usize)> {
+        let b = self.boxes[*self.occupied.get(t)? as usize];
+        Some((b.r0 as usize, b.r1 as usize, b.c0 as usize, b.c1 as usize))
+    }
+
     /// The box of all content, `None` when there is none.
     pub(crate) fn bbox(&self) -> Option<ActiveBox> {
         let mut out: Option<ActiveBox> = None;
