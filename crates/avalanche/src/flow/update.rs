@@ -134,7 +134,8 @@ pub(super) fn update_row_lanes<V: Lanes>(
         wave: 0.0,
         flowing: 0,
     };
-    // The row's moved volume, summed cell by cell, pipe by pipe.
+    // The row's moved volume: per cell its four pipes' in direction order, then the cells in
+    // column order (the same bits for any lane width).
     let mut moved = 0.0;
     let (lo, hi) = if r >= 1 && r + 2 <= ph {
         (1, pw - 2)
@@ -275,6 +276,7 @@ pub(super) fn update_row_lanes<V: Lanes>(
                     hrow[c] = hn;
                 }
                 let mut moving = false;
+                let mut cell_moved = 0.0;
                 for d in 0..4 {
                     let mut u = inp.new_pipes[d][kk];
                     let mut f = inp.flux[d][kk];
@@ -289,10 +291,11 @@ pub(super) fn update_row_lanes<V: Lanes>(
                         u *= s;
                     }
                     prow[d][c] = u;
-                    moved += f.abs();
+                    cell_moved += f.abs();
                     acc1.umax = acc1.umax.max(u.abs());
                     moving |= u != 0.0;
                 }
+                moved += cell_moved;
                 (moving || hrow[c] > 0.0) as u32
             }
         };
@@ -422,11 +425,12 @@ unsafe fn update_lanes<V: Lanes>(
                 ucell = ucell.max(V::select(f.ne(zero), u * s, u).abs());
             }
         }
-        // The row's volume in the order of the general code: cell by cell, pipe by pipe.
-        for i in 0..V::N {
-            for a in &absf {
-                *moved += a.lane(i);
-            }
+        // The row's volume in the order of the general code: per cell its four pipes (lane by
+        // lane: `0 + a0` is `a0`, the general code's first sum), then cell by cell.
+        let mut cells = [0.0; 8];
+        ((absf[0] + absf[1]) + absf[2] + absf[3]).store(&mut cells, 0);
+        for &v in &cells[..V::N] {
+            *moved += v;
         }
         if thick {
             let hn = ld::<V>(hrow, c) + dv * V::splat(k.inv_area);
