@@ -200,6 +200,7 @@ mod tests {
             "transport/step",
             "transport/wind_iteration",
             "transport/flakes",
+            "season/hazard_map",
             "avalanche/substep",
             "avalanche/slope_run_to_rest",
             "avalanche/avakot_run_to_rest",

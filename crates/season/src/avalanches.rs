@@ -332,6 +332,32 @@ pub struct HazardMap {
     window: SlopeWindowCache,
 }
 
+/// The sum of each of the rows of `rows` (`w` cells each, as many rows as `sums`; at most 4),
+/// cell by cell in index order, the rows' chains of additions side by side.
+fn row_sums_side_by_side(rows: &[f64], w: usize, sums: &mut [f64]) {
+    let mut acc = [0.0f64; 4];
+    let n = sums.len();
+    debug_assert!(n <= 4 && rows.len() == n * w);
+    if n == 4 {
+        let (r0, rest) = rows.split_at(w);
+        let (r1, rest) = rest.split_at(w);
+        let (r2, r3) = rest.split_at(w);
+        for c in 0..w {
+            acc[0] += r0[c];
+            acc[1] += r1[c];
+            acc[2] += r2[c];
+            acc[3] += r3[c];
+        }
+    } else {
+        for (a, row) in acc.iter_mut().zip(rows.chunks(w)) {
+            for &l in row {
+                *a += l;
+            }
+        }
+    }
+    sums.copy_from_slice(&acc[..n]);
+}
+
 /// [`HazardMap::window`].
 #[derive(Debug, Clone, Default, PartialEq)]
 struct SlopeWindowCache {
@@ -413,12 +439,19 @@ impl HazardMap {
             let natural = if params.natural { 1.0 } else { 0.0 };
             let triggers = natural + params.skier_gain * 0.0;
             let (min, reference) = (params.min_unstable_m, params.reference_unstable_m);
+            // Rows by groups of four: each row's sum is one chain of additions in cell order,
+            // and four chains side by side run at once.
+            const ROWS: usize = 4;
             self.lambda
-                .par_chunks_mut(w)
-                .zip(self.row_sums.par_iter_mut())
-                .zip(unstable.par_chunks(w).zip(window.par_chunks(w)))
-                .for_each(|((row, sum), (unstable, window))| {
-                    for ((l, &u), &s) in row.iter_mut().zip(unstable).zip(window) {
+                .par_chunks_mut(ROWS * w)
+                .zip(self.row_sums.par_chunks_mut(ROWS))
+                .zip(
+                    unstable
+                        .par_chunks(ROWS * w)
+                        .zip(window.par_chunks(ROWS * w)),
+                )
+                .for_each(|((rows, sums), (unstable, window))| {
+                    for ((l, &u), &s) in rows.iter_mut().zip(unstable).zip(window) {
                         let u = f64::from(u);
                         *l = if u < min || s == 0.0 {
                             0.0
@@ -426,10 +459,7 @@ impl HazardMap {
                             per_cell * (u / reference).min(1.0) * s * triggers
                         };
                     }
-                    *sum = 0.0;
-                    for &l in row.iter() {
-                        *sum += l;
-                    }
+                    row_sums_side_by_side(rows, w, sums);
                 });
             self.total = self.row_sums.iter().sum();
             return self.total;

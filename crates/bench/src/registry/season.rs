@@ -6,6 +6,9 @@
 
 use crate::kernel::{Kernel, KernelError};
 use snowscape_environment::{EnvironmentParams, precompute};
+use snowscape_season::avalanches::{
+    AvalancheParameters, HazardMap, HazardSources, bedrock_slopes_deg,
+};
 use snowscape_season::melt::{self, MeltParams};
 use snowscape_season::powder_diffusion::{self, DiffusionParams, DiffusionScratch};
 use snowscape_season::scenario::Scenario;
@@ -42,6 +45,8 @@ fn snowy(terrain: &Grid) -> LayeredTerrain {
 ///   (temperature, 4 layers read+written, surface), `season/powder_diffusion` 36 (5 layers
 ///   read, surface write+read, powder read+written, scale), `season/wind_transport` 72 (4 wind
 ///   maps, 5 layers, two flux maps written and read, powder and unstable written);
+/// - `season/hazard_map`: the natural-release hazard map `λ_i` and its row sums, 20 B/cell
+///   (unstable snow and the cached slope window read, `λ` written);
 /// - `season/100_days`: the event loop of a 100-day winter without avalanches (environment
 ///   precomputed once, outside the timing); cells = grid cells × grid-wide events, 45 B per
 ///   cell-event (the mean of the steps above);
@@ -104,6 +109,20 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
                 &mut scratch,
                 0.5,
             )?;
+            Ok(())
+        }));
+    }
+    {
+        // The natural-release hazard map, recomputed after every melt and snowfall event.
+        let (t, mut map) = (base.clone(), HazardMap::default());
+        let slopes = bedrock_slopes_deg(&t);
+        let params = AvalancheParameters::default();
+        kernels.push(Kernel::new("season/hazard_map", cells, 20.0, move || {
+            let sources = HazardSources {
+                skiers: None,
+                painted: None,
+            };
+            black_box(map.compute(&params, &t, &slopes, &sources));
             Ok(())
         }));
     }
