@@ -232,6 +232,13 @@ pub struct StabilityScratch {
     surface: Vec<f32>,
 }
 
+impl StabilityScratch {
+    /// The surface buffer, for the step before [`step_on_filled_surface`] to fill.
+    pub(crate) fn surface_to_fill(&mut self) -> &mut Vec<f32> {
+        &mut self.surface
+    }
+}
+
 /// Per-cell constants of one step, precomputed from the parameters.
 struct Coefficients {
     rate: RateCurve,
@@ -338,10 +345,34 @@ pub fn step(
 ) -> Result<StabilityReport, PhenomenonError> {
     params.validate()?;
     check_dt(dt_days)?;
+    check_map("temperature", temperature, terrain.geometry())?;
+    fill_surface(terrain, &mut scratch.surface);
+    step_on_filled_surface(params, terrain, temperature, scratch, dt_days)
+}
+
+/// [`step`] on the surface already in `scratch` ([`StabilityScratch::surface_to_fill`]),
+/// which must be `bedrock + Σ layers` of `terrain` as it is now, cell by cell (the enhanced
+/// melt fills it: [`crate::melt::enhanced::step_filling_surface`]).
+pub(crate) fn step_on_filled_surface(
+    params: &StabilityParams,
+    terrain: &mut LayeredTerrain,
+    temperature: &[f32],
+    scratch: &mut StabilityScratch,
+    dt_days: f64,
+) -> Result<StabilityReport, PhenomenonError> {
+    params.validate()?;
+    check_dt(dt_days)?;
     let geometry = terrain.geometry().clone();
     check_map("temperature", temperature, &geometry)?;
+    debug_assert!({
+        let mut fresh = Vec::new();
+        fill_surface(terrain, &mut fresh);
+        fresh
+            .iter()
+            .map(|v| v.to_bits())
+            .eq(scratch.surface.iter().map(|v| v.to_bits()))
+    });
     let mask = terrain.mask().clone();
-    fill_surface(terrain, &mut scratch.surface);
     let k = Coefficients {
         rate: RateCurve::new(params),
         age_share: implicit_share((params.k_age * dt_days) as f32),

@@ -299,6 +299,30 @@ pub fn step(
     pack: &mut SnowpackState,
     forcing: &MeltForcing,
 ) -> Result<MeltReport, PhenomenonError> {
+    step_and_surface(params, terrain, pack, forcing, None)
+}
+
+/// [`step`], also writing the snow surface it leaves, `A = bedrock + Σ layers` cell by cell
+/// (the same operations as the other steps' surface), into `surface` (resized to the grid):
+/// each row while its layers are still in cache, for the stability step that follows
+/// ([`crate::stability::step_on_filled_surface`]) instead of a pass of its own.
+pub(crate) fn step_filling_surface(
+    params: &EnhancedMeltParams,
+    terrain: &mut LayeredTerrain,
+    pack: &mut SnowpackState,
+    forcing: &MeltForcing,
+    surface: &mut Vec<f32>,
+) -> Result<MeltReport, PhenomenonError> {
+    step_and_surface(params, terrain, pack, forcing, Some(surface))
+}
+
+fn step_and_surface(
+    params: &EnhancedMeltParams,
+    terrain: &mut LayeredTerrain,
+    pack: &mut SnowpackState,
+    forcing: &MeltForcing,
+    surface: Option<&mut Vec<f32>>,
+) -> Result<MeltReport, PhenomenonError> {
     params.validate()?;
     let geometry = terrain.geometry().clone();
     let n = geometry.len();
@@ -345,6 +369,15 @@ pub fn step(
     let mask = terrain.mask().clone();
     let invalid = mask.invalid_cells();
     let k = Coefficients::new(params, forcing);
+    // Per row, where to write its surface (none without a surface to fill).
+    let surface_rows: Vec<Option<&mut [f32]>> = match surface {
+        Some(a) => {
+            a.resize(n, 0.0);
+            a.chunks_mut(w).map(Some).collect()
+        }
+        None => (0..geometry.height()).map(|_| None).collect(),
+    };
+    let bedrock = &terrain.bedrock;
     let [c, s, u, p] = &mut terrain.snow;
     let rows: Vec<RowSums> = c
         .par_chunks_mut(w)
@@ -355,10 +388,11 @@ pub fn step(
         .zip(pack.cold_content_m.par_chunks_mut(w))
         .zip(pack.liquid_water_m.par_chunks_mut(w))
         .zip(pack.melting.par_chunks_mut(w))
+        .zip(surface_rows.into_par_iter())
         .enumerate()
         .map_init(
             || RowScratch::new(w),
-            |scratch, (row, (((((((c, s), u), p), age), cold), liquid), melting))| {
+            |scratch, (row, ((((((((c, s), u), p), age), cold), liquid), melting), surface))| {
                 let base = row * w;
                 let snowy = (0..w).any(|k| c[k] + s[k] + u[k] + p[k] > 0.0);
                 if snowy {
@@ -372,11 +406,11 @@ pub fn step(
                 } else {
                     Some(&forcing.rain_m[base..base + w])
                 };
-                k.row(
+                let sums = k.row(
                     forcing,
                     base,
                     RowState {
-                        layers: [c, s, u, p],
+                        layers: [&mut *c, &mut *s, &mut *u, &mut *p],
                         age,
                         cold,
                         liquid,
@@ -385,7 +419,14 @@ pub fn step(
                     rain,
                     valid,
                     scratch,
-                )
+                );
+                if let Some(a) = surface {
+                    let b = &bedrock[base..base + w];
+                    for (k, a) in a.iter_mut().enumerate() {
+                        *a = b[k] + (c[k] + s[k] + u[k] + p[k]);
+                    }
+                }
+                sums
             },
         )
         .collect();

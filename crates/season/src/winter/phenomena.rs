@@ -85,8 +85,10 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         event.time_days,
         failed("melt_and_stability", event.time_days),
     );
+    // Whether the melt left the snow surface for the stability step.
+    let mut surface_filled = false;
     if w.scenario.parameters.melt.model == MeltModel::EnhancedTi {
-        w.enhanced_melt(day).map_err(&err)?;
+        surface_filled = w.enhanced_melt(day).map_err(&err)?;
     } else {
         let v = melt::step(
             &w.scenario.parameters.melt,
@@ -97,7 +99,12 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         .map_err(&err)?;
         w.state.budget.melt += v.removed;
     }
-    let r = stability::step(
+    let stability_step = if surface_filled {
+        stability::step_on_filled_surface
+    } else {
+        stability::step
+    };
+    let r = stability_step(
         &w.scenario.parameters.stability,
         &mut w.terrain,
         &w.environment.temperature,

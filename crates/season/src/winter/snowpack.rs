@@ -93,12 +93,14 @@ impl Winter {
         Ok(())
     }
 
-    /// One window of the enhanced melt, from the last melt event to `day`.
-    pub(super) fn enhanced_melt(&mut self, day: f64) -> Result<(), PhenomenonError> {
+    /// One window of the enhanced melt, from the last melt event to `day`. Returns whether it
+    /// ran, leaving the snow surface in the stability scratch
+    /// ([`crate::stability::step_on_filled_surface`]).
+    pub(super) fn enhanced_melt(&mut self, day: f64) -> Result<bool, PhenomenonError> {
         let t0 = self.state.melt_clock_days;
         let min_window = self.scenario.parameters.melt.enhanced.min_window_hours / 24.0;
         if day - t0 < min_window && day < self.scenario.days {
-            return Ok(());
+            return Ok(false);
         }
         if let Some(table) = self.air.station_precipitation(t0, day) {
             self.add_precipitation(&table)?;
@@ -121,11 +123,12 @@ impl Winter {
             rain_m: &self.pending_rain,
             window_days: (day - t0) as f32,
         };
-        let r = melt::enhanced::step(
+        let r = melt::enhanced::step_filling_surface(
             &self.scenario.parameters.melt.enhanced,
             &mut self.terrain,
             &mut self.pack,
             &forcing,
+            self.stability_scratch.surface_to_fill(),
         )?;
         self.pending_rain.fill(0.0);
         let a = self.terrain.geometry().cell_area();
@@ -139,6 +142,6 @@ impl Winter {
         b.water.store = self.pack.liquid_volume(a);
         self.state.melt_clock_days = day;
         self.refresh_air_temperature();
-        Ok(())
+        Ok(true)
     }
 }
