@@ -291,6 +291,7 @@ pub fn run_season(
     interrupted: &AtomicBool,
     progress: &mut dyn SeasonProgress,
 ) -> Result<SeasonOutcome, SeasonJobError> {
+    let started = Instant::now();
     let earlier = earlier_outputs(&job.out);
     prepare_dir(&job.out).map_err(SeasonJobError::OutputFolder)?;
     let frames_dir = job.out.join("frames");
@@ -406,8 +407,8 @@ pub fn run_season(
     stages.record("season", t_season.elapsed().as_secs_f64());
     winter.terrain.check_invariants()?;
 
-    // An interrupt while the outputs are written stops between two of them (each file is
-    // written whole or not at all); the final checkpoint lets a resume write them again.
+    // An interrupt while the outputs are written stops once they are (each file is written
+    // whole or not at all); the final checkpoint lets a resume write them again.
     let stop_if_interrupted = || -> Result<Option<SeasonOutcome>, SeasonJobError> {
         if !interrupted.load(Ordering::SeqCst) {
             return Ok(None);
@@ -425,26 +426,81 @@ pub fn run_season(
     if let Some(o) = stop_if_interrupted()? {
         return Ok(o);
     }
-    for (name, seconds) in write_all(&mut out, &winter.terrain, &frames, &job.view)? {
+    // Every output at once (different files; the state no longer changes): the rasters,
+    // previews, glb and time-lapse, the environment and avalanche maps, the ski tracks and the
+    // final checkpoint. Files are listed in that order, and the first error in that order is
+    // returned once all have finished.
+    let (dir, cog) = (out.dir.clone(), out.cog);
+    let written = |write: &(dyn Fn(&mut Written) -> Result<(), SeasonJobError> + Sync)| {
+        let mut files = Written::new(&dir);
+        files.cog = cog;
+        let t0 = Instant::now();
+        let result = write(&mut files);
+        (files, t0.elapsed().as_secs_f64(), result)
+    };
+    let (all, (maps, checkpoint)) = rayon::join(
+        || {
+            let mut files = Written::new(&dir);
+            files.cog = cog;
+            let result = write_all(&mut files, &winter.terrain, &frames, &job.view);
+            (files, result)
+        },
+        || {
+            rayon::join(
+                || {
+                    [
+                        (
+                            "write_environment",
+                            written(&|w| write_environment(w, &winter.terrain)),
+                        ),
+                        (
+                            "write_avalanches",
+                            written(&|w| write_avalanche_maps(w, &winter)),
+                        ),
+                        (
+                            "write_ski_tracks",
+                            written(&|w| write_ski_tracks(w, &winter)),
+                        ),
+                    ]
+                },
+                || {
+                    let t0 = Instant::now();
+                    (
+                        write_checkpoint(&job.out, &winter),
+                        t0.elapsed().as_secs_f64(),
+                    )
+                },
+            )
+        },
+    );
+    let mut first_error: Option<SeasonJobError> = None;
+    let (files, result) = all;
+    out.files.extend(files.files);
+    match result {
+        Ok(stage_seconds) => {
+            for (name, seconds) in stage_seconds {
+                stages.record(name, seconds);
+            }
+        }
+        Err(e) => {
+            first_error.get_or_insert(e.into());
+        }
+    }
+    for (name, (files, seconds, result)) in maps {
         stages.record(name, seconds);
+        out.files.extend(files.files);
+        if let Err(e) = result {
+            first_error.get_or_insert(e);
+        }
     }
-    if let Some(o) = stop_if_interrupted()? {
-        return Ok(o);
+    let (result, seconds) = checkpoint;
+    stages.record("write_checkpoint", seconds);
+    if let Err(e) = result {
+        first_error.get_or_insert(e);
     }
-    stages.run("write_environment", || {
-        write_environment(&mut out, &winter.terrain)
-    })?;
-    if let Some(o) = stop_if_interrupted()? {
-        return Ok(o);
+    if let Some(e) = first_error {
+        return Err(e);
     }
-    stages.run("write_avalanches", || {
-        write_avalanche_maps(&mut out, &winter)
-    })?;
-    if let Some(o) = stop_if_interrupted()? {
-        return Ok(o);
-    }
-    stages.run("write_ski_tracks", || write_ski_tracks(&mut out, &winter))?;
-    write_checkpoint(&job.out, &winter)?;
     out.files.push(CHECKPOINT.into());
 
     let mut report = season_report(
@@ -452,7 +508,7 @@ pub fn run_season(
         &job.extra_parameters,
         input,
         &winter,
-        stages.timings,
+        (stages.timings, started.elapsed().as_secs_f64()),
         out.files,
     );
     report.removed_stale = stale_outputs(&earlier, &report.outputs);
@@ -552,7 +608,7 @@ fn season_report(
     extra_parameters: &ExtraParameters,
     input: InputSummary,
     winter: &Winter,
-    timings: Vec<(String, f64)>,
+    (timings, wall): (Vec<(String, f64)>, f64),
     outputs: Vec<String>,
 ) -> Report {
     let b = winter.budget();
@@ -575,6 +631,9 @@ fn season_report(
         b.diffusion_outflow + b.wind_outflow + b.avalanche_outflow + b.shedding_outflow,
     );
     let mut timings_json = timings_object(&timings);
+    // Stages that ran at the same time (the outputs) overlap in `total`, their sum: `wall` is
+    // the job's own wall time, up to its report.
+    timings_json.insert("wall".into(), ((wall * 1e6).round() / 1e6).into());
     let phenomena: serde_json::Map<String, serde_json::Value> = winter
         .wall_seconds
         .iter()
