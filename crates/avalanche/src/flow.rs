@@ -81,6 +81,7 @@
 mod footprint;
 mod lanes;
 mod params;
+mod peaks;
 mod pipes;
 mod settle;
 mod state;
@@ -93,6 +94,8 @@ pub use params::{
     AvalancheError, AvalancheParams, AvalancheReport, Border, FrictionLaw, SamosAtParams,
     SlopeGravity,
 };
+pub(crate) use peaks::{Peaks, Recorded};
+use peaks::{RecordRow, record_row_lanes};
 use pipes::*;
 use substep::substep;
 use update::*;
@@ -797,6 +800,20 @@ lanes_dispatch!(
         prow: &mut [&mut [f64]; 4],
         trow: &mut [[u32; 2]],
     ) -> RowStats
+);
+
+lanes_dispatch!(
+    record_row,
+    record_row_avx,
+    record_row_avx512,
+    record_row_lanes,
+    (
+        s: &AvalancheState,
+        row: RecordRow,
+        consts: (f64, [f64; 2]),
+        peaks: (&mut [f64], &mut [f64]),
+        out: &mut Recorded,
+    ) -> (),
 );
 
 #[cfg(test)]

@@ -526,37 +526,16 @@ impl AvalancheRun {
 
     /// Updates peaks, energy and the moving flag over the active tiles.
     fn record(&mut self) {
-        let s = &self.state;
-        let w = s.geometry.width();
-        let area = s.geometry.cell_area();
-        let mut energy = 0.0;
-        let mut moving = false;
-        for (r0, r1, c0, c1) in s.content_cells() {
-            for r in r0..=r1 {
-                for c in c0..=c1 {
-                    let hk = s.thickness_at(c, r);
-                    if !moving && !s.at_rest(c, r) {
-                        moving = true;
-                    }
-                    if hk > 0.0 {
-                        let i = r * w + c;
-                        if hk > self.peak_thickness[i] {
-                            self.peak_thickness[i] = hk;
-                        }
-                        let v = s.velocity_at(c, r);
-                        let sp2 = v[0] * v[0] + v[1] * v[1];
-                        energy += 0.5 * hk * sp2 * area;
-                        let sp = sp2.sqrt();
-                        if sp > self.peak_speed[i] {
-                            self.peak_speed[i] = sp;
-                        }
-                    }
-                }
-            }
-        }
-        self.energy = energy;
-        self.peak_energy = self.peak_energy.max(energy);
-        self.moving = moving;
+        let r = self.state.record_peaks(
+            crate::flow::Peaks {
+                thickness: &mut self.peak_thickness,
+                speed: &mut self.peak_speed,
+            },
+            &self.scratch,
+        );
+        self.energy = r.energy;
+        self.peak_energy = self.peak_energy.max(r.energy);
+        self.moving = r.moving;
     }
 
     /// The run's figures so far.
