@@ -86,6 +86,7 @@ mod pipes;
 mod settle;
 mod state;
 mod substep;
+mod team;
 mod tiles;
 mod update;
 mod walk;
@@ -109,6 +110,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, NodataMask};
 use std::sync::Mutex;
+pub(crate) use team::Team;
+use team::TeamHandle;
 use thiserror::Error;
 use tiles::{Segments, TILE, TileSet};
 
@@ -150,6 +153,9 @@ const PARALLEL_MIN_CELLS: usize = 8192;
 /// Rows per block of the pipe pass.
 const BLOCK: usize = 16;
 
+/// Rows per block of the pipe pass when a team of two threads shares it.
+const TEAM_BLOCK: usize = 6;
+
 /// The rows of the block of the pipe pass a worker works on: velocities, discharges and
 /// gradients ([`VX`]..[`GY`]), and the pipes and volumes of the next block's first row (the
 /// volumes after a copy of the block's last row).
@@ -167,17 +173,17 @@ struct BlockRows {
 struct BlockRowsPool(Vec<Mutex<BlockRows>>);
 
 impl BlockRowsPool {
-    /// Makes room for every worker of the current pool.
+    /// Makes room for every worker of the current pool (and the two of a [`Team`]).
     fn reserve_workers(&mut self) {
-        let n = rayon::current_num_threads().max(1);
+        let n = rayon::current_num_threads().max(2);
         if self.0.len() < n {
             self.0.resize_with(n, Default::default);
         }
     }
 
-    /// The rows of the calling worker (the first when called outside a pool).
-    fn of_this_worker(&self) -> std::sync::MutexGuard<'_, BlockRows> {
-        let i = rayon::current_thread_index().unwrap_or(0) % self.0.len().max(1);
+    /// The rows of worker `worker` (a rayon worker's index, or a [`Team`]'s 0 and 1).
+    fn of_worker(&self, worker: usize) -> std::sync::MutexGuard<'_, BlockRows> {
+        let i = worker % self.0.len().max(1);
         // A panic in another block poisons nothing we rely on: the rows are overwritten
         // before they are read.
         self.0[i].lock().unwrap_or_else(|e| e.into_inner())
@@ -264,6 +270,8 @@ pub struct AvalancheScratch {
     /// The widest kernels to run, lanes (1, 4 or 8; 0: the widest the CPU has). Every width
     /// gives the same bits (for the tests and the benchmark that compare them).
     max_lanes: usize,
+    /// The helper thread of the run to rest going on (small flows split their passes with it).
+    team: TeamHandle,
 }
 
 impl AvalancheScratch {
@@ -278,6 +286,11 @@ impl AvalancheScratch {
     /// same bits.
     pub fn set_max_lanes(&mut self, lanes: usize) {
         self.max_lanes = lanes;
+    }
+
+    /// Splits small flows' passes with `team`'s helper from now on (a default handle: none).
+    pub(crate) fn set_team(&mut self, team: TeamHandle) {
+        self.team = team;
     }
 
     /// The kernels a sub-step runs.

@@ -165,10 +165,18 @@ impl AvalancheWorkspace {
             .collect();
         let mut run = AvalancheRun::with_buffers(state, buffers);
         let mut records = 0u64;
+        // A helper thread for the run's small sub-steps (when the pool has two threads or
+        // more); stopped at the end of the run.
+        let team = crate::flow::Team::start();
+        if let Some(t) = &team {
+            run.scratch_mut().set_team(t.handle());
+        }
         let result = run.run_over::<E>(flow, options, terrain, |r| {
             records += 1;
             on_record(r)
         });
+        run.scratch_mut().set_team(Default::default());
+        drop(team);
         let w = terrain.geometry().width();
         let mut entrained = Vec::new();
         let mut deposited = Vec::new();

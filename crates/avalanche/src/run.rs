@@ -322,6 +322,11 @@ impl AvalancheRun {
         run
     }
 
+    /// The flow's work buffers.
+    pub(crate) fn scratch_mut(&mut self) -> &mut AvalancheScratch {
+        &mut self.scratch
+    }
+
     /// The work buffers, for the next run (this one can no longer advance cheaply: it
     /// reallocates them).
     pub fn take_scratch(&mut self) -> AvalancheScratch {

@@ -31,13 +31,22 @@ pub(super) fn substep(
         seg2,
         block_rows,
         max_lanes: _,
+        team,
     } = scratch;
     block_rows.reserve_workers();
     let block_rows = &*block_rows;
     let (seg3, seg2) = (&*seg3, &*seg2);
-    // A small flow runs on the calling thread: below this many cells the fork and join of
-    // the two passes cost more than the second core saves.
-    let parallel = seg3.cells >= PARALLEL_MIN_CELLS;
+    // A small flow runs on the calling thread, or splits its passes with the run's helper
+    // thread (`team`): below this many cells a rayon fork and join cost more than the second
+    // core saves. A large one runs on rayon's workers (on two threads, with the helper).
+    let big = seg3.cells >= PARALLEL_MIN_CELLS;
+    let split = if team.is_on() && !(big && rayon::current_num_threads() > 2) {
+        Split::Team
+    } else if big {
+        Split::Rayon
+    } else {
+        Split::None
+    };
     let (r0, nr) = (seg3.r0, seg3.rows());
     let rows = r0 * pw..(r0 + nr) * pw;
     let empty: &[f64] = &[];
@@ -68,18 +77,27 @@ pub(super) fn substep(
         let pipes = state.pipes.each_ref().map(|p| p.as_slice());
         let inp1 = Inputs { pipes, ..none };
         let end = r0 + nr;
-        let nb = nr.div_ceil(BLOCK);
+        // (Smaller blocks split a small flow more evenly between the two threads of a team.)
+        let block_len = if split == Split::Team {
+            TEAM_BLOCK
+        } else {
+            BLOCK
+        };
+        let nb = nr.div_ceil(block_len);
         let mut np = rows_of(
             new_pipes.each_mut().map(|v| &mut v[rows.clone()]),
-            BLOCK * pw,
+            block_len * pw,
         );
-        let mut fl = rows_of(flux.each_mut().map(|v| &mut v[rows.clone()]), BLOCK * pw);
+        let mut fl = rows_of(
+            flux.each_mut().map(|v| &mut v[rows.clone()]),
+            block_len * pw,
+        );
         // Block `b` holds the factors of its rows shifted down by one.
         let frows = (r0 + 1).min(ph) * pw..(end + 1).min(ph) * pw;
-        let mut fac = rows_of([&mut factor[frows]], BLOCK * pw);
+        let mut fac = rows_of([&mut factor[frows]], block_len * pw);
         fac.resize_with(nb, || [&mut []]);
-        let block = |(bi, ((np, fl), [fac])): BlockItem| {
-            let b0 = r0 + bi * BLOCK;
+        let block = |worker: usize, (bi, ((np, fl), [fac])): BlockItem| {
+            let b0 = r0 + bi * block_len;
             let b1 = b0 + np[0].len() / pw;
             // Pipes of row `b1` too, but in the last block.
             let halo = b1 < end;
@@ -87,7 +105,7 @@ pub(super) fn substep(
             let v1 = (b1 + 1 + halo as usize).min(ph - 1);
             let len = (v1 - v0 + 1) * pw;
             {
-                let mut rows_of_worker = block_rows.of_this_worker();
+                let mut rows_of_worker = block_rows.of_worker(worker);
                 let BlockRows {
                     vel,
                     np: np_h,
@@ -167,18 +185,35 @@ pub(super) fn substep(
                 }
             }
         };
-        if parallel {
-            np.par_iter_mut()
+        match split {
+            Split::Rayon => np
+                .par_iter_mut()
                 .zip(fl.par_iter_mut())
                 .zip(fac.par_iter_mut())
                 .enumerate()
-                .for_each(block);
-        } else {
-            np.iter_mut()
+                .for_each(|item| block(rayon::current_thread_index().unwrap_or(0), item)),
+            Split::None => np
+                .iter_mut()
                 .zip(fl.iter_mut())
                 .zip(fac.iter_mut())
                 .enumerate()
-                .for_each(block);
+                .for_each(|item| block(0, item)),
+            Split::Team => {
+                let items: Vec<Mutex<BlockItem>> = np
+                    .iter_mut()
+                    .zip(fl.iter_mut())
+                    .zip(fac.iter_mut())
+                    .enumerate()
+                    .map(Mutex::new)
+                    .collect();
+                // The blocks split where half the visited cells lie on either side.
+                let mid = half_of_cells(seg3, r0, nb, block_len);
+                team.run(items.len(), mid, &|i, worker| {
+                    let mut item = items[i].lock().unwrap_or_else(|e| e.into_inner());
+                    let (bi, ((np, fl), fac)) = &mut *item;
+                    block(worker, (*bi, ((&mut **np, &mut **fl), &mut **fac)));
+                });
+            }
         }
     }
 
@@ -216,20 +251,42 @@ pub(super) fn substep(
             &mut h[rows.clone()],
             &mut row_tiles[r0 * ntx..(r0 + nr) * ntx],
         );
-        if parallel {
-            hr.par_chunks_mut(pw)
+        match split {
+            Split::Rayon => hr
+                .par_chunks_mut(pw)
                 .zip(prows)
                 .zip(tr.par_chunks_mut(ntx))
                 .enumerate()
                 .map(row)
-                .collect()
-        } else {
-            hr.chunks_mut(pw)
+                .collect(),
+            Split::None => hr
+                .chunks_mut(pw)
                 .zip(prows)
                 .zip(tr.chunks_mut(ntx))
                 .enumerate()
                 .map(row)
-                .collect()
+                .collect(),
+            Split::Team => {
+                type Slot<'a> = Mutex<(Option<RowItem<'a>>, RowStats)>;
+                let items: Vec<Slot> = hr
+                    .chunks_mut(pw)
+                    .zip(prows)
+                    .zip(tr.chunks_mut(ntx))
+                    .enumerate()
+                    .map(|item| Mutex::new((Some(item), RowStats::default())))
+                    .collect();
+                let mid = half_of_cells(seg3, r0, nr, 1);
+                team.run(items.len(), mid, &|i, _| {
+                    let mut slot = items[i].lock().unwrap_or_else(|e| e.into_inner());
+                    if let Some(item) = slot.0.take() {
+                        slot.1 = row(item);
+                    }
+                });
+                items
+                    .into_iter()
+                    .map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner()).1)
+                    .collect()
+            }
         }
     };
 
@@ -256,4 +313,34 @@ pub(super) fn substep(
     state.maxima = (out.max_speed, wave);
     state.active = state.tiles.bbox().map(|b| b.grown(pw, ph));
     out
+}
+
+/// How a sub-step's passes are shared among threads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Split {
+    /// All on the calling thread.
+    None,
+    /// Halves on the calling thread and the run's helper.
+    Team,
+    /// On rayon's workers.
+    Rayon,
+}
+
+/// The first of `n` groups of `rows` rows (from padded row `r0`) after which at least half of
+/// the cells `seg` visits lie.
+fn half_of_cells(seg: &Segments, r0: usize, n: usize, rows: usize) -> usize {
+    let mut seen = 0;
+    for g in 0..n {
+        for r in r0 + g * rows..r0 + (g + 1) * rows {
+            seen += seg
+                .row(r)
+                .iter()
+                .map(|&[a, b]| (b - a + 1) as usize)
+                .sum::<usize>();
+        }
+        if 2 * seen >= seg.cells {
+            return g + 1;
+        }
+    }
+    n
 }
