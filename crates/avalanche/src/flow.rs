@@ -153,9 +153,6 @@ const PARALLEL_MIN_CELLS: usize = 8192;
 /// Rows per block of the pipe pass.
 const BLOCK: usize = 16;
 
-/// Rows per block of the pipe pass when a team of two threads shares it.
-const TEAM_BLOCK: usize = 6;
-
 /// The rows of the block of the pipe pass a worker works on: velocities, discharges and
 /// gradients ([`VX`]..[`GY`]), and the pipes and volumes of the next block's first row (the
 /// volumes after a copy of the block's last row).

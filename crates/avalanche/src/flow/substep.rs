@@ -77,27 +77,18 @@ pub(super) fn substep(
         let pipes = state.pipes.each_ref().map(|p| p.as_slice());
         let inp1 = Inputs { pipes, ..none };
         let end = r0 + nr;
-        // (Smaller blocks split a small flow more evenly between the two threads of a team.)
-        let block_len = if split == Split::Team {
-            TEAM_BLOCK
-        } else {
-            BLOCK
-        };
-        let nb = nr.div_ceil(block_len);
+        let nb = nr.div_ceil(BLOCK);
         let mut np = rows_of(
             new_pipes.each_mut().map(|v| &mut v[rows.clone()]),
-            block_len * pw,
+            BLOCK * pw,
         );
-        let mut fl = rows_of(
-            flux.each_mut().map(|v| &mut v[rows.clone()]),
-            block_len * pw,
-        );
+        let mut fl = rows_of(flux.each_mut().map(|v| &mut v[rows.clone()]), BLOCK * pw);
         // Block `b` holds the factors of its rows shifted down by one.
         let frows = (r0 + 1).min(ph) * pw..(end + 1).min(ph) * pw;
-        let mut fac = rows_of([&mut factor[frows]], block_len * pw);
+        let mut fac = rows_of([&mut factor[frows]], BLOCK * pw);
         fac.resize_with(nb, || [&mut []]);
         let block = |worker: usize, (bi, ((np, fl), [fac])): BlockItem| {
-            let b0 = r0 + bi * block_len;
+            let b0 = r0 + bi * BLOCK;
             let b1 = b0 + np[0].len() / pw;
             // Pipes of row `b1` too, but in the last block.
             let halo = b1 < end;
@@ -207,7 +198,7 @@ pub(super) fn substep(
                     .map(Mutex::new)
                     .collect();
                 // The blocks split where half the visited cells lie on either side.
-                let mid = half_of_cells(seg3, r0, nb, block_len);
+                let mid = half_of_cells(seg3, r0, nb, BLOCK);
                 team.run(items.len(), mid, &|i, worker| {
                     let mut item = items[i].lock().unwrap_or_else(|e| e.into_inner());
                     let (bi, ((np, fl), fac)) = &mut *item;
