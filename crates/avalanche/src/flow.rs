@@ -74,9 +74,14 @@
 //! constant divisors (`2·dx`, `2·dy`, `L`, `dx·dy`) are applied as multiplications by their
 //! reciprocals.
 //!
-//! **Determinism.** Every pass is a gather over rows (rayon), each row writes only its own
-//! cells, and per-row sums are added in row order (within a row, cell by cell), so results are
-//! bit-identical for any thread count and any lane width.
+//! **Threads.** A large flow runs its passes on rayon's workers; a small one (below
+//! [`PARALLEL_MIN_CELLS`] visited cells) on the calling thread, or, during a run to rest on a
+//! pool of two threads or more, shared with the run's helper thread (`team`: the first blocks or
+//! rows on the caller, the rest on the helper, split where half the visited cells lie).
+//!
+//! **Determinism.** Every pass is a gather over rows, each row writes only its own cells, and
+//! per-row sums are added in row order (within a row, cell by cell), so results are
+//! bit-identical for any thread count, any split and any lane width.
 
 mod footprint;
 mod lanes;
