@@ -23,11 +23,12 @@ const POSTED: u8 = 1;
 /// The helper finished its part.
 const DONE: u8 = 2;
 
-/// Spins before the waiting helper starts yielding its core at each look.
-const SPINS_BEFORE_YIELD: u32 = 1 << 14;
+/// Spins before a waiting thread starts yielding its core at each look (tens of µs: the
+/// serial work between two sub-steps).
+const SPINS_BEFORE_YIELD: u32 = 1 << 11;
 
-/// Looks (spins and yields) before the waiting helper sleeps until work is posted.
-const LOOKS_BEFORE_SLEEP: u32 = 1 << 15;
+/// Looks (spins and yields) before the waiting helper sleeps until work is posted (a few ms).
+const LOOKS_BEFORE_SLEEP: u32 = 1 << 13;
 
 /// The work items `lo..hi` of one part: `f(item, worker)`.
 struct Part {
@@ -200,8 +201,14 @@ impl TeamHandle {
         struct Wait<'a>(&'a Shared);
         impl Drop for Wait<'_> {
             fn drop(&mut self) {
+                let mut looks = 0u32;
                 while self.0.state.load(Ordering::Acquire) != DONE {
-                    std::hint::spin_loop();
+                    looks = looks.saturating_add(1);
+                    if looks < SPINS_BEFORE_YIELD {
+                        std::hint::spin_loop();
+                    } else {
+                        std::thread::yield_now();
+                    }
                 }
                 self.0.state.store(IDLE, Ordering::Release);
             }
