@@ -211,3 +211,54 @@ fn bad_parameters_are_refused_before_any_snow_moves() {
     assert!(r.is_err());
     assert_eq!(t.snow, before);
 }
+
+/// A run to rest on one thread (no helper), two (its passes shared with the run's helper
+/// thread) and four gives the same bits.
+#[test]
+fn runs_to_rest_keep_their_bits_with_1_2_and_4_threads() {
+    let opts = RunOptions {
+        duration_s: 30.0,
+        ..RunOptions::default()
+    };
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut t = valley();
+            let mut ws = AvalancheWorkspace::new();
+            let mut volumes = Vec::new();
+            for k in 0..3 {
+                let cells = release_cells(&t, k);
+                let out = ws
+                    .run_to_rest::<AvalancheError>(
+                        &mut t,
+                        ReleasedCells::new(&cells, None),
+                        &AvalancheParams::default(),
+                        &opts,
+                        SnowLayer::Stable,
+                        |_| Ok(()),
+                    )
+                    .unwrap();
+                volumes.push((out.released_m3.to_bits(), out.deposited_m3.to_bits()));
+            }
+            (t, volumes)
+        })
+    };
+    let (t1, v1) = run(1);
+    assert!(v1.iter().all(|&(r, _)| f64::from_bits(r) > 100.0));
+    for threads in [2, 4] {
+        let (t, v) = run(threads);
+        assert_eq!(v, v1, "{threads} threads");
+        for layer in SnowLayer::ALL {
+            assert!(
+                t.layer(layer)
+                    .iter()
+                    .zip(t1.layer(layer))
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{layer:?} with {threads} threads"
+            );
+        }
+    }
+}
