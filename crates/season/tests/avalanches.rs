@@ -326,83 +326,66 @@ fn avamal_avalanches_clear_steep_slopes_and_pile_at_their_foot() {
     );
 }
 
+/// Unstable snow of up to 0.8 m drawn per cell with `seed`.
+fn random_unstable(t: &mut LayeredTerrain, seed: u64) {
+    for (i, u) in t.layer_mut(SnowLayer::Unstable).iter_mut().enumerate() {
+        *u = (0.8 * snowscape_terrain::random::uniform(seed, 0, i as u64)) as f32;
+    }
+}
+
+/// The hazard of `t` by the fast path (`fast`: no sources) and by the general path (`general`:
+/// zero paint), asserted bit for bit (total, every `λ`, every draw); returns the total.
+fn hazard_both_ways(
+    p: &AvalancheParameters,
+    t: &LayeredTerrain,
+    (fast, general): (&mut HazardMap, &mut HazardMap),
+) -> f64 {
+    let slopes = snowscape_season::avalanches::bedrock_slopes_deg(t);
+    let zeros = vec![0.0f32; t.geometry().len()];
+    let a = fast.compute(p, t, &slopes, &HazardSources::default());
+    let b = general.compute(
+        p,
+        t,
+        &slopes,
+        &HazardSources {
+            skiers: None,
+            painted: Some(&zeros),
+        },
+    );
+    assert_eq!(a.to_bits(), b.to_bits());
+    let bits = |m: &HazardMap| m.lambda.iter().map(|l| l.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(fast), bits(general));
+    // Every draw picks the same cell (the row sums agree too).
+    for k in 0..200 {
+        let u = (k as f64 + 0.5) / 200.0;
+        assert_eq!(fast.pick(u), general.pick(u));
+    }
+    a
+}
+
 #[test]
 fn natural_hazard_without_sources_has_the_bits_of_the_general_computation() {
     // The map without skiers, paint or nodata takes a straight loop with the slope window
     // looked up; zero paint sends it through the general cell-by-cell path.
     let p = AvalancheParameters::default();
     let mut t = slope_onto_flat();
-    let n = t.geometry().len();
-    for i in 0..n {
-        t.layer_mut(SnowLayer::Unstable)[i] =
-            (0.8 * snowscape_terrain::random::uniform(7, 0, i as u64)) as f32;
-    }
-    let slopes = snowscape_season::avalanches::bedrock_slopes_deg(&t);
-    let zeros = vec![0.0f32; n];
-    let mut fast = HazardMap::default();
-    let mut general = HazardMap::default();
-    let a = fast.compute(&p, &t, &slopes, &HazardSources::default());
-    let b = general.compute(
-        &p,
-        &t,
-        &slopes,
-        &HazardSources {
-            skiers: None,
-            painted: Some(&zeros),
-        },
-    );
+    random_unstable(&mut t, 7);
+    let (mut fast, mut general) = (HazardMap::default(), HazardMap::default());
+    let a = hazard_both_ways(&p, &t, (&mut fast, &mut general));
     assert!(a > 0.0);
-    assert_eq!(a.to_bits(), b.to_bits());
-    let bits = |m: &HazardMap| m.lambda.iter().map(|l| l.to_bits()).collect::<Vec<_>>();
-    assert_eq!(bits(&fast), bits(&general));
     // The cached window follows a change of the window's slopes (the 40° slope now lies where
     // the window falls off).
     let q = AvalancheParameters {
         slope_fall_deg: 38.0,
         ..p.clone()
     };
-    let c = fast.compute(&q, &t, &slopes, &HazardSources::default());
-    let d = general.compute(
-        &q,
-        &t,
-        &slopes,
-        &HazardSources {
-            skiers: None,
-            painted: Some(&zeros),
-        },
-    );
-    assert!(c < a);
-    assert_eq!(c.to_bits(), d.to_bits());
-    assert_eq!(bits(&fast), bits(&general));
+    assert!(hazard_both_ways(&q, &t, (&mut fast, &mut general)) < a);
     // A height that is not a multiple of the fast path's group of four rows: the last group's
     // rows are summed alone, with the same bits.
     let g = GridGeometry::square(37, 123, 5.0).unwrap();
     let mut t = LayeredTerrain::from_bedrock(Grid::from_fn(g, |c, r| {
         1000.0 + 4.0 * (123.0 - r as f32) + 0.5 * c as f32
     }));
-    let n = t.geometry().len();
-    for i in 0..n {
-        t.layer_mut(SnowLayer::Unstable)[i] =
-            (0.8 * snowscape_terrain::random::uniform(9, 0, i as u64)) as f32;
-    }
-    let slopes = snowscape_season::avalanches::bedrock_slopes_deg(&t);
-    let zeros = vec![0.0f32; n];
-    let a = fast.compute(&p, &t, &slopes, &HazardSources::default());
-    let b = general.compute(
-        &p,
-        &t,
-        &slopes,
-        &HazardSources {
-            skiers: None,
-            painted: Some(&zeros),
-        },
-    );
-    assert!(a > 0.0);
-    assert_eq!(a.to_bits(), b.to_bits());
-    assert_eq!(bits(&fast), bits(&general));
-    // Every draw picks the same cell (the row sums agree too).
-    for k in 0..200 {
-        let u = (k as f64 + 0.5) / 200.0;
-        assert_eq!(fast.pick(u), general.pick(u));
-    }
+    random_unstable(&mut t, 9);
+    assert!(hazard_both_ways(&p, &t, (&mut fast, &mut general)) > 0.0);
 }
