@@ -83,6 +83,7 @@
 //! per-row sums are added in row order (within a row, cell by cell), so results are
 //! bit-identical for any thread count, any split and any lane width.
 
+mod consts;
 mod footprint;
 mod lanes;
 mod params;
@@ -96,6 +97,7 @@ mod tiles;
 mod update;
 mod walk;
 
+use consts::Consts;
 pub use params::{
     AvalancheError, AvalancheParams, AvalancheReport, Border, FrictionLaw, SamosAtParams,
     SlopeGravity,
@@ -508,163 +510,6 @@ struct SubReport {
     visited: usize,
 }
 
-/// The samosAT law's constants of one sub-step.
-#[derive(Clone, Copy)]
-struct Samos {
-    /// `μ·g·dt`: the dry friction's speed change at high speed.
-    mu_g_dt: f64,
-    rs0: f64,
-    inv_kappa: f64,
-    b: f64,
-    /// `1/R`.
-    inv_r: f64,
-}
-
-impl Samos {
-    /// The dry friction's speed change over the sub-step at squared speed `speed2` (the
-    /// sub-step's start) on depth `depth`, for a pipe whose `μ·g·dt` is `mu_g_dt` (the law's
-    /// [`Samos::mu_g_dt`] or, with friction maps, the pipe's):
-    /// `μ·g·dt·(1 + Rs0/(Rs0 + u²/(g·h)))`, computed as `μ·g·dt·(1 + Rs0·g·h/(Rs0·g·h + u²))`
-    /// (one division).
-    #[inline(always)]
-    fn yield_dt(&self, mu_g_dt: f64, speed2: f64, depth: f64) -> f64 {
-        let rgh = self.rs0 * (G * depth);
-        mu_g_dt * (1.0 + rgh / (rgh + speed2))
-    }
-
-    /// The turbulent drag's `h·div²` with `div = ln(max(h/R, 1))/κ + B`: the drag slows a pipe
-    /// by the factor `1/(1 + dt·|u|/(h·div²))`, applied as `h·div²/(h·div² + dt·|u|)`.
-    #[inline(always)]
-    fn drag_depth(&self, depth: f64) -> f64 {
-        let div = lanes::ln_at_least_one((depth * self.inv_r).max(1.0)) * self.inv_kappa + self.b;
-        depth * div * div
-    }
-}
-
-/// Constants of one sub-step.
-struct Consts {
-    dt: f64,
-    /// `dt·g`.
-    dtg: f64,
-    /// Coulomb yield speed change `α·g·tanθc·dt`.
-    yield_dt: f64,
-    coulomb: bool,
-    /// Viscous coefficient `dt·(1 − α)·kv/2` (0: no viscous term).
-    visc: f64,
-    /// Voellmy turbulent-drag coefficient `dt·g/ξ` (0: Coulomb law).
-    turb: f64,
-    /// The samosAT law's constants (`None`: another law).
-    samos: Option<Samos>,
-    adv: bool,
-    /// [`SlopeGravity::Projected`].
-    projected: bool,
-    closed: bool,
-    alpha: f64,
-    pw: usize,
-    ph: usize,
-    /// `−g/L` per owned direction: the pressure term's factor.
-    neg_g_over_len: [f64; 4],
-    width: [f64; 4],
-    e: [[f64; 2]; 4],
-    dx: f64,
-    dy: f64,
-    square: bool,
-    area: f64,
-    /// `1/(dx·dy)`.
-    inv_area: f64,
-    /// `1/(2·e_SE,x)`, `1/(2·e_SE,y)`, `1/(2·dx)`, `1/(2·dy)`: the velocity's and the
-    /// gradient's constant divisors, as factors (a multiplication costs a fraction of a
-    /// division).
-    inv_den_x: f64,
-    inv_den_y: f64,
-    inv_two_dx: f64,
-    inv_two_dy: f64,
-    /// Padded index offset of the neighbour of each owned pipe.
-    off: [usize; 4],
-}
-
-impl Consts {
-    fn new(params: &AvalancheParams, pg: &PipeGeometry, pw: usize, ph: usize, dt: f64) -> Self {
-        let mu_g = params.dry_friction() * G;
-        let alpha = params.dry_weight();
-        let voellmy = params.friction == FrictionLaw::Voellmy;
-        let samos = (params.friction == FrictionLaw::SamosAt).then(|| {
-            let s = &params.samos_at;
-            Samos {
-                mu_g_dt: s.mu * G * dt,
-                rs0: s.rs0,
-                inv_kappa: 1.0 / s.kappa,
-                b: s.b,
-                inv_r: 1.0 / s.roughness_m,
-            }
-        });
-        Self {
-            dt,
-            dtg: dt * G,
-            yield_dt: alpha * mu_g * dt,
-            coulomb: alpha > 0.0,
-            visc: if voellmy || samos.is_some() {
-                0.0
-            } else {
-                dt * (1.0 - alpha) * params.k_viscous * 0.5
-            },
-            turb: if voellmy {
-                dt * G / params.voellmy_xi_m_s2
-            } else {
-                0.0
-            },
-            samos,
-            adv: params.momentum_advection,
-            projected: params.slope_gravity == SlopeGravity::Projected,
-            closed: params.border == Border::Closed,
-            alpha,
-            pw,
-            ph,
-            width: pg.width,
-            e: pg.e,
-            dx: pg.dx,
-            dy: pg.dy,
-            square: pg.dx == pg.dy,
-            area: pg.area,
-            inv_den_x: 1.0 / (2.0 * pg.e[2][0]),
-            inv_den_y: 1.0 / (2.0 * pg.e[2][1]),
-            inv_two_dx: pg.inv_two_dx,
-            inv_two_dy: pg.inv_two_dy,
-            neg_g_over_len: pg.neg_g_over_len,
-            inv_area: pg.inv_area,
-            off: [1, pw, pw + 1, pw - 1],
-        }
-    }
-
-    fn is_wall(&self, nodata: &[bool], k: usize, c: usize, r: usize) -> bool {
-        nodata[k] || (self.closed && (r == 0 || c == 0 || r == self.ph - 1 || c == self.pw - 1))
-    }
-
-    /// Padded index of the neighbour of `(c, r)` along owned direction `d`.
-    fn neighbour(&self, c: usize, r: usize, d: usize) -> Option<usize> {
-        let (dc, dr) = DIRS[d];
-        let cc = c as isize + dc;
-        let rr = r as isize + dr;
-        if cc < 0 || rr < 0 || cc >= self.pw as isize || rr >= self.ph as isize {
-            None
-        } else {
-            Some(rr as usize * self.pw + cc as usize)
-        }
-    }
-
-    /// Padded index of the owner of the pipe reaching `(c, r)` along direction `d`.
-    fn back(&self, c: usize, r: usize, d: usize) -> Option<usize> {
-        let (dc, dr) = DIRS[d];
-        let cc = c as isize - dc;
-        let rr = r as isize - dr;
-        if cc < 0 || rr < 0 || cc >= self.pw as isize || rr >= self.ph as isize {
-            None
-        } else {
-            Some(rr as usize * self.pw + cc as usize)
-        }
-    }
-}
-
 /// Read-only arrays of a pass (the ones a pass does not read are empty).
 #[derive(Clone, Copy)]
 struct Inputs<'a> {
@@ -832,91 +677,4 @@ lanes_dispatch!(
 );
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The four- and eight-lane kernels give the bits of the one-lane (scalar) ones: random bed and
-    /// depths, nodata cells, both borders, dry, wet and mixed snow, square and oblong cells.
-    #[test]
-    fn lanes_match_scalar() {
-        let hash = |i: usize, seed: u64| {
-            let mut x = (i as u64 ^ seed.wrapping_mul(0x9E37_79B9_7F4A_7C15))
-                .wrapping_add(0x632B_E59B_D9B4_E019);
-            x ^= x >> 30;
-            x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            x ^= x >> 27;
-            x = x.wrapping_mul(0x94D0_49BB_1331_11EB);
-            x ^= x >> 31;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let cases = [
-            (70, 50, 2.0, 2.0, Border::Open, 1.0),
-            (61, 43, 3.0, 2.0, Border::Closed, 0.4),
-            (40, 64, 5.0, 5.0, Border::Open, 0.0),
-        ];
-        for (case, &(w, h, dx, dy, border, alpha)) in cases.iter().enumerate() {
-            let seed = case as u64 + 11;
-            let g = GridGeometry::new(w, h, dx, dy).unwrap();
-            let bed: Vec<f64> = (0..w * h)
-                .map(|i| 4.0 * hash(i, seed) + 0.9 * (i / w) as f64 + 0.2 * (i % w) as f64)
-                .collect();
-            let mask =
-                NodataMask::from_invalid((0..w * h).map(|i| hash(i, seed ^ 7) < 0.02).collect());
-            let mut s = AvalancheState::new(&g, &mask, &bed).unwrap();
-            let depth: Vec<f64> = (0..w * h)
-                .map(|i| {
-                    let v = hash(i, seed ^ 3);
-                    if v < 0.4 { 0.0 } else { 2.0 * v }
-                })
-                .collect();
-            s.set_thickness(&depth).unwrap();
-            // The shallow form, and the projected one on the first two cases; each friction
-            // law, Voellmy also with per-cell μ and ξ.
-            for (law, maps) in [
-                (FrictionLaw::Coulomb, false),
-                (FrictionLaw::Voellmy, false),
-                (FrictionLaw::Voellmy, true),
-                (FrictionLaw::SamosAt, false),
-            ] {
-                let params = AvalancheParams {
-                    border,
-                    alpha,
-                    k_viscous: 0.02,
-                    friction: law,
-                    slope_gravity: if case < 2 {
-                        SlopeGravity::Projected
-                    } else {
-                        SlopeGravity::Shallow
-                    },
-                    ..AvalancheParams::default()
-                };
-                let mut s = s.clone();
-                if maps {
-                    let mu = (0..w * h).map(|i| 0.1 + 0.3 * hash(i, seed ^ 5)).collect();
-                    let xi = (0..w * h)
-                        .map(|i| 200.0 + 4000.0 * hash(i, seed ^ 9))
-                        .collect();
-                    s.set_friction_maps(&FrictionMaps::new(&g, Some(mu), Some(xi)).unwrap())
-                        .unwrap();
-                }
-                let run = |lanes: usize| {
-                    let mut st = s.clone();
-                    let mut scratch = AvalancheScratch::default();
-                    scratch.set_max_lanes(lanes);
-                    let reports: Vec<AvalancheReport> = (0..12)
-                        .map(|_| step(&params, &mut st, &mut scratch, 0.3).unwrap())
-                        .collect();
-                    (st, reports)
-                };
-                let (a, ra) = run(1);
-                assert!(ra.iter().map(|r| r.substeps).sum::<usize>() > 20);
-                // Four lanes (AVX) and eight (AVX-512), where the CPU has them.
-                for lanes in [4, 8] {
-                    let (b, rb) = run(lanes);
-                    assert_eq!(a, b, "case {case} {law:?} maps {maps} lanes {lanes}");
-                    assert_eq!(ra, rb, "case {case} {law:?} maps {maps} lanes {lanes}");
-                }
-            }
-        }
-    }
-}
+mod tests;

@@ -48,6 +48,25 @@ fn release_cells(t: &LayeredTerrain, k: usize) -> Vec<usize> {
         .collect()
 }
 
+/// `cells` of `t` released whole and run to rest through `ws` with the default flow, the debris
+/// laid down as stable snow.
+fn run_release(
+    ws: &mut AvalancheWorkspace,
+    t: &mut LayeredTerrain,
+    cells: &[usize],
+    opts: &RunOptions,
+) -> snowscape_avalanche::RestOutcome {
+    ws.run_to_rest::<AvalancheError>(
+        t,
+        ReleasedCells::new(cells, None),
+        &AvalancheParams::default(),
+        opts,
+        SnowLayer::Stable,
+        |_| Ok(()),
+    )
+    .unwrap()
+}
+
 /// The path the season took before the workspace: a state built from the whole terrain.
 fn fresh_run(t: &mut LayeredTerrain, cells: &[usize], opts: &RunOptions) -> (f64, f64) {
     let mut flags = vec![false; t.geometry().len()];
@@ -73,16 +92,7 @@ fn a_kept_workspace_gives_the_bits_of_a_fresh_state_per_avalanche() {
     let mut ws = AvalancheWorkspace::new();
     for k in 0..4 {
         let cells = release_cells(&a, k);
-        let out = ws
-            .run_to_rest::<AvalancheError>(
-                &mut a,
-                ReleasedCells::new(&cells, None),
-                &AvalancheParams::default(),
-                &opts,
-                SnowLayer::Stable,
-                |_| Ok(()),
-            )
-            .unwrap();
+        let out = run_release(&mut ws, &mut a, &cells, &opts);
         let (released, deposited) = fresh_run(&mut b, &cells, &opts);
         assert!(
             out.released_m3 > 100.0,
@@ -231,16 +241,7 @@ fn runs_to_rest_keep_their_bits_with_1_2_and_4_threads() {
             let mut volumes = Vec::new();
             for k in 0..3 {
                 let cells = release_cells(&t, k);
-                let out = ws
-                    .run_to_rest::<AvalancheError>(
-                        &mut t,
-                        ReleasedCells::new(&cells, None),
-                        &AvalancheParams::default(),
-                        &opts,
-                        SnowLayer::Stable,
-                        |_| Ok(()),
-                    )
-                    .unwrap();
+                let out = run_release(&mut ws, &mut t, &cells, &opts);
                 volumes.push((out.released_m3.to_bits(), out.deposited_m3.to_bits()));
             }
             (t, volumes)
