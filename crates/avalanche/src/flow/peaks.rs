@@ -30,7 +30,7 @@ impl AvalancheState {
         let simd = scratch.simd();
         let w = self.geometry.width();
         let area = self.geometry.cell_area();
-        let inv_den = [2.0 * self.pg.e[2][0], 2.0 * self.pg.e[2][1]];
+        let den = [2.0 * self.pg.e[2][0], 2.0 * self.pg.e[2][1]];
         let Peaks { thickness, speed } = peaks;
         let mut out = Recorded::default();
         for (r0, r1, c0, c1) in self.content_cells() {
@@ -44,7 +44,7 @@ impl AvalancheState {
                     simd,
                     self,
                     row,
-                    (area, inv_den),
+                    (area, den),
                     (&mut thickness[..], &mut speed[..]),
                     &mut out,
                 );
