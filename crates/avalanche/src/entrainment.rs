@@ -198,9 +198,11 @@ pub(crate) fn entrain(
     let area = terrain.geometry().cell_area();
     let mass_per_shear = params.density * dt / p.erosion_energy_j_kg;
     let shear = BasalShear::new(params);
-    let boxes: Vec<_> = state.content_cells().collect();
     let mut volume = 0.0;
-    for (r0, r1, c0, c1) in boxes {
+    for t in 0..state.occupied_tiles() {
+        let Some((r0, r1, c0, c1)) = state.content_cells_of(t) else {
+            continue;
+        };
         for r in r0..=r1 {
             for c in c0..=c1 {
                 let k = state.pad(c, r);

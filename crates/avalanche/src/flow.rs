@@ -89,6 +89,7 @@ mod lanes;
 mod params;
 mod peaks;
 mod pipes;
+mod rows;
 mod settle;
 mod state;
 mod substep;
@@ -105,6 +106,7 @@ pub use params::{
 pub(crate) use peaks::{Peaks, Recorded};
 use peaks::{RecordRow, record_row_lanes};
 use pipes::*;
+use rows::Rows;
 use substep::substep;
 use update::*;
 use walk::*;
@@ -266,6 +268,8 @@ pub struct AvalancheScratch {
     factor: Vec<f64>,
     /// Per padded row, the content column range of each tile the row touches.
     row_tiles: Vec<[u32; 2]>,
+    /// Per visited row of the thickness pass, its sums and maxima.
+    row_stats: Vec<RowStats>,
     /// The active tiles grown by 3 cells (velocities, pipes) and by 2 cells (thickness).
     seg3: Segments,
     seg2: Segments,
@@ -532,7 +536,7 @@ struct Inputs<'a> {
 }
 
 /// Per-row results of the final pass of a sub-step.
-#[derive(Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default)]
 struct RowStats {
     moved: f64,
     umax: f64,
@@ -543,30 +547,12 @@ struct RowStats {
     tiles: usize,
 }
 
-/// The chunks of `len` values (the last one may be shorter) of `N` arrays, one entry per chunk.
-fn rows_of<const N: usize>(arrays: [&mut [f64]; N], len: usize) -> Vec<[&mut [f64]; N]> {
-    let rows = arrays[0].len().div_ceil(len);
-    let mut its = arrays.map(|a| a.chunks_mut(len));
-    (0..rows)
-        .map(|_| std::array::from_fn(|i| its[i].next().expect("row")))
-        .collect()
-}
-
-/// A block of the pipe pass: its index, its new pipes and raw volumes (4 directions each), its
+/// A block of the pipe pass: its new pipes and raw volumes (4 directions each) and its
 /// outflow factors.
-type BlockItem<'a, 'b> = (
-    usize,
-    (
-        (&'a mut [&'b mut [f64]; 4], &'a mut [&'b mut [f64]; 4]),
-        &'a mut [&'b mut [f64]; 1],
-    ),
-);
+type BlockItem<'a> = [&'a mut [f64]; 9];
 
-/// A row of the thickness pass: its index, thickness, pipes (4 directions) and tile ranges.
-type RowItem<'a> = (
-    usize,
-    ((&'a mut [f64], [&'a mut [f64]; 4]), &'a mut [[u32; 2]]),
-);
+/// A row of the thickness pass: its thickness and pipes (4 directions).
+type RowItem<'a> = [&'a mut [f64]; 5];
 
 /// A row of pass 1: its index and the segments of cells it visits.
 #[derive(Debug, Clone, Copy)]

@@ -26,12 +26,9 @@ impl AvalancheState {
         // Settled in place, in one visit: a cell that settles was below the threshold and
         // stays below it (0), so its neighbours' tests read the same answer either way.
         let mut volume = 0.0;
-        let (w, hgt) = (self.geometry.width(), self.geometry.height());
         // Grid cells only: the ghost ring never holds snow at rest.
-        for t in 0..self.tiles.occupied().len() {
-            let Some((r0, r1, c0, c1)) =
-                self.tiles.content_box(t).and_then(|b| grid_box(b, w, hgt))
-            else {
+        for t in 0..self.occupied_tiles() {
+            let Some((r0, r1, c0, c1)) = self.content_cells_of(t) else {
                 continue;
             };
             for r in r0..=r1 {
@@ -68,10 +65,20 @@ impl AvalancheState {
     /// The content boxes of the active tiles in grid cells, inclusive `(r0, r1, c0, c1)`:
     /// every cell with flowing snow or a moving pipe lies in one (or is next to one).
     pub(crate) fn content_cells(&self) -> impl Iterator<Item = (usize, usize, usize, usize)> + '_ {
+        (0..self.occupied_tiles()).filter_map(|t| self.content_cells_of(t))
+    }
+
+    /// The number of active tiles.
+    pub(crate) fn occupied_tiles(&self) -> usize {
+        self.tiles.occupied().len()
+    }
+
+    /// The content box of the `t`-th active tile in grid cells, inclusive `(r0, r1, c0, c1)`
+    /// (`None` where it holds ghost cells only): for a loop over the content that changes the
+    /// state as it goes.
+    pub(crate) fn content_cells_of(&self, t: usize) -> Option<(usize, usize, usize, usize)> {
         let (w, hgt) = (self.geometry.width(), self.geometry.height());
-        self.tiles
-            .content_boxes()
-            .filter_map(move |b| grid_box(b, w, hgt))
+        self.tiles.content_box(t).and_then(|b| grid_box(b, w, hgt))
     }
 
     /// Thickness of the films settled so far (row-major), m.

@@ -27,6 +27,7 @@ pub(super) fn substep(
         flux,
         factor,
         row_tiles,
+        row_stats,
         seg3,
         seg2,
         block_rows,
@@ -78,16 +79,18 @@ pub(super) fn substep(
         let inp1 = Inputs { pipes, ..none };
         let end = r0 + nr;
         let nb = nr.div_ceil(BLOCK);
-        let mut np = rows_of(
-            new_pipes.each_mut().map(|v| &mut v[rows.clone()]),
-            BLOCK * pw,
-        );
-        let mut fl = rows_of(flux.each_mut().map(|v| &mut v[rows.clone()]), BLOCK * pw);
-        // Block `b` holds the factors of its rows shifted down by one.
+        // Block `b` holds the factors of its rows shifted down by one (the last block's may
+        // run past the grid: they are cut there).
         let frows = (r0 + 1).min(ph) * pw..(end + 1).min(ph) * pw;
-        let mut fac = rows_of([&mut factor[frows]], BLOCK * pw);
-        fac.resize_with(nb, || [&mut []]);
-        let block = |worker: usize, (bi, ((np, fl), [fac])): BlockItem| {
+        let [n0, n1, n2, n3] = new_pipes.each_mut().map(|v| &mut v[rows.clone()]);
+        let [f0, f1, f2, f3] = flux.each_mut().map(|v| &mut v[rows.clone()]);
+        let blocks = Rows::new(
+            [n0, n1, n2, n3, f0, f1, f2, f3, &mut factor[frows]],
+            BLOCK * pw,
+            nb,
+        );
+        let block = |worker: usize, bi: usize, [n0, n1, n2, n3, f0, f1, f2, f3, fac]: BlockItem| {
+            let (mut np, mut fl) = ([n0, n1, n2, n3], [f0, f1, f2, f3]);
             let b0 = r0 + bi * BLOCK;
             let b1 = b0 + np[0].len() / pw;
             // Pipes of row `b1` too, but in the last block.
@@ -177,33 +180,22 @@ pub(super) fn substep(
             }
         };
         match split {
-            Split::Rayon => np
-                .par_iter_mut()
-                .zip(fl.par_iter_mut())
-                .zip(fac.par_iter_mut())
+            Split::Rayon => blocks
+                .par()
                 .enumerate()
-                .for_each(|item| block(rayon::current_thread_index().unwrap_or(0), item)),
-            Split::None => np
-                .iter_mut()
-                .zip(fl.iter_mut())
-                .zip(fac.iter_mut())
-                .enumerate()
-                .for_each(|item| block(0, item)),
+                .for_each(|(bi, item)| block(rayon::current_thread_index().unwrap_or(0), bi, item)),
+            Split::None => blocks.enumerate().for_each(|(bi, item)| block(0, bi, item)),
             Split::Team => {
-                let items: Vec<Mutex<BlockItem>> = np
-                    .iter_mut()
-                    .zip(fl.iter_mut())
-                    .zip(fac.iter_mut())
-                    .enumerate()
-                    .map(Mutex::new)
-                    .collect();
                 // The blocks split where half the visited cells lie on either side.
                 let mid = half_of_cells(seg3, r0, nb, BLOCK);
-                team.run(items.len(), mid, &|i, worker| {
-                    let mut item = items[i].lock().unwrap_or_else(|e| e.into_inner());
-                    let (bi, ((np, fl), fac)) = &mut *item;
-                    block(worker, (*bi, ((&mut **np, &mut **fl), &mut **fac)));
-                });
+                let (first, rest) = blocks.split_at(mid);
+                team.join(
+                    || first.enumerate().for_each(|(bi, item)| block(0, bi, item)),
+                    || {
+                        rest.enumerate()
+                            .for_each(|(bi, item)| block(1, mid + bi, item))
+                    },
+                );
             }
         }
     }
@@ -211,7 +203,9 @@ pub(super) fn substep(
     // Pass 2: thickness update (seg2), pipes scaled by the upwind cell's factor (seg3), the
     // content of each row per tile, the CFL maxima.
     let ntx = state.tiles.ntx();
-    let stats: Vec<RowStats> = {
+    row_stats.clear();
+    row_stats.resize(nr, RowStats::default());
+    {
         let inp = Inputs {
             h: empty,
             bed: empty,
@@ -227,59 +221,55 @@ pub(super) fn substep(
             mu: empty,
             xi: empty,
         };
-        let (h, pipes) = (&mut state.h, &mut state.pipes);
-        let prows = rows_of(pipes.each_mut().map(|v| &mut v[rows.clone()]), pw);
-        let row = |(ri, ((hrow, mut prow), trow)): RowItem| {
+        let [p0, p1, p2, p3] = state.pipes.each_mut().map(|v| &mut v[rows.clone()]);
+        let rows = Rows::new([&mut state.h[rows.clone()], p0, p1, p2, p3], pw, nr);
+        let row = |ri: usize, [hrow, p0, p1, p2, p3]: RowItem, trow: &mut [[u32; 2]]| {
             let r = r0 + ri;
             let segs = UpdateSegs {
                 row: r,
                 seg2: seg2.row(r),
                 seg3: seg3.row(r),
             };
-            update_row(simd, &k, &inp, segs, hrow, &mut prow, trow)
+            update_row(simd, &k, &inp, segs, hrow, &mut [p0, p1, p2, p3], trow)
         };
-        let (hr, tr) = (
-            &mut h[rows.clone()],
+        let (tiles, stats) = (
             &mut row_tiles[r0 * ntx..(r0 + nr) * ntx],
+            &mut row_stats[..],
         );
         match split {
-            Split::Rayon => hr
-                .par_chunks_mut(pw)
-                .zip(prows)
-                .zip(tr.par_chunks_mut(ntx))
+            Split::Rayon => rows
+                .par()
+                .zip(tiles.par_chunks_mut(ntx))
+                .zip(stats.par_iter_mut())
                 .enumerate()
-                .map(row)
-                .collect(),
-            Split::None => hr
-                .chunks_mut(pw)
-                .zip(prows)
-                .zip(tr.chunks_mut(ntx))
+                .for_each(|(ri, ((item, trow), st))| *st = row(ri, item, trow)),
+            Split::None => rows
+                .zip(tiles.chunks_mut(ntx))
+                .zip(stats.iter_mut())
                 .enumerate()
-                .map(row)
-                .collect(),
+                .for_each(|(ri, ((item, trow), st))| *st = row(ri, item, trow)),
             Split::Team => {
-                type Slot<'a> = Mutex<(Option<RowItem<'a>>, RowStats)>;
-                let items: Vec<Slot> = hr
-                    .chunks_mut(pw)
-                    .zip(prows)
-                    .zip(tr.chunks_mut(ntx))
-                    .enumerate()
-                    .map(|item| Mutex::new((Some(item), RowStats::default())))
-                    .collect();
                 let mid = half_of_cells(seg3, r0, nr, 1);
-                team.run(items.len(), mid, &|i, _| {
-                    let mut slot = items[i].lock().unwrap_or_else(|e| e.into_inner());
-                    if let Some(item) = slot.0.take() {
-                        slot.1 = row(item);
-                    }
-                });
-                items
-                    .into_iter()
-                    .map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner()).1)
-                    .collect()
+                let (rows, rest) = rows.split_at(mid);
+                let (tiles, tiles_rest) = tiles.split_at_mut(mid * ntx);
+                let (stats, stats_rest) = stats.split_at_mut(mid);
+                team.join(
+                    || {
+                        rows.zip(tiles.chunks_mut(ntx))
+                            .zip(stats.iter_mut())
+                            .enumerate()
+                            .for_each(|(ri, ((item, trow), st))| *st = row(ri, item, trow))
+                    },
+                    || {
+                        rest.zip(tiles_rest.chunks_mut(ntx))
+                            .zip(stats_rest.iter_mut())
+                            .enumerate()
+                            .for_each(|(ri, ((item, trow), st))| *st = row(mid + ri, item, trow))
+                    },
+                );
             }
         }
-    };
+    }
 
     let mut out = SubReport {
         moved: 0.0,
@@ -290,7 +280,7 @@ pub(super) fn substep(
     };
     let mut wave = 0.0f64;
     state.tiles.clear();
-    for (ri, st) in stats.iter().enumerate() {
+    for (ri, st) in row_stats.iter().enumerate() {
         let r = r0 + ri;
         out.moved += st.moved;
         out.max_speed = out.max_speed.max(st.umax);

@@ -228,6 +228,24 @@ impl TeamHandle {
     }
 }
 
+impl TeamHandle {
+    /// Runs `caller` on the calling thread and `helper` on the helper at the same time (both
+    /// on the calling thread, one after the other, without a helper); returns when both are
+    /// done, re-raising a panic of either. Allocates nothing.
+    pub(crate) fn join(&self, caller: impl FnOnce() + Send, helper: impl FnOnce() + Send) {
+        let (caller, helper) = (Mutex::new(Some(caller)), Mutex::new(Some(helper)));
+        self.run(2, 1, &|i, _| {
+            if i == 0 {
+                let f = caller.lock().unwrap_or_else(|e| e.into_inner()).take();
+                f.into_iter().for_each(|f| f());
+            } else {
+                let f = helper.lock().unwrap_or_else(|e| e.into_inner()).take();
+                f.into_iter().for_each(|f| f());
+            }
+        });
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

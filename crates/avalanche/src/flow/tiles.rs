@@ -89,15 +89,6 @@ impl TileSet {
         b.c1 = b.c1.max(c1 as u32);
     }
 
-    /// The content box of every occupied tile, inclusive padded `(r0, r1, c0, c1)`, in
-    /// row-major tile order.
-    pub(crate) fn content_boxes(&self) -> impl Iterator<Item = (usize, usize, usize, usize)> + '_ {
-        self.occupied.iter().map(|&t| {
-            let b = self.boxes[t as usize];
-            (b.r0 as usize, b.r1 as usize, b.c0 as usize, b.c1 as usize)
-        })
-    }
-
     /// The content box of the `t`-th occupied tile (row-major tile order), inclusive padded
     /// `(r0, r1, c0, c1)`.
     pub(crate) fn content_box(&self, t: usize) -> Option<(usize, usize, usize, usize)> {
