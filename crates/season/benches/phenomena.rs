@@ -115,6 +115,7 @@ fn phenomena(c: &mut Criterion) {
         shadow: &s.shadow,
         effect_surface: &s.wz,
         sx: None,
+        terms: None,
     };
     group.bench_function("wind_transport", |b| {
         let mut t = s.terrain.clone();

@@ -51,11 +51,13 @@ use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
 
 pub mod sheltered;
 mod stencils;
+mod terms;
 pub use sheltered::SxParams;
 pub use stencils::{
     downwind_split, eroded_depth, erosion_curvature, one_sided_second_difference,
     second_difference, tamping_share, vertical_wind_change,
 };
+pub use terms::WindTerms;
 
 /// Which physics moves snow with the wind in a season.
 #[derive(
@@ -151,6 +153,9 @@ pub struct WindMaps<'a> {
     /// Maximum upwind slope `Sx` for the wind's direction, degrees (Winstral et al. 2002;
     /// `snowscape_environment::max_upwind_slope`). `None`: the paper's transport alone.
     pub sx: Option<&'a [f32]>,
+    /// The terms of this wind field that do not depend on the snow ([`WindTerms::new`], once
+    /// per wind field). `None`: each step computes them.
+    pub terms: Option<&'a WindTerms>,
 }
 
 impl WindMaps<'_> {
@@ -159,6 +164,9 @@ impl WindMaps<'_> {
         check_map("wind_v", self.v, geometry)?;
         check_map("wind_shadow", self.shadow, geometry)?;
         check_map("wind_effect_surface", self.effect_surface, geometry)?;
+        if let Some(terms) = self.terms {
+            terms.check(geometry)?;
+        }
         sheltered::check(self, geometry)
     }
 }
@@ -203,6 +211,8 @@ pub struct WindScratch {
     out_y: Vec<f32>,
     /// Buffers of the Sx term.
     sx: sheltered::SxScratch,
+    /// The wind's terms, when the maps come without them.
+    terms: WindTerms,
 }
 
 /// Moves snow with the wind over `dt_days`.
@@ -222,30 +232,28 @@ pub fn step(
     fill_surface(terrain, &mut scratch.surface);
     scratch.out_x.resize(n, 0.0);
     scratch.out_y.resize(n, 0.0);
-    let ctx = Context {
-        geometry: &geometry,
-        mask: &mask,
-        wind,
-        inv_dx2: (1.0 / (geometry.cell_size_x() * geometry.cell_size_x())) as f32,
-        inv_dy2: (1.0 / (geometry.cell_size_y() * geometry.cell_size_y())) as f32,
-        inv_4dxdy: (0.25 / (geometry.cell_size_x() * geometry.cell_size_y())) as f32,
-        erosion_dt: (params.k_erosion * dt_days) as f32,
-        tamping_dt: (params.k_tamping * dt_days) as f32,
-        slab_gradient: params.slab_slope_deg.to_radians().tan() as f32,
-        erode_unstable: params.erode_unstable,
+    let ctx = Context::new(&geometry, &mask, wind, params, dt_days);
+    // The wind's snow-independent terms: given, or computed here (in the scratch's buffer).
+    let mut own_terms = std::mem::take(&mut scratch.terms);
+    let terms = match wind.terms {
+        Some(t) => t,
+        None => {
+            with_validity!(mask, |valid| own_terms.compute(&ctx, valid));
+            &own_terms
+        }
     };
     let sx_params = &params.sx_redistribution;
     let sx_map = wind.sx.filter(|_| sx_params.enabled);
     let (pass1, pass2, sx) = with_validity!(mask, |valid| {
         let p1 = erosion::run(&ctx, valid, terrain, scratch);
-        let p2 = deposit::run(&ctx, valid, terrain, scratch);
+        let p2 = deposit::run(&ctx, valid, terms, terrain, scratch);
         let sx = sx_map.map(|sx| {
             fill_surface(terrain, &mut scratch.surface);
             sheltered::run(
                 &ctx,
                 valid,
                 sx_params,
-                (sx, &scratch.surface),
+                (sx, &scratch.surface, terms.dominant),
                 terrain,
                 &mut scratch.sx,
                 dt_days,
@@ -253,6 +261,7 @@ pub fn step(
         });
         (p1, p2, sx.unwrap_or_default())
     });
+    scratch.terms = own_terms;
     let area = geometry.cell_area();
     let sum = |rows: &[f64]| rows.iter().sum::<f64>() * area;
     let col = |rows: &[[f64; 3]], k: usize| rows.iter().map(|r| r[k]).sum::<f64>() * area;
@@ -283,7 +292,28 @@ struct Context<'a> {
     erode_unstable: bool,
 }
 
-impl Context<'_> {
+impl<'a> Context<'a> {
+    fn new(
+        geometry: &'a GridGeometry,
+        mask: &'a NodataMask,
+        wind: &'a WindMaps<'a>,
+        params: &WindTransportParams,
+        dt_days: f64,
+    ) -> Self {
+        Self {
+            geometry,
+            mask,
+            wind,
+            inv_dx2: (1.0 / (geometry.cell_size_x() * geometry.cell_size_x())) as f32,
+            inv_dy2: (1.0 / (geometry.cell_size_y() * geometry.cell_size_y())) as f32,
+            inv_4dxdy: (0.25 / (geometry.cell_size_x() * geometry.cell_size_y())) as f32,
+            erosion_dt: (params.k_erosion * dt_days) as f32,
+            tamping_dt: (params.k_tamping * dt_days) as f32,
+            slab_gradient: params.slab_slope_deg.to_radians().tan() as f32,
+            erode_unstable: params.erode_unstable,
+        }
+    }
+
     /// Value of `field` at `(col + dc, row + dr)` if that cell is inside and holds data.
     #[inline]
     fn at<V: Validity>(

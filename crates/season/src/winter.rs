@@ -150,6 +150,8 @@ pub struct Winter {
     shedding_scratch: crate::slope_shedding::SheddingScratch,
     /// Maximum upwind slope Sx for the current period's wind, degrees (Winstral et al. 2002).
     sx: Vec<f32>,
+    /// The current wind field's snow-independent transport terms (the paper's wind model).
+    wind_terms: Option<crate::wind_transport::WindTerms>,
     /// Bedrock slope per cell, degrees (for the avalanche hazard).
     slope_deg: Vec<f32>,
     /// Avalanche hazard per cell, 1/day (recomputed when the snow changes).
@@ -321,6 +323,7 @@ impl Winter {
             snowtran_scratch: SnowTranScratch::default(),
             shedding_scratch: Default::default(),
             sx: Vec::new(),
+            wind_terms: None,
             slope_deg: Vec::new(),
             hazard: Default::default(),
             hazard_stale: true,
@@ -334,7 +337,7 @@ impl Winter {
         w.wall_seconds
             .insert("environment", t.elapsed().as_secs_f64());
         w.wall_seconds.insert("hourly_sun", hourly_sun_s);
-        w.refresh_sheltering()?;
+        w.refresh_wind_terms()?;
         w.refresh_air_temperature();
         w.environment.store(&mut w.terrain)?;
         if w.air.from_station() {
@@ -696,7 +699,7 @@ impl Winter {
         self.environment.wind_shadow = wind.shadow;
         self.environment.wind_effect_surface = wind.effect_surface;
         self.environment.wind_stats = wind.stats;
-        self.refresh_sheltering()?;
+        self.refresh_wind_terms()?;
         self.refresh_air_temperature();
         self.environment.store(&mut self.terrain)?;
         *self.wall_seconds.entry("environment").or_default() += t.elapsed().as_secs_f64();

@@ -95,6 +95,7 @@ fn season(s: &mut Scene, events: usize) -> Result<Vec<VolumeChange>, PhenomenonE
                     shadow: &s.shadow,
                     effect_surface: &s.wz,
                     sx: None,
+                    terms: None,
                 };
                 wind_transport::step(&Default::default(), t, &maps, &mut wind_scratch, 0.5)?
                     .volume_change()

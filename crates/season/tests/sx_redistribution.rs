@@ -149,6 +149,7 @@ fn run(bed: Grid, min_cells: usize) -> Outcome {
             shadow: &maps.shadow,
             effect_surface: &maps.effect_surface,
             sx,
+            terms: None,
         };
         let mut scratch = WindScratch::default();
         let (mut out, mut sx_eroded) = (0.0, 0.0);

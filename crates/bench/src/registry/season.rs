@@ -15,7 +15,9 @@ use snowscape_season::scenario::Scenario;
 use snowscape_season::scheduler::EventKind;
 use snowscape_season::snowfall::{self, SnowfallParams, SnowfallScratch};
 use snowscape_season::stability::{self, StabilityParams, StabilityScratch};
-use snowscape_season::wind_transport::{self, WindMaps, WindScratch, WindTransportParams};
+use snowscape_season::wind_transport::{
+    self, WindMaps, WindScratch, WindTerms, WindTransportParams,
+};
 use snowscape_season::winter::Winter;
 use snowscape_terrain::{Grid, LayeredTerrain, SnowLayer};
 use std::hint::black_box;
@@ -146,10 +148,23 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
             maps.wind_shadow.clone(),
             maps.wind_effect_surface.clone(),
         );
+        // The wind field's snow-independent terms, once per field as a season computes them.
+        let maps_of = |terms| WindMaps {
+            u: &u,
+            v: &v,
+            shadow: &s,
+            effect_surface: &e,
+            sx: None,
+            terms,
+        };
+        let terms = WindTerms::new(t.geometry(), t.mask(), &maps_of(None))?;
+        // Surface (5 arrays read, 1 written), erosion (surface, wind, shadow, powder and
+        // unstable snow read, 2 amounts written), deposit (surface, amounts, a_z read, powder
+        // and unstable snow read and written): 22 f32 per cell.
         kernels.push(Kernel::new(
             "season/wind_transport",
             cells,
-            72.0,
+            88.0,
             move || {
                 let w = WindMaps {
                     u: &u,
@@ -157,6 +172,7 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
                     shadow: &s,
                     effect_surface: &e,
                     sx: None,
+                    terms: Some(&terms),
                 };
                 wind_transport::step(
                     &WindTransportParams::default(),

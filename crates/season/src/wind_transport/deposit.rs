@@ -1,7 +1,7 @@
 //! Pass 2 of wind transport: every cell removes its own erosion, is tamped, and gathers what
 //! its four neighbours send it.
 
-use super::{Context, WindScratch, second_difference, tamping_share, vertical_wind_change};
+use super::{Context, WindScratch, WindTerms, tamping_share};
 use crate::phenomenon::{Validity, row_gradient_norm};
 use rayon::prelude::*;
 use snowscape_terrain::LayeredTerrain;
@@ -19,13 +19,14 @@ struct Row {
 pub(super) fn run<V: Validity>(
     ctx: &Context,
     valid: &V,
+    terms: &WindTerms,
     terrain: &mut LayeredTerrain,
     scratch: &WindScratch,
 ) -> Vec<[f64; 3]> {
     let w = ctx.geometry.width();
     let h = ctx.geometry.height();
     let (a, ox, oy) = (&scratch.surface, &scratch.out_x, &scratch.out_y);
-    let z = ctx.wind.effect_surface;
+    let a_z = &terms.vertical_change;
     let [_, _, unstable, powder] = &mut terrain.snow;
     unstable
         .par_chunks_mut(w)
@@ -60,9 +61,8 @@ pub(super) fn run<V: Validity>(
                     if row + 1 < h {
                         d += oy[i + w].max(0.0);
                     }
-                    let a_z = general_vertical_change(ctx, valid, col, row);
                     let e = ox[i].abs() + oy[i].abs();
-                    let (slab, tamped) = cell_update(ctx, e, a_z, d, buf.gradient[col], pw, un);
+                    let (slab, tamped) = cell_update(ctx, e, a_z[i], d, buf.gradient[col], pw, un);
                     (buf.deposited[col], buf.slab[col], buf.tamped[col]) = (d, slab, tamped);
                 };
                 if row > 0 && row + 1 < h && w >= 3 {
@@ -74,14 +74,8 @@ pub(super) fn run<V: Validity>(
                         &oy[base..base + w],
                         &oy[base + w..base + 2 * w],
                     );
-                    let (z_up, z_mid, z_dn) = (
-                        &z[base - w..base],
-                        &z[base..base + w],
-                        &z[base + w..base + 2 * w],
-                    );
                     let (un, pw) = (&mut un[..w], &mut pw[..w]);
-                    let u_row = &ctx.wind.u[base..base + w];
-                    let v_row = &ctx.wind.v[base..base + w];
+                    let a_z_row = &a_z[base..base + w];
                     let grad = &buf.gradient[..w];
                     let deposited = &mut buf.deposited[..w];
                     let slabs = &mut buf.slab[..w];
@@ -108,19 +102,16 @@ pub(super) fn run<V: Validity>(
                             + (-ox_mid[col + 1]).max(0.0)
                             + (-oy_up[col]).max(0.0)
                             + oy_dn[col].max(0.0);
-                        let z_xx = second_difference(z_mid[col - 1], z_mid[col], z_mid[col + 1]);
-                        let z_yy = second_difference(z_up[col], z_mid[col], z_dn[col]);
-                        let z_xy = z_up[col + 1] - z_up[col - 1] - z_dn[col + 1] + z_dn[col - 1];
-                        let a_z = vertical_wind_change(
-                            z_xx * ctx.inv_dx2,
-                            z_xy * ctx.inv_4dxdy,
-                            z_yy * ctx.inv_dy2,
-                            u_row[col],
-                            v_row[col],
-                        );
                         let e = ox_mid[col].abs() + oy_mid[col].abs();
-                        let (slab, tamped) =
-                            cell_update(ctx, e, a_z, d, grad[col], &mut pw[col], &mut un[col]);
+                        let (slab, tamped) = cell_update(
+                            ctx,
+                            e,
+                            a_z_row[col],
+                            d,
+                            grad[col],
+                            &mut pw[col],
+                            &mut un[col],
+                        );
                         (deposited[col], slabs[col], tamps[col]) = (d, slab, tamped);
                     }
                     for col in masked_cells {
@@ -164,13 +155,4 @@ fn cell_update(
     *unstable += slab;
     *powder += d - slab;
     (slab, tamped)
-}
-
-/// `a_z` at any valid cell, with the border rules of the module docs.
-fn general_vertical_change<V: Validity>(ctx: &Context, valid: &V, col: usize, row: usize) -> f32 {
-    let i = row * ctx.geometry.width() + col;
-    let z = ctx.wind.effect_surface;
-    let (z_xx, z_yy) = ctx.second_differences(valid, z, col, row);
-    let z_xy = ctx.cross_difference(valid, z, col, row);
-    vertical_wind_change(z_xx, z_xy, z_yy, ctx.wind.u[i], ctx.wind.v[i])
 }

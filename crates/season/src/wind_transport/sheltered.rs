@@ -206,27 +206,6 @@ impl KeepShareCache {
     }
 }
 
-/// The unit dominant wind `(east, north)`: the mean of the wind field over valid cells (row
-/// sums in row order, so it does not depend on the thread count). `None` in calm air.
-fn dominant<V: Validity>(ctx: &Context, valid: &V) -> Option<(f64, f64)> {
-    let w = ctx.geometry.width();
-    let rows: Vec<(f64, f64)> = ctx
-        .wind
-        .u
-        .par_chunks(w)
-        .zip(ctx.wind.v.par_chunks(w))
-        .enumerate()
-        .map(|(row, (u, v))| {
-            (0..w)
-                .filter(|&c| valid.at(row * w + c))
-                .fold((0.0, 0.0), |(a, b), c| (a + u[c] as f64, b + v[c] as f64))
-        })
-        .collect();
-    let (su, sv) = rows.iter().fold((0.0, 0.0), |(a, b), r| (a + r.0, b + r.1));
-    let norm = su.hypot(sv);
-    (norm > 0.0 && norm.is_finite()).then(|| (su / norm, sv / norm))
-}
-
 /// The share of the arriving load a cell keeps, `1 − exp(−(a + b · x))` for a shelter `x =
 /// Sx − sheltered_above_deg` (degrees; `x ≤ 0`, open ground: `1 − exp(−a)`), `a = ℓ / L`,
 /// `b = ℓ · k_deposit`.
@@ -256,17 +235,18 @@ impl KeepShare {
     }
 }
 
-/// Runs the Sx term on the layers (after the paper's passes).
+/// Runs the Sx term on the layers (after the paper's passes), sweeping along the `dominant`
+/// wind ([`super::WindTerms`]; none in calm air: nothing moves).
 pub(super) fn run<V: Validity>(
     ctx: &Context,
     valid: &V,
     params: &SxParams,
-    (sx, surface): (&[f32], &[f32]),
+    (sx, surface, dominant): (&[f32], &[f32], Option<(f64, f64)>),
     terrain: &mut LayeredTerrain,
     scratch: &mut SxScratch,
     dt_days: f64,
 ) -> SxSums {
-    let Some((ex, ey)) = dominant(ctx, valid) else {
+    let Some((ex, ey)) = dominant else {
         return SxSums::default();
     };
     let (dx, dy) = (ctx.geometry.cell_size_x(), ctx.geometry.cell_size_y());

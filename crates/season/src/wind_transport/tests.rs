@@ -27,6 +27,7 @@ impl Wind {
             shadow: &self.shadow,
             effect_surface: &self.z,
             sx: None,
+            terms: None,
         }
     }
 }
@@ -425,6 +426,7 @@ fn sx_term_is_the_same_on_one_and_two_threads_and_conserves_with_nodata() {
                 let mut t = t.clone();
                 let maps = WindMaps {
                     sx: Some(&sx),
+                    terms: None,
                     ..wind.maps()
                 };
                 let mut scratch = WindScratch::default();
@@ -450,4 +452,82 @@ fn sx_term_is_the_same_on_one_and_two_threads_and_conserves_with_nodata() {
         "the wind blows snow off the east and south borders"
     );
     assert!((before - out - a.snow_volume()).abs() < 1e-5 * before);
+}
+
+/// The wind's snow-independent terms computed once ([`WindTerms::new`]) give the bits of a
+/// step that computes them itself, on a bumpy terrain with nodata cells, a varying wind and
+/// the Sx term; terms for another grid are refused, naming the map.
+#[test]
+fn terms_computed_once_give_the_bits_of_terms_computed_per_step() {
+    let geo = GridGeometry::square(40, 30, 10.0).unwrap();
+    let n = geo.len();
+    let invalid: Vec<bool> = (0..n).map(|i| uniform(7, 0, i as u64) < 0.03).collect();
+    let bed: Vec<f32> = (0..n)
+        .map(|i| {
+            let (c, r) = ((i % 40) as f32, (i / 40) as f32);
+            1500.0 + 30.0 * (c / 6.0).sin() * (r / 5.0).cos() + 5.0 * uniform(7, 1, i as u64) as f32
+        })
+        .collect();
+    let grid = Grid::new(geo.clone(), bed, NodataMask::from_invalid(invalid)).unwrap();
+    let mut t = LayeredTerrain::from_bedrock(grid);
+    for i in 0..n {
+        t.layer_mut(SnowLayer::Powder)[i] = 0.3 * uniform(7, 2, i as u64) as f32;
+        t.layer_mut(SnowLayer::Unstable)[i] = 0.2 * uniform(7, 3, i as u64) as f32;
+    }
+    let wind = Wind {
+        u: (0..n)
+            .map(|i| 8.0 + 4.0 * uniform(7, 4, i as u64) as f32)
+            .collect(),
+        v: (0..n)
+            .map(|i| -3.0 + 6.0 * uniform(7, 5, i as u64) as f32)
+            .collect(),
+        shadow: (0..n)
+            .map(|i| (uniform(7, 6, i as u64) < 0.1) as u8 as f32)
+            .collect(),
+        z: (0..n)
+            .map(|i| t.bedrock[i] + 20.0 * uniform(7, 7, i as u64) as f32)
+            .collect(),
+    };
+    let sx = snowscape_environment::max_upwind_slope(
+        &t.bedrock,
+        &geo,
+        t.mask(),
+        250.0,
+        &snowscape_environment::ShelteringParams::default(),
+    )
+    .unwrap();
+    let maps = WindMaps {
+        sx: Some(&sx),
+        ..wind.maps()
+    };
+    let terms = WindTerms::new(&geo, t.mask(), &maps).unwrap();
+    assert!(terms.dominant.is_some());
+    assert!(terms.vertical_change.iter().any(|&a| a > 0.0));
+    let given = WindMaps {
+        terms: Some(&terms),
+        ..maps
+    };
+    let p = WindTransportParams::default();
+    let (mut a, mut b) = (t.clone(), t.clone());
+    let (mut sa, mut sb) = (WindScratch::default(), WindScratch::default());
+    for _ in 0..4 {
+        let ra = step(&p, &mut a, &maps, &mut sa, 0.5).unwrap();
+        let rb = step(&p, &mut b, &given, &mut sb, 0.5).unwrap();
+        assert_eq!(ra, rb);
+        assert!(ra.tamped > 0.0 && ra.sx_eroded > 0.0);
+    }
+    assert_eq!(a, b);
+    let other = GridGeometry::square(8, 8, 10.0).unwrap();
+    let small = Wind::uniform(
+        &LayeredTerrain::from_bedrock(Grid::filled(other.clone(), 0.0)),
+        5.0,
+        0.0,
+    );
+    let wrong = WindTerms::new(&other, &NodataMask::all_valid(), &small.maps()).unwrap();
+    let bad = WindMaps {
+        terms: Some(&wrong),
+        ..maps
+    };
+    let e = step(&p, &mut a, &bad, &mut sa, 0.5).unwrap_err();
+    assert!(e.to_string().contains("wind terms"), "{e}");
 }

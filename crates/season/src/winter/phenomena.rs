@@ -14,7 +14,7 @@ use crate::scheduler::{Event, EventKind};
 use crate::snowfall::{self, SnowfallModel};
 use crate::snowtran_transport::{self, SnowTranForcing};
 use crate::stability;
-use crate::wind_transport::{self, WindMaps, WindModel};
+use crate::wind_transport::{self, WindModel};
 
 /// One step of an event: applies it to the winter.
 pub(super) type Step = fn(&mut Winter, &Event) -> Result<(), SeasonError>;
@@ -182,13 +182,7 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         w.state.budget.wind_sublimation += r.sublimated;
         return Ok(());
     }
-    let maps = WindMaps {
-        u: &e.wind_u,
-        v: &e.wind_v,
-        shadow: &e.wind_shadow,
-        effect_surface: &e.wind_effect_surface,
-        sx: (!w.sx.is_empty()).then_some(w.sx.as_slice()),
-    };
+    let maps = super::snowpack::wind_maps(&w.environment, &w.sx, w.wind_terms.as_ref());
     let r = wind_transport::step(
         &p.wind_transport,
         &mut w.terrain,

@@ -6,31 +6,40 @@ use super::{SeasonError, Winter};
 use crate::melt::{self, MeltForcing, MeltModel};
 use crate::phenomenon::PhenomenonError;
 use crate::snowfall::{self, PrecipitationMaps};
+use crate::wind_transport::{WindMaps, WindModel, WindTerms};
 use std::time::Instant;
 
 impl Winter {
-    /// The maximum upwind slope of the current period's wind (when the Sx redistribution is on).
-    pub(super) fn refresh_sheltering(&mut self) -> Result<(), SeasonError> {
-        if !self
-            .scenario
-            .parameters
-            .wind_transport
-            .sx_redistribution
-            .enabled
-        {
+    /// What the current period's wind field gives wind transport: the maximum upwind slope
+    /// (when the Sx redistribution is on), then the field's snow-independent terms.
+    pub(super) fn refresh_wind_terms(&mut self) -> Result<(), SeasonError> {
+        let p = &self.scenario.parameters.wind_transport;
+        if p.sx_redistribution.enabled {
+            let t = Instant::now();
+            let w = &self.weather[self.state.weather_index];
+            self.sx = snowscape_environment::max_upwind_slope(
+                &self.terrain.bedrock,
+                self.terrain.geometry(),
+                self.terrain.mask(),
+                w.wind_from_deg,
+                &self.base_environment.sheltering,
+            )?;
+            *self.wall_seconds.entry("sheltering").or_default() += t.elapsed().as_secs_f64();
+        } else {
             self.sx.clear();
-            return Ok(());
         }
-        let t = Instant::now();
-        let w = &self.weather[self.state.weather_index];
-        self.sx = snowscape_environment::max_upwind_slope(
-            &self.terrain.bedrock,
-            self.terrain.geometry(),
-            self.terrain.mask(),
-            w.wind_from_deg,
-            &self.base_environment.sheltering,
-        )?;
-        *self.wall_seconds.entry("sheltering").or_default() += t.elapsed().as_secs_f64();
+        self.wind_terms = if p.model == WindModel::Cordonnier {
+            let maps = wind_maps(&self.environment, &self.sx, None);
+            let terms = WindTerms::new(self.terrain.geometry(), self.terrain.mask(), &maps)
+                .map_err(|source| SeasonError::Phenomenon {
+                    phenomenon: "wind_transport",
+                    day: self.day(),
+                    source,
+                })?;
+            Some(terms)
+        } else {
+            None
+        };
         Ok(())
     }
 
@@ -143,5 +152,22 @@ impl Winter {
         self.state.melt_clock_days = day;
         self.refresh_air_temperature();
         Ok(true)
+    }
+}
+
+/// The wind maps of wind transport: the environment's wind field, the `sx` map (none when
+/// empty) and the field's `terms`.
+pub(super) fn wind_maps<'a>(
+    e: &'a snowscape_environment::EnvironmentMaps,
+    sx: &'a [f32],
+    terms: Option<&'a WindTerms>,
+) -> WindMaps<'a> {
+    WindMaps {
+        u: &e.wind_u,
+        v: &e.wind_v,
+        shadow: &e.wind_shadow,
+        effect_surface: &e.wind_effect_surface,
+        sx: (!sx.is_empty()).then_some(sx),
+        terms,
     }
 }
