@@ -80,24 +80,12 @@ pub(super) fn run<V: Validity>(
                     let deposited = &mut buf.deposited[..w];
                     let slabs = &mut buf.slab[..w];
                     let tamps = &mut buf.tamped[..w];
-                    let mut masked_cells = Vec::new();
                     for col in 1..w - 1 {
-                        let i = base + col;
-                        let ring = [
-                            i - w - 1,
-                            i - w,
-                            i - w + 1,
-                            i - 1,
-                            i + 1,
-                            i + w - 1,
-                            i + w,
-                            i + w + 1,
-                        ];
-                        if !valid.at(i) || !ring.iter().all(|&j| valid.at(j)) {
-                            // Nodata or next to it: redone by the general path below.
-                            masked_cells.push(col);
+                        if !valid.at(base + col) {
+                            (deposited[col], slabs[col], tamps[col]) = (0.0, 0.0, 0.0);
                             continue;
                         }
+                        // (All four neighbours are in the grid; a nodata one sends nothing.)
                         let d = ox_mid[col - 1].max(0.0)
                             + (-ox_mid[col + 1]).max(0.0)
                             + (-oy_up[col]).max(0.0)
@@ -113,9 +101,6 @@ pub(super) fn run<V: Validity>(
                             &mut un[col],
                         );
                         (deposited[col], slabs[col], tamps[col]) = (d, slab, tamped);
-                    }
-                    for col in masked_cells {
-                        general(col, buf, &mut un[col], &mut pw[col]);
                     }
                 } else {
                     for col in 0..w {
