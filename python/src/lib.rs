@@ -409,6 +409,13 @@ mod jobs;
 
 #[pymodule]
 fn _snowscape(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // A CPU without what the build assumes would die on an illegal instruction.
+    let missing = snowscape::cpu::missing_features();
+    if !missing.is_empty() {
+        return Err(pyo3::exceptions::PyImportError::new_err(
+            snowscape::cpu::requirement_message(&missing),
+        ));
+    }
     m.add_function(wrap_pyfunction!(read_raster, m)?)?;
     m.add_function(wrap_pyfunction!(write, m)?)?;
     m.add_function(wrap_pyfunction!(jobs::avalanche, m)?)?;

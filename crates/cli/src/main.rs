@@ -19,6 +19,12 @@ use failure::Failure;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // First: a CPU without what the build assumes would die on an illegal instruction.
+    let missing = snowscape::cpu::missing_features();
+    if !missing.is_empty() {
+        eprintln!("error: {}", snowscape::cpu::requirement_message(&missing));
+        return ExitCode::from(1);
+    }
     let args = cli::Cli::parse();
     init_logging(args.global.quiet, args.global.verbose);
     if let Some(n) = args.global.threads {

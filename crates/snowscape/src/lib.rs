@@ -58,6 +58,7 @@
 
 pub mod avalanche_release;
 pub mod cover;
+pub mod cpu;
 pub mod engine_export;
 pub mod outputs;
 pub mod report;
