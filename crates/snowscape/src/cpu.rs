@@ -1,7 +1,7 @@
 //! The CPU features this build was compiled to assume, checked against the CPU it runs on.
 //!
-//! The workspace builds for x86-64-v3 (`.cargo/config.toml`): started on an x86-64 CPU without
-//! AVX2 or FMA, the programs would die on an illegal instruction. The command line and the
+//! The workspace builds for x86-64-v3 without FMA (`.cargo/config.toml`): started on an x86-64
+//! CPU without AVX2 or BMI2, the programs would die on an illegal instruction. The command line and the
 //! Python module call [`missing_features`] first and stop with [`requirement_message`] instead.
 //! A build for a lower target (`RUSTFLAGS="-C target-cpu=x86-64"`) assumes fewer features and
 //! finds none missing.
@@ -39,10 +39,9 @@ pub fn missing_features() -> Vec<&'static str> {
 /// for their CPU.
 pub fn requirement_message(missing: &[&str]) -> String {
     format!(
-        "this build of snowscape is compiled for x86-64-v3 CPUs (AVX2, FMA and BMI2: Intel \
-         Haswell (2013) or later, AMD Excavator (2015) or later); this CPU lacks {}. Build it \
-         for this CPU with: RUSTFLAGS=\"-C target-cpu=native\" cargo build --release (or \
-         target-cpu=x86-64 for any x86-64 CPU)",
+        "this build of snowscape is compiled for x86-64-v3 CPUs (AVX2 and BMI2: Intel Haswell \
+         (2013) or later, AMD Excavator (2015) or later); this CPU lacks {}. Build it for any \
+         x86-64 CPU with: RUSTFLAGS=\"-C target-cpu=x86-64\" cargo build --release",
         missing.join(", ")
     )
 }
@@ -61,6 +60,6 @@ mod tests {
     fn the_message_names_the_missing_features_and_the_way_out() {
         let m = requirement_message(&["avx2", "fma"]);
         assert!(m.contains("lacks avx2, fma"), "{m}");
-        assert!(m.contains("RUSTFLAGS=\"-C target-cpu=native\""), "{m}");
+        assert!(m.contains("RUSTFLAGS=\"-C target-cpu=x86-64\""), "{m}");
     }
 }
