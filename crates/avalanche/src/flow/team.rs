@@ -159,6 +159,21 @@ impl std::fmt::Debug for TeamHandle {
 }
 
 impl TeamHandle {
+    /// Runs `caller` on the calling thread and `helper` on the helper at the same time (both
+    /// on the calling thread, one after the other, without a helper); returns when both are
+    /// done, re-raising a panic of either. Allocates nothing.
+    pub(crate) fn join(&self, caller: impl FnOnce() + Send, helper: impl FnOnce() + Send) {
+        fn call(f: &Mutex<Option<impl FnOnce()>>) {
+            if let Some(f) = f.lock().unwrap_or_else(|e| e.into_inner()).take() {
+                f();
+            }
+        }
+        let (caller, helper) = (Mutex::new(Some(caller)), Mutex::new(Some(helper)));
+        self.run(2, 1, &|i, _| {
+            if i == 0 { call(&caller) } else { call(&helper) }
+        });
+    }
+
     /// Whether a helper is there.
     pub(crate) fn is_on(&self) -> bool {
         self.0.is_some()
@@ -225,24 +240,6 @@ impl TeamHandle {
         {
             resume_unwind(p);
         }
-    }
-}
-
-impl TeamHandle {
-    /// Runs `caller` on the calling thread and `helper` on the helper at the same time (both
-    /// on the calling thread, one after the other, without a helper); returns when both are
-    /// done, re-raising a panic of either. Allocates nothing.
-    pub(crate) fn join(&self, caller: impl FnOnce() + Send, helper: impl FnOnce() + Send) {
-        let (caller, helper) = (Mutex::new(Some(caller)), Mutex::new(Some(helper)));
-        self.run(2, 1, &|i, _| {
-            if i == 0 {
-                let f = caller.lock().unwrap_or_else(|e| e.into_inner()).take();
-                f.into_iter().for_each(|f| f());
-            } else {
-                let f = helper.lock().unwrap_or_else(|e| e.into_inner()).take();
-                f.into_iter().for_each(|f| f());
-            }
-        });
     }
 }
 
@@ -317,6 +314,32 @@ mod tests {
                 count.fetch_add(1, Ordering::Relaxed);
             });
             assert_eq!(count.load(Ordering::Relaxed), 10);
+        });
+    }
+
+    #[test]
+    fn join_runs_each_part_once_the_second_on_the_helper() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let team = Team::start().expect("two threads");
+            let h = team.handle();
+            let me = std::thread::current().id();
+            for _ in 0..50 {
+                let (mut a, mut b) = (None, None);
+                h.join(
+                    || a = Some(std::thread::current().id()),
+                    || b = Some(std::thread::current().id()),
+                );
+                assert_eq!(a, Some(me));
+                assert!(b.is_some() && b != Some(me));
+            }
+            // Without a helper both run on the calling thread.
+            let (mut a, mut b) = (0, 0);
+            TeamHandle::default().join(|| a += 1, || b += 1);
+            assert_eq!((a, b), (1, 1));
         });
     }
 }
