@@ -248,15 +248,21 @@ mod tests {
     use super::*;
     use std::sync::atomic::AtomicUsize;
 
-    #[test]
-    fn both_halves_run_once_on_their_workers() {
+    /// Runs `f` with the handle of a team started in a pool of two threads.
+    fn with_team(f: impl FnOnce(&TeamHandle) + Send) {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()
             .unwrap();
         pool.install(|| {
             let team = Team::start().expect("two threads");
-            let h = team.handle();
+            f(&team.handle());
+        });
+    }
+
+    #[test]
+    fn both_halves_run_once_on_their_workers() {
+        with_team(|h| {
             for round in 0..200 {
                 let hits: Vec<AtomicUsize> = (0..37).map(|_| AtomicUsize::new(0)).collect();
                 let workers: Vec<AtomicUsize> = (0..37).map(|_| AtomicUsize::new(9)).collect();
@@ -290,13 +296,7 @@ mod tests {
 
     #[test]
     fn a_panic_in_the_helpers_half_reaches_the_caller_after_both_halves() {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            let team = Team::start().expect("two threads");
-            let h = team.handle();
+        with_team(|h| {
             let done = AtomicUsize::new(0);
             let r = catch_unwind(AssertUnwindSafe(|| {
                 h.run(10, 5, &|i, _| {
@@ -319,13 +319,7 @@ mod tests {
 
     #[test]
     fn join_runs_each_part_once_the_second_on_the_helper() {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            let team = Team::start().expect("two threads");
-            let h = team.handle();
+        with_team(|h| {
             let me = std::thread::current().id();
             for _ in 0..50 {
                 let (mut a, mut b) = (None, None);
