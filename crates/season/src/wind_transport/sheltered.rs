@@ -27,9 +27,11 @@
 //! leaving the grid is border outflow.
 //!
 //! **Conservation and determinism.** The scour of every cell is computed first (row-parallel,
-//! a pure function of each cell); the sweep is sequential in a fixed order, so the result is
-//! bit-identical for any thread count, and every depth scoured is deposited once or counted as
-//! border outflow.
+//! a pure function of each cell); the sweep runs row after row in a fixed order, the carries
+//! along each row by a scan over fixed segments of it ([`drift_row`]: the cell-by-cell
+//! recurrence regrouped, equal to it to f32 round-off), so the result is bit-identical for any
+//! thread count, and every depth scoured is deposited once or counted as border outflow (each
+//! cell keeps what it does not send on).
 
 use super::{Context, WindMaps};
 use crate::phenomenon::{PhenomenonError, Validity, check_range, row_gradient_norm};
@@ -37,6 +39,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
+
+mod drift_row;
+use drift_row::{DriftRow, Exits, RowTotals, share_out};
 
 /// Parameters of the Sx-driven redistribution.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -368,8 +373,8 @@ fn keep_row(share: &[f32], gradient: &[f32], slab_gradient: f32, out: &mut [f32]
 ///
 /// The columns are cut in two halves, upwind and downwind, swept at the same time: the only
 /// load that crosses between them is each row's east/west carry at the cut, which the upwind
-/// half hands over row by row (the downwind half waits for it). Each cell does the same
-/// arithmetic in the same order as in one sequential sweep, so the layers are bit-identical
+/// half hands over row by row (the downwind half waits for it). The halves are fixed by the
+/// grid and the arithmetic of each cell by its half and row, so the layers are bit-identical
 /// for any thread count; the sums are per half, added in a fixed order.
 fn sweep<V: Validity>(
     ctx: &Context,
@@ -488,6 +493,23 @@ impl Half<'_> {
     /// the carry `carry_in(k)` from the other half (k the position in `rows`) and ends by
     /// handing its carry to `carry_out`.
     fn sweep<V: Validity>(
+        self,
+        m: &SweepMaps<V>,
+        rows: &[usize],
+        carry_in: impl Fn(usize) -> f32,
+        carry_out: impl FnMut(usize, f32),
+    ) -> SxSums {
+        if m.dc > 0 {
+            self.sweep_towards::<V, false>(m, rows, carry_in, carry_out)
+        } else {
+            self.sweep_towards::<V, true>(m, rows, carry_in, carry_out)
+        }
+    }
+
+    /// [`Half::sweep`] towards lower columns (`WEST`) or higher ones, a row in three passes
+    /// ([`drift_row`]): each cell's scour and what reaches it from the row before, the
+    /// carries along the row, then each cell's shares.
+    fn sweep_towards<V: Validity, const WEST: bool>(
         mut self,
         m: &SweepMaps<V>,
         rows: &[usize],
@@ -495,70 +517,86 @@ impl Half<'_> {
         mut carry_out: impl FnMut(usize, f32),
     ) -> SxSums {
         let w = m.ctx.geometry.width();
-        let n_cols = self.from_row.len();
+        let n = self.from_row.len();
         let mut sums = SxSums::default();
-        // The east/west neighbour lies off the grid only past the last column of the half
-        // whose last step is the grid's edge; the north/south one only past the last row.
-        let edge_col = if m.dc > 0 { w - 1 } else { 0 };
-        let step_x = m.dc;
+        if n == 0 {
+            for k in 0..rows.len() {
+                carry_out(k, 0.0);
+            }
+            return sums;
+        }
+        // The column of sweep position p in the half, and the half's cell on the grid's
+        // edge downwind, if any.
+        let local = |p: usize| if WEST { n - 1 - p } else { p };
+        let edge = if WEST {
+            (self.first_col == 0).then_some(n - 1)
+        } else {
+            (self.first_col + n == w).then_some(n - 1)
+        };
+        let step_x: isize = if WEST { -1 } else { 1 };
         let step_y = m.dr * w as isize;
+        let mut buf = DriftRow::new(n);
+        let mut totals = RowTotals::new(n);
         for (k, &row) in rows.iter().enumerate() {
-            let mut carry = if n_cols == 0 { 0.0 } else { carry_in(k) };
             let has_y = k + 1 < rows.len();
+            let base = row * w + self.first_col;
             let (unstable, powder) = &mut self.rows[row];
-            for step in 0..n_cols {
-                let local = if m.dc > 0 { step } else { n_cols - 1 - step };
-                let col = self.first_col + local;
-                let i = row * w + col;
-                let from_above = std::mem::take(&mut self.from_row[local]);
-                if !m.valid.at(i) {
-                    carry = 0.0;
-                    continue;
-                }
-                let e = m.scour[i];
-                if e > 0.0 {
-                    let from_powder = e.min(powder[local]);
-                    powder[local] -= from_powder;
-                    unstable[local] -= (e - from_powder).min(unstable[local]);
-                    sums.eroded += f64::from(e);
-                }
-                let load = carry + from_above + e;
-                carry = 0.0;
-                if load <= 0.0 {
-                    continue;
-                }
-                let keep = m.keep[i];
-                let mut kept = load * keep.abs();
-                let out = load - kept;
-                let to_x = out * m.fx;
-                let to_y = out - to_x;
-                // The east/west share.
-                if col == edge_col {
-                    sums.border += f64::from(to_x);
-                } else if m.valid.at(i.wrapping_add_signed(step_x)) {
-                    carry = to_x;
-                } else {
-                    kept += to_x;
-                }
-                // The north/south share.
-                if !has_y {
-                    sums.border += f64::from(to_y);
-                } else if m.valid.at(i.wrapping_add_signed(step_y)) {
-                    self.from_row[local] = to_y;
-                } else {
-                    kept += to_y;
-                }
-                if kept > 0.0 {
-                    sums.deposited += f64::from(kept);
-                    if keep < 0.0 {
-                        unstable[local] += kept;
-                        sums.deposited_unstable += f64::from(kept);
+            let (unstable, powder) = (&mut unstable[..n], &mut powder[..n]);
+            let (scour, keep) = (&m.scour[base..base + n], &m.keep[base..base + n]);
+            let from_row = &mut self.from_row[..n];
+            // Scour (a pure function of the cell, applied before its load: the cell's own
+            // layers are not touched before it is reached) and what arrives.
+            {
+                let (arriving, passed) = (&mut buf.arriving[..n], &mut buf.passed[..n]);
+                let eroded = &mut totals.eroded[..n];
+                for p in 0..n {
+                    let l = local(p);
+                    let i = base + l;
+                    let e = scour[l];
+                    let from_powder = e.min(powder[l]);
+                    powder[l] -= from_powder;
+                    unstable[l] -= (e - from_powder).min(unstable[l]);
+                    eroded[p] = e;
+                    let along = Some(p) != edge
+                        && m.valid.at(i)
+                        && m.valid.at(i.wrapping_add_signed(step_x));
+                    arriving[p] = from_row[l] + e;
+                    passed[p] = if along {
+                        (1.0 - keep[l].abs()) * m.fx
                     } else {
-                        powder[local] += kept;
-                    }
+                        0.0
+                    };
                 }
             }
-            carry_out(k, carry);
+            let out = buf.carries(carry_in(k));
+            carry_out(k, out);
+            let (carry, arriving) = (&buf.carry[..n + 1], &buf.arriving[..n]);
+            let (kept_row, kept_unstable, border_row) = (
+                &mut totals.kept[..n],
+                &mut totals.kept_unstable[..n],
+                &mut totals.border[..n],
+            );
+            for p in 0..n {
+                let l = local(p);
+                let i = base + l;
+                let valid = m.valid.at(i);
+                let exits = Exits {
+                    off_along: valid && Some(p) == edge,
+                    across: valid && has_y && m.valid.at(i.wrapping_add_signed(step_y)),
+                    off_across: valid && !has_y,
+                };
+                let load = carry[p] + arriving[p];
+                let k_share = keep[l];
+                let [across, kept, border] = share_out(load, k_share, carry[p + 1], m.fx, exits);
+                from_row[l] = across;
+                let slab = k_share < 0.0;
+                unstable[l] += if slab { kept } else { 0.0 };
+                powder[l] += if slab { 0.0 } else { kept };
+                kept_row[p] = kept;
+                kept_unstable[p] = if slab { kept } else { 0.0 };
+                border_row[p] = border;
+            }
+            totals.add_to(&mut sums);
         }
         sums
     }
@@ -574,3 +612,6 @@ pub(super) fn check(
         None => Ok(()),
     }
 }
+
+#[cfg(test)]
+mod tests;
