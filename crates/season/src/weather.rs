@@ -9,6 +9,7 @@ use crate::forcing::StationForcing;
 use crate::melt::MeltHour;
 use crate::scenario::WeatherPeriod;
 use crate::snowfall::PrecipitationTable;
+use rayon::prelude::*;
 use snowscape_environment::SeasonSun;
 use snowscape_environment::insolation::clear_sky;
 use snowscape_terrain::{LayeredTerrain, NodataMask};
@@ -186,13 +187,20 @@ impl Air {
     /// The daily-mean air temperature map at season day `day`, °C (0 on nodata).
     pub fn daily_temperature_map(&self, day: f64, mask: &NodataMask, out: &mut Vec<f32>) {
         let t = self.sea_level_daily_c(day) as f32;
-        out.clear();
-        out.extend(
-            self.lapse_offset_c
-                .iter()
-                .enumerate()
-                .map(|(i, &o)| if mask.is_valid(i) { t + o } else { 0.0 }),
-        );
+        out.resize(self.lapse_offset_c.len(), 0.0);
+        const BLOCK: usize = 1 << 14;
+        out.par_chunks_mut(BLOCK)
+            .zip(self.lapse_offset_c.par_chunks(BLOCK))
+            .enumerate()
+            .for_each(|(b, (out, offsets))| match mask.invalid_cells() {
+                None => out.iter_mut().zip(offsets).for_each(|(o, &d)| *o = t + d),
+                Some(invalid) => {
+                    let invalid = &invalid[b * BLOCK..b * BLOCK + out.len()];
+                    for ((o, &d), &bad) in out.iter_mut().zip(offsets).zip(invalid) {
+                        *o = if bad { 0.0 } else { t + d };
+                    }
+                }
+            });
     }
 
     /// The hour slots of the window `[t0, t1]` (season days): (start day, weight in hours).

@@ -205,6 +205,9 @@ impl WindReport {
 #[derive(Debug, Clone, Default)]
 pub struct WindScratch {
     surface: Vec<f32>,
+    /// The snow surface after the paper's passes, written by the deposit pass for the Sx
+    /// term (then swapped with `surface`).
+    surface_after: Vec<f32>,
     /// Depth each cell sends east (> 0) or west (< 0), m.
     out_x: Vec<f32>,
     /// Depth each cell sends north (> 0) or south (< 0), m.
@@ -246,9 +249,13 @@ pub fn step(
     let sx_map = wind.sx.filter(|_| sx_params.enabled);
     let (pass1, pass2, sx) = with_validity!(mask, |valid| {
         let p1 = erosion::run(&ctx, valid, terrain, scratch);
-        let p2 = deposit::run(&ctx, valid, terms, terrain, scratch);
+        // The Sx term reads the surface the paper's passes leave: the deposit pass writes it.
+        let fill = sx_map.is_some();
+        let p2 = deposit::run(&ctx, valid, terms, terrain, scratch, fill);
+        if fill {
+            std::mem::swap(&mut scratch.surface, &mut scratch.surface_after);
+        }
         let sx = sx_map.map(|sx| {
-            fill_surface(terrain, &mut scratch.surface);
             sheltered::run(
                 &ctx,
                 valid,

@@ -21,16 +21,35 @@ pub(super) fn run<V: Validity>(
     valid: &V,
     terms: &WindTerms,
     terrain: &mut LayeredTerrain,
-    scratch: &WindScratch,
+    scratch: &mut WindScratch,
+    fill_surface_after: bool,
 ) -> Vec<[f64; 3]> {
     let w = ctx.geometry.width();
     let h = ctx.geometry.height();
-    let (a, ox, oy) = (&scratch.surface, &scratch.out_x, &scratch.out_y);
+    let WindScratch {
+        surface: a,
+        out_x: ox,
+        out_y: oy,
+        surface_after,
+        ..
+    } = scratch;
+    let (a, ox, oy) = (&*a, &*ox, &*oy);
+    // Per row, where to write its surface after the pass (none when not asked for).
+    let after_rows: Vec<Option<&mut [f32]>> = if fill_surface_after {
+        surface_after.resize(a.len(), 0.0);
+        surface_after.chunks_mut(w).map(Some).collect()
+    } else {
+        (0..h).map(|_| None).collect()
+    };
     let a_z = &terms.vertical_change;
-    let [_, _, unstable, powder] = &mut terrain.snow;
+    let bedrock = &terrain.bedrock;
+    let [compacted, stable, unstable, powder] = &mut terrain.snow;
+    let (compacted, stable) = (&*compacted, &*stable);
     unstable
         .par_chunks_mut(w)
         .zip(powder.par_chunks_mut(w))
+        .zip(after_rows.into_par_iter())
+        .map(|((un, pw), after)| (un, pw, after))
         .enumerate()
         .map_init(
             || Row {
@@ -39,7 +58,7 @@ pub(super) fn run<V: Validity>(
                 slab: vec![0.0; w],
                 tamped: vec![0.0; w],
             },
-            |buf, (row, (un, pw))| {
+            |buf, (row, (un, pw, after))| {
                 row_gradient_norm(a, ctx.geometry, ctx.mask, valid, row, &mut buf.gradient);
                 let base = row * w;
                 let general = |col: usize, buf: &mut Row, un: &mut f32, pw: &mut f32| {
@@ -105,6 +124,14 @@ pub(super) fn run<V: Validity>(
                 } else {
                     for col in 0..w {
                         general(col, buf, &mut un[col], &mut pw[col]);
+                    }
+                }
+                if let Some(after) = after {
+                    // The same sum, in the same order, as `fill_surface`.
+                    let r = row * w..(row + 1) * w;
+                    let (b, c, s) = (&bedrock[r.clone()], &compacted[r.clone()], &stable[r]);
+                    for (k, a) in after.iter_mut().enumerate() {
+                        *a = b[k] + (c[k] + s[k] + un[k] + pw[k]);
                     }
                 }
                 [
