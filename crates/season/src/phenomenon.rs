@@ -218,6 +218,19 @@ pub(crate) fn row_gradient_norm<V: Validity>(
     row: usize,
     out: &mut [f32],
 ) {
+    row_gradient_norm_in(a, geometry, mask, valid, row, 0..geometry.width(), out);
+}
+
+/// [`row_gradient_norm`] of the columns `cols` of the row, into `out[..cols.len()]`.
+pub(crate) fn row_gradient_norm_in<V: Validity>(
+    a: &[f32],
+    geometry: &GridGeometry,
+    mask: &NodataMask,
+    valid: &V,
+    row: usize,
+    cols: std::ops::Range<usize>,
+    out: &mut [f32],
+) {
     let w = geometry.width();
     let h = geometry.height();
     let half_inv_dx = (0.5 / geometry.cell_size_x()) as f32;
@@ -227,25 +240,28 @@ pub(crate) fn row_gradient_norm<V: Validity>(
         (gx * gx + gy * gy).sqrt()
     };
     let base = row * w;
+    let first = cols.start;
+    let out = &mut out[..cols.len()];
+    let edge = |col: usize| if valid.at(base + col) { slow(col) } else { 0.0 };
     if row == 0 || row + 1 == h || w < 3 {
-        for (col, o) in out.iter_mut().enumerate() {
-            *o = if valid.at(base + col) { slow(col) } else { 0.0 };
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = edge(first + k);
         }
         return;
     }
     let up = &a[base - w..base];
     let mid = &a[base..base + w];
     let dn = &a[base + w..base + 2 * w];
-    let out = &mut out[..w];
-    out[0] = if valid.at(base) { slow(0) } else { 0.0 };
-    out[w - 1] = if valid.at(base + w - 1) {
-        slow(w - 1)
-    } else {
-        0.0
-    };
-    for col in 1..w - 1 {
+    // The border columns in the range, then its interior columns.
+    for col in [0, w - 1] {
+        if cols.contains(&col) {
+            out[col - first] = edge(col);
+        }
+    }
+    let (lo, hi) = (cols.start.max(1), cols.end.min(w - 1));
+    for col in lo..hi {
         let i = base + col;
-        out[col] = if !valid.at(i) {
+        out[col - first] = if !valid.at(i) {
             0.0
         } else if valid.at(i - 1) && valid.at(i + 1) && valid.at(i - w) && valid.at(i + w) {
             let gx = (mid[col + 1] - mid[col - 1]) * half_inv_dx;
@@ -294,6 +310,21 @@ mod tests {
                     0.0
                 };
                 assert!((o - expect).abs() < 1e-5, "({col},{row}) {o} vs {expect}");
+            }
+            // Any range of columns gives the bits of the whole row.
+            for cols in [0..3, 2..7, 3..4, 0..7, 6..7] {
+                let mut part = vec![-1.0; cols.len()];
+                with_validity!(mask, |v| row_gradient_norm_in(
+                    g.data(),
+                    &geo,
+                    mask,
+                    v,
+                    row,
+                    cols.clone(),
+                    &mut part
+                ));
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&part), bits(&out[cols]));
             }
         }
     }

@@ -34,7 +34,7 @@
 //! cell keeps what it does not send on).
 
 use super::{Context, WindMaps};
-use crate::phenomenon::{PhenomenonError, Validity, check_range, row_gradient_norm};
+use crate::phenomenon::{PhenomenonError, Validity, check_range, row_gradient_norm_in};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
@@ -159,10 +159,6 @@ pub(super) struct SxSums {
 /// Buffers of the sweep.
 #[derive(Debug, Clone, Default)]
 pub(super) struct SxScratch {
-    /// Depth scoured from each cell, m.
-    scour: Vec<f32>,
-    /// Share of the arriving load each cell keeps, negative on slab slopes.
-    keep: Vec<f32>,
     /// Load arriving from the upwind row, per column.
     from_row: Vec<f32>,
     /// The share of the arriving load each cell keeps on open or sheltered ground (before the
@@ -267,36 +263,23 @@ pub(super) fn run<V: Validity>(
         sheltered: params.sheltered_above_deg as f32,
     };
     let w = ctx.geometry.width();
-    let n = w * ctx.geometry.height();
-    scratch.scour.resize(n, 0.0);
-    scratch.keep.resize(n, 0.0);
     let share = scratch.keep_share.shares(&cell.keep, cell.sheltered, sx, w);
-    let [_, _, unstable, powder] = &terrain.snow;
-    scratch
-        .scour
-        .par_chunks_mut(w)
-        .zip(scratch.keep.par_chunks_mut(w))
-        .enumerate()
-        .for_each_init(
-            || vec![0.0f32; w],
-            |gradient, (row, (sc, kp))| {
-                let r = row * w..(row + 1) * w;
-                row_gradient_norm(surface, ctx.geometry, ctx.mask, valid, row, gradient);
-                let erodible = ctx.erode_unstable.then(|| &unstable[r.clone()]);
-                cell.scour_row(ctx.wind, r.clone(), &powder[r.clone()], erodible, sc);
-                keep_row(&share[r.clone()], gradient, ctx.slab_gradient, kp);
-                for (k, i) in r.enumerate() {
-                    if !valid.at(i) {
-                        (sc[k], kp[k]) = (0.0, 0.0);
-                    }
-                }
-            },
-        );
-    sweep(ctx, valid, (ex, ey, fx as f32), terrain, scratch)
+    let maps = SweepMaps {
+        ctx,
+        valid,
+        cell: &cell,
+        share,
+        surface,
+        fx: fx as f32,
+        dc: if ex >= 0.0 { 1 } else { -1 },
+        dr: if ey >= 0.0 { -1 } else { 1 },
+    };
+    sweep(&maps, terrain, &mut scratch.from_row)
 }
 
-/// The per-cell terms of the sweep, computed in a row-parallel pass before it from the maps
-/// and the snow before the step: the scour and the share kept (a pure function of each cell).
+/// The per-cell terms of the sweep, computed by the sweep for each row before it reaches it
+/// from the maps and the row's snow (still as the step found it): the scour and the share
+/// kept (a pure function of each cell).
 struct CellTerms<'a> {
     sx: &'a [f32],
     keep: KeepShare,
@@ -377,23 +360,20 @@ fn keep_row(share: &[f32], gradient: &[f32], slab_gradient: f32, out: &mut [f32]
 /// grid and the arithmetic of each cell by its half and row, so the layers are bit-identical
 /// for any thread count; the sums are per half, added in a fixed order.
 fn sweep<V: Validity>(
-    ctx: &Context,
-    valid: &V,
-    (ex, ey, fx): (f64, f64, f32),
+    maps: &SweepMaps<V>,
     terrain: &mut LayeredTerrain,
-    scratch: &mut SxScratch,
+    from_row: &mut Vec<f32>,
 ) -> SxSums {
-    let (w, h) = (ctx.geometry.width(), ctx.geometry.height());
+    let (w, h) = (maps.ctx.geometry.width(), maps.ctx.geometry.height());
     // Downwind steps: east is +col, north is −row.
-    let dc: isize = if ex >= 0.0 { 1 } else { -1 };
-    let dr: isize = if ey >= 0.0 { -1 } else { 1 };
+    let (dc, dr) = (maps.dc, maps.dr);
     let rows: Vec<usize> = if dr < 0 {
         (0..h).rev().collect()
     } else {
         (0..h).collect()
     };
-    scratch.from_row.clear();
-    scratch.from_row.resize(w, 0.0);
+    from_row.clear();
+    from_row.resize(w, 0.0);
     let mid = w / 2;
     let [_, _, unstable, powder] = &mut terrain.snow;
     // Each row's (unstable, powder) in the west and east halves.
@@ -403,7 +383,7 @@ fn sweep<V: Validity>(
         west.push((uw, pw));
         east.push((ue, pe));
     }
-    let (from_west, from_east) = scratch.from_row.split_at_mut(mid);
+    let (from_west, from_east) = from_row.split_at_mut(mid);
     let west = Half {
         first_col: 0,
         rows: west,
@@ -417,19 +397,10 @@ fn sweep<V: Validity>(
     let (upwind, downwind) = if dc > 0 { (west, east) } else { (east, west) };
     let handover: Vec<AtomicU32> = (0..h).map(|_| AtomicU32::new(0)).collect();
     let handed = AtomicUsize::new(0);
-    let maps = SweepMaps {
-        ctx,
-        valid,
-        scour: &scratch.scour,
-        keep: &scratch.keep,
-        fx,
-        dc,
-        dr,
-    };
     let (up, down) = rayon::join(
         || {
             upwind.sweep(
-                &maps,
+                maps,
                 &rows,
                 |_| 0.0,
                 |k, carry| {
@@ -440,7 +411,7 @@ fn sweep<V: Validity>(
         },
         || {
             downwind.sweep(
-                &maps,
+                maps,
                 &rows,
                 |k| {
                     let mut spins = 0u32;
@@ -470,14 +441,73 @@ fn sweep<V: Validity>(
 struct SweepMaps<'a, V> {
     ctx: &'a Context<'a>,
     valid: &'a V,
-    /// Depth scoured from each cell, m.
-    scour: &'a [f32],
-    /// Share of the arriving load each cell keeps, negative where deposits land as unstable
-    /// snow (surface slope above the slab slope).
-    keep: &'a [f32],
+    /// The scour's and the kept share's parameters and maps.
+    cell: &'a CellTerms<'a>,
+    /// The share of the arriving load each cell keeps, before the slab sign
+    /// ([`KeepShareCache`]).
+    share: &'a [f32],
+    /// The snow surface as the step found it (the slab slopes), m.
+    surface: &'a [f32],
     fx: f32,
     dc: isize,
     dr: isize,
+}
+
+impl<V: Validity> SweepMaps<'_, V> {
+    /// The scour and the share kept (negative where deposits land as unstable snow: surface
+    /// slope above the slab slope) of the cells `cols` of `row`, with `powder` and `unstable`
+    /// on them as the step found them, into `terms`; 0 on nodata.
+    fn cell_terms(
+        &self,
+        row: usize,
+        cols: std::ops::Range<usize>,
+        (powder, unstable): (&[f32], &[f32]),
+        terms: &mut RowTerms,
+    ) {
+        let ctx = self.ctx;
+        let n = cols.len();
+        let r = row * ctx.geometry.width() + cols.start..row * ctx.geometry.width() + cols.end;
+        let (gradient, scour, keep) = (
+            &mut terms.gradient[..n],
+            &mut terms.scour[..n],
+            &mut terms.keep[..n],
+        );
+        row_gradient_norm_in(
+            self.surface,
+            ctx.geometry,
+            ctx.mask,
+            self.valid,
+            row,
+            cols,
+            gradient,
+        );
+        let erodible = ctx.erode_unstable.then_some(unstable);
+        self.cell
+            .scour_row(ctx.wind, r.clone(), powder, erodible, scour);
+        keep_row(&self.share[r.clone()], gradient, ctx.slab_gradient, keep);
+        for (k, i) in r.enumerate() {
+            if !self.valid.at(i) {
+                (scour[k], keep[k]) = (0.0, 0.0);
+            }
+        }
+    }
+}
+
+/// One half-row's terms ([`SweepMaps::cell_terms`]) and the surface gradient they use.
+struct RowTerms {
+    gradient: Vec<f32>,
+    scour: Vec<f32>,
+    keep: Vec<f32>,
+}
+
+impl RowTerms {
+    fn new(cells: usize) -> Self {
+        Self {
+            gradient: vec![0.0; cells],
+            scour: vec![0.0; cells],
+            keep: vec![0.0; cells],
+        }
+    }
 }
 
 /// A half of the columns: per row its (unstable, powder) and the loads handed down from the
@@ -537,12 +567,15 @@ impl Half<'_> {
         let step_y = m.dr * w as isize;
         let mut buf = DriftRow::new(n);
         let mut totals = RowTotals::new(n);
+        let mut terms = RowTerms::new(n);
         for (k, &row) in rows.iter().enumerate() {
             let has_y = k + 1 < rows.len();
             let base = row * w + self.first_col;
             let (unstable, powder) = &mut self.rows[row];
             let (unstable, powder) = (&mut unstable[..n], &mut powder[..n]);
-            let (scour, keep) = (&m.scour[base..base + n], &m.keep[base..base + n]);
+            let cols = self.first_col..self.first_col + n;
+            m.cell_terms(row, cols, (powder, unstable), &mut terms);
+            let (scour, keep) = (&terms.scour[..n], &terms.keep[..n]);
             let from_row = &mut self.from_row[..n];
             // Scour (a pure function of the cell, applied before its load: the cell's own
             // layers are not touched before it is reached) and what arrives.

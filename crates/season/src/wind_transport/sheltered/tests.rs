@@ -74,9 +74,10 @@ fn sequential_sweep(
     [eroded, deposited, unstable_dep, border]
 }
 
-/// Random scour, shares (some of them on slab slopes) and layers on a grid with nodata, for
-/// winds from each quadrant and along each axis, on one and two threads: every layer within
-/// 2e-6 m of the sequential recurrence, and the sums within 1e-6 of it.
+/// A rough terrain with nodata, random `Sx`, winds and shadows (so that cells are exposed,
+/// sheltered, shadowed and on slab slopes), and winds from each quadrant and along each axis,
+/// on one and two threads: every layer within 2e-6 m of the sequential recurrence fed with the
+/// same per-cell terms, and the sums within 1e-6 of it.
 #[test]
 fn the_row_scan_gives_the_sequential_recurrence_to_round_off() {
     let (w, h) = (53, 37);
@@ -86,7 +87,9 @@ fn the_row_scan_gives_the_sequential_recurrence_to_round_off() {
     let valid: Vec<bool> = invalid.iter().map(|b| !b).collect();
     let bed = Grid::new(
         geo.clone(),
-        vec![1000.0; n],
+        (0..n)
+            .map(|i| (1000.0 + 12.0 * uniform(3, 7, i as u64)) as f32)
+            .collect(),
         NodataMask::from_invalid(invalid.clone()),
     )
     .unwrap();
@@ -96,37 +99,42 @@ fn the_row_scan_gives_the_sequential_recurrence_to_round_off() {
         terrain.snow[2][i] = zero(0.3 * uniform(3, 1, i as u64), i);
         terrain.snow[3][i] = zero(0.5 * uniform(3, 2, i as u64), i);
     }
-    let scour: Vec<f32> = (0..n)
+    let surface: Vec<f32> = (0..n)
+        .map(|i| terrain.bedrock[i] + terrain.snow.iter().map(|l| l[i]).sum::<f32>())
+        .collect();
+    let sx: Vec<f32> = (0..n)
+        .map(|i| (30.0 * uniform(3, 3, i as u64) - 15.0) as f32)
+        .collect();
+    let u: Vec<f32> = (0..n)
+        .map(|i| (15.0 * uniform(3, 4, i as u64)) as f32)
+        .collect();
+    let v: Vec<f32> = (0..n)
+        .map(|i| (8.0 * uniform(3, 5, i as u64)) as f32)
+        .collect();
+    let shadow: Vec<f32> = (0..n)
         .map(|i| {
-            let s = 0.08 * uniform(3, 3, i as u64);
-            zero(
-                if uniform(3, 4, i as u64) < 0.4 {
-                    s
-                } else {
-                    0.0
-                },
-                i,
-            )
+            if uniform(3, 6, i as u64) < 0.1 {
+                1.0
+            } else {
+                0.0
+            }
         })
         .collect();
-    let keep: Vec<f32> = (0..n)
-        .map(|i| {
-            let k = 0.02 + 0.5 * uniform(3, 5, i as u64);
-            zero(if uniform(3, 6, i as u64) < 0.3 { -k } else { k }, i)
-        })
-        .collect();
-    let u = vec![5.0f32; n];
     let wind = WindMaps {
         u: &u,
-        v: &u,
-        shadow: &u,
-        effect_surface: &u,
-        sx: None,
+        v: &v,
+        shadow: &shadow,
+        effect_surface: &surface,
+        sx: Some(&sx),
         terms: None,
     };
     let params = crate::wind_transport::WindTransportParams::default();
     let mask = terrain.mask().clone();
     let ctx = Context::new(&geo, &mask, &wind, &params, 0.5);
+    let sx_params = SxParams {
+        k_exposed: 0.02,
+        ..Default::default()
+    };
     for (ex, ey) in [
         (1.0f64, 0.3f64),
         (-1.0, 0.5),
@@ -139,6 +147,40 @@ fn the_row_scan_gives_the_sequential_recurrence_to_round_off() {
         let fx = ex.abs() / (ex.abs() + ey.abs());
         let dc: isize = if ex >= 0.0 { 1 } else { -1 };
         let dr: isize = if ey >= 0.0 { -1 } else { 1 };
+        // The per-cell terms the sweep computes, over whole rows, for the reference.
+        let (mut scour, mut keep) = (vec![0.0f32; n], vec![0.0f32; n]);
+        let hop = fx * 10.0 * ex.abs() + (1.0 - fx) * 10.0 * ey.abs();
+        let cell = CellTerms {
+            sx: &sx,
+            keep: KeepShare::new(hop / sx_params.settling_length_m, hop * sx_params.k_deposit),
+            scour_dt: (sx_params.k_exposed * 0.5) as f32,
+            inv_ref: (1.0 / sx_params.reference_speed_m_s) as f32,
+            expo: sx_params.speed_exponent as f32,
+            exposed: sx_params.exposed_below_deg as f32,
+            sheltered: sx_params.sheltered_above_deg as f32,
+        };
+        let mut cache = KeepShareCache::default();
+        let share = cache.shares(&cell.keep, cell.sheltered, &sx, w);
+        with_validity!(mask, |v| {
+            let maps = SweepMaps {
+                ctx: &ctx,
+                valid: v,
+                cell: &cell,
+                share,
+                surface: &surface,
+                fx: fx as f32,
+                dc,
+                dr,
+            };
+            let mut terms = RowTerms::new(w);
+            for row in 0..h {
+                let r = row * w..(row + 1) * w;
+                let layers = (&terrain.snow[3][r.clone()], &terrain.snow[2][r.clone()]);
+                maps.cell_terms(row, 0..w, layers, &mut terms);
+                scour[r.clone()].copy_from_slice(&terms.scour);
+                keep[r].copy_from_slice(&terms.keep);
+            }
+        });
         let (mut eu, mut ep) = (terrain.snow[2].clone(), terrain.snow[3].clone());
         let sums = sequential_sweep(
             &valid,
@@ -148,24 +190,25 @@ fn the_row_scan_gives_the_sequential_recurrence_to_round_off() {
             &mut eu,
             &mut ep,
         );
+        assert!(
+            keep.iter().any(|&k| k < 0.0) && scour.iter().filter(|&&e| e > 0.0).count() > n / 10
+        );
         for threads in [1, 2] {
             let mut t = terrain.clone();
-            let mut scratch = SxScratch {
-                scour: scour.clone(),
-                keep: keep.clone(),
-                ..Default::default()
-            };
+            let mut scratch = SxScratch::default();
             let got = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap()
                 .install(|| {
-                    with_validity!(mask, |v| sweep(
+                    with_validity!(mask, |v| run(
                         &ctx,
                         v,
-                        (ex, ey, fx as f32),
+                        &sx_params,
+                        (&sx, &surface, Some((ex, ey))),
                         &mut t,
-                        &mut scratch
+                        &mut scratch,
+                        0.5
                     ))
                 });
             for i in 0..n {
