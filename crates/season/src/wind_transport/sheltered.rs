@@ -26,8 +26,9 @@
 //! paper's wind slabs). A share aimed at a nodata cell is kept by the sending cell; a share
 //! leaving the grid is border outflow.
 //!
-//! **Conservation and determinism.** The scour of every cell is computed first (row-parallel,
-//! a pure function of each cell); the sweep runs row after row in a fixed order, the carries
+//! **Conservation and determinism.** The scour of every cell is a pure function of the cell
+//! as the step found it (the sweep computes a row's just before it reaches the row, whose
+//! snow it has not touched yet); the sweep runs row after row in a fixed order, the carries
 //! along each row by a scan over fixed segments of it ([`drift_row`]: the cell-by-cell
 //! recurrence regrouped, equal to it to f32 round-off), so the result is bit-identical for any
 //! thread count, and every depth scoured is deposited once or counted as border outflow (each
