@@ -694,32 +694,44 @@ fn over_holding_depth<V: Validity>(
     let surface = |j: usize| bedrock[j] + (snow[0][j] + snow[1][j] + snow[2][j] + snow[3][j]);
     (0..geometry.height())
         .into_par_iter()
-        .flat_map_iter(|row| {
-            (row * w..(row + 1) * w).filter_map(move |i| {
-                if !valid.at(i) {
-                    return None;
+        .map_init(
+            || vec![false; w],
+            |candidate, row| {
+                // The slope bound first, over the whole row (a loop that vectorises): it reads
+                // two arrays and rules out most cells.
+                let base = row * w;
+                let (b, c) = (&bound[base..base + w], &snow[0][base..base + w]);
+                for (k, out) in candidate.iter_mut().enumerate() {
+                    *out = b[k] + c[k] * inv_l_max + margin >= tan_min;
                 }
-                // The slope bound first: it reads two arrays and rules out most cells.
-                if bound[i] + snow[0][i] * inv_l_max + margin < tan_min {
-                    return None;
+                let mut found = Vec::new();
+                for i in (0..w).filter(|&k| candidate[k]).map(|k| base + k) {
+                    if !valid.at(i) {
+                        continue;
+                    }
+                    let depth = snow[0][i] + snow[1][i] + snow[2][i] + snow[3][i];
+                    if depth - floor <= MIN_SHED_M {
+                        continue;
+                    }
+                    let on_bed = steepest_descent(bed(i), bed, bed, geometry, valid, nb, i);
+                    if on_bed < tan_min {
+                        continue;
+                    }
+                    let on_snow =
+                        steepest_descent(surface(i), surface, bed, geometry, valid, nb, i);
+                    let t = on_bed.min(on_snow);
+                    if t < tan_min {
+                        continue;
+                    }
+                    let excess = depth - holding.hold(t, false);
+                    if excess > MIN_SHED_M {
+                        found.push((i as u32, t, excess));
+                    }
                 }
-                let depth = snow[0][i] + snow[1][i] + snow[2][i] + snow[3][i];
-                if depth - floor <= MIN_SHED_M {
-                    return None;
-                }
-                let on_bed = steepest_descent(bed(i), bed, bed, geometry, valid, nb, i);
-                if on_bed < tan_min {
-                    return None;
-                }
-                let on_snow = steepest_descent(surface(i), surface, bed, geometry, valid, nb, i);
-                let t = on_bed.min(on_snow);
-                if t < tan_min {
-                    return None;
-                }
-                let excess = depth - holding.hold(t, false);
-                (excess > MIN_SHED_M).then_some((i as u32, t, excess))
-            })
-        })
+                found
+            },
+        )
+        .flat_map_iter(|found| found)
         .collect()
 }
 
