@@ -506,11 +506,17 @@ impl DegreeHours {
     const STEP_C: f32 = 0.02;
 
     fn new(hours: &[MeltHour], threshold: f32, offsets: &[f32]) -> Self {
+        // (Minimum and maximum are exact in any order: the same range for any thread count.)
         let (lo, hi) = offsets
-            .iter()
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &o| {
-                (a.min(o), b.max(o))
-            });
+            .par_iter()
+            .fold(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |(a, b), &o| (a.min(o), b.max(o)),
+            )
+            .reduce(
+                || (f32::INFINITY, f32::NEG_INFINITY),
+                |(a, b), (c, d)| (a.min(c), b.max(d)),
+            );
         let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 0.0) };
         let n = (((hi - lo) / Self::STEP_C).ceil() as usize + 2).min(1 << 20);
         let (mut cooling, mut warm) = (vec![0.0f32; n], vec![0.0f32; n]);
