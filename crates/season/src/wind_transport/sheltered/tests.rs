@@ -80,7 +80,21 @@ fn sequential_sweep(
 /// same per-cell terms, and the sums within 1e-6 of it.
 #[test]
 fn the_row_scan_gives_the_sequential_recurrence_to_round_off() {
-    let (w, h) = (53, 37);
+    compare_with_recurrence(53, 37, true);
+}
+
+/// The same on grids of one to five columns or rows (halves of 0 to 3 columns, a single row
+/// whose shares across all leave the grid).
+#[test]
+fn the_row_scan_holds_on_grids_a_few_cells_wide() {
+    for (w, h) in [(1, 6), (2, 5), (3, 4), (5, 1), (4, 2)] {
+        compare_with_recurrence(w, h, false);
+    }
+}
+
+/// The sweep against [`sequential_sweep`] on a `w` x `h` grid (module test above); `coverage`:
+/// also check that the case exercises scour, slab slopes and border outflow.
+fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
     let geo = GridGeometry::square(w, h, 10.0).unwrap();
     let n = w * h;
     let invalid: Vec<bool> = (0..n).map(|i| uniform(3, 0, i as u64) < 0.06).collect();
@@ -190,9 +204,12 @@ fn the_row_scan_gives_the_sequential_recurrence_to_round_off() {
             &mut eu,
             &mut ep,
         );
-        assert!(
-            keep.iter().any(|&k| k < 0.0) && scour.iter().filter(|&&e| e > 0.0).count() > n / 10
-        );
+        if coverage {
+            assert!(
+                keep.iter().any(|&k| k < 0.0)
+                    && scour.iter().filter(|&&e| e > 0.0).count() > n / 10
+            );
+        }
         for threads in [1, 2] {
             let mut t = terrain.clone();
             let mut scratch = SxScratch::default();
@@ -233,7 +250,9 @@ fn the_row_scan_gives_the_sequential_recurrence_to_round_off() {
                     "sums {got:?} against {sums:?}"
                 );
             }
-            assert!(sums[0] > 1.0 && sums[2] > 0.1 && sums[3] > 0.1, "{sums:?}");
+            if coverage {
+                assert!(sums[0] > 1.0 && sums[2] > 0.1 && sums[3] > 0.1, "{sums:?}");
+            }
         }
     }
 }
