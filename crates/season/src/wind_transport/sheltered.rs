@@ -248,33 +248,16 @@ pub(super) fn run<V: Validity>(
     scratch: &mut SxScratch,
     dt_days: f64,
 ) -> SxSums {
-    let Some((ex, ey)) = dominant else {
+    let Some(wind) = dominant else {
         return SxSums::default();
     };
-    let (dx, dy) = (ctx.geometry.cell_size_x(), ctx.geometry.cell_size_y());
-    let fx = ex.abs() / (ex.abs() + ey.abs());
-    let hop = fx * dx * ex.abs() + (1.0 - fx) * dy * ey.abs();
-    let cell = CellTerms {
-        sx,
-        keep: KeepShare::new(hop / params.settling_length_m, hop * params.k_deposit),
-        scour_dt: (params.k_exposed * dt_days) as f32,
-        inv_ref: (1.0 / params.reference_speed_m_s) as f32,
-        expo: params.speed_exponent as f32,
-        exposed: params.exposed_below_deg as f32,
-        sheltered: params.sheltered_above_deg as f32,
-    };
-    let w = ctx.geometry.width();
-    let share = scratch.keep_share.shares(&cell.keep, cell.sheltered, sx, w);
-    let maps = SweepMaps {
-        ctx,
-        valid,
-        cell: &cell,
-        share,
-        surface,
-        fx: fx as f32,
-        dc: if ex >= 0.0 { 1 } else { -1 },
-        dr: if ey >= 0.0 { -1 } else { 1 },
-    };
+    let maps = SweepMaps::new(
+        (ctx, valid),
+        params,
+        (sx, surface, wind),
+        &mut scratch.keep_share,
+        dt_days,
+    );
     sweep(&maps, terrain, &mut scratch.from_row)
 }
 
@@ -443,7 +426,7 @@ struct SweepMaps<'a, V> {
     ctx: &'a Context<'a>,
     valid: &'a V,
     /// The scour's and the kept share's parameters and maps.
-    cell: &'a CellTerms<'a>,
+    cell: CellTerms<'a>,
     /// The share of the arriving load each cell keeps, before the slab sign
     /// ([`KeepShareCache`]).
     share: &'a [f32],
@@ -454,7 +437,41 @@ struct SweepMaps<'a, V> {
     dr: isize,
 }
 
-impl<V: Validity> SweepMaps<'_, V> {
+impl<'a, V: Validity> SweepMaps<'a, V> {
+    /// What the sweep along the dominant wind `(ex, ey)` reads in a step of `dt_days` (the
+    /// kept shares from `shares`, recomputed if the `Sx` map or the parameters changed).
+    fn new(
+        (ctx, valid): (&'a Context<'a>, &'a V),
+        params: &SxParams,
+        (sx, surface, (ex, ey)): (&'a [f32], &'a [f32], (f64, f64)),
+        shares: &'a mut KeepShareCache,
+        dt_days: f64,
+    ) -> Self {
+        let (dx, dy) = (ctx.geometry.cell_size_x(), ctx.geometry.cell_size_y());
+        let fx = ex.abs() / (ex.abs() + ey.abs());
+        let hop = fx * dx * ex.abs() + (1.0 - fx) * dy * ey.abs();
+        let cell = CellTerms {
+            sx,
+            keep: KeepShare::new(hop / params.settling_length_m, hop * params.k_deposit),
+            scour_dt: (params.k_exposed * dt_days) as f32,
+            inv_ref: (1.0 / params.reference_speed_m_s) as f32,
+            expo: params.speed_exponent as f32,
+            exposed: params.exposed_below_deg as f32,
+            sheltered: params.sheltered_above_deg as f32,
+        };
+        let share = shares.shares(&cell.keep, cell.sheltered, sx, ctx.geometry.width());
+        Self {
+            ctx,
+            valid,
+            cell,
+            share,
+            surface,
+            fx: fx as f32,
+            dc: if ex >= 0.0 { 1 } else { -1 },
+            dr: if ey >= 0.0 { -1 } else { 1 },
+        }
+    }
+
     /// The scour and the share kept (negative where deposits land as unstable snow: surface
     /// slope above the slab slope) of the cells `cols` of `row`, with `powder` and `unstable`
     /// on them as the step found them, into `terms`; 0 on nodata.

@@ -158,34 +158,17 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
         (0.0, 1.0),
         (-1.0, 0.0),
     ] {
-        let fx = ex.abs() / (ex.abs() + ey.abs());
-        let dc: isize = if ex >= 0.0 { 1 } else { -1 };
-        let dr: isize = if ey >= 0.0 { -1 } else { 1 };
         // The per-cell terms the sweep computes, over whole rows, for the reference.
         let (mut scour, mut keep) = (vec![0.0f32; n], vec![0.0f32; n]);
-        let hop = fx * 10.0 * ex.abs() + (1.0 - fx) * 10.0 * ey.abs();
-        let cell = CellTerms {
-            sx: &sx,
-            keep: KeepShare::new(hop / sx_params.settling_length_m, hop * sx_params.k_deposit),
-            scour_dt: (sx_params.k_exposed * 0.5) as f32,
-            inv_ref: (1.0 / sx_params.reference_speed_m_s) as f32,
-            expo: sx_params.speed_exponent as f32,
-            exposed: sx_params.exposed_below_deg as f32,
-            sheltered: sx_params.sheltered_above_deg as f32,
-        };
         let mut cache = KeepShareCache::default();
-        let share = cache.shares(&cell.keep, cell.sheltered, &sx, w);
-        with_validity!(mask, |v| {
-            let maps = SweepMaps {
-                ctx: &ctx,
-                valid: v,
-                cell: &cell,
-                share,
-                surface: &surface,
-                fx: fx as f32,
-                dc,
-                dr,
-            };
+        let (fx, dc, dr) = with_validity!(mask, |v| {
+            let maps = SweepMaps::new(
+                (&ctx, v),
+                &sx_params,
+                (&sx, &surface, (ex, ey)),
+                &mut cache,
+                0.5,
+            );
             let mut terms = RowTerms::new(w);
             for row in 0..h {
                 let r = row * w..(row + 1) * w;
@@ -194,12 +177,13 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
                 scour[r.clone()].copy_from_slice(&terms.scour);
                 keep[r].copy_from_slice(&terms.keep);
             }
+            (maps.fx, maps.dc, maps.dr)
         });
         let (mut eu, mut ep) = (terrain.snow[2].clone(), terrain.snow[3].clone());
         let sums = sequential_sweep(
             &valid,
             (w, h),
-            (dc, dr, fx as f32),
+            (dc, dr, fx),
             (&scour, &keep),
             &mut eu,
             &mut ep,
