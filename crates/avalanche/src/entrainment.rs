@@ -251,25 +251,12 @@ pub(crate) fn entrain(
                 maps.stable[i] += taken.from_bed;
                 state.bed[k] -= taken.from_bed;
                 state.h[k] = h + taken.total;
-                slow_pipes(state, k, h / (h + taken.total));
-                state.raise_wave_maximum(k);
+                state.slow_pipes_around(k, h / (h + taken.total));
                 volume += taken.total * area;
             }
         }
     }
     volume
-}
-
-/// Multiplies the 8 pipes touching padded cell `k` by `factor`.
-fn slow_pipes(state: &mut AvalancheState, k: usize, factor: f64) {
-    let pw = state.pw;
-    // Owned: east, south, south-east, south-west; reaching the cell: from the west, north,
-    // north-west and north-east owners.
-    let incoming = [k - 1, k - pw, k - pw - 1, k - pw + 1];
-    for (d, pipes) in state.pipes.iter_mut().enumerate() {
-        pipes[k] *= factor;
-        pipes[incoming[d]] *= factor;
-    }
 }
 
 #[cfg(test)]

@@ -233,6 +233,24 @@ impl AvalancheState {
         self.touch_tile((r / TILE) * self.tiles.ntx() + c / TILE);
     }
 
+    /// Multiplies the 8 pipes touching padded cell `k` by `factor` (in (0, 1]: snow taken up
+    /// in place, whose momentum the flow shares) and raises the CFL maxima to the cell's new
+    /// wave speed, `sqrt(g·h) +` the largest of those pipes' speeds, taken as they are scaled:
+    /// the pipes [`AvalancheState::wave_speed`] would read again, the same value.
+    pub(crate) fn slow_pipes_around(&mut self, k: usize, factor: f64) {
+        let pw = self.pw;
+        // Owned: east, south, south-east, south-west; reaching the cell: from the west, north,
+        // north-west and north-east owners (the order of `DIRS`).
+        let incoming = [k - 1, k - pw, k - pw - 1, k - pw + 1];
+        let mut umax = 0.0f64;
+        for (d, pipes) in self.pipes.iter_mut().enumerate() {
+            pipes[k] *= factor;
+            pipes[incoming[d]] *= factor;
+            umax = umax.max(pipes[k].abs()).max(pipes[incoming[d]].abs());
+        }
+        self.maxima.1 = self.maxima.1.max((G * self.h[k]).sqrt() + umax);
+    }
+
     /// Raises the CFL maxima to padded cell `k`'s wave speed (its snow grew in place: its tile
     /// already holds content).
     pub(crate) fn raise_wave_maximum(&mut self, k: usize) {
