@@ -327,6 +327,8 @@ fn row_update(
         let d = s[i] * implicit_share(k.k_compaction_dt * load);
         s[i] -= d;
         c[i] += d * k.density_ratio;
+        use crate::phenomenon::flush_negligible as f;
+        (c[i], s[i], u[i], p[i]) = (f(c[i]), f(s[i]), f(u[i]), f(p[i]));
         aged_stable[i] = aged_s;
         aged_unstable[i] = aged_u;
         exchanged[i] = e;

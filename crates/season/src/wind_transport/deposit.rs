@@ -164,7 +164,7 @@ fn cell_update(
     *powder -= tamped;
     *unstable += tamped;
     let slab = if gradient > ctx.slab_gradient { d } else { 0.0 };
-    *unstable += slab;
-    *powder += d - slab;
+    *unstable = crate::phenomenon::flush_negligible(*unstable + slab);
+    *powder = crate::phenomenon::flush_negligible(*powder + (d - slab));
     (slab, tamped)
 }

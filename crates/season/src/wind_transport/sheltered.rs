@@ -35,14 +35,16 @@
 //! cell keeps what it does not send on).
 
 use super::{Context, WindMaps};
-use crate::phenomenon::{PhenomenonError, Validity, check_range, row_gradient_norm_in};
+use crate::phenomenon::{
+    PhenomenonError, Validity, check_range, flush_below, flush_negligible, row_gradient_norm_in,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 mod drift_row;
-use drift_row::{DriftRow, Exits, RowTotals, share_out};
+use drift_row::{DriftRow, Exits, NEGLIGIBLE_LOAD, NEGLIGIBLE_SHARE, RowTotals, share_out};
 
 /// Parameters of the Sx-driven redistribution.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -448,7 +450,15 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
         dt_days: f64,
     ) -> Self {
         let (dx, dy) = (ctx.geometry.cell_size_x(), ctx.geometry.cell_size_y());
+        // (A wind within 1e-15 of an axis sweeps along it: see `NEGLIGIBLE_SHARE`.)
         let fx = ex.abs() / (ex.abs() + ey.abs());
+        let fx = if fx < f64::from(NEGLIGIBLE_SHARE) {
+            0.0
+        } else if 1.0 - fx < f64::from(NEGLIGIBLE_SHARE) {
+            1.0
+        } else {
+            fx
+        };
         let hop = fx * dx * ex.abs() + (1.0 - fx) * dy * ey.abs();
         let cell = CellTerms {
             sx,
@@ -611,9 +621,9 @@ impl Half<'_> {
                     let along = Some(p) != edge
                         && m.valid.at(i)
                         && m.valid.at(i.wrapping_add_signed(step_x));
-                    arriving[p] = from_row[l] + e;
+                    arriving[p] = flush_below(from_row[l] + e, NEGLIGIBLE_LOAD);
                     passed[p] = if along {
-                        (1.0 - keep[l].abs()) * m.fx
+                        flush_below((1.0 - keep[l].abs()) * m.fx, NEGLIGIBLE_SHARE)
                     } else {
                         0.0
                     };
@@ -641,8 +651,8 @@ impl Half<'_> {
                 let [across, kept, border] = share_out(load, k_share, carry[p + 1], m.fx, exits);
                 from_row[l] = across;
                 let slab = k_share < 0.0;
-                unstable[l] += if slab { kept } else { 0.0 };
-                powder[l] += if slab { 0.0 } else { kept };
+                unstable[l] = flush_negligible(unstable[l] + if slab { kept } else { 0.0 });
+                powder[l] = flush_negligible(powder[l] + if slab { 0.0 } else { kept });
                 kept_row[p] = kept;
                 kept_unstable[p] = if slab { kept } else { 0.0 };
                 border_row[p] = border;

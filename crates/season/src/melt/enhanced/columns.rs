@@ -160,6 +160,13 @@ pub(super) fn column_updates<'s>(
             water = lanes(|l| water[l] - take[l]);
             melted_water = lanes(|l| melted_water[l] + take[l]);
         }
+        {
+            use crate::phenomenon::flush_negligible as f;
+            l0 = lanes(|l| f(l0[l]));
+            l1 = lanes(|l| f(l1[l]));
+            l2 = lanes(|l| f(l2[l]));
+            l3 = lanes(|l| f(l3[l]));
+        }
         let liquid = lanes(|l| liquid[l] + (melted_water[l] + rain[l]));
         let left = lanes(|l| l0[l] * wpd[0] + l1[l] * wpd[1] + l2[l] * wpd[2] + l3[l] * wpd[3]);
         let hold = lanes(|l| {
