@@ -621,7 +621,9 @@ impl Coefficients {
 
     /// Per cell of a row with lapse offsets `off`: the absorbed share `1 − α` of its surface
     /// (of its age, on the curve `melting` selects) and the window's cooling and melting
-    /// degree-hours, from the tables (straight loops over the row: they vectorise).
+    /// degree-hours, from the tables: eight cells at a time with AVX2 gathers where the build
+    /// has AVX2 (`gathers.rs`, the same bits), the rest cell by cell
+    /// ([`Coefficients::lookups_scalar`]).
     fn lookups(
         &self,
         off: &[f32],
@@ -631,10 +633,32 @@ impl Coefficients {
         let w = off.len();
         let (age, melting) = (&age[..w], &melting[..w]);
         let (absorbed, cooling, warm) = (&mut absorbed[..w], &mut cooling[..w], &mut warm[..w]);
-        for col in 0..w {
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+        let done = self.lookups_avx2(off, (age, melting), (absorbed, cooling, warm));
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+        let done = 0;
+        self.lookups_scalar(
+            &off[done..],
+            (&age[done..], &melting[done..]),
+            (
+                &mut absorbed[done..],
+                &mut cooling[done..],
+                &mut warm[done..],
+            ),
+        );
+    }
+
+    /// [`Coefficients::lookups`] cell by cell.
+    fn lookups_scalar(
+        &self,
+        off: &[f32],
+        (age, melting): (&[f32], &[f32]),
+        (absorbed, cooling, warm): (&mut [f32], &mut [f32], &mut [f32]),
+    ) {
+        for col in 0..off.len() {
             absorbed[col] = 1.0 - self.albedo_at(age[col], melting[col] > 0.5);
         }
-        for col in 0..w {
+        for col in 0..off.len() {
             (cooling[col], warm[col]) = self.degree_hours.at(off[col]);
         }
     }
@@ -742,6 +766,8 @@ fn row_shortwave(threshold: f32, f: &MeltForcing, base: usize, out: &mut [f32]) 
 }
 
 mod columns;
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+mod gathers;
 use columns::{Columns, RowState, Scalars, column_updates};
 
 #[cfg(test)]

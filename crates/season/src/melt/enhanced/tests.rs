@@ -187,3 +187,79 @@ fn the_surface_filled_by_the_melt_is_the_surface_of_the_snow_it_leaves() {
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&surface), bits(&fresh));
 }
+
+#[test]
+fn table_lookups_give_the_bits_of_the_cell_by_cell_lookups() {
+    // A day whose hours cross 0 °C and the melt threshold at different lapse offsets.
+    let hours: Vec<MeltHour> = (0..24)
+        .map(|h| MeltHour {
+            weight: if h == 23 { 0.5 } else { 1.0 },
+            sea_level_c: -6.0 + 0.7 * h as f32,
+            beam: None,
+            direct_w_m2: 0.0,
+            diffuse_w_m2: 0.0,
+            reflected_w_m2: 0.0,
+            month: 0,
+            longwave_balance_w_m2: 0.0,
+        })
+        .collect();
+    let offsets: Vec<f32> = (0..64).map(|k| -9.0 + 0.173 * k as f32).collect();
+    let forcing = MeltForcing {
+        hours: &hours,
+        lapse_offset_c: &offsets,
+        sky_view_factor: &[],
+        reflected: &[],
+        rain_m: &[],
+        window_days: 1.0,
+    };
+    let k = Coefficients::new(&EnhancedMeltParams::default(), &forcing);
+    // Ages, curves and offsets on and between the entries, at both ends of the tables and
+    // past them, negative zero, NaN and infinities; 83 cells: ten groups of eight and a tail.
+    let special = [
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        -0.0,
+        0.0,
+        -3.0,
+        1e9,
+        3e9,
+    ];
+    let n = 83;
+    let age: Vec<f32> = (0..n)
+        .map(|i| {
+            if i % 7 == 0 {
+                special[(i / 7) % special.len()]
+            } else {
+                0.05 * i as f32 + 0.013 * (i % 3) as f32 + if i > 70 { 395.0 } else { 0.0 }
+            }
+        })
+        .collect();
+    let melting: Vec<f32> = (0..n)
+        .map(|i| [0.0, 1.0, 0.5, 0.51, f32::NAN][i % 5])
+        .collect();
+    let off: Vec<f32> = (0..n)
+        .map(|i| {
+            if i % 9 == 4 {
+                special[(i / 9) % special.len()]
+            } else {
+                -12.0 + 0.21 * i as f32
+            }
+        })
+        .collect();
+    let mut fast = [vec![0.0f32; n], vec![0.0f32; n], vec![0.0f32; n]];
+    let mut slow = fast.clone();
+    {
+        let [a, c, w] = &mut fast;
+        k.lookups(&off, (&age, &melting), (a, c, w));
+    }
+    {
+        let [a, c, w] = &mut slow;
+        k.lookups_scalar(&off, (&age, &melting), (a, c, w));
+    }
+    for (f, s) in fast.iter().zip(&slow) {
+        for (i, (x, y)) in f.iter().zip(s).enumerate() {
+            assert_eq!(x.to_bits(), y.to_bits(), "cell {i}: {x} vs {y}");
+        }
+    }
+}
