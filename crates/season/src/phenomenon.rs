@@ -281,7 +281,7 @@ pub(crate) fn row_gradient_norm_in<V: Validity>(
 /// is outside the volume budget and negligible: at most this depth per cell and step, about
 /// 1e-9 m³ over a 100-day season on 1024² cells of 10 m, where the budget closes to 1e-5 of
 /// ~1e8 m³.
-pub(crate) const NEGLIGIBLE_DEPTH_M: f32 = 1e-20;
+pub const NEGLIGIBLE_DEPTH_M: f32 = 1e-20;
 
 /// `x`, or 0 when it is below `floor` (branch-free: a select in vector loops).
 #[inline(always)]

@@ -26,7 +26,9 @@
 //!
 //! Every transfer is the implicit-Euler share `x/(1+x)` of a first-order law `dX/dt = −k X`:
 //! it lies in [0, 1) for any time step, so no layer can go negative, and it matches
-//! `1 − e^(−x)` to first order without a per-cell exponential.
+//! `1 − e^(−x)` to first order without a per-cell exponential. Layer depths left below
+//! [`crate::phenomenon::NEGLIGIBLE_DEPTH_M`] (1e-20 m) are set to 0: shares of shares of a
+//! layer would otherwise decay into subnormal floats.
 
 use crate::phenomenon::{
     PhenomenonError, Validity, check_dt, check_map, check_range, fill_surface, row_gradient_norm,

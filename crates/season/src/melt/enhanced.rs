@@ -28,6 +28,7 @@
 //! (powder, unstable, stable, compacted, each at its density); melt water and rain join the
 //! liquid water `L`, which the pack holds up to `θ_max · SWE` (Anderson 1976's liquid-water
 //! holding capacity, 5 %); the rest runs off. A cell that melts out releases its water.
+//! Layer depths left below [`crate::phenomenon::NEGLIGIBLE_DEPTH_M`] (1e-20 m) are set to 0.
 //!
 //! **Albedo** decays with the age `t` (days) of the snow surface and is reset by snowfall
 //! (U.S. Army Corps of Engineers 1956, "Snow Hydrology", as fitted in the form used by e.g.

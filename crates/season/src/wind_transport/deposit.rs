@@ -146,7 +146,9 @@ pub(super) fn run<V: Validity>(
 
 /// One cell's update: removes its erosion `e` (powder first, then unstable snow), tamps
 /// its powder by `a_z`, and adds the deposit `d` as powder, or as unstable snow where the
-/// surface gradient exceeds the slab slope. Returns `(deposit landed as unstable, tamped)`.
+/// surface gradient exceeds the slab slope; powder and unstable depths below
+/// [`crate::phenomenon::NEGLIGIBLE_DEPTH_M`] are set to 0. Returns `(deposit landed as
+/// unstable, tamped)`.
 #[inline(always)]
 fn cell_update(
     ctx: &Context,

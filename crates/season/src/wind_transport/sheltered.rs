@@ -32,7 +32,9 @@
 //! along each row by a scan over fixed segments of it ([`drift_row`]: the cell-by-cell
 //! recurrence regrouped, equal to it to f32 round-off), so the result is bit-identical for any
 //! thread count, and every depth scoured is deposited once or counted as border outflow (each
-//! cell keeps what it does not send on).
+//! cell keeps what it does not send on), but for loads below
+//! [`crate::phenomenon::NEGLIGIBLE_DEPTH_M`] (1e-20 m) and shares below 1e-15, which the sweep
+//! sets to 0 ([`drift_row`]: they would decay into subnormal floats).
 
 use super::{Context, WindMaps};
 use crate::phenomenon::{
