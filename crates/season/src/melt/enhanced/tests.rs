@@ -80,18 +80,7 @@ fn liquid_water_refreezes_and_water_is_conserved() {
     let liquid = pack.liquid_water_m[0];
     let compacted = t.layer(SnowLayer::Compacted)[0];
     // A cold night: the water refreezes into the compacted layer.
-    let hours: Vec<MeltHour> = (0..12)
-        .map(|_| MeltHour {
-            weight: 1.0,
-            sea_level_c: -10.0,
-            beam: None,
-            direct_w_m2: 0.0,
-            diffuse_w_m2: 0.0,
-            reflected_w_m2: 0.0,
-            month: 0,
-            longwave_balance_w_m2: 0.0,
-        })
-        .collect();
+    let hours: Vec<MeltHour> = (0..12).map(|_| dark_hour(1.0, -10.0)).collect();
     let forcing = MeltForcing {
         hours: &hours,
         lapse_offset_c: &[0.0, 0.0],
@@ -192,16 +181,7 @@ fn the_surface_filled_by_the_melt_is_the_surface_of_the_snow_it_leaves() {
 fn table_lookups_give_the_bits_of_the_cell_by_cell_lookups() {
     // A day whose hours cross 0 °C and the melt threshold at different lapse offsets.
     let hours: Vec<MeltHour> = (0..24)
-        .map(|h| MeltHour {
-            weight: if h == 23 { 0.5 } else { 1.0 },
-            sea_level_c: -6.0 + 0.7 * h as f32,
-            beam: None,
-            direct_w_m2: 0.0,
-            diffuse_w_m2: 0.0,
-            reflected_w_m2: 0.0,
-            month: 0,
-            longwave_balance_w_m2: 0.0,
-        })
+        .map(|h| dark_hour(if h == 23 { 0.5 } else { 1.0 }, -6.0 + 0.7 * h as f32))
         .collect();
     let offsets: Vec<f32> = (0..64).map(|k| -9.0 + 0.173 * k as f32).collect();
     let forcing = MeltForcing {
@@ -261,5 +241,19 @@ fn table_lookups_give_the_bits_of_the_cell_by_cell_lookups() {
         for (i, (x, y)) in f.iter().zip(s).enumerate() {
             assert_eq!(x.to_bits(), y.to_bits(), "cell {i}: {x} vs {y}");
         }
+    }
+}
+
+/// An hour without sun or recorded longwave, `weight` of it in the window, at `sea_level_c`.
+fn dark_hour(weight: f32, sea_level_c: f32) -> MeltHour<'static> {
+    MeltHour {
+        weight,
+        sea_level_c,
+        beam: None,
+        direct_w_m2: 0.0,
+        diffuse_w_m2: 0.0,
+        reflected_w_m2: 0.0,
+        month: 0,
+        longwave_balance_w_m2: 0.0,
     }
 }
