@@ -5,16 +5,22 @@
 // server's stream rate from the browser's rendering. Needs `node --experimental-websocket` on
 // Node 20 (a global WebSocket from Node 22). Run through scripts/live-rate.sh.
 import assert from 'node:assert/strict';
-import { applyFrame } from '../src/wire.js';
+import { applyFrame, setProtocol } from '../src/wire.js';
 import { steepestCell } from './common.mjs';
 
 const url = process.env.SNOWSCAPE_URL;
 if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
 const seconds = Number(process.env.SNOWSCAPE_SECONDS || 10);
+// The frame layout comes from the server, as the page reads it (without it every frame is
+// refused and the wait below would time out).
+const proto = await fetch(new URL('/api/protocol', url));
+assert.ok(proto.ok, `GET /api/protocol: HTTP ${proto.status}`);
+setProtocol(await proto.json());
 const grids = {};
 let state = null, avalanche = null, frames = 0, flowFrames = 0, bytes = 0;
 const ws = new WebSocket(url.replace(/^http/, 'ws').replace(/\/$/, '') + '/ws');
 ws.binaryType = 'arraybuffer';
+ws.onerror = () => { console.error('the WebSocket failed'); process.exit(1); };
 ws.onmessage = (ev) => {
   if (typeof ev.data === 'string') {
     const m = JSON.parse(ev.data);
