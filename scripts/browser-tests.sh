@@ -14,6 +14,9 @@ dem_url="$url"
 start_server 256
 SNOWSCAPE_URL="$url" SNOWSCAPE_TOKEN_URL="$token_url" SNOWSCAPE_DEM_URL="$dem_url" \
   SNOWSCAPE_SHOTS="${SNOWSCAPE_SHOTS:-$scratch}" node web/tests/browser.mjs
+# The live avalanche stream as a bare WebSocket client counts it (scripts/live-rate.sh measures
+# it at 1024²), here for 2 s on the 256² server, so that the measuring client keeps working.
+SNOWSCAPE_URL="$url" SNOWSCAPE_SECONDS=2 node --experimental-websocket web/tests/live_rate_ws.mjs
 
 # scripts/serve.sh run from another folder: a relative --dem path is the caller's, npm ci is
 # skipped while web/node_modules matches the lock file, and the page is served.
