@@ -211,7 +211,7 @@ impl AvalancheState {
     /// Adds padded cell `k`, which received snow, to the active set (its tile touched) and
     /// to the CFL maxima.
     pub(crate) fn mark_content(&mut self, k: usize) {
-        self.raise_wave_maximum(k);
+        self.maxima.1 = self.maxima.1.max(self.wave_speed(k));
         let (r, c) = (k / self.pw, k % self.pw);
         self.tiles.add(r, c, c);
         let cell = ActiveBox {
@@ -249,12 +249,6 @@ impl AvalancheState {
             umax = umax.max(pipes[k].abs()).max(pipes[incoming[d]].abs());
         }
         self.maxima.1 = self.maxima.1.max((G * self.h[k]).sqrt() + umax);
-    }
-
-    /// Raises the CFL maxima to padded cell `k`'s wave speed (its snow grew in place: its tile
-    /// already holds content).
-    pub(crate) fn raise_wave_maximum(&mut self, k: usize) {
-        self.maxima.1 = self.maxima.1.max(self.wave_speed(k));
     }
 
     /// Flowing volume on the grid, m³ (rows summed in order).
