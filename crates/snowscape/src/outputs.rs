@@ -6,6 +6,7 @@
 //! export, the Python package) writes through these functions, so the same state gives the
 //! same bytes whichever wrote it.
 
+use crate::output_folder::OutputFolder;
 use image::RgbaImage;
 use snowscape_io::{AtomicWriteError, RasterError};
 use snowscape_io::{write_bytes_atomic, write_exr, write_geotiff, write_png16, write_splat};
@@ -62,6 +63,24 @@ pub enum OutputError {
     /// A Fearing cover has nothing to write (no snow settled).
     #[error(transparent)]
     Fearing(#[from] snowscape_fearing::FearingError),
+    /// Another job holds the output folder.
+    #[error(
+        "output folder {path} is in use by another snowscape job; wait for it or choose another --out"
+    )]
+    Busy { path: PathBuf },
+    /// A path in the output folder that a job will not write through or remove.
+    #[error("{path} {reason}: refusing to write there")]
+    UnsafePath { path: PathBuf, reason: &'static str },
+    /// A job listed an output it did not write (a bug, reported rather than committed).
+    #[error("output {name} was not written (missing at {path})")]
+    NotStaged { path: PathBuf, name: String },
+    /// A written output could not be moved into place.
+    #[error("cannot move the output into place at {path}: {source}")]
+    Commit {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 /// The result of an output.
@@ -129,49 +148,11 @@ fn remove_partial_leftovers(dir: &Path) -> usize {
     removed
 }
 
-/// The outputs an earlier run listed in `dir/report.json`, plus any time-lapse frames in
-/// `dir/frames` (an interrupted run writes frames before any report): the files this
-/// program owns in the folder. Read it before a new run overwrites the report.
-pub fn earlier_outputs(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read(dir.join("report.json"))
-        .ok()
-        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-        .and_then(|v| {
-            v.get("outputs")?.as_array().map(|a| {
-                a.iter()
-                    .filter_map(|s| s.as_str().map(String::from))
-                    .collect()
-            })
-        })
-        .unwrap_or_default();
-    if let Ok(entries) = std::fs::read_dir(dir.join("frames")) {
-        for e in entries.flatten() {
-            if let Some(n) = e.file_name().to_str()
-                && n.starts_with("frame_")
-                && n.ends_with(".png")
-            {
-                names.push(format!("frames/{n}"));
-            }
-        }
-    }
-    names.sort();
-    names.dedup();
-    names
-}
-
-/// The earlier outputs this run did not write again (stale: they describe another run).
-pub fn stale_outputs(earlier: &[String], written: &[String]) -> Vec<String> {
-    let now: std::collections::HashSet<&str> = written.iter().map(String::as_str).collect();
-    earlier
-        .iter()
-        .filter(|n| !now.contains(n.as_str()) && n.as_str() != "report.json")
-        .cloned()
-        .collect()
-}
-
-/// Writes `report` (a JSON object with an `outputs` list) to `dir/report.json`, listing and
-/// then removing the `earlier` outputs this run did not write again.
-pub fn write_report(dir: &Path, earlier: &[String], mut report: serde_json::Value) -> Result<()> {
+/// Writes `report` (a JSON object with an `outputs` list, the files staged in `folder`) as
+/// `report.json` and commits the folder ([`OutputFolder::commit`]): the outputs move into
+/// place and the earlier ones this job did not write again (listed as `removed_stale`) are
+/// removed.
+pub fn write_report(folder: OutputFolder, mut report: serde_json::Value) -> Result<()> {
     let written: Vec<String> = report["outputs"]
         .as_array()
         .map(|a| {
@@ -180,33 +161,12 @@ pub fn write_report(dir: &Path, earlier: &[String], mut report: serde_json::Valu
                 .collect()
         })
         .unwrap_or_default();
-    let stale = stale_outputs(earlier, &written);
+    let stale = folder.stale(&written);
     if !stale.is_empty() {
         report["removed_stale"] = serde_json::json!(stale);
     }
     let text = serde_json::to_string_pretty(&report).map_err(OutputError::Report)?;
-    write_bytes_atomic(&dir.join("report.json"), text.as_bytes())?;
-    remove_stale(dir, &stale);
-    Ok(())
-}
-
-/// Removes the `stale` files from `dir`: only plain relative names inside the folder (never
-/// `..` or an absolute path), and only files (a link is removed, not followed).
-pub fn remove_stale(dir: &Path, stale: &[String]) {
-    for name in stale {
-        let p = Path::new(name);
-        let inside = p
-            .components()
-            .all(|c| matches!(c, std::path::Component::Normal(_)));
-        let path = dir.join(p);
-        let is_file = std::fs::symlink_metadata(&path).is_ok_and(|m| !m.is_dir());
-        if inside && is_file {
-            match std::fs::remove_file(&path) {
-                Ok(()) => tracing::info!("removed stale output {}", path.display()),
-                Err(e) => tracing::warn!("cannot remove stale output {}: {e}", path.display()),
-            }
-        }
-    }
+    folder.commit(&written, Some(text.as_bytes()))
 }
 
 /// Collects written file names relative to the output folder.

@@ -11,10 +11,8 @@
 //! avalanche scour and deposit, the ski tracks, the final checkpoint and `report.json`; an
 //! earlier run's outputs that this one did not write again are removed.
 
-use crate::outputs::{
-    OutputError, Written, earlier_outputs, prepare_dir, remove_stale, stale_outputs, write_all,
-    write_png,
-};
+use crate::output_folder::OutputFolder;
+use crate::outputs::{OutputError, Written, write_all, write_png};
 use crate::report::{InputSummary, MassBudget, Report, timings_object};
 use image::RgbaImage;
 use snowscape_io::{AtomicWriteError, write_atomic, write_bytes_atomic};
@@ -28,6 +26,16 @@ use std::time::Instant;
 
 /// Name of the checkpoint file inside the output folder.
 pub const CHECKPOINT: &str = "checkpoint.bin";
+
+/// Name of the resolved scenario written beside the outputs (what `--resume` reuses).
+pub const RESOLVED_SCENARIO: &str = "scenario.toml";
+
+/// The largest earlier frame read back on a resume (a 512-pixel RGBA PNG is at most ~1 MiB).
+const MAX_FRAME_BYTES: u64 = 64 << 20;
+
+/// The largest checkpoint read, bytes per terrain cell (its layers, pack and maps in f32 or
+/// f64 take ~300; compressed it is less), plus a fixed allowance for its small records.
+const MAX_CHECKPOINT_BYTES_PER_CELL: u64 = 1024;
 
 /// Longest stretch of simulated days between two checks of the interrupt flag.
 pub const CHUNK_DAYS: f64 = 0.25;
@@ -105,6 +113,8 @@ pub struct SeasonJob {
     /// Write the single-band GeoTIFFs Cloud-Optimized (`--cog`; `wind.tif`, two bands, stays
     /// a plain GeoTIFF).
     pub cog: bool,
+    /// Write the resolved scenario ([`RESOLVED_SCENARIO`]) beside the outputs (`run`).
+    pub write_scenario: bool,
 }
 
 /// What a front end hears while a season runs (all optional).
@@ -138,18 +148,18 @@ pub enum SeasonJobError {
     /// The output folder cannot be created or written into (bad input: nothing was run).
     #[error(transparent)]
     OutputFolder(OutputError),
-    #[error("cannot read checkpoint {path}: {source}")]
-    ReadCheckpoint {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
     #[error("cannot resume from {path}: {source}")]
     Resume {
         path: PathBuf,
         #[source]
         source: Box<SeasonError>,
     },
+    #[error("cannot read the checkpoint to resume from: {0}")]
+    CheckpointFile(Box<snowscape_io::InputError>),
+    #[error("cannot read an earlier frame to resume with: {0}")]
+    EarlierFrameFile(Box<snowscape_io::InputError>),
+    #[error("cannot encode the resolved scenario: {0}")]
+    EncodeScenario(#[source] toml::ser::Error),
     #[error("cannot read the earlier frame {path}: {source}")]
     EarlierFrame {
         path: PathBuf,
@@ -177,7 +187,8 @@ impl SeasonJobError {
         matches!(
             self,
             Self::OutputFolder(_)
-                | Self::ReadCheckpoint { .. }
+                | Self::CheckpointFile(_)
+                | Self::EarlierFrameFile(_)
                 | Self::Resume { .. }
                 | Self::EarlierFrame { .. }
         )
@@ -248,6 +259,17 @@ fn frame_name(k: usize) -> String {
     format!("frames/frame_{k:04}.png")
 }
 
+/// Reads the checkpoint at `path` for a terrain of `cells` cells: a regular file (a device,
+/// FIFO or folder is refused before it is opened) of at most
+/// [`MAX_CHECKPOINT_BYTES_PER_CELL`] bytes a cell plus 64 MiB.
+fn read_checkpoint_file(path: &Path, cells: usize) -> Result<Vec<u8>, SeasonJobError> {
+    let max = (cells as u64)
+        .saturating_mul(MAX_CHECKPOINT_BYTES_PER_CELL)
+        .saturating_add(64 << 20);
+    snowscape_io::input::read_regular(path, max)
+        .map_err(|e| SeasonJobError::CheckpointFile(Box::new(e)))
+}
+
 /// Writes `checkpoint.bin` into `dir`, atomically.
 pub fn write_checkpoint(dir: &Path, winter: &Winter) -> Result<(), SeasonJobError> {
     let path = dir.join(CHECKPOINT);
@@ -292,15 +314,25 @@ pub fn run_season(
     progress: &mut dyn SeasonProgress,
 ) -> Result<SeasonOutcome, SeasonJobError> {
     let started = Instant::now();
-    let earlier = earlier_outputs(&job.out);
-    prepare_dir(&job.out).map_err(SeasonJobError::OutputFolder)?;
-    let frames_dir = job.out.join("frames");
-    std::fs::create_dir_all(&frames_dir).map_err(|source| {
+    let mut folder = OutputFolder::open(&job.out).map_err(SeasonJobError::OutputFolder)?;
+    folder
+        .check_subfolder("frames")
+        .map_err(SeasonJobError::OutputFolder)?;
+    let stage = folder.staging().to_path_buf();
+    std::fs::create_dir(stage.join("frames")).map_err(|source| {
         SeasonJobError::Output(OutputError::CreateFolder {
-            path: frames_dir,
+            path: stage.join("frames"),
             source,
         })
     })?;
+    // This run's own files so far (frames, the resolved scenario), for a commit that ends it
+    // before its outputs (an interrupt, --stop-at) and for a periodic checkpoint.
+    let mut staged: Vec<String> = Vec::new();
+    if job.write_scenario {
+        let text = toml::to_string(&job.scenario).map_err(SeasonJobError::EncodeScenario)?;
+        write_bytes_atomic(&stage.join(RESOLVED_SCENARIO), text.as_bytes())?;
+        staged.push(RESOLVED_SCENARIO.into());
+    }
     let input = InputSummary::of(&job.source, &job.bedrock);
     let mut stages = Stages {
         timings: Vec::new(),
@@ -316,11 +348,7 @@ pub fn run_season(
             )?),
             Some(dir) => {
                 let path = dir.join(CHECKPOINT);
-                let bytes =
-                    std::fs::read(&path).map_err(|source| SeasonJobError::ReadCheckpoint {
-                        path: path.clone(),
-                        source,
-                    })?;
+                let bytes = read_checkpoint_file(&path, terrain.geometry().len())?;
                 Winter::resume_with_forcing(
                     job.scenario.clone(),
                     terrain,
@@ -345,8 +373,16 @@ pub fn run_season(
         for (k, &d) in snaps.iter().enumerate() {
             if d <= winter.day() {
                 let path = dir.join(frame_name(k));
-                let img = image::open(&path)
-                    .map_err(|source| SeasonJobError::EarlierFrame { path, source })?;
+                let bytes = snowscape_io::input::read_regular(&path, MAX_FRAME_BYTES)
+                    .map_err(|e| SeasonJobError::EarlierFrameFile(Box::new(e)))?;
+                let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
+                    .map_err(|source| SeasonJobError::EarlierFrame {
+                        path: path.clone(),
+                        source,
+                    })?;
+                // The frame is this run's too: it goes into the folder with the others.
+                write_bytes_atomic(&stage.join(frame_name(k)), &bytes)?;
+                staged.push(frame_name(k));
                 frames[k] = Some(img.to_rgba8());
             }
         }
@@ -379,9 +415,12 @@ pub fn run_season(
                     && let Some(k) = snaps.iter().position(|&d| d == m)
                 {
                     let img = render_preview(&winter.terrain, &frame_view)?;
-                    write_png(&job.out.join(frame_name(k)), &img)?;
+                    write_png(&stage.join(frame_name(k)), &img)?;
+                    staged.push(frame_name(k));
                 }
-                write_checkpoint(&job.out, &winter)?;
+                write_checkpoint(&stage, &winter)?;
+                staged.push(CHECKPOINT.into());
+                folder.commit(&staged, None)?;
                 return Ok(SeasonOutcome::Interrupted {
                     day: winter.day(),
                     outputs_pending: false,
@@ -393,39 +432,41 @@ pub fn run_season(
         }
         if let Some(k) = snaps.iter().position(|&d| d == m) {
             let img = render_preview(&winter.terrain, &frame_view)?;
-            write_png(&job.out.join(frame_name(k)), &img)?;
+            write_png(&stage.join(frame_name(k)), &img)?;
+            staged.push(frame_name(k));
             frames[k] = Some(img);
         }
-        if checkpoints.contains(&m) {
-            write_checkpoint(&job.out, &winter)?;
-        }
         if stop_at == Some(m) {
-            write_checkpoint(&job.out, &winter)?;
+            write_checkpoint(&stage, &winter)?;
+            staged.push(CHECKPOINT.into());
+            folder.commit(&staged, None)?;
             return Ok(SeasonOutcome::Stopped { day: winter.day() });
+        }
+        if checkpoints.contains(&m) {
+            // In place at once, with the frames so far: a run killed later resumes from it.
+            write_checkpoint(&stage, &winter)?;
+            staged.push(CHECKPOINT.into());
+            folder.place(&staged)?;
         }
     }
     stages.record("season", t_season.elapsed().as_secs_f64());
     winter.terrain.check_invariants()?;
 
-    // An interrupt while the outputs are written stops once they are (each file is written
-    // whole or not at all); the final checkpoint lets a resume write them again.
-    let stop_if_interrupted = || -> Result<Option<SeasonOutcome>, SeasonJobError> {
-        if !interrupted.load(Ordering::SeqCst) {
-            return Ok(None);
-        }
-        write_checkpoint(&job.out, &winter)?;
-        Ok(Some(SeasonOutcome::Interrupted {
+    // An interrupt that came once the season was complete stops before its outputs, with the
+    // final checkpoint: a resume writes them.
+    if interrupted.load(Ordering::SeqCst) {
+        write_checkpoint(&stage, &winter)?;
+        staged.push(CHECKPOINT.into());
+        folder.commit(&staged, None)?;
+        return Ok(SeasonOutcome::Interrupted {
             day: winter.day(),
             outputs_pending: true,
-        }))
-    };
-    let mut out = Written::new(&job.out);
+        });
+    }
+    let mut out = Written::new(&stage);
     out.cog = job.cog;
     let frames: Vec<RgbaImage> = frames.into_iter().flatten().collect();
-    out.files.extend((0..frames.len()).map(frame_name));
-    if let Some(o) = stop_if_interrupted()? {
-        return Ok(o);
-    }
+    out.files.extend(staged.iter().cloned());
     // Every output at once (different files; the state no longer changes): the rasters,
     // previews, glb and time-lapse, the environment and avalanche maps, the ski tracks and the
     // final checkpoint. Files are listed in that order, and the first error in that order is
@@ -466,7 +507,7 @@ pub fn run_season(
                 || {
                     let t0 = Instant::now();
                     (
-                        write_checkpoint(&job.out, &winter),
+                        write_checkpoint(&stage, &winter),
                         t0.elapsed().as_secs_f64(),
                     )
                 },
@@ -511,10 +552,9 @@ pub fn run_season(
         (stages.timings, started.elapsed().as_secs_f64()),
         out.files,
     );
-    report.removed_stale = stale_outputs(&earlier, &report.outputs);
+    report.removed_stale = folder.stale(&report.outputs);
     let text = serde_json::to_vec_pretty(&report).map_err(OutputError::Report)?;
-    write_bytes_atomic(&job.out.join("report.json"), &text)?;
-    remove_stale(&job.out, &report.removed_stale);
+    folder.commit(&report.outputs, Some(&text))?;
     Ok(SeasonOutcome::Finished(Box::new(report)))
 }
 

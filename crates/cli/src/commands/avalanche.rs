@@ -5,7 +5,7 @@
 use crate::cli::{AvalancheArgs, FrictionArg, GlobalArgs, SlopeGravityArg, ThicknessArg};
 use crate::commands::render::preview_options;
 use crate::failure::{ExitCodeExt, Failure};
-use crate::outputs::{Written, earlier_outputs, prepare_dir, write_png, write_report};
+use crate::outputs::{Written, write_png, write_report};
 use crate::report::InputSummary;
 use anyhow::{Context, anyhow, bail};
 use clap::ValueEnum;
@@ -13,6 +13,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 pub use snowscape::avalanche_release::ReleaseSpec;
 use snowscape::avalanche_release::release_terrain;
+use snowscape::output_folder::OutputFolder;
 use snowscape_avalanche::validation::ThicknessConvention;
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, FrictionMaps,
@@ -289,10 +290,11 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .map(|r| super::avalanche_compare::read_inputs(r, args.path.as_deref()))
         .transpose()
         .bad_input()?;
-    let earlier = earlier_outputs(&args.out);
-    prepare_dir(&args.out).bad_input()?;
-    std::fs::create_dir_all(args.out.join("frames"))
-        .with_context(|| format!("cannot create {}/frames", args.out.display()))
+    let folder = OutputFolder::open(&args.out).bad_input()?;
+    folder.check_subfolder("frames").bad_input()?;
+    let stage = folder.staging().to_path_buf();
+    std::fs::create_dir(stage.join("frames"))
+        .with_context(|| format!("cannot create {}/frames", stage.display()))
         .job_failed()?;
     let relief = ReliefFrames::new(&dem, &view).job_failed()?;
     let t0 = Instant::now();
@@ -307,7 +309,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     {
         bar.set_style(style.progress_chars("=> "));
     }
-    let mut out = Written::new(&args.out);
+    let mut out = Written::new(&stage);
     let mut frames = Vec::new();
     let mut next_frame = 0.0;
     let mut render_s = 0.0;
@@ -331,7 +333,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
                     let tf = Instant::now();
                     let name = format!("frames/frame_{:04}.png", frames.len());
                     match render_frame(&relief, r).and_then(|img| {
-                        write_png(&args.out.join(&name), &img)
+                        write_png(&stage.join(&name), &img)
                             .map(|_| img)
                             .map_err(Into::into)
                     }) {
@@ -473,7 +475,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let report = serde_json::to_value(&report)
         .context("the avalanche report")
         .job_failed()?;
-    write_report(&args.out, &earlier, report).job_failed()?;
+    write_report(folder, report).job_failed()?;
     if !global.quiet {
         println!(
             "avalanche: released {:.0} m³, entrained {:.0} m³, ran {:.1} s ({:?}), runout {:.0} m, travel angle {:.1}°, footprint {:.0} m², {:.2} s wall -> {}",

@@ -9,7 +9,7 @@
 use crate::cli::GlobalArgs;
 use crate::dem_input::DemInputArgs;
 use crate::failure::{BAD_INPUT, ExitCodeExt, Failure};
-use crate::outputs::{earlier_outputs, prepare_dir, write_png, write_report};
+use crate::outputs::{write_png, write_report};
 use crate::report::InputSummary;
 use anyhow::{Context, anyhow, bail};
 use clap::{Args, ValueEnum};
@@ -17,6 +17,7 @@ use snowscape::cover::{
     CoverParameters, DemPlacement, DiffusionCoverReport, FearingInputSummary, GrowthSummary,
     MeshInputSummary, Turntable,
 };
+use snowscape::output_folder::OutputFolder;
 use snowscape_festenberg::{CoverParams, FestenbergError, GrowthParams, cover, grow_cover};
 use snowscape_mesh::preview::{PreviewOptions, render_turntable, write_preview};
 use snowscape_mesh::terrain::{grid_object, map_to_scene, place_scene_on_grid};
@@ -129,8 +130,6 @@ pub struct CoverInput {
     /// The region to cover, scene metres (`None`: the scene's bounds).
     pub extent_m: Option<[f64; 4]>,
     pub read_s: f64,
-    /// The outputs an earlier run left in the output folder.
-    pub earlier: Vec<String>,
 }
 
 /// Runs `snowscape cover`.
@@ -146,12 +145,15 @@ pub fn run(args: &CoverArgs, global: &GlobalArgs) -> Result<(), Failure> {
         None => CoverParameters::default(),
     };
     let input = read_input(args).bad_input()?;
-    prepare_dir(&args.out).job_failed()?;
+    let folder = OutputFolder::open(&args.out).bad_input()?;
+    folder.check_subfolder("growth").bad_input()?;
     match args.method {
-        CoverMethod::Diffusion => cover_diffusion(args, global, &input, file.diffusion, t0),
+        CoverMethod::Diffusion => {
+            cover_diffusion(args, global, &input, file.diffusion, (folder, t0))
+        }
         CoverMethod::Fearing => {
             let depth_set = file.fearing_depth_set;
-            cover_fearing(args, global, &input, file.fearing, depth_set, t0)
+            cover_fearing(args, global, &input, file.fearing, depth_set, (folder, t0))
         }
     }
 }
@@ -221,7 +223,6 @@ fn read_input(args: &CoverArgs) -> anyhow::Result<CoverInput> {
         summary,
         extent_m,
         read_s: t0.elapsed().as_secs_f64(),
-        earlier: earlier_outputs(&args.out),
     })
 }
 
@@ -279,7 +280,7 @@ fn cover_diffusion(
     global: &GlobalArgs,
     input: &CoverInput,
     file: CoverParams,
-    t0: Instant,
+    (folder, t0): (OutputFolder, Instant),
 ) -> Result<(), Failure> {
     // The file's values, each flag given overriding its own; a DEM fixes the extent.
     let params = CoverParams {
@@ -308,7 +309,7 @@ fn cover_diffusion(
         ))
         .job_failed();
     }
-    let dir = &args.out;
+    let dir = &folder.staging().to_path_buf();
     let mut files = Vec::new();
     let mut timings = vec![("read".to_string(), input.read_s)];
     timings.extend(c.stats.timings.iter().cloned());
@@ -387,7 +388,7 @@ fn cover_diffusion(
     let report = serde_json::to_value(&report)
         .context("report.json")
         .job_failed()?;
-    write_report(dir, &input.earlier, report).job_failed()?;
+    write_report(folder, report).job_failed()?;
     if !global.quiet {
         let s = &c.stats;
         println!(
@@ -414,7 +415,7 @@ fn cover_fearing(
     input: &CoverInput,
     file: snowscape_fearing::FearingParams,
     depth_set: bool,
-    t0: Instant,
+    (folder, t0): (OutputFolder, Instant),
 ) -> Result<(), Failure> {
     use snowscape_fearing::Material;
     let scene = &input.scene;
@@ -456,10 +457,7 @@ fn cover_fearing(
     let c = snowscape_fearing::cover(scene, &params).bad_input()?;
     if let Some(n) = args.turntable {
         let meshes = c.meshes();
-        std::fs::create_dir_all(&args.out)
-            .with_context(|| format!("cannot create {}", args.out.display()))
-            .job_failed()?;
-        write_turntable(&args.out, scene, &meshes, n).job_failed()?;
+        write_turntable(folder.staging(), scene, &meshes, n).job_failed()?;
     }
     let summary = FearingInputSummary {
         mesh: input.summary.clone(),
@@ -474,7 +472,18 @@ fn cover_fearing(
         .context("report.json")
         .job_failed()?;
     // Nothing to write (no snow settled) or a file that cannot be written: the job failed.
-    snowscape::cover::write_fearing_outputs(&args.out, scene, &c, Some(summary)).job_failed()?;
+    let written =
+        snowscape::cover::write_fearing_outputs(folder.staging(), scene, &c, Some(summary))
+            .job_failed()?;
+    let mut files: Vec<String> = written
+        .iter()
+        .filter_map(|p| p.strip_prefix(folder.staging()).ok())
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    if args.turntable.is_some() {
+        files.push("turntable.gif".into());
+    }
+    folder.commit(&files, None).job_failed()?;
     if !global.quiet {
         let r = &c.report;
         println!(

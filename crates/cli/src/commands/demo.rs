@@ -21,9 +21,13 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
         ))
         .bad_input();
     }
-    if !(args.cell_size.is_finite() && args.cell_size > 0.0) {
+    let (lo, hi) = (
+        snowscape_terrain::MIN_TERRAIN_CELL_M,
+        snowscape_terrain::MAX_TERRAIN_CELL_M,
+    );
+    if !(lo..=hi).contains(&args.cell_size) {
         return Err(anyhow!(
-            "--cell-size must be a positive number of metres, got {}",
+            "--cell-size must be within {lo}..={hi} m, got {}",
             args.cell_size
         ))
         .bad_input();
@@ -75,6 +79,7 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
             },
             out: args.out.clone(),
             resume: None,
+            write_scenario: false,
             forcing: None,
             stop_at: None,
             view,

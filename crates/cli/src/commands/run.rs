@@ -5,14 +5,10 @@ use crate::commands::render::preview_options;
 use crate::commands::season::{SeasonJob, run_season};
 use crate::failure::{ExitCodeExt, Failure};
 use anyhow::{Context, anyhow, bail};
-use snowscape::season_run::ExtraParameters;
-use snowscape_io::write_bytes_atomic;
+use snowscape::season_run::{ExtraParameters, RESOLVED_SCENARIO};
 use snowscape_render::ColourMode;
 use snowscape_season::scenario::Scenario;
 use std::path::Path;
-
-/// File name of the resolved scenario written beside the outputs (what `--resume` reuses).
-const RESOLVED_SCENARIO: &str = "scenario.toml";
 
 fn load_scenario(path: &Path) -> anyhow::Result<Scenario> {
     let text = snowscape_io::input::read_regular_text(path)
@@ -119,13 +115,6 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .validate_on(bedrock.geometry(), &scenario_name)
         .with_context(|| format!("on the terrain {}", args.dem.display()))
         .bad_input()?;
-    if args.resume.is_none() {
-        crate::outputs::prepare_dir(&out).bad_input()?;
-        let text = toml::to_string(&scenario)
-            .map_err(|e| anyhow!("cannot write the resolved scenario: {e}"))
-            .job_failed()?;
-        write_bytes_atomic(&out.join(RESOLVED_SCENARIO), text.as_bytes()).job_failed()?;
-    }
     let view = preview_options(&args.view, ColourMode::Snow).bad_input()?;
     run_season(
         SeasonJob {
@@ -142,6 +131,7 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
             forcing,
             view,
             cog: args.cog,
+            write_scenario: true,
         },
         global.quiet,
     )

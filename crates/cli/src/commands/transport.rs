@@ -5,9 +5,9 @@
 
 use crate::cli::{GlobalArgs, TransportArgs};
 use crate::failure::{ExitCodeExt, Failure};
-use crate::outputs::prepare_dir;
 use anyhow::{Context, anyhow, bail};
 use serde::Serialize;
+use snowscape::output_folder::OutputFolder;
 use snowscape::transport_job::{Overrides, dem_heights, fit_to_scene, load_scenario};
 use snowscape::transport_job::{RunContext, write_outputs};
 use snowscape_mesh::terrain::{map_to_scene, place_scene_on_grid};
@@ -228,7 +228,7 @@ pub fn run_command(args: &TransportArgs, global: &GlobalArgs) -> Result<(), Fail
         .apply(&mut scenario)
         .context("the scenario after the command-line overrides")
         .bad_input()?;
-    prepare_dir(&args.out).job_failed()?;
+    let folder = OutputFolder::open(&args.out).bad_input()?;
     if !global.quiet {
         let g = &input.geometry;
         eprintln!(
@@ -249,7 +249,14 @@ pub fn run_command(args: &TransportArgs, global: &GlobalArgs) -> Result<(), Fail
         mask: Some(&input.mask),
         wall_s: started.elapsed().as_secs_f64(),
     };
-    let files = write_outputs(&args.out, &scenario, &input.heights, &out, &context).job_failed()?;
+    let files =
+        write_outputs(folder.staging(), &scenario, &input.heights, &out, &context).job_failed()?;
+    let names: Vec<String> = files
+        .iter()
+        .filter_map(|p| p.strip_prefix(folder.staging()).ok())
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    folder.commit(&names, None).job_failed()?;
     if !global.quiet {
         let b = &out.budget;
         eprintln!(

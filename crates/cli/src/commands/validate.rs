@@ -9,13 +9,14 @@
 
 use crate::cli::{GlobalArgs, ValidateArgs};
 use crate::failure::{ExitCodeExt, Failure};
-use crate::outputs::{prepare_dir, write_png};
+use crate::outputs::write_png;
 use crate::validation::figures::{density_scatter, side_by_side};
 use crate::validation::{
     Input, Inputs, Settings, Validation, ValidationError, compare, prevailing_wind_from, summary,
 };
 use anyhow::Context;
 use serde::Serialize;
+use snowscape::output_folder::OutputFolder;
 use snowscape_io::{ReadOptions, read_dem, write_bytes_atomic};
 use snowscape_terrain::Grid;
 use std::path::{Path, PathBuf};
@@ -157,7 +158,8 @@ pub fn run(args: &ValidateArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .out
         .clone()
         .unwrap_or_else(|| args.run.join("validation"));
-    prepare_dir(&out).bad_input()?;
+    let folder = OutputFolder::open(&out).bad_input()?;
+    let stage = folder.staging().to_path_buf();
     let outputs = vec!["validation.json", "validation.png", "scatter.png"];
     let report = Report {
         snowscape_version: env!("CARGO_PKG_VERSION"),
@@ -174,12 +176,14 @@ pub fn run(args: &ValidateArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let json = serde_json::to_vec_pretty(&report)
         .context("cannot encode validation.json")
         .job_failed()?;
-    write_bytes_atomic(&out.join("validation.json"), &json).job_failed()?;
+    write_bytes_atomic(&stage.join("validation.json"), &json).job_failed()?;
     let maps_img = side_by_side(maps.width, maps.height, &maps.observed, &maps.simulated);
-    write_png(&out.join("validation.png"), &maps_img).job_failed()?;
+    write_png(&stage.join("validation.png"), &maps_img).job_failed()?;
     let compared = |v: &[f64]| -> Vec<f64> { v.iter().copied().filter(|x| !x.is_nan()).collect() };
     let scatter = density_scatter(&compared(&maps.observed), &compared(&maps.simulated));
-    write_png(&out.join("scatter.png"), &scatter).job_failed()?;
+    write_png(&stage.join("scatter.png"), &scatter).job_failed()?;
+    let names: Vec<String> = outputs.iter().map(|n| n.to_string()).collect();
+    folder.commit(&names, None).job_failed()?;
     if !global.quiet {
         print!("{}", summary::table(&validation));
         println!("wrote {} in {}", outputs.join(", "), out.display());
