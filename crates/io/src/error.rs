@@ -206,6 +206,21 @@ pub enum RasterError {
         #[source]
         source: TerrainError,
     },
+    /// A raster without a CRS whose cells and extent look like degrees of longitude and
+    /// latitude (a geographic DEM that lost its CRS): taken as metres its cells would be a
+    /// fraction of a millimetre.
+    #[error(
+        "{path}: cells of {cell_x} x {cell_y} with no CRS over x {x0:.4}..{x1:.4}, y {y0:.4}..{y1:.4} look like degrees of longitude and latitude; pass --crs EPSG:4326 (or the file's geographic CRS) if they are degrees, or its projected CRS with --crs if they are metres"
+    )]
+    LooksLikeDegrees {
+        path: PathBuf,
+        cell_x: f64,
+        cell_y: f64,
+        x0: f64,
+        x1: f64,
+        y0: f64,
+        y1: f64,
+    },
     /// The raster was read but cannot be a terrain (too small, no surface, altitude spike).
     #[error("{path}: not a usable terrain: {source}")]
     Terrain {

@@ -136,12 +136,45 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
 /// output.
 pub fn read_terrain(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
     let grid = read_dem(path, opts)?;
+    refuse_degrees_without_crs(path, grid.geometry())?;
     grid.check_terrain()
         .map_err(|source| RasterError::Terrain {
             path: path.to_path_buf(),
             source,
         })?;
     Ok(grid)
+}
+
+/// Refuses a terrain without a CRS whose cells are below 0.05 (metres or degrees) and whose
+/// extent lies inside the longitude and latitude ranges away from the origin: a geographic DEM
+/// that lost its CRS (3″ SRTM cells are 0.000833). Taken as metres, its sub-millimetre cells
+/// would make every distance-based neighbourhood thousands of cells wide. A metric grid has
+/// projected coordinates (far outside ±180) or, voxelised from a mesh, starts at the origin.
+fn refuse_degrees_without_crs(path: &Path, g: &GridGeometry) -> Result<(), RasterError> {
+    let t = g.transform();
+    let (x0, x1) = (t.origin_x, t.origin_x + g.width() as f64 * t.pixel_width);
+    let (y0, y1) = (t.origin_y - g.height() as f64 * t.pixel_height, t.origin_y);
+    let in_degrees = (-180.0..=360.0).contains(&x0)
+        && (-180.0..=360.0).contains(&x1)
+        && (-90.0..=90.0).contains(&y0)
+        && (-90.0..=90.0).contains(&y1);
+    let away_from_origin = x0.abs().max(y1.abs()) >= 0.5;
+    if g.crs().is_none()
+        && t.pixel_width.max(t.pixel_height) < 0.05
+        && in_degrees
+        && away_from_origin
+    {
+        return Err(RasterError::LooksLikeDegrees {
+            path: path.to_path_buf(),
+            cell_x: t.pixel_width,
+            cell_y: t.pixel_height,
+            x0,
+            x1,
+            y0,
+            y1,
+        });
+    }
+    Ok(())
 }
 
 /// Warns when a grid without a CRS has cells of at most 1 mm inside the range of degrees: it

@@ -37,6 +37,9 @@ use thiserror::Error;
 pub enum SeasonError {
     #[error("environment precompute: {0}")]
     Environment(#[from] EnvironmentError),
+    /// The terrain cannot carry a season (its cells are beyond what a terrain cell may be).
+    #[error("terrain: {0}")]
+    Terrain(#[source] TerrainError),
     #[error("{phenomenon} at day {day:.3}: {source}")]
     Phenomenon {
         phenomenon: &'static str,
@@ -212,6 +215,10 @@ impl Winter {
         terrain: LayeredTerrain,
         forcing: Option<StationForcing>,
     ) -> Result<Self, SeasonError> {
+        terrain
+            .geometry()
+            .check_terrain_cells()
+            .map_err(SeasonError::Terrain)?;
         let valid: Vec<f32> = terrain
             .bedrock
             .iter()

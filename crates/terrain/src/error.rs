@@ -68,6 +68,17 @@ pub enum TerrainError {
         value: f32,
         limit: f32,
     },
+    /// A terrain whose metric cell size is beyond what the model can mean (absurd geometry).
+    #[error(
+        "cell size {value:e} m along {axis} is outside {lo}..={hi} m that a terrain cell may \
+         have (a wrong unit, or degrees without a CRS?)"
+    )]
+    TerrainCellSize {
+        axis: char,
+        value: f64,
+        lo: f64,
+        hi: f64,
+    },
     /// Two grids that must share a geometry do not.
     #[error("geometry mismatch: {0}")]
     GeometryMismatch(String),

@@ -194,6 +194,26 @@ impl GridGeometry {
         Ok(g)
     }
 
+    /// Checks that the metric cell sizes are within [`crate::grid::MIN_TERRAIN_CELL_M`] and
+    /// [`crate::grid::MAX_TERRAIN_CELL_M`] (what a terrain cell may be).
+    pub fn check_terrain_cells(&self) -> Result<(), TerrainError> {
+        let (lo, hi) = (
+            crate::grid::MIN_TERRAIN_CELL_M,
+            crate::grid::MAX_TERRAIN_CELL_M,
+        );
+        for (axis, value) in [('x', self.cell_size_x), ('y', self.cell_size_y)] {
+            if !(lo..=hi).contains(&value) {
+                return Err(TerrainError::TerrainCellSize {
+                    axis,
+                    value,
+                    lo,
+                    hi,
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Whether positions are in degrees: only when the CRS is geographic. A grid without a
     /// CRS is metric whatever its cell size (a mesh voxelised at 1 cm is not in degrees); a
     /// DEM in degrees without a CRS needs one given (`--crs EPSG:4326`).

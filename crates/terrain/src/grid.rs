@@ -6,6 +6,14 @@ use crate::{GridGeometry, TerrainError};
 /// +9 km; the limit leaves room for synthetic scenes but refuses spikes (1e30) and wrong units.
 pub const MAX_ABS_ALTITUDE_M: f32 = 1e5;
 
+/// The smallest metric cell a terrain may have, m: 1 mm, the scale of a snow grain, below
+/// which the model's layers and slopes mean nothing (and a DEM in degrees without a CRS has
+/// cells of ~1e-4 to 1e-2 "m").
+pub const MIN_TERRAIN_CELL_M: f64 = 1e-3;
+
+/// The largest metric cell a terrain may have, m: 100 km (a whole-Earth grid of 400 cells).
+pub const MAX_TERRAIN_CELL_M: f64 = 1e5;
+
 /// Which cells hold data. Nodata cells (outside a real DEM's footprint) carry no snow and are
 /// skipped by every kernel; their stored value is kept finite (0) so it can never spread a NaN.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -178,10 +186,12 @@ impl Grid {
     }
 
     /// Checks that the grid can be a terrain, before any work is done on it: at least 2x2
-    /// cells, every valid altitude finite and within +-[`MAX_ABS_ALTITUDE_M`], and at least
+    /// cells of [`MIN_TERRAIN_CELL_M`] to [`MAX_TERRAIN_CELL_M`] metres each way, every valid
+    /// altitude finite and within +-[`MAX_ABS_ALTITUDE_M`], and at least
     /// one 2x2 block of cells of which three or more are valid (a surface with a slope).
     /// The error names the size, the cell and the value.
     pub fn check_terrain(&self) -> Result<(), TerrainError> {
+        self.geometry.check_terrain_cells()?;
         let (w, h) = (self.geometry.width(), self.geometry.height());
         if w < 2 || h < 2 {
             return Err(TerrainError::TerrainTooSmall {

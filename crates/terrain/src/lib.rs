@@ -32,5 +32,5 @@ pub mod timeline;
 
 pub use error::TerrainError;
 pub use geometry::{Crs, GeoTransform, GridGeometry};
-pub use grid::{Grid, MAX_ABS_ALTITUDE_M, NodataMask};
+pub use grid::{Grid, MAX_ABS_ALTITUDE_M, MAX_TERRAIN_CELL_M, MIN_TERRAIN_CELL_M, NodataMask};
 pub use layers::{LayeredTerrain, SnowLayer};

@@ -32,7 +32,16 @@
 //! whose rays has a sample (e.g. the upwind grid border) gets `Sx = 0`, as if the terrain
 //! beyond the grid were level with it. Nodata cells get 0.
 //!
-//! **Cost and determinism.** `O(cells · rays · dmax / min(dx, dy))`, parallel over rows; each
+//! **Bounded by cells.** A ray never samples beyond the grid's diagonal (samples there all
+//! fall outside the grid and are skipped anyway), and never more than [`MAX_SX_STEPS`]
+//! samples: the step count is `min(⌊dmax / min(dx, dy)⌋, ⌈diagonal / min(dx, dy)⌉ + 1,
+//! MAX_SX_STEPS)`, so the padded copy holds at most `(w + 2·pad)(h + 2·pad)` values with
+//! `pad ≤ max(w, h)·max(dx, dy)/min(dx, dy)`-ish and in any case `pad ≤ MAX_SX_STEPS + 2`
+//! cells: memory is bounded by the cell count, never by `dmax` divided by the cell size
+//! (1 cm cells and the default 100 m once asked for a 20 000-cell pad, 1.5 GB for 32×32 cells).
+//! At the cap a ray reaches `MAX_SX_STEPS·min(dx, dy)` (512 m on 1 m cells, 51 m on 10 cm).
+//!
+//! **Cost and determinism.** `O(cells · rays · min(dmax / min(dx, dy), MAX_SX_STEPS))`, parallel over rows; each
 //! cell's value is a pure function of the surface, so the map is bit-identical for any thread
 //! count.
 
@@ -42,6 +51,9 @@ use crate::field::validate;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::{GridGeometry, NodataMask};
+
+/// The most samples along one ray (module docs, "Bounded by cells").
+pub const MAX_SX_STEPS: usize = 512;
 
 /// Parameters of the maximum upwind slope `Sx` (Winstral et al. 2002).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -103,10 +115,16 @@ impl ShelteringParams {
             .collect()
     }
 
-    /// Number of samples along each ray on cells of `geometry`: at least one.
+    /// Number of samples along each ray on cells of `geometry`: at least one, at most to the
+    /// grid's diagonal and at most [`MAX_SX_STEPS`] (module docs, "Bounded by cells").
     pub fn steps(&self, geometry: &GridGeometry) -> usize {
-        let step = geometry.cell_size_x().min(geometry.cell_size_y());
-        ((self.dmax_m / step + 1e-9).floor() as usize).max(1)
+        let (dx, dy) = (geometry.cell_size_x(), geometry.cell_size_y());
+        let step = dx.min(dy);
+        let diagonal = (geometry.width() as f64 * dx).hypot(geometry.height() as f64 * dy);
+        let wanted = (self.dmax_m / step + 1e-9).floor();
+        let inside = (diagonal / step).ceil() + 1.0;
+        // `as usize` saturates (and maps NaN to 0) before the minimum with the cap.
+        (wanted.min(inside) as usize).clamp(1, MAX_SX_STEPS)
     }
 }
 

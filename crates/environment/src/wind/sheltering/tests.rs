@@ -246,3 +246,25 @@ fn bad_inputs_are_typed_errors() {
     assert_eq!(serde_json::from_str::<ShelteringParams>(&json).unwrap(), p);
     assert!(serde_json::from_str::<ShelteringParams>(r#"{"dmax": 3}"#).is_err());
 }
+
+#[test]
+fn the_search_is_bounded_by_the_grid_not_by_dmax_over_the_cell_size() {
+    // 1 cm cells and the default 100 m search once padded the grid by 10 000 cells a side
+    // (1.5 GB for 32×32 cells); 1e-320 m cells overflowed the pad and panicked.
+    let p = ShelteringParams::default();
+    for (cell, n) in [(0.01, 32), (1e-6, 32), (1e-300, 8), (0.5, 4096)] {
+        let g = GridGeometry::square(n, n, cell).unwrap();
+        let steps = p.steps(&g);
+        let diagonal_cells = (2f64.sqrt() * n as f64).ceil() as usize + 1;
+        assert!(
+            steps <= diagonal_cells.min(MAX_SX_STEPS),
+            "{cell} m cells, {n}²: {steps} steps"
+        );
+    }
+    // Where the search fits, nothing changes: 100 m on 5 m cells is 20 steps.
+    assert_eq!(p.steps(&GridGeometry::square(64, 64, 5.0).unwrap()), 20);
+    // A tiny-cell terrain runs, with a padded copy bounded by its cells.
+    let (z, g) = plane(32, 32, 0.01, 0.1, 0.0);
+    let s = sx(&z, &g, 270.0, &p);
+    assert!(s.iter().all(|v| v.is_finite()));
+}
