@@ -23,8 +23,11 @@
 //! hop (`dx/(|Ŵx| + |Ŵy|)` for square cells) and `L` the settling length on open ground. So
 //! snow settles within about `1 / (k_deposit · shelter)` metres of lee slope, whatever the cell
 //! size. It lands as powder, or as unstable snow on slopes steeper than `slab_slope_deg` (the
-//! paper's wind slabs). A share aimed at a nodata cell is kept by the sending cell; a share
-//! leaving the grid is border outflow.
+//! paper's wind slabs). **Boundary condition:** the grid's border and the nodata outline are
+//! both open: a share leaving the grid or aimed at a nodata cell leaves the terrain as border
+//! outflow. (Kept by the sending cell, as before issue 46, the drift piled into walls along
+//! the outline: on avaMal the one-cell rim held 2.0 m between 1400 and 1700 m where the cells
+//! one step inside held 0.11 m; `tests/nodata_edges.rs`.)
 //!
 //! **Conservation and determinism.** The scour of every cell is a pure function of the cell
 //! as the step found it (the sweep computes a row's just before it reaches the row, whose
@@ -643,10 +646,14 @@ impl Half<'_> {
                 let l = local(p);
                 let i = base + l;
                 let valid = m.valid.at(i);
+                // The nodata outline is an open boundary, as the grid's border: a share aimed
+                // at a nodata cell leaves the terrain (border outflow).
+                let across = valid && has_y && m.valid.at(i.wrapping_add_signed(step_y));
                 let exits = Exits {
-                    off_along: valid && Some(p) == edge,
-                    across: valid && has_y && m.valid.at(i.wrapping_add_signed(step_y)),
-                    off_across: valid && !has_y,
+                    off_along: valid
+                        && (Some(p) == edge || !m.valid.at(i.wrapping_add_signed(step_x))),
+                    across,
+                    off_across: valid && !across,
                 };
                 let load = carry[p] + arriving[p];
                 let k_share = keep[l];

@@ -87,11 +87,13 @@ impl RowTotals {
 /// Where the shares of one cell's load that are not carried along the row go.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Exits {
-    /// The cell is on the grid's last column downwind (its east/west share leaves the grid).
+    /// The cell is on the grid's last column downwind or its downwind neighbour along the row
+    /// is nodata (its east/west share leaves the terrain).
     pub(super) off_along: bool,
     /// The cell in the next row holds data.
     pub(super) across: bool,
-    /// The row is the last downwind (its north/south share leaves the grid).
+    /// The row is the last downwind or the cell in the next row is nodata (its north/south
+    /// share leaves the terrain).
     pub(super) off_across: bool,
 }
 
@@ -147,8 +149,8 @@ impl DriftRow {
 
 /// What a cell of load `load`, keeping the share `|keep|` and sending `carried_on` along the
 /// row, does with its load: `(sent to the next row, kept, border outflow)`. What leaves is
-/// split `f_x` along the row, the rest across; the cell keeps what it does not send on (its
-/// share, and the shares aimed at nodata).
+/// split `f_x` along the row, the rest across; a share aimed off the grid or at nodata is
+/// border outflow (`exits`); the cell keeps the rest of what it does not send on.
 #[inline(always)]
 pub(super) fn share_out(load: f32, keep: f32, carried_on: f32, fx: f32, exits: Exits) -> [f32; 3] {
     let out = load - load * keep.abs();

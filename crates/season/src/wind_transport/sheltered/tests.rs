@@ -53,14 +53,15 @@ fn sequential_sweep(
             } else if valid[(i as isize + dc) as usize] {
                 carry = to_x;
             } else {
-                kept += to_x;
+                // The nodata outline is an open boundary, as the grid's border.
+                border += f64::from(to_x);
             }
             if k + 1 == rows.len() {
                 border += f64::from(to_y);
             } else if valid[(i as isize + dr * w as isize) as usize] {
                 from_row[col] = to_y;
             } else {
-                kept += to_y;
+                border += f64::from(to_y);
             }
             deposited += f64::from(kept);
             if keep[i] < 0.0 {
