@@ -548,3 +548,111 @@ fn bound_to_a_network_address_the_token_is_asked() {
     let (status, head) = get_at(addr, &format!("/api/state?token={}", token.as_str()), &[]);
     assert_eq!(status, 200, "{head}");
 }
+
+/// Peak resident memory of this process (the server runs in it), bytes.
+fn peak_rss() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}
+
+/// The case: 32 parallel `GET /api/export/NAME` of a 256 MiB export, cross-site (all
+/// refused) and then with the token (one streamed, the rest 429); prints the peak resident
+/// memory before and after. Ignored by default (it writes and zips 256 MiB); run with
+/// `cargo test --release -p snowscape-editor --test access -- --ignored --nocapture`.
+#[test]
+#[ignore = "a 256 MiB measurement; run with --ignored --nocapture"]
+fn parallel_export_zips_take_bounded_memory() {
+    let server = start("127.0.0.1");
+    let port = server.served.addr.port();
+    let t = server.served.token.as_str().to_string();
+    let root = server._dir.path().join("project");
+    std::fs::create_dir_all(root.join("exports/big")).unwrap();
+    {
+        let mut f = std::io::BufWriter::new(
+            std::fs::File::create(root.join("exports/big/noise.bin")).unwrap(),
+        );
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut block = vec![0u8; 1 << 20];
+        for _ in 0..256 {
+            for b in &mut block {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                *b = (x >> 24) as u8;
+            }
+            f.write_all(&block).unwrap();
+        }
+    }
+    let addr = SocketAddr::from(([127, 0, 0, 1], port));
+    let fire = |headers: Vec<(String, String)>| {
+        let threads: Vec<_> = (0..32)
+            .map(|_| {
+                let headers = headers.clone();
+                std::thread::spawn(move || {
+                    let mut s = TcpStream::connect(addr).unwrap();
+                    let mut req = format!(
+                        "GET /api/export/big HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n"
+                    );
+                    for (k, v) in &headers {
+                        req.push_str(&format!("{k}: {v}\r\n"));
+                    }
+                    req.push_str("\r\n");
+                    s.write_all(req.as_bytes()).unwrap();
+                    let mut buf = vec![0u8; 1 << 16];
+                    let (mut n, mut head) = (0u64, Vec::new());
+                    loop {
+                        match s.read(&mut buf) {
+                            Ok(0) | Err(_) => break,
+                            Ok(k) => {
+                                if head.len() < 12 {
+                                    head.extend_from_slice(&buf[..k.min(12)]);
+                                }
+                                n += k as u64;
+                            }
+                        }
+                    }
+                    (String::from_utf8_lossy(&head[9..12]).to_string(), n)
+                })
+            })
+            .collect();
+        let mut codes: Vec<(String, u64)> =
+            threads.into_iter().map(|h| h.join().unwrap()).collect();
+        codes.sort();
+        codes
+    };
+    let base = peak_rss();
+    let t0 = std::time::Instant::now();
+    let cross = fire(vec![("Sec-Fetch-Site".into(), "cross-site".into())]);
+    assert!(cross.iter().all(|(c, _)| c == "403"), "{cross:?}");
+    println!(
+        "32 cross-site GETs: all 403 in {:.2} s; peak RSS {} -> {} MiB",
+        t0.elapsed().as_secs_f64(),
+        base >> 20,
+        peak_rss() >> 20
+    );
+    let t0 = std::time::Instant::now();
+    let own = fire(vec![("X-Snowscape-Token".into(), t.clone())]);
+    let ok = own.iter().filter(|(c, _)| c == "200").count();
+    let busy = own.iter().filter(|(c, _)| c == "429").count();
+    let streamed = own.iter().map(|(_, n)| n).max().copied().unwrap_or(0);
+    println!(
+        "32 GETs with the token: {ok} streamed ({} MiB), {busy} refused 429, in {:.1} s; peak RSS {} -> {} MiB",
+        streamed >> 20,
+        t0.elapsed().as_secs_f64(),
+        base >> 20,
+        peak_rss() >> 20
+    );
+    assert!(ok >= 1 && ok + busy == 32, "{own:?}");
+    assert!(streamed > 256 << 20, "the whole zip came");
+    assert!(
+        peak_rss() < base + (64 << 20),
+        "peak RSS grew by {} MiB",
+        (peak_rss() - base) >> 20
+    );
+}
