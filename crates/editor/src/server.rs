@@ -657,7 +657,7 @@ async fn import_dem_handler(
         Ok(Err(e)) => return reply(StatusCode::INTERNAL_SERVER_ERROR, e),
         Err(_) => return StatusCode::INTERNAL_SERVER_ERROR.into_response(),
     };
-    let received = receive_upload(body, file, &name).await;
+    let received = receive_upload(body, file, &name, MAX_DEM_UPLOAD as u64).await;
     let received = match received {
         Ok(n) => n,
         Err((code, message)) => {
@@ -695,12 +695,14 @@ async fn import_dem_handler(
     }
 }
 
-/// Writes the upload's body into `file` block by block, at most [`MAX_DEM_UPLOAD`] bytes;
-/// the bytes received, or the refusal.
+/// Writes the upload's body into `file` block by block, at most `max` bytes (the body is
+/// refused as soon as it passes them, whatever its `Content-Length` said); the bytes
+/// received, or the refusal.
 async fn receive_upload(
     body: axum::body::Body,
     file: std::fs::File,
     name: &str,
+    max: u64,
 ) -> Result<u64, (StatusCode, String)> {
     use futures_core::Stream;
     use std::io::Write;
@@ -720,10 +722,10 @@ async fn receive_upload(
             }
         };
         total += chunk.len() as u64;
-        if total > MAX_DEM_UPLOAD as u64 {
+        if total > max {
             return Err((
                 StatusCode::PAYLOAD_TOO_LARGE,
-                format!("DEM {name}: more than the {MAX_DEM_UPLOAD} bytes an upload may take"),
+                format!("DEM {name}: more than the {max} bytes an upload may take"),
             ));
         }
         let Some(mut f) = file.take() else {
@@ -1059,5 +1061,60 @@ async fn connection(mut socket: WebSocket, s: AppState) {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A body of `blocks` blocks of `size` bytes, without a length (chunked).
+    fn stream_body(blocks: usize, size: usize) -> axum::body::Body {
+        struct Blocks(usize, usize);
+        impl futures_core::Stream for Blocks {
+            type Item = Result<axum::body::Bytes, std::io::Error>;
+            fn poll_next(
+                mut self: std::pin::Pin<&mut Self>,
+                _: &mut std::task::Context<'_>,
+            ) -> std::task::Poll<Option<Self::Item>> {
+                if self.0 == 0 {
+                    return std::task::Poll::Ready(None);
+                }
+                self.0 -= 1;
+                std::task::Poll::Ready(Some(Ok(vec![7u8; self.1].into())))
+            }
+        }
+        axum::body::Body::from_stream(Blocks(blocks, size))
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn uploads_are_bounded_while_they_stream() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("up.asc");
+        // Within the bound: every byte written.
+        let f = std::fs::File::create(&path).unwrap();
+        let n = receive_upload(stream_body(10, 1000), f, "up.asc", 10_000)
+            .await
+            .unwrap();
+        assert_eq!(n, 10_000);
+        assert_eq!(std::fs::metadata(&path).unwrap().len(), 10_000);
+        // A body without a length that passes the bound is refused as soon as it does, and
+        // no more than the bound is written.
+        let f = std::fs::File::create(&path).unwrap();
+        let (code, message) = receive_upload(stream_body(1000, 1000), f, "up.asc", 10_000)
+            .await
+            .unwrap_err();
+        assert_eq!(code, StatusCode::PAYLOAD_TOO_LARGE);
+        assert!(
+            message.contains("10000 bytes") && message.contains("up.asc"),
+            "{message}"
+        );
+        assert!(std::fs::metadata(&path).unwrap().len() <= 10_000);
+        // An empty body is refused.
+        let f = std::fs::File::create(&path).unwrap();
+        let (code, _) = receive_upload(stream_body(0, 0), f, "up.asc", 10_000)
+            .await
+            .unwrap_err();
+        assert_eq!(code, StatusCode::BAD_REQUEST);
     }
 }

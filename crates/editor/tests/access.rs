@@ -455,17 +455,18 @@ fn dem_uploads_are_bounded_and_refused_ones_leave_no_file() {
         .as_bytes(),
     )
     .unwrap();
+    // Once its temporary file exists the slow upload holds the one place.
     let t0 = std::time::Instant::now();
-    loop {
-        let (status, reply) = post(port, "/api/dem?name=other.asc", &t, 3, b"abc");
-        if status == 429 {
-            assert!(reply.contains("another upload"), "{reply}");
-            break;
-        }
-        // The slow upload may not have reached the handler yet.
-        assert!(t0.elapsed() < Duration::from_secs(20), "{status}: {reply}");
-        std::thread::sleep(Duration::from_millis(50));
+    while !imports(&root).iter().any(|f| f.starts_with(".upload-")) {
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "the slow upload never began"
+        );
+        std::thread::sleep(Duration::from_millis(20));
     }
+    let (status, reply) = post(port, "/api/dem?name=other.asc", &t, 3, b"abc");
+    assert_eq!(status, 429, "{reply}");
+    assert!(reply.contains("another upload"), "{reply}");
     drop(slow);
     // A broken-off upload leaves nothing.
     let t0 = std::time::Instant::now();
