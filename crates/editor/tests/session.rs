@@ -362,6 +362,43 @@ fn save_and_load_round_trip_in_the_project_folder() {
 }
 
 #[test]
+fn scenario_paths_that_leave_the_project_folder_are_refused_on_set_save_and_load() {
+    let tmp = tempfile::tempdir().unwrap();
+    let pd = ProjectDir::open(tmp.path()).unwrap();
+    let mut s = session(64, 10.0);
+    // From the page: refused before anything changes, naming the value.
+    let mut sc = s.summary().scenario;
+    sc["forcing"] = serde_json::json!("/etc/passwd");
+    let (code, message) = s
+        .handle(ClientMessage::SetScenario { scenario: sc }, Some(&pd), None)
+        .unwrap_err();
+    assert_eq!(code, ErrorCode::BadPath);
+    assert!(
+        message.contains("scenario.forcing") && message.contains("\"/etc/passwd\""),
+        "{message}"
+    );
+    assert!(s.winter().scenario().forcing.is_none());
+    // A saved project whose scenario.toml was edited to name a file outside: not loaded.
+    s.handle(ClientMessage::Save { name: "p2".into() }, Some(&pd), None)
+        .unwrap();
+    let file = tmp.path().join("projects/p2/scenario.toml");
+    for bad in ["/etc/passwd", "../../../etc/passwd"] {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let text: String = text
+            .lines()
+            .filter(|l| !l.starts_with("forcing"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        std::fs::write(&file, format!("forcing = {bad:?}\n{text}\n")).unwrap();
+        let (code, message) = s
+            .handle(ClientMessage::Load { name: "p2".into() }, Some(&pd), None)
+            .unwrap_err();
+        assert_eq!(code, ErrorCode::BadPath, "{message}");
+        assert!(message.contains(&format!("{bad:?}")), "{message}");
+    }
+}
+
+#[test]
 fn launched_skier_moves_and_packs_snow() {
     let mut s = session(128, 10.0);
     snow_everywhere(&mut s);
