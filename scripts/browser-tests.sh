@@ -33,6 +33,7 @@ serve_sh=$!
 serve_url=""
 for _ in $(seq 1 600); do
   serve_url=$(grep -o 'http://[0-9.:]*/' "$caller/log" | head -n1 || true)
+  serve_token=$(grep -o 'token=[0-9a-f]*' "$caller/log" | head -n1 || true)
   [ -n "$serve_url" ] && break
   kill -0 "$serve_sh" 2>/dev/null || break
   sleep 0.5
@@ -41,7 +42,8 @@ serve_sh_ok=1
 if [ -z "$serve_url" ]; then
   echo "FAIL scripts/serve.sh from another folder did not start:"; cat "$caller/log"; serve_sh_ok=0
 else
-  state=$(curl -sf "${serve_url}api/state" || true)
+  # The data needs the printed URL's access token (loopback included); the page does not.
+  state=$(curl -sf "${serve_url}api/state?${serve_token}" || true)
   page=$(curl -sf "$serve_url" || true)
   if ! grep -q '"width":[0-9]' <<<"$state" || ! grep -qi '<html' <<<"$page"; then
     echo "FAIL scripts/serve.sh: no state or page at $serve_url"; serve_sh_ok=0

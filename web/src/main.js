@@ -21,8 +21,10 @@ function send(msg) {
 app.send = send;
 app.sendRaw = (text) => ws.send(text);
 
-// A server bound beyond loopback asks for its access token: the page was opened with
-// `?token=…` (the server also set a cookie on that load; the URL's token is passed on as well).
+// Every request for the editor's data (/api, /files, the WebSocket) needs the server's access
+// token, loopback included. The server sets it in the page's SameSite=Strict cookie (on the
+// page's load on loopback, or from the printed URL's `?token=…`), which the page's fetches,
+// downloads and WebSocket carry; a token in the page's URL is passed on as well.
 const token = new URLSearchParams(location.search).get('token');
 const wsPath = token ? `/ws?token=${encodeURIComponent(token)}` : '/ws';
 

@@ -19,7 +19,13 @@ import http from 'node:http';
 const url = process.env.SNOWSCAPE_URL;
 if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
 const shots = process.env.SNOWSCAPE_SHOTS || '/tmp';
-const base = url.replace(/\/$/, '');
+// The printed URL carries the server's access token (?token=): the page keeps it in its
+// cookie; this script's own requests send it in the X-Snowscape-Token header.
+const base = new URL(url).origin;
+const token = new URL(url).searchParams.get('token') || '';
+const auth = { 'X-Snowscape-Token': token };
+const nodeFetch = globalThis.fetch;
+const fetch = (u, o = {}) => nodeFetch(u, { ...o, headers: { ...auth, ...(o.headers || {}) } });
 const cell = async (c, r) => (await fetch(`${base}/api/cell?col=${c}&row=${r}`)).json();
 const results = [];
 async function check(name, fn) {
@@ -377,7 +383,7 @@ await check('save and export from the page; exported files download; the project
 // A raw HTTP request with chosen headers (fetch would fix Host itself).
 const rawRequest = (path, headers) => new Promise((resolve, reject) => {
   const u = new URL(base);
-  const req = http.request({ host: u.hostname, port: u.port, path, headers }, (res) => {
+  const req = http.request({ host: u.hostname, port: u.port, path, headers: { ...auth, ...headers } }, (res) => {
     res.resume();
     resolve(res.statusCode);
   });
@@ -397,6 +403,25 @@ await check('other sites, other local ports and rebinding names are refused (403
   assert.equal(await rawRequest('/ws', { ...upgrade, Origin: base }), 101, 'the page itself connects');
   assert.equal(await rawRequest('/ws', { ...upgrade, Origin: 'http://evil.example' }), 403);
   assert.equal(await rawRequest('/ws', { ...upgrade, Origin: 'http://127.0.0.1:1' }), 403, 'another local port');
+  // Cross-site GETs (an <img>, a no-cors fetch: no Origin) are refused, and so is the data
+  // opened from a typed URL; only the page itself opens so.
+  for (const path of ['/api/state', '/api/export/e2e', '/files/e2e/project.json', '/main.js', '/']) {
+    assert.equal(await rawRequest(path, { Host: host, 'Sec-Fetch-Site': 'cross-site' }), 403, path);
+  }
+  assert.equal(await rawRequest('/api/state', { Host: host, 'Sec-Fetch-Site': 'none' }), 403);
+  assert.equal(await rawRequest('/', { Host: host, 'Sec-Fetch-Site': 'none' }), 200);
+  // Without its token the data is refused, loopback included (a foreign page cannot probe it).
+  assert.equal(await new Promise((resolve, reject) => {
+    const u = new URL(base);
+    const req = http.request({ host: u.hostname, port: u.port, path: '/api/state', headers: { Host: host } }, (res) => {
+      res.resume(); resolve(res.statusCode);
+    });
+    req.on('error', reject);
+    req.end();
+  }), 403, 'no token');
+  const res = await fetch(`${base}/api/state`);
+  assert.equal(res.headers.get('cross-origin-resource-policy'), 'same-origin');
+  assert.equal(res.headers.get('x-content-type-options'), 'nosniff');
 });
 
 await check('at most 16 tabs connect at once; a closed one frees its place', async () => {
@@ -404,7 +429,7 @@ await check('at most 16 tabs connect at once; a closed one frees its place', asy
   const held = [];
   const open = () => new Promise((resolve, reject) => {
     const req = http.request({ host: u.hostname, port: u.port, path: '/ws', headers: {
-      Host: u.host, Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
+      ...auth, Host: u.host, Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
       'Sec-WebSocket-Key': 'dGhlIHNhbXBsZSBub25jZQ==' } });
     req.on('upgrade', (res, socket) => { held.push(socket); resolve(res.statusCode); });
     req.on('response', (res) => { res.resume(); resolve(res.statusCode); });
@@ -433,7 +458,7 @@ await check('a tab that asks for the whole state again and again without reading
   const t0 = Date.now();
   const closed = await new Promise((resolve, reject) => {
     const req = http.request({ host: u.hostname, port: u.port, path: '/ws', headers: {
-      Host: u.host, Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
+      ...auth, Host: u.host, Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
       'Sec-WebSocket-Key': 'dGhlIHNhbXBsZSBub25jZQ==' } });
     req.on('upgrade', (res, socket) => {
       socket.pause(); // read nothing while the server's replies pile up

@@ -13,12 +13,15 @@ if (!url) { console.error('SNOWSCAPE_URL is not set'); process.exit(2); }
 const seconds = Number(process.env.SNOWSCAPE_SECONDS || 10);
 // The frame layout comes from the server, as the page reads it (without it every frame is
 // refused and the wait below would time out).
-const proto = await fetch(new URL('/api/protocol', url));
+// The URL `snowscape serve` printed carries the access token the data needs (?token=).
+const token = new URL(url).searchParams.get('token') || '';
+const origin = new URL(url).origin;
+const proto = await fetch(new URL('/api/protocol', origin), { headers: { 'X-Snowscape-Token': token } });
 assert.ok(proto.ok, `GET /api/protocol: HTTP ${proto.status}`);
 setProtocol(await proto.json());
 const grids = {};
 let state = null, avalanche = null, frames = 0, flowFrames = 0, bytes = 0;
-const ws = new WebSocket(url.replace(/^http/, 'ws').replace(/\/$/, '') + '/ws');
+const ws = new WebSocket(`${origin.replace(/^http/, 'ws')}/ws?token=${token}`);
 ws.binaryType = 'arraybuffer';
 ws.onerror = () => { console.error('the WebSocket failed'); process.exit(1); };
 ws.onmessage = (ev) => {

@@ -1,5 +1,5 @@
-//! Who may talk to the editor: the `Host` and `Origin` checks on every request, and the access
-//! token every request must carry when the server is bound beyond loopback.
+//! Who may talk to the editor: the `Host`, `Origin` and `Sec-Fetch-Site` checks on every
+//! request, and the per-session access token every request for the session's data must carry.
 //!
 //! **Host and Origin.** Every request must name the served address in its `Host` header
 //! (`127.0.0.1:PORT`, `localhost:PORT`, `[::1]:PORT`, the `--bind` address; any IP literal
@@ -8,25 +8,79 @@
 //! This keeps other sites the artist visits, pages served from other local ports and
 //! DNS-rebinding names away from the session and the project files.
 //!
-//! **Access token.** The bind address decides: bound to a loopback address, only this machine
-//! can connect and no token is asked; bound to anything else (`0.0.0.0`, a LAN address, `::`)
-//! the server draws a 128-bit [`AccessToken`] from the operating system's random source and
-//! every request, from any client (loopback ones too, since they cannot be told apart from a
-//! forwarded connection), must carry it: as the query parameter `token=` (the URL the server
-//! prints) or in the cookie `snowscape_token_PORT`, which the server sets (`HttpOnly`,
-//! `SameSite=Strict`) on the response to a request whose query carried the token. The page
-//! opened with the printed URL therefore loads its scripts, downloads exports and opens its
-//! WebSocket on the cookie. Tokens are compared in constant time. Any refusal is a 403.
+//! **Cross-site requests.** A page on another site can make the browser send a GET without an
+//! `Origin` (`<img>`, `<script>`, a `no-cors` fetch). Browsers name such a request's initiator
+//! in `Sec-Fetch-Site`: a request whose `Sec-Fetch-Site` is present and is neither
+//! `same-origin` nor `none` is refused; `none` (a typed URL, a bookmark) is accepted only for
+//! a GET of the page itself (`/` or an `.html` file), never for its scripts, `/api`, `/files`
+//! or `/ws`. Every response, refusals included, carries `Cross-Origin-Resource-Policy:
+//! same-origin`, `X-Content-Type-Options: nosniff` and `Referrer-Policy: no-referrer`
+//! ([`SECURITY_HEADERS`]).
+//!
+//! **Access token.** Every server draws a 128-bit [`AccessToken`] from the operating system's
+//! random source at start. Every request for the session's data (`/api/…`, `/files/…`, the
+//! WebSocket `/ws`; [`Resource::Data`]) must carry it, from any client, loopback included:
+//! in the cookie `snowscape_token_PORT` (what the page's own requests, downloads and WebSocket
+//! carry), as the query parameter `token=` (the URL the server prints), or in the header
+//! [`TOKEN_HEADER`] (scripts). The server sets the cookie (`HttpOnly`, `SameSite=Strict`, so
+//! the browser never sends it with a request another site makes) on the response to a request
+//! whose query carried the token and, bound to loopback, on the response to a GET of the page
+//! itself. Where the server is bound decides what the page and its scripts ask: bound to a
+//! loopback address the page is served without a token (only this machine can connect; the
+//! page then runs on the cookie it set); bound to anything else (`0.0.0.0`, a LAN address,
+//! `::`) every request, the page included, needs the token ([`token_required`]: loopback
+//! clients cannot be told apart from forwarded connections). Tokens are compared in constant
+//! time. Any refusal is a 403 whose message names the refused header or value (never the
+//! token).
 
 use std::net::{IpAddr, SocketAddr};
 
-/// Whether a server bound to `bind` asks for an access token: any address but loopback.
+/// The header a script may carry the access token in (the page uses the cookie).
+pub const TOKEN_HEADER: &str = "x-snowscape-token";
+
+/// Headers set on every response: no other site may embed or read it, nothing is
+/// content-sniffed, and no URL (with its `?token=`) leaks in a `Referer`.
+pub const SECURITY_HEADERS: [(&str, &str); 3] = [
+    ("cross-origin-resource-policy", "same-origin"),
+    ("x-content-type-options", "nosniff"),
+    ("referrer-policy", "no-referrer"),
+];
+
+/// Whether a server bound to `bind` asks for the access token for its page too (not only for
+/// its data): any address but loopback.
 pub fn token_required(bind: IpAddr) -> bool {
     !bind.is_loopback()
 }
 
-/// The access token of a server bound beyond loopback: 128 bits from the OS, as 32 lowercase
-/// hexadecimal digits.
+/// What a request asks for, as the gate sees it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Resource {
+    /// A GET of the page itself (`/`, an `.html` file): the only thing a typed URL or a
+    /// bookmark (`Sec-Fetch-Site: none`) may open.
+    Page,
+    /// The page's other files (scripts, styles).
+    Asset,
+    /// The session's data: `/api/…`, `/files/…`, `/ws`. Always needs the token.
+    Data,
+}
+
+impl Resource {
+    /// The resource a request for `path` with `method` asks for.
+    pub fn of(method: &str, path: &str) -> Self {
+        // Leading slashes repeated or not, any case: never less than the data.
+        let p = path.trim_start_matches('/').to_ascii_lowercase();
+        let under = |dir: &str| p == dir || p.starts_with(&format!("{dir}/"));
+        if under("ws") || under("api") || under("files") {
+            Resource::Data
+        } else if (method == "GET" || method == "HEAD") && (p.is_empty() || p.ends_with(".html")) {
+            Resource::Page
+        } else {
+            Resource::Asset
+        }
+    }
+}
+
+/// The access token of a server: 128 bits from the OS, as 32 lowercase hexadecimal digits.
 #[derive(Clone, PartialEq, Eq)]
 pub struct AccessToken(String);
 
@@ -130,10 +184,14 @@ impl AllowedHosts {
 pub struct Credentials<'a> {
     pub host: Option<&'a str>,
     pub origin: Option<&'a str>,
+    /// The `Sec-Fetch-Site` header.
+    pub fetch_site: Option<&'a str>,
     /// The URL's query (after `?`).
     pub query: Option<&'a str>,
     /// The values of its `Cookie` headers.
     pub cookies: &'a [&'a str],
+    /// The [`TOKEN_HEADER`] header.
+    pub token_header: Option<&'a str>,
 }
 
 /// The gate's verdict on an admitted request.
@@ -141,31 +199,35 @@ pub struct Credentials<'a> {
 pub enum Admitted {
     /// Served as it is.
     Open,
-    /// Served, and the response sets this `Set-Cookie` value (the token came in the query).
+    /// Served, and the response sets this `Set-Cookie` value (the token came in the query, or
+    /// the page was opened on loopback).
     SetCookie(String),
 }
 
-/// The Host/Origin checks and, beyond loopback, the access token.
+/// The Host/Origin and `Sec-Fetch-Site` checks and the access token.
 #[derive(Debug, Clone)]
 pub struct Gate {
     hosts: AllowedHosts,
-    token: Option<AccessToken>,
+    token: AccessToken,
+    /// Bound beyond loopback: the page and its files need the token too.
+    page_needs_token: bool,
     cookie: String,
 }
 
 impl Gate {
-    /// The gate of a server bound to `bind` on `port`; `token` is required when given.
-    pub fn new(bind: IpAddr, port: u16, token: Option<AccessToken>) -> Self {
+    /// The gate of a server bound to `bind` on `port` whose token is `token`.
+    pub fn new(bind: IpAddr, port: u16, token: AccessToken) -> Self {
         Self {
             hosts: AllowedHosts::new(bind, port),
             token,
+            page_needs_token: token_required(bind),
             cookie: format!("snowscape_token_{port}"),
         }
     }
 
-    /// The token requests must carry, if any.
-    pub fn token(&self) -> Option<&AccessToken> {
-        self.token.as_ref()
+    /// The token requests must carry.
+    pub fn token(&self) -> &AccessToken {
+        &self.token
     }
 
     /// The name of the cookie that carries the token.
@@ -173,12 +235,33 @@ impl Gate {
         &self.cookie
     }
 
-    /// Whether a request may be served; a refusal says why (never the token).
-    pub fn admits(&self, req: Credentials<'_>) -> Result<Admitted, String> {
+    fn set_cookie(&self) -> Admitted {
+        Admitted::SetCookie(format!(
+            "{}={}; Path=/; HttpOnly; SameSite=Strict",
+            self.cookie,
+            self.token.as_str()
+        ))
+    }
+
+    /// Whether a request for `what` may be served; a refusal says why (never the token).
+    pub fn admits(&self, what: Resource, req: Credentials<'_>) -> Result<Admitted, String> {
         self.hosts.admits(req.host, req.origin)?;
-        let Some(token) = &self.token else {
-            return Ok(Admitted::Open);
-        };
+        match req.fetch_site {
+            None | Some("same-origin") => {}
+            Some("none") if what == Resource::Page => {}
+            Some("none") => {
+                return Err(
+                    "Sec-Fetch-Site \"none\": only the page itself may be opened from a typed URL or a bookmark, not its data or files; open the page"
+                        .into(),
+                );
+            }
+            Some(other) => {
+                return Err(format!(
+                    "Sec-Fetch-Site {other:?}: this editor refuses every request another site makes"
+                ));
+            }
+        }
+        let token = &self.token;
         let in_query = req
             .query
             .unwrap_or("")
@@ -194,14 +277,24 @@ impl Gate {
                 (k == self.cookie).then_some(v)
             })
             .any(|t| token.matches(t));
-        match (in_query, in_cookie) {
-            (_, true) => Ok(Admitted::Open),
-            (true, false) => Ok(Admitted::SetCookie(format!(
-                "{}={}; Path=/; HttpOnly; SameSite=Strict",
-                self.cookie,
-                token.as_str()
-            ))),
-            (false, false) => Err(
+        let in_header = req.token_header.is_some_and(|t| token.matches(t.trim()));
+        if in_cookie {
+            return Ok(Admitted::Open);
+        }
+        if in_query {
+            return Ok(self.set_cookie());
+        }
+        if in_header {
+            return Ok(Admitted::Open);
+        }
+        match what {
+            Resource::Page if !self.page_needs_token => Ok(self.set_cookie()),
+            Resource::Asset if !self.page_needs_token => Ok(Admitted::Open),
+            Resource::Data if !self.page_needs_token => Err(
+                "the editor's data and files need its access token: open the editor's page (it sets the token's cookie), or send the token of the URL `snowscape serve` printed (?token=, or the X-Snowscape-Token header)"
+                    .into(),
+            ),
+            _ => Err(
                 "this editor is reachable from the network and asks for its access token: open it with the URL `snowscape serve` printed (…/?token=…)"
                     .into(),
             ),
@@ -294,17 +387,20 @@ mod tests {
     }
 
     #[test]
-    fn the_token_comes_in_the_query_or_the_cookie() {
+    fn the_token_comes_in_the_query_the_cookie_or_the_header() {
         let token = AccessToken::generate().unwrap();
         let t = token.as_str().to_string();
-        let gate = Gate::new("0.0.0.0".parse().unwrap(), 8080, Some(token));
+        let gate = Gate::new("0.0.0.0".parse().unwrap(), 8080, token);
         let at = |query: Option<&str>, cookies: &[&str]| {
-            gate.admits(Credentials {
-                host: Some("192.168.1.7:8080"),
-                origin: None,
-                query,
-                cookies,
-            })
+            gate.admits(
+                Resource::Data,
+                Credentials {
+                    host: Some("192.168.1.7:8080"),
+                    query,
+                    cookies,
+                    ..Credentials::default()
+                },
+            )
         };
         let e = at(None, &[]).unwrap_err();
         assert!(e.contains("access token") && !e.contains(&t), "{e}");
@@ -328,24 +424,127 @@ mod tests {
             )
             .is_err()
         );
+        let header = |h: &str| {
+            gate.admits(
+                Resource::Data,
+                Credentials {
+                    host: Some("192.168.1.7:8080"),
+                    token_header: Some(h),
+                    ..Credentials::default()
+                },
+            )
+        };
+        assert_eq!(header(&t).unwrap(), Admitted::Open);
+        assert!(header("0123").is_err());
+        // Beyond loopback the page needs the token too.
+        for what in [Resource::Page, Resource::Asset] {
+            assert!(
+                gate.admits(
+                    what,
+                    Credentials {
+                        host: Some("192.168.1.7:8080"),
+                        ..Credentials::default()
+                    }
+                )
+                .is_err()
+            );
+        }
         // Host and Origin are still checked first.
         let e = gate
-            .admits(Credentials {
-                host: Some("evil.example:8080"),
-                query: Some(&format!("token={t}")),
-                ..Credentials::default()
-            })
+            .admits(
+                Resource::Data,
+                Credentials {
+                    host: Some("evil.example:8080"),
+                    query: Some(&format!("token={t}")),
+                    ..Credentials::default()
+                },
+            )
             .unwrap_err();
         assert!(e.contains("evil.example"), "{e}");
-        // Loopback: no token.
-        let open = Gate::new("127.0.0.1".parse().unwrap(), 8080, None);
-        assert_eq!(
-            open.admits(Credentials {
+    }
+
+    #[test]
+    fn on_loopback_the_page_sets_the_cookie_and_the_data_needs_the_token() {
+        let token = AccessToken::generate().unwrap();
+        let t = token.as_str().to_string();
+        let gate = Gate::new("127.0.0.1".parse().unwrap(), 8080, token);
+        let plain = |what: Resource| {
+            gate.admits(
+                what,
+                Credentials {
+                    host: Some("127.0.0.1:8080"),
+                    ..Credentials::default()
+                },
+            )
+        };
+        let Admitted::SetCookie(c) = plain(Resource::Page).unwrap() else {
+            panic!("the page sets the cookie");
+        };
+        assert!(c.contains(&t) && c.contains("SameSite=Strict"), "{c}");
+        assert_eq!(plain(Resource::Asset).unwrap(), Admitted::Open);
+        let e = plain(Resource::Data).unwrap_err();
+        assert!(e.contains("access token") && !e.contains(&t), "{e}");
+        let cookie = format!("snowscape_token_8080={t}");
+        let with_cookie = gate.admits(
+            Resource::Data,
+            Credentials {
                 host: Some("127.0.0.1:8080"),
+                cookies: &[&cookie],
                 ..Credentials::default()
-            })
-            .unwrap(),
-            Admitted::Open
+            },
         );
+        assert_eq!(with_cookie.unwrap(), Admitted::Open);
+    }
+
+    #[test]
+    fn cross_site_requests_are_refused_and_none_opens_only_the_page() {
+        let token = AccessToken::generate().unwrap();
+        let t = token.as_str().to_string();
+        let cookie = format!("snowscape_token_8080={t}");
+        let cookies = [cookie.as_str()];
+        let gate = Gate::new("127.0.0.1".parse().unwrap(), 8080, token);
+        let site = |what: Resource, site: &str| {
+            gate.admits(
+                what,
+                Credentials {
+                    host: Some("127.0.0.1:8080"),
+                    fetch_site: Some(site),
+                    cookies: &cookies,
+                    ..Credentials::default()
+                },
+            )
+        };
+        for what in [Resource::Page, Resource::Asset, Resource::Data] {
+            assert!(site(what, "same-origin").is_ok(), "{what:?}");
+            for other in ["cross-site", "same-site", "bogus"] {
+                let e = site(what, other).unwrap_err();
+                assert!(e.contains("Sec-Fetch-Site") && e.contains(other), "{e}");
+            }
+        }
+        assert!(site(Resource::Page, "none").is_ok());
+        for what in [Resource::Asset, Resource::Data] {
+            let e = site(what, "none").unwrap_err();
+            assert!(e.contains("\"none\""), "{e}");
+        }
+    }
+
+    #[test]
+    fn requests_are_sorted_into_page_assets_and_data() {
+        assert_eq!(Resource::of("GET", "/"), Resource::Page);
+        assert_eq!(Resource::of("GET", "/index.html"), Resource::Page);
+        assert_eq!(Resource::of("POST", "/"), Resource::Asset);
+        assert_eq!(Resource::of("GET", "/main.js"), Resource::Asset);
+        for data in [
+            "/api/state",
+            "/api/export/x",
+            "/files/projects/a/x.tif",
+            "/ws",
+            "/api",
+        ] {
+            assert_eq!(Resource::of("GET", data), Resource::Data, "{data}");
+        }
+        assert_eq!(Resource::of("GET", "//api/state"), Resource::Data);
+        assert_eq!(Resource::of("GET", "/API/state"), Resource::Data);
+        assert_eq!(Resource::of("GET", "/apix.js"), Resource::Asset);
     }
 }

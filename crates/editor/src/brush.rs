@@ -10,7 +10,10 @@
 //! unstable, stable, then compacted).
 //!
 //! Every change is recorded in an [`Edit`] (first value of each touched cell), so a stroke is
-//! undone and redone exactly.
+//! undone and redone exactly. A dab's radius may not exceed the terrain's extent (the
+//! diagonal of its grid, [`max_radius_m`]; larger ones are refused): a dab's work is bounded
+//! by the grid's cells, and a stroke's record by the cells it touched (the session bounds the
+//! whole undo history by bytes, `session::UNDO_BUDGET_BYTES`).
 
 use crate::protocol::{BrushOp, BrushTarget};
 use snowscape_terrain::{LayeredTerrain, SnowLayer};
@@ -80,6 +83,8 @@ impl CellRect {
 pub struct Edit {
     pub stroke: u32,
     pub before: HashMap<(Slot, usize), f32>,
+    /// Record nothing (a stroke past the undo history's budget: it cannot be undone).
+    pub unrecorded: bool,
 }
 
 fn slot_values<'a>(t: &'a mut LayeredTerrain, p: &'a mut PaintMaps, s: Slot) -> &'a mut [f32] {
@@ -96,6 +101,14 @@ impl Edit {
         self.before.is_empty()
     }
 
+    /// Estimated memory of the edit, bytes: its map's buckets (key, value and control byte,
+    /// at the map's 7/8 load) and the edit itself.
+    pub fn bytes(&self) -> u64 {
+        let bucket = std::mem::size_of::<((Slot, usize), f32)>() + 1;
+        let buckets = self.before.capacity().saturating_mul(8) / 7;
+        (buckets * bucket + std::mem::size_of::<Self>()) as u64
+    }
+
     /// Puts the recorded values back and returns the edit that redoes the change, with the
     /// cells it touched.
     pub fn revert(
@@ -107,6 +120,7 @@ impl Edit {
         let mut inverse = Edit {
             stroke: self.stroke,
             before: HashMap::with_capacity(self.before.len()),
+            unrecorded: false,
         };
         let mut rect: Option<CellRect> = None;
         for (&(slot, i), &v) in &self.before {
@@ -129,6 +143,9 @@ impl Edit {
 }
 
 fn record(edit: &mut Edit, slot: Slot, i: usize, old: f32) {
+    if edit.unrecorded {
+        return;
+    }
     edit.before.entry((slot, i)).or_insert(old);
 }
 
@@ -172,6 +189,13 @@ fn read(terrain: &LayeredTerrain, paint: &PaintMaps, target: BrushTarget, i: usi
         BrushTarget::AvalancheProbability => paint.avalanche_probability[i],
         BrushTarget::SkiArea => paint.ski_area[i],
     }
+}
+
+/// The largest brush radius on `terrain`, m: the diagonal of its grid (a dab that size covers
+/// every cell from anywhere on it).
+pub fn max_radius_m(terrain: &LayeredTerrain) -> f64 {
+    let g = terrain.geometry();
+    (g.width() as f64 * g.cell_size_x()).hypot(g.height() as f64 * g.cell_size_y())
 }
 
 /// Applies one dab; returns the cells it may have changed (`None` when it misses the grid).

@@ -138,6 +138,22 @@ enum Work {
     },
 }
 
+/// The file of an imported DEM (the server's temporary upload): kept as `imports/NAME` beside
+/// it when the import succeeded, else removed (a refused or failed upload leaves nothing).
+fn keep_or_remove_upload(path: &std::path::Path, name: &str, keep: bool) {
+    let kept = keep
+        && path.parent().is_some_and(|dir| {
+            path.file_name() == Some(std::ffi::OsStr::new(name))
+                || std::fs::rename(path, dir.join(name)).is_ok()
+        });
+    if !kept
+        && let Err(e) = std::fs::remove_file(path)
+        && e.kind() != std::io::ErrorKind::NotFound
+    {
+        tracing::warn!("cannot remove the upload {}: {e}", path.display());
+    }
+}
+
 /// Work handed to a worker: everything it needs, owned.
 pub struct Job {
     progress: JobProgress,
@@ -235,6 +251,7 @@ impl Job {
                 Err(e) => {
                     let code = match e {
                         ProjectError::NotFound(_) => ErrorCode::NotFound,
+                        ProjectError::ScenarioPath(_) => ErrorCode::BadPath,
                         _ => ErrorCode::Failed,
                     };
                     JobOutcome::Failed((code, e.to_string()))
@@ -264,7 +281,7 @@ impl Job {
                     max_cells: MAX_IMPORT_CELLS,
                     ..Default::default()
                 };
-                match snowscape_io::read_terrain(&path, &options) {
+                let outcome = match snowscape_io::read_terrain(&path, &options) {
                     Err(e) => JobOutcome::Failed((ErrorCode::InvalidValue, format!("{name}: {e}"))),
                     Ok(bedrock) => match scenario
                         .validate_on(bedrock.geometry(), "the current scenario")
@@ -275,13 +292,19 @@ impl Job {
                         }) {
                         Ok(winter) => JobOutcome::Loaded {
                             session: Box::new(Session::new(winter, format!("imported {name}"))),
-                            name,
+                            name: name.clone(),
                         },
                         Err(e) => {
                             JobOutcome::Failed((ErrorCode::InvalidValue, format!("{name}: {e}")))
                         }
                     },
-                }
+                };
+                keep_or_remove_upload(
+                    &path,
+                    &name,
+                    matches!(outcome, JobOutcome::Loaded { .. }) && !cancelled(),
+                );
+                outcome
             }
             Work::Save {
                 project,
@@ -291,7 +314,9 @@ impl Job {
                 Ok(files) => JobOutcome::Saved { name, files },
                 Err(e) => {
                     let code = match e {
-                        ProjectError::BadPath(_) => ErrorCode::BadPath,
+                        ProjectError::BadPath(_) | ProjectError::ScenarioPath(_) => {
+                            ErrorCode::BadPath
+                        }
                         _ => ErrorCode::Failed,
                     };
                     JobOutcome::Failed((code, e.to_string()))
@@ -389,12 +414,16 @@ impl Session {
     pub(crate) fn scenario_job(
         &mut self,
         value: serde_json::Value,
+        project: Option<&ProjectDir>,
     ) -> Result<(Job, Vec<Out>), Refusal> {
-        let scenario = crate::page_scenario::read_scenario(value)?;
-        let (first, paint) = self.timeline.first();
+        let scenario = crate::page_scenario::read_scenario(value, project)?;
+        let (first, paint) = self
+            .timeline
+            .first(&self.winter)
+            .map_err(|e| (ErrorCode::Failed, e))?;
         let work = Work::SetScenario {
             scenario: Box::new(scenario),
-            terrain: Box::new(first.terrain.clone()),
+            terrain: Box::new(first.terrain),
             paint,
             source: self.source.clone(),
         };

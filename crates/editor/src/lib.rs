@@ -6,20 +6,23 @@
 //! 3.1). `snowscape serve` runs this crate: a local web server whose page (`web/`, three.js)
 //! shows the terrain and its snow in 3D.
 //!
-//! - [`session`]: the one shared state (a season, its timeline, undo/redo, painted maps);
-//!   free of I/O, so it is tested directly.
+//! - [`session`]: the one shared state (a season, its timeline, undo/redo within a byte
+//!   budget, painted maps); free of I/O, so it is tested directly.
 //! - [`brush`]: add / remove / smooth / set, per layer or on the total depth, and painting of
 //!   the avalanche probability and skier areas; [`painted`]: what those maps do in a step.
 //! - [`live`]: avalanches and skiers stepped on the server and streamed frame by frame.
 //! - [`job`]: long work (season steps, scenario changes, loads, exports) on a worker, with
 //!   progress and cancel.
-//! - [`timeline`]: the snapshots the page plays and scrubs, within a memory budget.
+//! - [`timeline`]: the snapshots the page plays and scrubs, packed (about 20 bytes a cell),
+//!   within a memory budget.
 //! - [`page_scenario`]: the scenario the page sends, read and checked.
 //! - [`protocol`]: the JSON messages, their decoder (byte cap, validation) and the rate cap;
 //!   [`wire`]: the binary tile frames (16-bit quantised values, dirty tiles only).
 //! - [`project`]: the project folder (save, load, exports; no path leaves it).
-//! - [`server`]: axum over WebSocket with the session in an actor thread; [`access`]: who may
-//!   talk to it (Host and Origin, the access token beyond loopback); [`assets`]: the page's
+//! - [`server`]: axum over WebSocket with the session in an actor thread (exports streamed one
+//!   at a time, DEM uploads bounded in bytes and in number); [`access`]: who may talk to it
+//!   (Host, Origin and `Sec-Fetch-Site`: no cross-site request is served; the per-session
+//!   access token for every request for the data, loopback included); [`assets`]: the page's
 //!   files (embedded, or a folder).
 
 pub mod access;

@@ -8,6 +8,8 @@
 //!
 //! Every path is checked by [`ProjectDir::resolve`]: relative, no `..`, no root or prefix,
 //! and once resolved (symbolic links followed) still inside the canonical project folder.
+//! The paths a scenario names (`forcing`) are held to the same rule, relative to the
+//! project's folder, when it is saved and loaded ([`ProjectError::ScenarioPath`]).
 
 use crate::brush::PaintMaps;
 use crate::history::{Action, ProjectHistory};
@@ -33,6 +35,8 @@ pub enum ProjectError {
         path: String,
         source: std::io::Error,
     },
+    #[error(transparent)]
+    ScenarioPath(#[from] crate::page_scenario::ScenarioPathError),
     #[error("{what} {path}: {reason}")]
     Content {
         what: &'static str,
@@ -191,11 +195,10 @@ impl ProjectDir {
         out
     }
 
-    /// Export `name` (`exports/<name>/`) as one zip archive in memory: its regular files,
-    /// deflated, each read through [`Self::read`] (so the folder's limits hold); at most
-    /// `max` bytes of files in all.
-    pub fn export_zip(&self, name: &str, max: u64) -> Result<Vec<u8>, ProjectError> {
-        use std::io::Write;
+    /// The files of export `name` (`exports/<name>/`), for its zip: their paths relative to
+    /// the project folder, checked through [`Self::resolve`] (no link leaves the folder), and
+    /// at most `max` bytes in all. Refusals come before anything is sent.
+    pub fn export_files(&self, name: &str, max: u64) -> Result<Vec<String>, ProjectError> {
         crate::protocol::check_name(name).map_err(|e| ProjectError::BadPath(e.to_string()))?;
         let rel = format!("exports/{name}");
         let dir = self.resolve(&rel)?;
@@ -207,25 +210,88 @@ impl ProjectDir {
             .filter_map(Result::ok)
             .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
             .filter_map(|e| e.file_name().into_string().ok())
+            .map(|f| format!("{rel}/{f}"))
             .collect();
         files.sort();
-        let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let mut total = 0u64;
+        for f in &files {
+            let (_, len) = self.open_file(f)?;
+            total = total.saturating_add(len);
+            if total > max {
+                return Err(ProjectError::Content {
+                    what: "export",
+                    path: rel,
+                    reason: format!("more than the {max} bytes served as one zip"),
+                });
+            }
+        }
+        Ok(files)
+    }
+
+    /// Opens the file `rel` for reading: checked as [`Self::read`] does; with its length.
+    fn open_file(&self, rel: &str) -> Result<(std::fs::File, u64), ProjectError> {
+        let p = self.resolve(rel)?;
+        let canon = p
+            .canonicalize()
+            .map_err(|_| ProjectError::NotFound(rel.into()))?;
+        if !canon.starts_with(&self.root) {
+            return Err(ProjectError::Escapes(rel.into()));
+        }
+        let file = std::fs::File::open(&canon).map_err(io_err(&canon))?;
+        let meta = file.metadata().map_err(io_err(&canon))?;
+        if !meta.is_file() {
+            return Err(ProjectError::NotFound(rel.into()));
+        }
+        Ok((file, meta.len()))
+    }
+
+    /// Writes export `name` as one zip archive to `out` as it goes (deflated; `out` need not
+    /// seek, so the archive streams to the network and is never whole in memory): the files
+    /// [`Self::export_files`] lists, each copied in small blocks, at most `max` bytes in all
+    /// (a file that grew meanwhile is cut there and the archive refused).
+    pub fn write_export_zip(
+        &self,
+        name: &str,
+        max: u64,
+        out: impl std::io::Write,
+    ) -> Result<(), ProjectError> {
+        use std::io::Read;
+        let files = self.export_files(name, max)?;
+        let mut zip = zip::ZipWriter::new_stream(out);
         let options = zip::write::SimpleFileOptions::default()
-            .compression_method(zip::CompressionMethod::Deflated);
+            .compression_method(zip::CompressionMethod::Deflated)
+            .large_file(max >= u64::from(u32::MAX));
         let zip_err = |e: zip::result::ZipError| ProjectError::Content {
             what: "zip",
-            path: dir.display().to_string(),
+            path: format!("exports/{name}"),
             reason: e.to_string(),
         };
-        let mut total = 0u64;
+        let mut left = max;
         for f in files {
-            let bytes = self.read(&format!("{rel}/{f}"), max.saturating_sub(total))?;
-            total += bytes.len() as u64;
-            zip.start_file(format!("{name}/{f}"), options)
+            let (file, _) = self.open_file(&f)?;
+            let short = f.rsplit('/').next().unwrap_or(&f);
+            zip.start_file(format!("{name}/{short}"), options)
                 .map_err(zip_err)?;
-            zip.write_all(&bytes).map_err(io_err(&dir))?;
+            let copied = std::io::copy(&mut file.take(left.saturating_add(1)), &mut zip)
+                .map_err(io_err(Path::new(&f)))?;
+            if copied > left {
+                return Err(ProjectError::Content {
+                    what: "export",
+                    path: f,
+                    reason: format!("more than the {max} bytes served as one zip"),
+                });
+            }
+            left -= copied;
         }
-        Ok(zip.finish().map_err(zip_err)?.into_inner())
+        zip.finish().map_err(zip_err)?;
+        Ok(())
+    }
+
+    /// Export `name` as one zip archive in memory ([`Self::write_export_zip`]; tests).
+    pub fn export_zip(&self, name: &str, max: u64) -> Result<Vec<u8>, ProjectError> {
+        let mut out = Vec::new();
+        self.write_export_zip(name, max, &mut out)?;
+        Ok(out)
     }
 
     /// Saves the session as project `name`; returns the written files (relative).
@@ -263,6 +329,7 @@ impl ProjectDir {
                 .map_err(|e| content("map", &p)(e.to_string()))?;
             write_geotiff(&p, &grid).map_err(|e| content("map", &p)(e.to_string()))?;
         }
+        crate::page_scenario::check_scenario_paths(w.scenario(), Some((self, &dir_rel)))?;
         let p = put("scenario.toml");
         let text =
             toml::to_string(w.scenario()).map_err(|e| content("scenario", &p)(e.to_string()))?;
@@ -306,6 +373,10 @@ impl ProjectDir {
         let text = std::fs::read_to_string(&p).map_err(io_err(&p))?;
         let scenario = Scenario::from_toml(&text, &p.display().to_string())
             .map_err(|e| bad("scenario", &p, e.to_string()))?;
+        crate::page_scenario::check_scenario_paths(
+            &scenario,
+            Some((self, &format!("projects/{name}"))),
+        )?;
         let p = file("checkpoint.bin")?;
         let bytes = std::fs::read(&p).map_err(io_err(&p))?;
         let terrain = LayeredTerrain::from_bedrock(bedrock);

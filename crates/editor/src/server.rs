@@ -10,14 +10,24 @@
 //!   `GET /api/parameters`: every scenario parameter with its help, range and choices
 //!   ([`snowscape_season::parameter_catalogue`], generated from the parameter types);
 //!   `GET /api/projects`: the saved projects (name, day); `GET /api/export/<name>`: an export's
-//!   files as one zip; `POST /api/dem?name=FILE.ext`: a DEM uploaded from the page, imported by a
-//!   job (the season of the current scenario restarts on it).
+//!   files as one zip, streamed as it is deflated, [`MAX_CONCURRENT_EXPORTS`] at once (429
+//!   beyond), at most [`MAX_DOWNLOAD`] bytes of files; `POST /api/dem?name=FILE.ext`: a DEM
+//!   uploaded from the page, at most [`MAX_DEM_UPLOAD`] bytes (413 from its `Content-Length`
+//!   or as soon as the body passes it), [`MAX_CONCURRENT_UPLOADS`] at once (429 beyond),
+//!   written to the project folder as it arrives and imported by a job (the season of the
+//!   current scenario restarts on it); an upload that is refused (busy: 409) or fails is
+//!   removed.
 //! - `GET /files/<path>`: a file of the project folder (exports), read-only.
 //!
 //! **Who may talk to it** ([`crate::access`]): every request must name the served address in
-//! its `Host` header and come from one of its pages when it carries an `Origin`; bound beyond
-//! loopback, every request must also carry the server's access token (query or cookie).
-//! Others get 403.
+//! its `Host` header and come from one of its pages when it carries an `Origin`; a request
+//! another site makes (`Sec-Fetch-Site` other than `same-origin`, or `none` for anything but
+//! the page itself) is refused, GETs included; every request for the data (`/api`, `/files`,
+//! `/ws`) must carry the server's access token (the cookie the page's response sets, the
+//! query `token=` of the printed URL, or the `X-Snowscape-Token` header), loopback included,
+//! and bound beyond loopback the page needs it too. Others get 403. Every response carries
+//! `Cross-Origin-Resource-Policy: same-origin`, `X-Content-Type-Options: nosniff` and
+//! `Referrer-Policy: no-referrer`.
 //!
 //! At most [`MAX_CONNECTIONS`] tabs are connected at once (more get 503); sockets send with
 //! `TCP_NODELAY`.
@@ -31,7 +41,10 @@
 //! [`MAX_PENDING_REPLIES`] of its own replies pile up, or does not take a message within
 //! [`SEND_TIMEOUT`], is dropped (memory per tab stays bounded).
 
-use crate::access::{AccessToken, Admitted, Credentials, Gate, token_required};
+use crate::access::{
+    AccessToken, Admitted, Credentials, Gate, Resource, SECURITY_HEADERS, TOKEN_HEADER,
+    token_required,
+};
 use crate::assets::{Assets, BUILD_HINT};
 use crate::job::{Job, JobOutcome, JobProgress};
 use crate::project::{ProjectDir, ProjectError};
@@ -72,12 +85,21 @@ pub const MAX_PENDING_REPLIES: usize = 256;
 pub const SEND_TIMEOUT: Duration = Duration::from_secs(10);
 /// Most WebSocket connections at once (tabs); more are refused with 503.
 pub const MAX_CONNECTIONS: usize = 16;
-/// Largest project file served for download.
-const MAX_DOWNLOAD: u64 = 1 << 30;
+/// Largest project file served for download, and most bytes of files in one export zip.
+pub const MAX_DOWNLOAD: u64 = 1 << 30;
+/// Export zips sent at once (`GET /api/export/<name>`); more are refused with 429. Each is
+/// streamed as it is deflated (a few blocks of [`ZIP_BLOCK_BYTES`] in memory, whatever its
+/// size).
+pub const MAX_CONCURRENT_EXPORTS: usize = 1;
+/// Size of the blocks an export zip is sent in, bytes.
+pub const ZIP_BLOCK_BYTES: usize = 64 << 10;
 
 /// Largest DEM upload, bytes (a 4096² float32 GeoTIFF is 64 MiB; ASCII grids take ~3 times as
-/// much).
+/// much): refused with 413 from its `Content-Length`, or as soon as the body passes it.
 pub const MAX_DEM_UPLOAD: usize = 256 << 20;
+/// DEM uploads received at once; more are refused with 429. An upload is written to the
+/// project folder as it arrives (never whole in memory).
+pub const MAX_CONCURRENT_UPLOADS: usize = 1;
 
 /// A server error.
 #[derive(Debug, Error)]
@@ -156,6 +178,10 @@ struct AppState {
     assets: Arc<Assets>,
     /// Open WebSocket connections.
     connections: Arc<std::sync::atomic::AtomicUsize>,
+    /// [`MAX_CONCURRENT_EXPORTS`] permits.
+    exports: Arc<tokio::sync::Semaphore>,
+    /// [`MAX_CONCURRENT_UPLOADS`] permits.
+    uploads: Arc<tokio::sync::Semaphore>,
 }
 
 /// Runs `job` on a worker thread that reports to the actor through `commands`.
@@ -316,13 +342,14 @@ fn actor(
 pub struct Served {
     /// The address listened on.
     pub addr: SocketAddr,
-    /// The token every request must carry (bound beyond loopback), else `None`.
-    pub token: Option<AccessToken>,
+    /// The token every request for the session's data must carry (bound beyond loopback,
+    /// every request).
+    pub token: AccessToken,
 }
 
 impl Served {
     /// The URL to open: on this machine (a loopback address when bound to all interfaces),
-    /// with the token when one is asked.
+    /// with the token (a browser then keeps it in its cookie; scripts send it back).
     pub fn url(&self) -> String {
         let ip = match self.addr.ip() {
             IpAddr::V4(v4) if v4.is_unspecified() => IpAddr::V4(std::net::Ipv4Addr::LOCALHOST),
@@ -330,15 +357,14 @@ impl Served {
             ip => ip,
         };
         let addr = SocketAddr::new(ip, self.addr.port());
-        match &self.token {
-            Some(t) => format!("http://{addr}/?token={}", t.as_str()),
-            None => format!("http://{addr}/"),
-        }
+        format!("http://{addr}/?token={}", self.token.as_str())
     }
 
     /// The warning to print when the editor is reachable from the network, else `None`.
     pub fn network_warning(&self) -> Option<String> {
-        self.token.as_ref()?;
+        if !token_required(self.addr.ip()) {
+            return None;
+        }
         let (ip, port) = (self.addr.ip(), self.addr.port());
         let from_elsewhere = if ip.is_unspecified() {
             format!(
@@ -364,17 +390,14 @@ pub fn serve_blocking(
 }
 
 /// Starts the server and blocks until `stop` completes (then shuts down gracefully).
-/// `on_ready` gets where it listens. Bound beyond loopback, the server draws an
-/// [`AccessToken`] that every request must carry ([`crate::access`]).
+/// `on_ready` gets where it listens. The server draws an [`AccessToken`] that every request
+/// for its data (beyond loopback: every request) must carry ([`crate::access`]).
 pub fn serve_until(
     config: ServeConfig,
     on_ready: impl FnOnce(&Served),
     stop: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> Result<(), ServeError> {
-    let token = token_required(config.bind)
-        .then(AccessToken::generate)
-        .transpose()
-        .map_err(ServeError::Token)?;
+    let token = AccessToken::generate().map_err(ServeError::Token)?;
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -402,25 +425,33 @@ pub fn serve_until(
     })
 }
 
-/// Refuses, with 403, a request whose `Host` or `Origin` is not this server's, or that lacks
-/// the access token when one is required ([`Gate::admits`]); sets the token's cookie when it
-/// came in the query.
+/// Refuses, with 403, a request whose `Host` or `Origin` is not this server's, that another
+/// site made (`Sec-Fetch-Site`), or that lacks the access token where it is required
+/// ([`Gate::admits`]); sets the token's cookie when it came in the query or the page was
+/// opened on loopback. Every response gets the [`SECURITY_HEADERS`].
 async fn guard(State(gate): State<Arc<Gate>>, req: Request, next: Next) -> Response {
     let verdict = {
         let headers = req.headers();
         let text = |v: &header::HeaderValue| v.to_str().unwrap_or("(not text)").to_string();
         let host = headers.get(header::HOST).map(text);
         let origin = headers.get(header::ORIGIN).map(text);
+        let fetch_site = headers.get("sec-fetch-site").map(text);
+        let token_header = headers.get(TOKEN_HEADER).map(text);
         let cookies: Vec<String> = headers.get_all(header::COOKIE).iter().map(text).collect();
         let cookies: Vec<&str> = cookies.iter().map(String::as_str).collect();
-        gate.admits(Credentials {
-            host: host.as_deref(),
-            origin: origin.as_deref(),
-            query: req.uri().query(),
-            cookies: &cookies,
-        })
+        gate.admits(
+            Resource::of(req.method().as_str(), req.uri().path()),
+            Credentials {
+                host: host.as_deref(),
+                origin: origin.as_deref(),
+                fetch_site: fetch_site.as_deref(),
+                query: req.uri().query(),
+                cookies: &cookies,
+                token_header: token_header.as_deref(),
+            },
+        )
     };
-    match verdict {
+    let mut res = match verdict {
         Ok(Admitted::Open) => next.run(req).await,
         Ok(Admitted::SetCookie(cookie)) => {
             let mut res = next.run(req).await;
@@ -430,7 +461,12 @@ async fn guard(State(gate): State<Arc<Gate>>, req: Request, next: Next) -> Respo
             res
         }
         Err(why) => (StatusCode::FORBIDDEN, format!("snowscape serve: {why}\n")).into_response(),
+    };
+    for (k, v) in SECURITY_HEADERS {
+        res.headers_mut()
+            .insert(k, header::HeaderValue::from_static(v));
     }
+    res
 }
 
 /// The router, with the actor thread started.
@@ -443,6 +479,8 @@ fn router(config: ServeConfig, gate: Arc<Gate>) -> Router {
         project: config.project.clone(),
         assets: Arc::new(config.assets),
         connections: Arc::default(),
+        exports: Arc::new(tokio::sync::Semaphore::new(MAX_CONCURRENT_EXPORTS)),
+        uploads: Arc::new(tokio::sync::Semaphore::new(MAX_CONCURRENT_UPLOADS)),
     };
     let (session, project, exporter, pace) =
         (config.session, config.project, config.exporter, config.pace);
@@ -459,11 +497,7 @@ fn router(config: ServeConfig, gate: Arc<Gate>) -> Router {
         .route("/api/protocol", get(protocol_handler))
         .route("/api/projects", get(projects_handler))
         .route("/api/export/{name}", get(export_zip_handler))
-        .route(
-            "/api/dem",
-            axum::routing::post(import_dem_handler)
-                .layer(axum::extract::DefaultBodyLimit::max(MAX_DEM_UPLOAD)),
-        )
+        .route("/api/dem", axum::routing::post(import_dem_handler))
         .route("/files/{*path}", get(file_handler))
         .fallback(get(asset_handler))
         .with_state(state)
@@ -510,14 +544,40 @@ struct DemQuery {
     name: String,
 }
 
+/// A plain-text reply.
+fn reply(code: StatusCode, message: String) -> Response {
+    (
+        code,
+        [(header::CONTENT_TYPE, "text/plain; charset=utf-8")],
+        format!("snowscape serve: {message}\n"),
+    )
+        .into_response()
+}
+
+/// Removes a refused or failed upload (in the background; a file that is gone already is
+/// fine).
+fn discard_upload(path: std::path::PathBuf) {
+    tokio::task::spawn_blocking(move || {
+        if let Err(e) = std::fs::remove_file(&path)
+            && e.kind() != std::io::ErrorKind::NotFound
+        {
+            tracing::warn!("cannot remove the upload {}: {e}", path.display());
+        }
+    });
+}
+
 /// A DEM uploaded from the page (`POST /api/dem?name=FILE.ext`, the file as the body, at most
-/// [`MAX_DEM_UPLOAD`] bytes): saved as `imports/FILE.ext` in the project folder and imported by
-/// a job that reads it as `snowscape run --dem` does (`202` with the job's id; `400` for a bad
-/// name, `409` while busy, `413` when too large; the reader's errors come as the job's failure).
+/// [`MAX_DEM_UPLOAD`] bytes, [`MAX_CONCURRENT_UPLOADS`] at once): written as it arrives to a
+/// temporary `imports/.upload-RANDOM-FILE.ext` in the project folder and imported by a job that
+/// reads it as `snowscape run --dem` does and keeps it as `imports/FILE.ext` (`202` with the
+/// job's id; `400` for a bad name or an empty or broken body, `409` while busy, `413` when too
+/// large, `429` while another upload is received; the reader's errors come as the job's
+/// failure). An upload that is refused or fails is removed.
 async fn import_dem_handler(
     State(s): State<AppState>,
     Query(q): Query<DemQuery>,
-    body: axum::body::Bytes,
+    headers: axum::http::HeaderMap,
+    body: axum::body::Body,
 ) -> Response {
     let name = q.name.trim().to_string();
     let path = std::path::Path::new(&name);
@@ -529,73 +589,290 @@ async fn import_dem_handler(
         || !stem_ok
         || snowscape_io::RasterFormat::from_path(path).is_none()
     {
-        return (
+        return reply(
             StatusCode::BAD_REQUEST,
             format!(
-                "DEM name {:?}: a file name of letters, digits, '_' or '-' with a raster extension (.asc, .tif, .png, .raw, .r16, .npy, .exr)\n",
+                "DEM name {:?}: a file name of letters, digits, '_' or '-' with a raster extension (.asc, .tif, .png, .raw, .r16, .npy, .exr)",
                 name.chars().take(80).collect::<String>()
             ),
-        )
-            .into_response();
+        );
     }
-    if body.is_empty() {
-        return (
-            StatusCode::BAD_REQUEST,
-            format!("{name}: the file is empty\n"),
-        )
-            .into_response();
+    let declared = headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.trim().parse::<u64>().ok());
+    match declared {
+        Some(len) if len > MAX_DEM_UPLOAD as u64 => {
+            return reply(
+                StatusCode::PAYLOAD_TOO_LARGE,
+                format!(
+                    "DEM {name}: {len} bytes (Content-Length) is more than the {MAX_DEM_UPLOAD} bytes an upload may take"
+                ),
+            );
+        }
+        Some(0) => {
+            return reply(
+                StatusCode::BAD_REQUEST,
+                format!("{name}: the file is empty"),
+            );
+        }
+        _ => {}
     }
+    let Ok(permit) = s.uploads.clone().try_acquire_owned() else {
+        return reply(
+            StatusCode::TOO_MANY_REQUESTS,
+            format!(
+                "DEM {name}: another upload is being received (at most {MAX_CONCURRENT_UPLOADS} at a time); try again when it ends"
+            ),
+        );
+    };
+    // A busy session refuses the import: say so before anything is received.
+    if let Some(st) = ask(&s, Command::State).await
+        && st.busy
+    {
+        return reply(
+            StatusCode::CONFLICT,
+            format!("DEM {name}: busy: wait for the running job or live event, or cancel it"),
+        );
+    }
+    let mut tag = [0u8; 8];
+    if getrandom::fill(&mut tag).is_err() {
+        return reply(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            "cannot name the upload's temporary file".into(),
+        );
+    }
+    let tag: String = tag.iter().map(|b| format!("{b:02x}")).collect();
     let project = s.project.clone();
-    let file = name.clone();
-    let saved = tokio::task::spawn_blocking(move || {
+    let part_name = format!(".upload-{tag}-{name}");
+    let created = tokio::task::spawn_blocking(move || {
         let dir = project.create_dir("imports").map_err(|e| e.to_string())?;
-        let p = dir.join(&file);
-        snowscape_io::write_bytes_atomic(&p, &body).map_err(|e| e.to_string())?;
-        Ok::<_, String>(p)
+        let p = dir.join(&part_name);
+        let f = std::fs::File::create_new(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+        Ok::<_, String>((p, f))
     })
     .await;
-    let path = match saved {
-        Ok(Ok(p)) => p,
-        Ok(Err(e)) => return (StatusCode::INTERNAL_SERVER_ERROR, format!("{e}\n")).into_response(),
+    let (part, file) = match created {
+        Ok(Ok(x)) => x,
+        Ok(Err(e)) => return reply(StatusCode::INTERNAL_SERVER_ERROR, e),
         Err(_) => return StatusCode::INTERNAL_SERVER_ERROR.into_response(),
     };
-    match ask(&s, |reply| Command::ImportDem { path, name, reply }).await {
+    let received = receive_upload(body, file, &name, MAX_DEM_UPLOAD as u64).await;
+    let received = match received {
+        Ok(n) => n,
+        Err((code, message)) => {
+            discard_upload(part);
+            return reply(code, message);
+        }
+    };
+    tracing::info!("DEM upload {name}: {received} bytes");
+    let answer = ask(&s, |reply| Command::ImportDem {
+        path: part.clone(),
+        name: name.clone(),
+        reply,
+    })
+    .await;
+    drop(permit);
+    match answer {
         Some(Ok(id)) => (
             StatusCode::ACCEPTED,
             axum::Json(serde_json::json!({ "job": id })),
         )
             .into_response(),
-        Some(Err((ErrorCode::Busy, m))) => (StatusCode::CONFLICT, format!("{m}\n")).into_response(),
-        Some(Err((_, m))) => (StatusCode::BAD_REQUEST, format!("{m}\n")).into_response(),
-        None => StatusCode::SERVICE_UNAVAILABLE.into_response(),
+        Some(Err((code, m))) => {
+            discard_upload(part);
+            let status = if code == ErrorCode::Busy {
+                StatusCode::CONFLICT
+            } else {
+                StatusCode::BAD_REQUEST
+            };
+            reply(status, format!("DEM {name}: {m}"))
+        }
+        None => {
+            discard_upload(part);
+            StatusCode::SERVICE_UNAVAILABLE.into_response()
+        }
     }
 }
 
-/// An export's files as one zip (`GET /api/export/<name>`, named `<name>.zip`).
+/// Writes the upload's body into `file` block by block, at most `max` bytes (the body is
+/// refused as soon as it passes them, whatever its `Content-Length` said); the bytes
+/// received, or the refusal.
+async fn receive_upload(
+    body: axum::body::Body,
+    file: std::fs::File,
+    name: &str,
+    max: u64,
+) -> Result<u64, (StatusCode, String)> {
+    use futures_core::Stream;
+    use std::io::Write;
+    let mut stream = body.into_data_stream();
+    let mut file = Some(file);
+    let mut total = 0u64;
+    loop {
+        let chunk = std::future::poll_fn(|cx| std::pin::Pin::new(&mut stream).poll_next(cx)).await;
+        let chunk = match chunk {
+            None => break,
+            Some(Ok(c)) => c,
+            Some(Err(e)) => {
+                return Err((
+                    StatusCode::BAD_REQUEST,
+                    format!("DEM {name}: the upload broke off after {total} bytes: {e}"),
+                ));
+            }
+        };
+        total += chunk.len() as u64;
+        if total > max {
+            return Err((
+                StatusCode::PAYLOAD_TOO_LARGE,
+                format!("DEM {name}: more than the {max} bytes an upload may take"),
+            ));
+        }
+        let Some(mut f) = file.take() else {
+            break;
+        };
+        let written = tokio::task::spawn_blocking(move || f.write_all(&chunk).map(|()| f)).await;
+        match written {
+            Ok(Ok(f)) => file = Some(f),
+            Ok(Err(e)) => {
+                return Err((
+                    StatusCode::INTERNAL_SERVER_ERROR,
+                    format!("DEM {name}: cannot write the upload: {e}"),
+                ));
+            }
+            Err(_) => {
+                return Err((
+                    StatusCode::INTERNAL_SERVER_ERROR,
+                    "upload writer stopped".into(),
+                ));
+            }
+        }
+    }
+    if total == 0 {
+        return Err((
+            StatusCode::BAD_REQUEST,
+            format!("{name}: the file is empty"),
+        ));
+    }
+    if let Some(f) = file {
+        let synced = tokio::task::spawn_blocking(move || f.sync_all()).await;
+        if !matches!(synced, Ok(Ok(()))) {
+            return Err((
+                StatusCode::INTERNAL_SERVER_ERROR,
+                format!("DEM {name}: cannot write the upload"),
+            ));
+        }
+    }
+    Ok(total)
+}
+
+/// Where the zip writer's blocks go: a bounded channel to the response body, so that a slow
+/// client holds the writer back rather than the blocks piling up in memory.
+struct ChannelWriter {
+    tx: mpsc::Sender<Result<axum::body::Bytes, std::io::Error>>,
+    buf: Vec<u8>,
+}
+
+impl ChannelWriter {
+    fn send_block(&mut self) -> std::io::Result<()> {
+        if self.buf.is_empty() {
+            return Ok(());
+        }
+        let block = std::mem::replace(&mut self.buf, Vec::with_capacity(ZIP_BLOCK_BYTES));
+        self.tx
+            .blocking_send(Ok(block.into()))
+            .map_err(|_| std::io::Error::new(std::io::ErrorKind::BrokenPipe, "the client left"))
+    }
+}
+
+impl std::io::Write for ChannelWriter {
+    fn write(&mut self, data: &[u8]) -> std::io::Result<usize> {
+        let n = data.len().min(ZIP_BLOCK_BYTES - self.buf.len());
+        self.buf.extend_from_slice(&data[..n]);
+        if self.buf.len() >= ZIP_BLOCK_BYTES {
+            self.send_block()?;
+        }
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.send_block()
+    }
+}
+
+/// The response body of an export zip: the blocks the writer sends.
+struct ZipBody(mpsc::Receiver<Result<axum::body::Bytes, std::io::Error>>);
+
+impl futures_core::Stream for ZipBody {
+    type Item = Result<axum::body::Bytes, std::io::Error>;
+
+    fn poll_next(
+        mut self: std::pin::Pin<&mut Self>,
+        cx: &mut std::task::Context<'_>,
+    ) -> std::task::Poll<Option<Self::Item>> {
+        self.0.poll_recv(cx)
+    }
+}
+
+/// An export's files as one zip (`GET /api/export/<name>`, named `<name>.zip`), streamed as it
+/// is deflated; [`MAX_CONCURRENT_EXPORTS`] at once (429 beyond), at most [`MAX_DOWNLOAD`]
+/// bytes of files (400 beyond); 404 for no such export.
 async fn export_zip_handler(
     State(s): State<AppState>,
     axum::extract::Path(name): axum::extract::Path<String>,
 ) -> Response {
+    let Ok(permit) = s.exports.clone().try_acquire_owned() else {
+        return reply(
+            StatusCode::TOO_MANY_REQUESTS,
+            format!(
+                "export {name:?}: another export zip is being sent (at most {MAX_CONCURRENT_EXPORTS} at a time); try again when it ends"
+            ),
+        );
+    };
     let project = s.project.clone();
     let n = name.clone();
-    match tokio::task::spawn_blocking(move || project.export_zip(&n, MAX_DOWNLOAD)).await {
-        Ok(Ok(bytes)) => (
-            [
-                (header::CONTENT_TYPE, "application/zip".to_string()),
-                (
-                    header::CONTENT_DISPOSITION,
-                    format!("attachment; filename=\"{name}.zip\""),
-                ),
-            ],
-            bytes,
-        )
-            .into_response(),
+    // Refusals before anything is sent.
+    match tokio::task::spawn_blocking(move || project.export_files(&n, MAX_DOWNLOAD)).await {
+        Ok(Ok(_)) => {}
         Ok(Err(ProjectError::NotFound(n))) => {
-            (StatusCode::NOT_FOUND, format!("no export {n:?}\n")).into_response()
+            return reply(StatusCode::NOT_FOUND, format!("no export {n:?}"));
         }
-        Ok(Err(e)) => (StatusCode::BAD_REQUEST, format!("{e}\n")).into_response(),
-        Err(_) => StatusCode::INTERNAL_SERVER_ERROR.into_response(),
+        Ok(Err(e)) => return reply(StatusCode::BAD_REQUEST, e.to_string()),
+        Err(_) => return StatusCode::INTERNAL_SERVER_ERROR.into_response(),
     }
+    let (tx, rx) = mpsc::channel(4);
+    let project = s.project.clone();
+    let n = name.clone();
+    tokio::task::spawn_blocking(move || {
+        let _permit = permit;
+        let mut out = ChannelWriter {
+            tx: tx.clone(),
+            buf: Vec::with_capacity(ZIP_BLOCK_BYTES),
+        };
+        let written = project
+            .write_export_zip(&n, MAX_DOWNLOAD, &mut out)
+            .and_then(|()| {
+                std::io::Write::flush(&mut out).map_err(|e| ProjectError::Io {
+                    path: format!("exports/{n}"),
+                    source: e,
+                })
+            });
+        if let Err(e) = written {
+            tracing::warn!("the zip of export {n} stopped: {e}");
+            let _ = tx.blocking_send(Err(std::io::Error::other(e.to_string())));
+        }
+    });
+    (
+        [
+            (header::CONTENT_TYPE, "application/zip".to_string()),
+            (
+                header::CONTENT_DISPOSITION,
+                format!("attachment; filename=\"{name}.zip\""),
+            ),
+        ],
+        axum::body::Body::from_stream(ZipBody(rx)),
+    )
+        .into_response()
 }
 
 /// The parameter catalogue (built once, on first use, off the async workers: its ranges are
@@ -784,5 +1061,60 @@ async fn connection(mut socket: WebSocket, s: AppState) {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A body of `blocks` blocks of `size` bytes, without a length (chunked).
+    fn stream_body(blocks: usize, size: usize) -> axum::body::Body {
+        struct Blocks(usize, usize);
+        impl futures_core::Stream for Blocks {
+            type Item = Result<axum::body::Bytes, std::io::Error>;
+            fn poll_next(
+                mut self: std::pin::Pin<&mut Self>,
+                _: &mut std::task::Context<'_>,
+            ) -> std::task::Poll<Option<Self::Item>> {
+                if self.0 == 0 {
+                    return std::task::Poll::Ready(None);
+                }
+                self.0 -= 1;
+                std::task::Poll::Ready(Some(Ok(vec![7u8; self.1].into())))
+            }
+        }
+        axum::body::Body::from_stream(Blocks(blocks, size))
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn uploads_are_bounded_while_they_stream() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("up.asc");
+        // Within the bound: every byte written.
+        let f = std::fs::File::create(&path).unwrap();
+        let n = receive_upload(stream_body(10, 1000), f, "up.asc", 10_000)
+            .await
+            .unwrap();
+        assert_eq!(n, 10_000);
+        assert_eq!(std::fs::metadata(&path).unwrap().len(), 10_000);
+        // A body without a length that passes the bound is refused as soon as it does, and
+        // no more than the bound is written.
+        let f = std::fs::File::create(&path).unwrap();
+        let (code, message) = receive_upload(stream_body(1000, 1000), f, "up.asc", 10_000)
+            .await
+            .unwrap_err();
+        assert_eq!(code, StatusCode::PAYLOAD_TOO_LARGE);
+        assert!(
+            message.contains("10000 bytes") && message.contains("up.asc"),
+            "{message}"
+        );
+        assert!(std::fs::metadata(&path).unwrap().len() <= 10_000);
+        // An empty body is refused.
+        let f = std::fs::File::create(&path).unwrap();
+        let (code, _) = receive_upload(stream_body(0, 0), f, "up.asc", 10_000)
+            .await
+            .unwrap_err();
+        assert_eq!(code, StatusCode::BAD_REQUEST);
     }
 }

@@ -69,6 +69,12 @@ fn view_sun(winter: &Winter) -> [f64; 3] {
     sun_vector(winter.latitude_deg(), dec, hour_angle(VIEW_SOLAR_HOUR))
 }
 
+/// Memory the brushes' undo and redo history may take by default, bytes (256 MiB: about 10 M
+/// recorded values, a stroke on the total depth over every cell of a 1024² terrain being
+/// 4 M). Past it the oldest strokes are dropped first (they can no longer be undone); a stroke
+/// that alone exceeds it is not recorded and cannot be undone. Every tab is told.
+pub const UNDO_BUDGET_BYTES: u64 = 256 << 20;
+
 /// The state summary every tab shows.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StateSummary {
@@ -129,6 +135,10 @@ pub struct Session {
     pub(crate) timeline: Timeline,
     undo: Vec<Edit>,
     redo: Vec<Edit>,
+    /// Memory the undo and redo history may take, bytes.
+    undo_budget: u64,
+    /// The stroke that went past the undo budget (not recorded).
+    unrecorded_stroke: Option<u32>,
     seq: u32,
     bedrock_quant: Quant,
     pub(crate) source: String,
@@ -167,6 +177,8 @@ impl Session {
             timeline,
             undo: Vec::new(),
             redo: Vec::new(),
+            undo_budget: UNDO_BUDGET_BYTES,
+            unrecorded_stroke: None,
             seq: 0,
             bedrock_quant,
             source: source.into(),
@@ -185,9 +197,60 @@ impl Session {
         self.timeline.set_budget(bytes);
     }
 
+    /// Sets the memory the undo and redo history may take, bytes; the oldest strokes past it
+    /// are dropped.
+    pub fn set_undo_budget(&mut self, bytes: u64) {
+        self.undo_budget = bytes;
+        self.enforce_undo_budget(None);
+    }
+
+    /// Estimated memory of the undo and redo history, bytes.
+    pub fn undo_bytes(&self) -> u64 {
+        self.undo.iter().chain(&self.redo).map(Edit::bytes).sum()
+    }
+
+    /// Drops the oldest strokes (redo first, then undo) until the history fits its budget;
+    /// the notice for every tab, if any went. When `stroke` (the one in progress) is dropped
+    /// too, it goes on unrecorded.
+    fn enforce_undo_budget(&mut self, stroke: Option<u32>) -> Option<Out> {
+        let mut total = self.undo_bytes();
+        if total <= self.undo_budget {
+            return None;
+        }
+        let mut dropped = 0usize;
+        while total > self.undo_budget {
+            let e = if self.redo.is_empty() {
+                if self.undo.is_empty() {
+                    break;
+                }
+                self.undo.remove(0)
+            } else {
+                self.redo.remove(0)
+            };
+            total -= e.bytes().min(total);
+            dropped += 1;
+            if self.undo.is_empty() && self.redo.is_empty() && stroke == Some(e.stroke) {
+                // The stroke in progress alone was past the budget: it goes unrecorded.
+                self.unrecorded_stroke = stroke;
+            }
+        }
+        let message = format!(
+            "the undo history keeps at most {} MiB: {dropped} oldest stroke(s) dropped{}",
+            self.undo_budget >> 20,
+            if stroke.is_some() && self.unrecorded_stroke == stroke {
+                " (this stroke alone is larger: it cannot be undone)"
+            } else {
+                ""
+            }
+        );
+        tracing::info!("{message}");
+        Some(Out::All(text(&ServerMessage::Notice { message })))
+    }
+
     /// Replaces this session by `next` (a new scenario, a loaded project), keeping the
     /// snapshot budget and the job numbers.
     pub(crate) fn replace_with(&mut self, mut next: Session) {
+        next.undo_budget = self.undo_budget;
         next.set_snapshot_budget(self.timeline.budget_bytes());
         next.job_seq = self.job_seq;
         *self = next;
@@ -208,6 +271,11 @@ impl Session {
         );
         tracing::info!("{message}");
         Some(Out::All(text(&ServerMessage::Notice { message })))
+    }
+
+    /// The timeline of snapshots.
+    pub fn timeline(&self) -> &Timeline {
+        &self.timeline
     }
 
     /// The season being edited.
@@ -510,6 +578,15 @@ impl Session {
                 strength,
                 value,
             } => {
+                let most = brush::max_radius_m(&self.winter.terrain);
+                if radius_m > most {
+                    return refuse(
+                        ErrorCode::InvalidValue,
+                        format!(
+                            "brush radius_m = {radius_m} is larger than the terrain ({most:.0} m across its diagonal): use a radius within it"
+                        ),
+                    );
+                }
                 let dab = Dab {
                     op,
                     target,
@@ -519,9 +596,19 @@ impl Session {
                     strength,
                     value,
                 };
+                let unrecorded = self.unrecorded_stroke == Some(stroke);
                 let mut edit = match self.undo.pop() {
+                    other if unrecorded => {
+                        self.undo.extend(other);
+                        Edit {
+                            stroke,
+                            unrecorded: true,
+                            ..Edit::default()
+                        }
+                    }
                     Some(e) if e.stroke == stroke => e,
                     other => {
+                        self.unrecorded_stroke = None;
                         self.undo.extend(other);
                         self.log(Action::Brush {
                             stroke,
@@ -536,14 +623,21 @@ impl Session {
                     }
                 };
                 let rect = brush::apply(&mut self.winter.terrain, &mut self.paint, &dab, &mut edit);
-                if !edit.is_empty() {
+                let notice = if edit.unrecorded {
+                    self.timeline.mark_edited();
+                    None
+                } else if !edit.is_empty() {
                     self.undo.push(edit);
                     self.redo.clear();
                     self.timeline.mark_edited();
-                }
+                    self.enforce_undo_budget(Some(stroke))
+                } else {
+                    None
+                };
                 let mut out = rect
                     .map(|r| self.rect_frames(target, r))
                     .unwrap_or_default();
+                out.extend(notice);
                 out.push(self.state_out());
                 Ok(out)
             }
@@ -581,15 +675,19 @@ impl Session {
             ClientMessage::Step { days } => return job(self.step_job(days)),
             ClientMessage::Seek { index } => {
                 self.timeline.store(&self.winter, &self.paint);
-                let (w, p) = self.timeline.seek(index).ok_or_else(|| {
-                    (
-                        ErrorCode::InvalidValue,
-                        format!(
-                            "snapshot {index} does not exist ({} snapshots)",
-                            self.timeline.len()
-                        ),
-                    )
-                })?;
+                let (w, p) = self
+                    .timeline
+                    .seek(index, &self.winter)
+                    .ok_or_else(|| {
+                        (
+                            ErrorCode::InvalidValue,
+                            format!(
+                                "snapshot {index} does not exist ({} snapshots)",
+                                self.timeline.len()
+                            ),
+                        )
+                    })?
+                    .map_err(|e| (ErrorCode::Failed, e))?;
                 self.winter = w;
                 self.paint = p;
                 self.clear_undo();
@@ -628,7 +726,9 @@ impl Session {
                 Ok(out)
             }
             ClientMessage::LaunchSkier { col, row } => self.launch_skier(col, row),
-            ClientMessage::SetScenario { scenario } => return job(self.scenario_job(scenario)),
+            ClientMessage::SetScenario { scenario } => {
+                return job(self.scenario_job(scenario, project));
+            }
             ClientMessage::Save { name } => return job(self.save_job(name, project)),
             ClientMessage::Load { name } => return job(self.load_job(name, project)),
             ClientMessage::Export { name } => return job(self.export_job(name, project, export)),

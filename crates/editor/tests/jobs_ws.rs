@@ -15,11 +15,11 @@ use std::time::{Duration, Instant};
 struct Tab(TcpStream);
 
 impl Tab {
-    fn open(port: u16) -> Tab {
+    fn open(port: u16, token: &str) -> Tab {
         let mut s = TcpStream::connect(SocketAddr::from(([127, 0, 0, 1], port))).expect("connect");
         s.set_read_timeout(Some(Duration::from_secs(60))).ok();
         let req = format!(
-            "GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n"
+            "GET /ws?token={token} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n"
         );
         s.write_all(req.as_bytes()).expect("handshake");
         let mut head = Vec::new();
@@ -92,10 +92,11 @@ impl Tab {
     }
 }
 
-fn http_state(port: u16) -> serde_json::Value {
+fn http_state(port: u16, token: &str) -> serde_json::Value {
     let mut s = TcpStream::connect(SocketAddr::from(([127, 0, 0, 1], port))).expect("connect");
-    let req =
-        format!("GET /api/state HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n");
+    let req = format!(
+        "GET /api/state HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nX-Snowscape-Token: {token}\r\nConnection: close\r\n\r\n"
+    );
     s.write_all(req.as_bytes()).expect("send");
     let mut text = String::new();
     s.read_to_string(&mut text).expect("reply");
@@ -121,7 +122,7 @@ fn other_tabs_are_answered_while_a_step_runs_and_cancel_stops_it() {
         serve_until(
             config,
             |s| {
-                let _ = ready_tx.send(s.addr.port());
+                let _ = ready_tx.send((s.addr.port(), s.token.as_str().to_string()));
             },
             async move {
                 let _ = stop_rx.await;
@@ -129,12 +130,12 @@ fn other_tabs_are_answered_while_a_step_runs_and_cancel_stops_it() {
         )
         .expect("the server ran");
     });
-    let port = ready_rx
+    let (port, token) = ready_rx
         .recv_timeout(Duration::from_secs(60))
         .expect("ready");
 
-    let mut a = Tab::open(port);
-    let mut b = Tab::open(port);
+    let mut a = Tab::open(port, &token);
+    let mut b = Tab::open(port, &token);
     for t in [&mut a, &mut b] {
         t.until(|m| m["type"] == "state");
     }
@@ -154,7 +155,7 @@ fn other_tabs_are_answered_while_a_step_runs_and_cancel_stops_it() {
         !seen.iter().any(is_end),
         "the step ended before the probe was answered"
     );
-    let st = http_state(port);
+    let st = http_state(port, &token);
     assert_eq!(st["busy"], true);
     assert_eq!(st["job"]["kind"], "step");
     b.send(r#"{"type":"brush","stroke":1,"op":"add","target":"powder","col":50,"row":50,"radius_m":100,"strength":0.5}"#);

@@ -362,6 +362,43 @@ fn save_and_load_round_trip_in_the_project_folder() {
 }
 
 #[test]
+fn scenario_paths_that_leave_the_project_folder_are_refused_on_set_save_and_load() {
+    let tmp = tempfile::tempdir().unwrap();
+    let pd = ProjectDir::open(tmp.path()).unwrap();
+    let mut s = session(64, 10.0);
+    // From the page: refused before anything changes, naming the value.
+    let mut sc = s.summary().scenario;
+    sc["forcing"] = serde_json::json!("/etc/passwd");
+    let (code, message) = s
+        .handle(ClientMessage::SetScenario { scenario: sc }, Some(&pd), None)
+        .unwrap_err();
+    assert_eq!(code, ErrorCode::BadPath);
+    assert!(
+        message.contains("scenario.forcing") && message.contains("\"/etc/passwd\""),
+        "{message}"
+    );
+    assert!(s.winter().scenario().forcing.is_none());
+    // A saved project whose scenario.toml was edited to name a file outside: not loaded.
+    s.handle(ClientMessage::Save { name: "p2".into() }, Some(&pd), None)
+        .unwrap();
+    let file = tmp.path().join("projects/p2/scenario.toml");
+    for bad in ["/etc/passwd", "../../../etc/passwd"] {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let text: String = text
+            .lines()
+            .filter(|l| !l.starts_with("forcing"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        std::fs::write(&file, format!("forcing = {bad:?}\n{text}\n")).unwrap();
+        let (code, message) = s
+            .handle(ClientMessage::Load { name: "p2".into() }, Some(&pd), None)
+            .unwrap_err();
+        assert_eq!(code, ErrorCode::BadPath, "{message}");
+        assert!(message.contains(&format!("{bad:?}")), "{message}");
+    }
+}
+
+#[test]
 fn launched_skier_moves_and_packs_snow() {
     let mut s = session(128, 10.0);
     snow_everywhere(&mut s);
@@ -543,8 +580,14 @@ fn hostile_parameters_from_the_page_are_refused_before_they_take_effect() {
 #[test]
 fn the_timeline_keeps_within_its_memory_budget_and_keeps_the_first_snapshot() {
     let mut s = session(128, 30.0);
-    let one = s.summary().snapshot_bytes;
-    s.set_snapshot_budget(3 * one + one / 2);
+    // Snapshots are packed: their sizes vary with the snow; the budget here holds the first
+    // and about two more of the first step's size.
+    let first = s.summary().snapshot_bytes;
+    s.handle(ClientMessage::Step { days: 0.5 }, None, None)
+        .unwrap();
+    let one = s.summary().snapshot_bytes - first;
+    let budget = first + 2 * one + one / 2;
+    s.set_snapshot_budget(budget);
     let mut notices = Vec::new();
     for _ in 0..12 {
         let out = s
@@ -556,15 +599,27 @@ fn the_timeline_keeps_within_its_memory_budget_and_keeps_the_first_snapshot() {
         }));
         let st = s.summary();
         assert!(st.snapshots.len() <= 3, "{} snapshots", st.snapshots.len());
-        assert!(st.snapshot_bytes <= st.snapshot_budget_bytes);
+        assert!(st.snapshots.len() >= 2, "{} snapshots", st.snapshots.len());
+        assert!(
+            st.snapshot_bytes <= st.snapshot_budget_bytes || st.snapshots.len() == 2,
+            "{} bytes kept, budget {}",
+            st.snapshot_bytes,
+            st.snapshot_budget_bytes
+        );
         assert_eq!(st.snapshots[0], 0.0, "the first snapshot stays");
         assert_eq!(st.current, st.snapshots.len() - 1);
     }
     let st = s.summary();
-    assert_eq!(st.snapshots.len(), 3);
-    assert_eq!(st.snapshots_dropped, 10, "13 snapshots made, 3 kept");
-    assert!((st.snapshots[2] - st.day).abs() < 1e-9 && st.snapshots[1] < st.snapshots[2]);
-    assert_eq!(notices.len(), 10, "one notice per step that dropped one");
+    let kept = st.snapshots.len();
+    assert_eq!(st.snapshots_dropped + kept, 14, "14 snapshots made");
+    assert!(
+        (st.snapshots[kept - 1] - st.day).abs() < 1e-9
+            && st.snapshots[kept - 2] < st.snapshots[kept - 1]
+    );
+    assert!(
+        !notices.is_empty() && notices.len() <= st.snapshots_dropped,
+        "a notice per step that dropped some"
+    );
     assert!(notices[0].contains("memory budget"), "{}", notices[0]);
     // A new scenario restarts from the first snapshot and keeps the budget.
     let mut sc = st.scenario.clone();
@@ -573,5 +628,108 @@ fn the_timeline_keeps_within_its_memory_budget_and_keeps_the_first_snapshot() {
         .unwrap();
     let st = s.summary();
     assert_eq!((st.day, st.snapshots.len()), (0.0, 1));
-    assert_eq!(st.snapshot_budget_bytes, 3 * one + one / 2);
+    assert_eq!(st.snapshot_budget_bytes, budget);
+}
+
+/// A brush stroke over the whole terrain (every cell of the total depth).
+fn big_stroke(s: &mut Session, stroke: u32) -> Vec<Out> {
+    let g = s.terrain().geometry().clone();
+    let dab = ClientMessage::Brush {
+        stroke,
+        op: BrushOp::Add,
+        target: BrushTarget::Unstable,
+        col: g.width() as f64 / 2.0,
+        row: g.height() as f64 / 2.0,
+        radius_m: g.width() as f64 * g.cell_size_x(),
+        strength: 0.1,
+        value: 0.0,
+    };
+    s.handle(dab, None, None).expect("a stroke")
+}
+
+fn notices(out: &[Out]) -> Vec<String> {
+    out.iter()
+        .filter_map(|o| match o {
+            Out::All(Outgoing::Text(t)) if t.contains("\"type\":\"notice\"") => Some(t.clone()),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn the_undo_history_keeps_within_its_byte_budget_dropping_the_oldest_first() {
+    let mut s = session(64, 10.0);
+    big_stroke(&mut s, 1);
+    let one = s.undo_bytes();
+    assert!(
+        one > 64 * 64 * 16,
+        "a whole-terrain stroke records every cell: {one} bytes"
+    );
+    s.set_undo_budget(3 * one + one / 2);
+    let mut told = Vec::new();
+    for stroke in 2..=20 {
+        let before = s.terrain().snow.clone();
+        told.extend(notices(&big_stroke(&mut s, stroke)));
+        let st = s.summary();
+        assert!(
+            s.undo_bytes() <= 3 * one + one / 2,
+            "stroke {stroke}: {} bytes kept",
+            s.undo_bytes()
+        );
+        assert!(st.undo <= 3, "{} strokes kept", st.undo);
+        // The newest stroke is always undoable, exactly.
+        if stroke == 20 {
+            s.handle(ClientMessage::Undo {}, None, None).unwrap();
+            assert!(s.terrain().snow == before, "undo restores the last stroke");
+        }
+    }
+    assert!(!told.is_empty(), "the tabs are told");
+    assert!(told[0].contains("undo history"), "{}", told[0]);
+    // A stroke that alone is larger than the budget is not recorded (nothing to undo), and
+    // says so.
+    s.set_undo_budget(one / 4);
+    assert_eq!(s.summary().undo, 0);
+    let out = big_stroke(&mut s, 21);
+    let n = notices(&out);
+    assert!(n.iter().any(|m| m.contains("cannot be undone")), "{n:?}");
+    big_stroke(&mut s, 21);
+    assert_eq!((s.summary().undo, s.undo_bytes()), (0, 0));
+    let (code, message) = s.handle(ClientMessage::Undo {}, None, None).unwrap_err();
+    assert_eq!(code, ErrorCode::InvalidValue);
+    assert!(message.contains("nothing to undo"));
+    assert_eq!(
+        snowscape_editor::session::UNDO_BUDGET_BYTES,
+        256 << 20,
+        "the documented budget"
+    );
+}
+
+#[test]
+fn brush_radii_beyond_the_terrain_are_refused() {
+    let mut s = session(64, 10.0);
+    let before = s.terrain().snow.clone();
+    for radius_m in [1e5, 64.0 * 20.0 * 1.5] {
+        let dab = ClientMessage::Brush {
+            stroke: 1,
+            op: BrushOp::Add,
+            target: BrushTarget::Powder,
+            col: 32.0,
+            row: 32.0,
+            radius_m,
+            strength: 0.5,
+            value: 0.0,
+        };
+        let (code, message) = s.handle(dab, None, None).unwrap_err();
+        assert_eq!(code, ErrorCode::InvalidValue);
+        assert!(
+            message.contains(&format!("radius_m = {radius_m}")),
+            "{message}"
+        );
+        assert!(
+            message.contains("1810 m"),
+            "names the terrain's extent: {message}"
+        );
+    }
+    assert!(s.terrain().snow == before, "nothing changed");
+    assert_eq!(s.summary().undo, 0);
 }

@@ -165,6 +165,57 @@ impl Winter {
         w.hazard_stale = true;
         Ok(w)
     }
+
+    /// Sets this season to the state of a checkpoint written by it or by a fork of it (the
+    /// same scenario and weather on the same terrain) as [`Winter::resume`] restores it, but
+    /// without the environment precompute: this season's is kept (the weather period's maps
+    /// are refreshed when the checkpoint's period is another). What a checkpoint does not
+    /// hold is left as a resume leaves it (no ski area, no painted release rates). The
+    /// editor's timeline keeps its snapshots as checkpoints and restores them so.
+    pub fn restore_checkpoint(&mut self, r: &mut impl std::io::Read) -> Result<(), SeasonError> {
+        let mut saved = checkpoint::read::<RunState>(r, self.terrain.geometry().len(), EXTRA_MAPS)?;
+        if saved.header.fingerprint != bedrock_fingerprint(&self.terrain) {
+            return Err(SeasonError::CheckpointTerrain {
+                checkpoint: saved.header.terrain.clone(),
+                now: terrain_summary(&self.terrain),
+            });
+        }
+        if saved.header.scenario_digest != self.state.scenario_digest {
+            let now = serde_json::to_value(&self.scenario).unwrap_or_default();
+            return Err(match first_difference("", &saved.header.scenario, &now) {
+                Some((key, checkpoint, now)) => SeasonError::CheckpointScenario {
+                    key,
+                    checkpoint,
+                    now,
+                },
+                None => SeasonError::CheckpointForcing,
+            });
+        }
+        let period_changed = saved.header.weather_index != self.state.weather_index;
+        saved.restore_layers(&mut self.terrain);
+        let mut extra = std::mem::take(&mut saved.extra);
+        self.pending_rain = extra.pop().unwrap_or_default();
+        let pack = extra.split_off(2);
+        self.pack = SnowpackState::from_arrays(pack);
+        self.avalanche_maps.deposit = extra.pop().unwrap_or_default();
+        self.avalanche_maps.scour = extra.pop().unwrap_or_default();
+        self.state = saved.header;
+        self.ski_area = None;
+        self.painted_release = None;
+        self.terminus_stale = false;
+        if period_changed {
+            self.refresh_weather_maps()?;
+        }
+        self.refresh_air_temperature();
+        self.hazard.compute(
+            &self.scenario.parameters.avalanche,
+            &self.terrain,
+            &self.slope_deg,
+            &HazardSources::default(),
+        );
+        self.hazard_stale = true;
+        Ok(())
+    }
 }
 
 #[cfg(test)]
