@@ -316,16 +316,13 @@ pub fn run_season(
             )?),
             Some(dir) => {
                 let path = dir.join(CHECKPOINT);
-                let bytes =
-                    std::fs::read(&path).map_err(|source| SeasonJobError::ReadCheckpoint {
-                        path: path.clone(),
-                        source,
-                    })?;
-                Winter::resume_with_forcing(
+                // Only a regular file of at most the terrain's largest checkpoint is read
+                // (a symbolic link to /dev/zero or a FIFO is refused before any read).
+                Winter::resume_from_file(
                     job.scenario.clone(),
                     terrain,
                     job.forcing.clone(),
-                    &mut bytes.as_slice(),
+                    &path,
                 )
                 .map_err(|source| SeasonJobError::Resume {
                     path,
