@@ -318,16 +318,11 @@ pub fn run_season(
                 let path = dir.join(CHECKPOINT);
                 // Only a regular file of at most the terrain's largest checkpoint is read
                 // (a symbolic link to /dev/zero or a FIFO is refused before any read).
-                Winter::resume_from_file(
-                    job.scenario.clone(),
-                    terrain,
-                    job.forcing.clone(),
-                    &path,
-                )
-                .map_err(|source| SeasonJobError::Resume {
-                    path,
-                    source: Box::new(source),
-                })
+                Winter::resume_from_file(job.scenario.clone(), terrain, job.forcing.clone(), &path)
+                    .map_err(|source| SeasonJobError::Resume {
+                        path,
+                        source: Box::new(source),
+                    })
             }
         }
     })?;
