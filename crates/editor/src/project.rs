@@ -378,10 +378,10 @@ impl ProjectDir {
             Some((self, &format!("projects/{name}"))),
         )?;
         let p = file("checkpoint.bin")?;
-        let bytes = std::fs::read(&p).map_err(io_err(&p))?;
         let terrain = LayeredTerrain::from_bedrock(bedrock);
         let n = terrain.geometry().len();
-        let winter = Winter::resume(scenario, terrain, &mut bytes.as_slice())
+        // Only a regular file of at most the terrain's largest checkpoint is read.
+        let winter = Winter::resume_from_file(scenario, terrain, None, &p)
             .map_err(|e| bad("checkpoint", &p, e.to_string()))?;
         let mut paint = PaintMaps::new(n);
         for (f, dst) in [

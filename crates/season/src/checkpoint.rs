@@ -9,6 +9,18 @@
 //! the lengths (a short file is "truncated", naming both sizes) and the checksum (a flipped
 //! bit is refused) before it parses anything. The file is written atomically by the caller
 //! (temporary name, then rename), so a crash mid-write leaves the previous checkpoint intact.
+//!
+//! [`read_file`] opens only a regular file (a device such as `/dev/zero` reads without end, a
+//! FIFO blocks: both are refused before anything is read), refuses one longer than the
+//! largest checkpoint of the terrain (a [`MAX_HEADER`] header and the maps of its cells), and
+//! after the preamble checks the file's length against the one the preamble announces,
+//! before the body is allocated.
+//!
+//! The checksum detects damage, not nonsense: a file written wrong or forged with a matching
+//! checksum can still hold an index past its table, a time of −1e300 or NaN snow. The caller
+//! validates every decoded value (the season does in [`crate::winter::Winter::resume`]) and
+//! refuses one out of range with [`CheckpointError::Implausible`], naming the field and the
+//! value (cut to [`crate::MAX_ECHO_CHARS`] characters).
 
 use serde::{Serialize, de::DeserializeOwned};
 use snowscape_terrain::{LayeredTerrain, random::mix64};
@@ -21,7 +33,7 @@ pub const VERSION: u32 = 3;
 /// Bytes before the JSON header: magic, version, two lengths.
 const PREAMBLE: usize = 8 + 4 + 8 + 8;
 /// Largest JSON header accepted, bytes.
-const MAX_HEADER: u64 = 64 << 20;
+pub const MAX_HEADER: u64 = 64 << 20;
 
 /// Why a checkpoint could not be written or read.
 #[derive(Debug, Error)]
@@ -48,6 +60,118 @@ pub enum CheckpointError {
     HeaderTooLarge(u64),
     #[error("checkpoint holds layers for {found} cells, the terrain has {expected}")]
     SizeMismatch { expected: usize, found: usize },
+    #[error("checkpoint {path} is {kind}, not a regular file: refusing to read it")]
+    NotRegular {
+        path: std::path::PathBuf,
+        kind: &'static str,
+    },
+    #[error(
+        "checkpoint {path} is {bytes} bytes, more than the {max} bytes a checkpoint of this terrain can hold"
+    )]
+    TooLarge {
+        path: std::path::PathBuf,
+        bytes: u64,
+        max: u64,
+    },
+    #[error("cannot read checkpoint {path}: {source}")]
+    Open {
+        path: std::path::PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(
+        "checkpoint field {field} = {value} is implausible: {expected} (the checksum matches, so the file was written wrong or forged)"
+    )]
+    Implausible {
+        field: String,
+        value: String,
+        expected: String,
+    },
+}
+
+impl CheckpointError {
+    /// An [`CheckpointError::Implausible`] value, cut for the message.
+    pub fn implausible(
+        field: impl Into<String>,
+        value: impl ToString,
+        expected: impl Into<String>,
+    ) -> Self {
+        Self::Implausible {
+            field: field.into(),
+            value: crate::clip_for_message(&value.to_string()),
+            expected: expected.into(),
+        }
+    }
+}
+
+/// What a file type is, in words, for [`CheckpointError::NotRegular`].
+fn kind_of(t: std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_dir() {
+        "a directory"
+    } else {
+        "not a file"
+    }
+}
+
+/// The largest checkpoint of a terrain of `cells` cells with `extra` extra maps, bytes.
+pub fn max_len(cells: usize, extra: usize) -> u64 {
+    PREAMBLE as u64 + MAX_HEADER + 4 * (4 + extra as u64) * cells as u64 + 4
+}
+
+/// Reads and verifies the checkpoint file at `path` (as [`read`]), opening only a regular
+/// file of at most [`max_len`] bytes and checking its length against the preamble's before
+/// the body is allocated (module docs).
+pub fn read_file<H: DeserializeOwned>(
+    path: &std::path::Path,
+    cells: usize,
+    extra: usize,
+) -> Result<Contents<H>, CheckpointError> {
+    let open = |source| CheckpointError::Open {
+        path: path.to_path_buf(),
+        source,
+    };
+    let not_regular = |t| CheckpointError::NotRegular {
+        path: path.to_path_buf(),
+        kind: kind_of(t),
+    };
+    // The path's metadata first: nothing is opened, so a FIFO cannot block.
+    let meta = std::fs::metadata(path).map_err(open)?;
+    if !meta.is_file() {
+        return Err(not_regular(meta.file_type()));
+    }
+    let file = std::fs::File::open(path).map_err(open)?;
+    // The path could have been replaced between the check and the open.
+    let meta = file.metadata().map_err(open)?;
+    if !meta.is_file() {
+        return Err(not_regular(meta.file_type()));
+    }
+    let max = max_len(cells, extra);
+    if meta.len() > max {
+        return Err(CheckpointError::TooLarge {
+            path: path.to_path_buf(),
+            bytes: meta.len(),
+            max,
+        });
+    }
+    // `take` bounds the read even if the file grows while it is read.
+    let mut r = std::io::BufReader::new(file).take(max + 1);
+    read_bounded(&mut r, Some(meta.len()), cells, extra)
 }
 
 /// A fingerprint of a terrain's bedrock and geometry, to refuse resuming on other inputs.
@@ -126,6 +250,17 @@ pub fn read<H: DeserializeOwned>(
     cells: usize,
     extra: usize,
 ) -> Result<Contents<H>, CheckpointError> {
+    read_bounded(r, None, cells, extra)
+}
+
+/// [`read`], knowing the length of the file when it is one: a length other than the one the
+/// preamble announces is refused before the body is allocated.
+fn read_bounded<H: DeserializeOwned>(
+    r: &mut impl Read,
+    file_len: Option<u64>,
+    cells: usize,
+    extra: usize,
+) -> Result<Contents<H>, CheckpointError> {
     let mut pre = [0u8; PREAMBLE];
     let got = read_up_to(r, &mut pre)?;
     let mut magic = [0u8; 8];
@@ -149,15 +284,29 @@ pub fn read<H: DeserializeOwned>(
         return Err(CheckpointError::HeaderTooLarge(header_len));
     }
     let maps = 4 + extra;
-    let expected_maps = (4 * maps * cells) as u64;
+    let expected_maps = 4 * maps as u64 * cells as u64;
     if maps_len != expected_maps {
         return Err(CheckpointError::SizeMismatch {
             expected: cells,
-            found: (maps_len / (4 * maps as u64)) as usize,
+            found: (maps_len / (4 * maps as u64)).min(usize::MAX as u64) as usize,
         });
     }
     // Both lengths are bounded now: the header by MAX_HEADER, the maps by the terrain.
     let body_len = header_len + maps_len;
+    if let Some(len) = file_len {
+        let expected = PREAMBLE as u64 + body_len + 4;
+        if len < expected {
+            return Err(CheckpointError::Truncated {
+                expected,
+                found: len,
+            });
+        }
+        if len > expected {
+            return Err(CheckpointError::TrailingBytes {
+                extra: len - expected,
+            });
+        }
+    }
     let mut body = vec![0u8; body_len as usize + 4];
     let got_body = read_up_to(r, &mut body)?;
     if got_body < body.len() {

@@ -60,6 +60,22 @@
 //!
 //! Every value is checked (non-numbers, NaN and infinities, values outside the ranges above):
 //! a [`ForcingError`] names the file, line, column and value.
+//!
+//! # Limits
+//!
+//! A forcing file is read whole, so its size is bounded before anything is allocated, and
+//! so is every part of it; past a limit the reader stops with a typed error naming it:
+//!
+//! | what | limit |
+//! |---|---|
+//! | the file | [`MAX_FILE_BYTES`] (512 MiB; only a regular file is opened) |
+//! | one line | [`MAX_LINE_BYTES`] (64 KiB) |
+//! | one field (cell or column name) | [`MAX_FIELD_BYTES`] (1 KiB) |
+//! | columns in the header | [`MAX_COLUMNS`] (1024) |
+//! | records | [`MAX_RECORDS`] (hourly records for 300 years) |
+//!
+//! The header is read in time linear in its length, and an error message repeats at most
+//! [`crate::MAX_ECHO_CHARS`] characters of any value from the file.
 
 mod generic;
 mod snobal;
@@ -91,6 +107,16 @@ pub const LONGWAVE_RANGE_W_M2: (f64, f64) = (0.0, 1000.0);
 pub const RELATIVE_HUMIDITY_RANGE: (f64, f64) = (0.0, 1.05);
 /// Station altitudes accepted, metres above sea level.
 pub const STATION_ALTITUDE_RANGE_M: (f64, f64) = (-500.0, 9000.0);
+/// Largest forcing file read, bytes (512 MiB: 300 years of hourly records of 200 bytes).
+pub const MAX_FILE_BYTES: u64 = 512 << 20;
+/// Longest line accepted, bytes.
+pub const MAX_LINE_BYTES: usize = 64 << 10;
+/// Longest field (a cell or a column name) accepted, bytes.
+pub const MAX_FIELD_BYTES: usize = 1024;
+/// Most columns a header may have (a format needs at most eleven; extra ones are ignored).
+pub const MAX_COLUMNS: usize = 1024;
+/// Most records a file may hold: hourly records for 300 years (366-day years).
+pub const MAX_RECORDS: usize = 24 * 366 * 300;
 /// Where a snobal file without a time column starts (the pysnobal test season, hourly).
 pub const SNOBAL_DEFAULT_START: ForcingTime = ForcingTime {
     year: 1983,
@@ -206,6 +232,44 @@ pub enum ForcingError {
         expected: String,
         step_hours: f64,
     },
+    #[error("{path} is {bytes} bytes, more than the {max} bytes a forcing file may hold")]
+    TooLarge { path: PathBuf, bytes: u64, max: u64 },
+    #[error(
+        "{path}:{line}: the line is {bytes} bytes long, more than the {max} bytes a line may hold"
+    )]
+    LineTooLong {
+        path: PathBuf,
+        line: u64,
+        bytes: usize,
+        max: usize,
+    },
+    #[error(
+        "{path}:{line}: column {column_number} holds {bytes} bytes, more than the {max} bytes a field may hold"
+    )]
+    FieldTooLong {
+        path: PathBuf,
+        line: u64,
+        column_number: usize,
+        bytes: usize,
+        max: usize,
+    },
+    #[error(
+        "{path}:{line}: the header has {columns} columns, more than the {max} a forcing file may have"
+    )]
+    TooManyColumns {
+        path: PathBuf,
+        line: u64,
+        columns: usize,
+        max: usize,
+    },
+    #[error(
+        "{path}:{line}: more than {max} records (hourly records for 300 years), the most a forcing file may hold"
+    )]
+    TooManyRecords {
+        path: PathBuf,
+        line: u64,
+        max: usize,
+    },
     #[error("{path}: no records after the header")]
     NoRecords { path: PathBuf },
     #[error(
@@ -236,14 +300,39 @@ pub fn from_path(
         path: path.to_path_buf(),
         source,
     };
-    // A device or a FIFO is refused before it is opened (reading one would not end, or block).
-    if !std::fs::metadata(path).map_err(io)?.is_file() {
-        return Err(io(std::io::Error::new(
+    use std::io::Read;
+    let not_regular = || {
+        io(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             "not a regular file (a device, FIFO or folder)",
-        )));
+        ))
+    };
+    // A device or a FIFO is refused before it is opened (reading one would not end, or block),
+    // and again on the open handle (the path may have been replaced in between).
+    if !std::fs::metadata(path).map_err(io)?.is_file() {
+        return Err(not_regular());
     }
-    let text = std::fs::read_to_string(path).map_err(io)?;
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if !meta.is_file() {
+        return Err(not_regular());
+    }
+    let too_large = |bytes| ForcingError::TooLarge {
+        path: path.to_path_buf(),
+        bytes,
+        max: MAX_FILE_BYTES,
+    };
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(too_large(meta.len()));
+    }
+    let mut text = String::with_capacity(meta.len() as usize);
+    // `take` bounds the read even if the file grows while it is read.
+    file.take(MAX_FILE_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(io)?;
+    if text.len() as u64 > MAX_FILE_BYTES {
+        return Err(too_large(text.len() as u64));
+    }
     StationForcing::from_text(&text, path, station_altitude_override)
 }
 
@@ -260,6 +349,13 @@ impl StationForcing {
             return Err(ForcingError::BadAltitudeOverride {
                 path: path.to_path_buf(),
                 value: v,
+            });
+        }
+        if text.len() as u64 > MAX_FILE_BYTES {
+            return Err(ForcingError::TooLarge {
+                path: path.to_path_buf(),
+                bytes: text.len() as u64,
+                max: MAX_FILE_BYTES,
             });
         }
         let table = table::Table::parse(text, path)?;

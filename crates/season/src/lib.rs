@@ -31,6 +31,21 @@ pub mod weather;
 pub mod wind_transport;
 pub mod winter;
 
+/// Most characters of a value read from an input file (a forcing cell, a scenario string, a
+/// checkpoint field) that an error message repeats: a longer one is cut, and the message says
+/// how long it was, so a hostile file cannot flood the terminal or a log.
+pub const MAX_ECHO_CHARS: usize = 80;
+
+/// `s` for an error message: itself when it has at most [`MAX_ECHO_CHARS`] characters, else
+/// its first characters, `...` and its length in bytes.
+pub fn clip_for_message(s: &str) -> String {
+    if s.chars().nth(MAX_ECHO_CHARS).is_none() {
+        return s.to_string();
+    }
+    let head: String = s.chars().take(MAX_ECHO_CHARS - 3).collect();
+    format!("{head}... ({} bytes)", s.len())
+}
+
 /// Snow volume a step added to and removed from the terrain, m³ of snow.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct VolumeChange {

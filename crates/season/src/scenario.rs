@@ -30,6 +30,17 @@
 //! ```
 //!
 //! Unknown keys are errors, reported with the key, line and column by the TOML parser.
+//!
+//! # Limits
+//!
+//! A scenario is small: its text is at most [`MAX_SCENARIO_BYTES`] (4 MiB, refused before it
+//! is parsed), the season at most [`MAX_SEASON_DAYS`] days, and each repeated table at most
+//! one entry per day of that longest season, checked by [`Scenario::validate`]:
+//! [`MAX_WEATHER_PERIODS`] `[[weather]]`, [`MAX_SNOWFALL_PERIODS`] `[[snowfall_period]]`,
+//! [`MAX_USER_AVALANCHES`] `[[avalanche]]`, [`MAX_SKIER_STARTS`] `skiers.starts`, and
+//! [`MAX_SNAPSHOTS`] `snapshot_days`; `skiers.terminus` lists at most [`MAX_TERMINUS_CELLS`]
+//! cells. Each refusal is a [`ScenarioError::TooMany`] naming the key, the count and the cap.
+//! An error repeats at most [`crate::MAX_ECHO_CHARS`] characters of any value from the file.
 
 use crate::melt::MeltParams;
 use crate::powder_diffusion::DiffusionParams;
@@ -58,6 +69,23 @@ pub enum ScenarioError {
         source_name: String,
         section: &'static str,
         message: String,
+    },
+    /// The text is larger than [`MAX_SCENARIO_BYTES`].
+    #[error("scenario {source_name}: {bytes} bytes, more than the {max} bytes a scenario may hold")]
+    TooLarge {
+        source_name: String,
+        bytes: usize,
+        max: usize,
+    },
+    /// A repeated table or list with more entries than its cap.
+    #[error(
+        "scenario {source_name}: {count} {key} entries, more than the {max} a scenario may have"
+    )]
+    TooMany {
+        source_name: String,
+        key: &'static str,
+        count: usize,
+        max: usize,
     },
     /// A value out of range.
     #[error("scenario {source_name}: {key} = {value}: {reason}")]
@@ -172,6 +200,20 @@ impl Parameters {
 
 /// Most frames (`snapshot_every_days` and `snapshot_days` together) one season may take.
 pub const MAX_SNAPSHOTS: f64 = 1000.0;
+/// Longest season, days (ten winters).
+pub const MAX_SEASON_DAYS: f64 = 3650.0;
+/// Largest scenario text, bytes (a scenario with every table at its cap is about 1.5 MB).
+pub const MAX_SCENARIO_BYTES: usize = 4 << 20;
+/// Most `[[weather]]` periods: one a day of the longest season.
+pub const MAX_WEATHER_PERIODS: usize = MAX_SEASON_DAYS as usize;
+/// Most `[[snowfall_period]]` entries: one a day of the longest season.
+pub const MAX_SNOWFALL_PERIODS: usize = MAX_SEASON_DAYS as usize;
+/// Most `[[avalanche]]` entries: one a day of the longest season.
+pub const MAX_USER_AVALANCHES: usize = MAX_SEASON_DAYS as usize;
+/// Most skier start points (`skiers.starts`).
+pub const MAX_SKIER_STARTS: usize = MAX_SEASON_DAYS as usize;
+/// Most cells a `skiers.terminus` cell list may name.
+pub const MAX_TERMINUS_CELLS: usize = 1_000_000;
 /// Most checkpoints one season may write.
 pub const MAX_CHECKPOINTS: f64 = 1000.0;
 
@@ -258,10 +300,18 @@ pub fn day_of_year(date: &str) -> Option<u32> {
 
 impl Scenario {
     /// Parses a scenario; `source_name` (a file path) goes into error messages.
+    /// A text over [`MAX_SCENARIO_BYTES`] is refused before it is parsed.
     pub fn from_toml(text: &str, source_name: &str) -> Result<Self, ScenarioError> {
+        if text.len() > MAX_SCENARIO_BYTES {
+            return Err(ScenarioError::TooLarge {
+                source_name: source_name.to_string(),
+                bytes: text.len(),
+                max: MAX_SCENARIO_BYTES,
+            });
+        }
         let s: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Parse {
             source_name: source_name.to_string(),
-            message: e.to_string(),
+            message: clip_parse_message(&e.to_string()),
         })?;
         s.validate(source_name)?;
         Ok(s)
@@ -275,7 +325,40 @@ impl Scenario {
             value,
             reason: reason.into(),
         };
-        if !(self.days.is_finite() && self.days > 0.0 && self.days <= 3650.0) {
+        let counts = [
+            ("weather", self.weather.len(), MAX_WEATHER_PERIODS),
+            (
+                "snowfall_period",
+                self.snowfall_periods.len(),
+                MAX_SNOWFALL_PERIODS,
+            ),
+            ("avalanche", self.avalanches.len(), MAX_USER_AVALANCHES),
+            ("skiers.starts", self.skiers.starts.len(), MAX_SKIER_STARTS),
+            (
+                "skiers.terminus",
+                match &self.skiers.terminus {
+                    snowscape_skiers::Terminus::Cells(c) => c.len(),
+                    _ => 0,
+                },
+                MAX_TERMINUS_CELLS,
+            ),
+            (
+                "snapshot_days",
+                self.snapshot_days.len(),
+                MAX_SNAPSHOTS as usize,
+            ),
+        ];
+        for (key, count, max) in counts {
+            if count > max {
+                return Err(ScenarioError::TooMany {
+                    source_name: source_name.to_string(),
+                    key,
+                    count,
+                    max,
+                });
+            }
+        }
+        if !(self.days.is_finite() && self.days > 0.0 && self.days <= MAX_SEASON_DAYS) {
             return Err(bad(
                 "days",
                 self.days.to_string(),
@@ -285,7 +368,7 @@ impl Scenario {
         if day_of_year(&self.start_date).is_none() {
             return Err(bad(
                 "start_date",
-                self.start_date.clone(),
+                crate::clip_for_message(&self.start_date),
                 "must be MM-DD or YYYY-MM-DD",
             ));
         }
@@ -333,13 +416,6 @@ impl Scenario {
                     "is too frequent: at most 1000 per season (0: never)",
                 ));
             }
-        }
-        if self.snapshot_days.len() as f64 > MAX_SNAPSHOTS {
-            return Err(bad(
-                "snapshot_days",
-                format!("{} days", self.snapshot_days.len()),
-                "lists more than 1000 days",
-            ));
         }
         for (k, &d) in self.snapshot_days.iter().enumerate() {
             if !(d.is_finite() && d >= 0.0 && d <= self.days) {
@@ -497,6 +573,50 @@ impl Scenario {
     }
 }
 
+/// A TOML parser's message with every value of the file it repeats cut to
+/// [`crate::MAX_ECHO_CHARS`] characters: the quoted parts (`` `...` `` and `"..."`) of its
+/// lines and the source excerpt (`3 | key = value`, and the caret line under it).
+fn clip_parse_message(message: &str) -> String {
+    /// Longest line kept whole, characters (a list of the expected keys is about 300).
+    const MAX_LINE_CHARS: usize = 1000;
+    let clip_line = |line: &str| -> String {
+        // The excerpt: ` 3 | text` or `   | ^^^`.
+        if let Some((gutter, text)) = line.split_once('|')
+            && gutter.trim().bytes().all(|b| b.is_ascii_digit())
+        {
+            return format!("{gutter}|{}", crate::clip_for_message(text));
+        }
+        // Quoted parts: the odd pieces between quote characters.
+        let mut out = String::new();
+        let mut quoted = false;
+        for piece in line.split_inclusive(['`', '"']) {
+            let (body, quote) = match piece.char_indices().last() {
+                Some((at, q @ ('`' | '"'))) => (&piece[..at], Some(q)),
+                _ => (piece, None),
+            };
+            if quoted {
+                out.push_str(&crate::clip_for_message(body));
+            } else {
+                out.push_str(body);
+            }
+            if let Some(q) = quote {
+                out.push(q);
+                quoted = !quoted;
+            }
+        }
+        if out.chars().nth(MAX_LINE_CHARS).is_some() {
+            let head: String = out.chars().take(MAX_LINE_CHARS).collect();
+            return format!("{head}... ({} bytes)", out.len());
+        }
+        out
+    };
+    message
+        .lines()
+        .map(clip_line)
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// Altitude at quantile `q` (0..1) of `altitudes`.
 fn quantile(altitudes: &[f32], q: f64) -> f64 {
     if altitudes.is_empty() {
@@ -619,6 +739,138 @@ slope_gravity = "projected"
         .to_string();
         assert!(e.contains("weather[0].wind_speed_m_s = 500"), "{e}");
         assert!(Scenario::from_toml("start_date = \"02-30\"\n", "s").is_err());
+    }
+
+    /// `n` daily `[[weather]]` periods.
+    fn weather_periods(n: usize) -> String {
+        let mut text = format!("days = {}\n", MAX_SEASON_DAYS);
+        for k in 0..n {
+            text.push_str(&format!(
+                "[[weather]]\nfrom_day = {k}\nsea_level_temperature_c = 5\nwind_from_deg = 0\nwind_speed_m_s = 5\nsnowfall_per_week = 1\n"
+            ));
+        }
+        text
+    }
+
+    #[test]
+    fn repeated_tables_over_their_cap_are_refused_naming_count_and_cap() {
+        // Issue 46: 10^6 weather periods took 3.6 GB and wrote a 462 MB report. One a day of
+        // the longest season is accepted, one more refused.
+        let s = Scenario::from_toml(&weather_periods(MAX_WEATHER_PERIODS), "s.toml").unwrap();
+        assert_eq!(s.weather.len(), MAX_WEATHER_PERIODS);
+        let e =
+            Scenario::from_toml(&weather_periods(MAX_WEATHER_PERIODS + 1), "s.toml").unwrap_err();
+        assert!(
+            matches!(e, ScenarioError::TooMany { key: "weather", count, max: MAX_WEATHER_PERIODS, .. } if count == MAX_WEATHER_PERIODS + 1),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("3651 weather entries"), "{e}");
+        // The other tables, checked by `validate` whoever built the scenario.
+        let s = Scenario {
+            snowfall_periods: vec![
+                SnowfallPeriod {
+                    start_day: 1.0,
+                    days: 1.0
+                };
+                MAX_SNOWFALL_PERIODS + 1
+            ],
+            ..Scenario::default()
+        };
+        assert!(matches!(
+            s.validate("s").unwrap_err(),
+            ScenarioError::TooMany {
+                key: "snowfall_period",
+                ..
+            }
+        ));
+        let s = Scenario {
+            avalanches: vec![
+                UserAvalanche {
+                    day: 1.0,
+                    x: 0.0,
+                    y: 0.0
+                };
+                MAX_USER_AVALANCHES + 1
+            ],
+            ..Scenario::default()
+        };
+        assert!(matches!(
+            s.validate("s").unwrap_err(),
+            ScenarioError::TooMany {
+                key: "avalanche",
+                ..
+            }
+        ));
+        let mut s = Scenario::default();
+        s.skiers.starts = vec![[0.0, 0.0]; MAX_SKIER_STARTS + 1];
+        assert!(matches!(
+            s.validate("s").unwrap_err(),
+            ScenarioError::TooMany {
+                key: "skiers.starts",
+                ..
+            }
+        ));
+        let mut s = Scenario::default();
+        s.skiers.terminus = snowscape_skiers::Terminus::Cells(vec![0; MAX_TERMINUS_CELLS + 1]);
+        assert!(matches!(
+            s.validate("s").unwrap_err(),
+            ScenarioError::TooMany {
+                key: "skiers.terminus",
+                ..
+            }
+        ));
+        let s = Scenario {
+            snapshot_days: vec![1.0; MAX_SNAPSHOTS as usize + 1],
+            ..Scenario::default()
+        };
+        assert!(matches!(
+            s.validate("s").unwrap_err(),
+            ScenarioError::TooMany {
+                key: "snapshot_days",
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn a_text_over_the_size_cap_is_refused_before_it_is_parsed() {
+        // 10^6 periods (150 MB): refused at once, nothing parsed.
+        let one = "[[weather]]\nfrom_day = 0\nsea_level_temperature_c = 5\nwind_from_deg = 0\nwind_speed_m_s = 5\nsnowfall_per_week = 1\n";
+        let text = one.repeat(MAX_SCENARIO_BYTES / one.len() + 1);
+        let t = std::time::Instant::now();
+        let e = Scenario::from_toml(&text, "s.toml").unwrap_err();
+        assert!(
+            matches!(e, ScenarioError::TooLarge { bytes, max: MAX_SCENARIO_BYTES, .. } if bytes == text.len()),
+            "{e:?}"
+        );
+        assert!(t.elapsed().as_secs_f64() < 0.5, "{:?}", t.elapsed());
+    }
+
+    #[test]
+    fn string_values_in_errors_are_cut() {
+        let long = "9".repeat(100_000);
+        // A validation error.
+        let e = Scenario::from_toml(&format!("start_date = \"{long}\"\n"), "s.toml").unwrap_err();
+        assert!(matches!(e, ScenarioError::Invalid { .. }), "{e:?}");
+        assert!(e.to_string().len() < 300, "{e}");
+        // Parse errors: a string where a number belongs, an unknown key, a bad value's line.
+        for text in [
+            format!("days = \"{long}\"\n"),
+            format!("k{long} = 1\n"),
+            format!("[parameters.melt]\nk_{long} = 0.1\n"),
+            format!("days = 1{long}x\n"),
+        ] {
+            let e = Scenario::from_toml(&text, "s.toml").unwrap_err();
+            let m = e.to_string();
+            assert!(matches!(e, ScenarioError::Parse { .. }), "{e:?}");
+            assert!(
+                m.len() < 1500,
+                "{} bytes: {}",
+                m.len(),
+                &m[..2000.min(m.len())]
+            );
+            assert!(m.contains("line 1") || m.contains("line 2"), "{m}");
+        }
     }
 
     #[test]

@@ -33,9 +33,6 @@ pub const RESOLVED_SCENARIO: &str = "scenario.toml";
 /// The largest earlier frame read back on a resume (a 512-pixel RGBA PNG is at most ~1 MiB).
 const MAX_FRAME_BYTES: u64 = 64 << 20;
 
-/// The largest checkpoint read, bytes per terrain cell (its layers, pack and maps in f32 or
-/// f64 take ~300; compressed it is less), plus a fixed allowance for its small records.
-const MAX_CHECKPOINT_BYTES_PER_CELL: u64 = 1024;
 
 /// Longest stretch of simulated days between two checks of the interrupt flag.
 pub const CHUNK_DAYS: f64 = 0.25;
@@ -154,8 +151,6 @@ pub enum SeasonJobError {
         #[source]
         source: Box<SeasonError>,
     },
-    #[error("cannot read the checkpoint to resume from: {0}")]
-    CheckpointFile(Box<snowscape_io::InputError>),
     #[error("cannot read an earlier frame to resume with: {0}")]
     EarlierFrameFile(Box<snowscape_io::InputError>),
     #[error("cannot encode the resolved scenario: {0}")]
@@ -187,7 +182,6 @@ impl SeasonJobError {
         matches!(
             self,
             Self::OutputFolder(_)
-                | Self::CheckpointFile(_)
                 | Self::EarlierFrameFile(_)
                 | Self::Resume { .. }
                 | Self::EarlierFrame { .. }
@@ -257,17 +251,6 @@ fn checkpoint_days(s: &Scenario) -> Vec<f64> {
 
 fn frame_name(k: usize) -> String {
     format!("frames/frame_{k:04}.png")
-}
-
-/// Reads the checkpoint at `path` for a terrain of `cells` cells: a regular file (a device,
-/// FIFO or folder is refused before it is opened) of at most
-/// [`MAX_CHECKPOINT_BYTES_PER_CELL`] bytes a cell plus 64 MiB.
-fn read_checkpoint_file(path: &Path, cells: usize) -> Result<Vec<u8>, SeasonJobError> {
-    let max = (cells as u64)
-        .saturating_mul(MAX_CHECKPOINT_BYTES_PER_CELL)
-        .saturating_add(64 << 20);
-    snowscape_io::input::read_regular(path, max)
-        .map_err(|e| SeasonJobError::CheckpointFile(Box::new(e)))
 }
 
 /// Writes `checkpoint.bin` into `dir`, atomically.
@@ -348,17 +331,13 @@ pub fn run_season(
             )?),
             Some(dir) => {
                 let path = dir.join(CHECKPOINT);
-                let bytes = read_checkpoint_file(&path, terrain.geometry().len())?;
-                Winter::resume_with_forcing(
-                    job.scenario.clone(),
-                    terrain,
-                    job.forcing.clone(),
-                    &mut bytes.as_slice(),
-                )
-                .map_err(|source| SeasonJobError::Resume {
-                    path,
-                    source: Box::new(source),
-                })
+                // Only a regular file of at most the terrain's largest checkpoint is read
+                // (a symbolic link to /dev/zero or a FIFO is refused before any read).
+                Winter::resume_from_file(job.scenario.clone(), terrain, job.forcing.clone(), &path)
+                    .map_err(|source| SeasonJobError::Resume {
+                        path,
+                        source: Box::new(source),
+                    })
             }
         }
     })?;

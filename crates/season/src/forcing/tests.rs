@@ -370,3 +370,148 @@ fn devices_and_folders_are_refused_before_reading() {
         assert!(e.to_string().contains("not a regular file"), "{e}");
     }
 }
+
+/// The generic header with `extra` more columns named `x0, x1, ...`, and one record.
+fn wide_file(extra: usize) -> String {
+    let mut text = String::from("time,air_temperature_c,precipitation_mm,wind_speed_m_s");
+    let mut row = String::from("\n2000-01-01T00:00,1,0,1");
+    for k in 0..extra {
+        text.push_str(&format!(",x{k}"));
+        row.push_str(",0");
+    }
+    text.push_str(&row);
+    text.push('\n');
+    text
+}
+
+#[test]
+fn a_header_wider_than_the_limit_is_refused_naming_its_width() {
+    // Issue 46: 10^5 columns took 13.7 s (a quadratic duplicate search), 10^6 did not end.
+    let t = std::time::Instant::now();
+    let e = parse(&wide_file(100_000)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ForcingError::LineTooLong { line: 1, .. }
+                | ForcingError::TooManyColumns { line: 1, .. }
+        ),
+        "{e:?}"
+    );
+    // Within the line limit, over the column limit.
+    let text = format!("{}\n2000-01-01,1,0,1\n", "a,".repeat(MAX_COLUMNS) + "b");
+    let e = parse(&text).unwrap_err();
+    assert!(
+        matches!(e, ForcingError::TooManyColumns { line: 1, columns, max: MAX_COLUMNS, .. } if columns == MAX_COLUMNS + 1),
+        "{e:?}"
+    );
+    assert!(t.elapsed().as_secs_f64() < 2.0, "{:?}", t.elapsed());
+}
+
+#[test]
+fn the_widest_header_allowed_reads_in_linear_time_and_finds_a_late_duplicate() {
+    let text = wide_file(MAX_COLUMNS - 4);
+    let f = parse(&text).unwrap();
+    assert_eq!(f.records.len(), 1);
+    // A duplicate as the last column is found and named with both positions.
+    let text = text.replacen(&format!(",x{}\n", MAX_COLUMNS - 5), ",x0\n", 1);
+    match parse(&text).unwrap_err() {
+        ForcingError::DuplicateColumn {
+            column,
+            first,
+            second,
+            ..
+        } => assert_eq!((column.as_str(), first, second), ("x0", 5, MAX_COLUMNS)),
+        e => panic!("{e:?}"),
+    }
+}
+
+#[test]
+fn long_lines_and_fields_are_refused_and_never_echoed_whole() {
+    // A line over the limit: refused with its length, nothing of it repeated.
+    let long = "7".repeat(MAX_LINE_BYTES + 1);
+    let text = format!("{HEAD}2000-01-01T00:00,{long},0,1,270,0.5\n");
+    let e = parse(&text).unwrap_err();
+    assert!(
+        matches!(e, ForcingError::LineTooLong { line: 2, .. }),
+        "{e:?}"
+    );
+    assert!(e.to_string().len() < 300, "{e}");
+    // A field over the limit in a line within it.
+    let field = "7".repeat(MAX_FIELD_BYTES + 1);
+    let text = format!("{HEAD}2000-01-01T00:00,{field},0,1,270,0.5\n");
+    let e = parse(&text).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ForcingError::FieldTooLong {
+                line: 2,
+                column_number: 2,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().len() < 300, "{e}");
+    // A bad value within the limits is named, cut to MAX_ECHO_CHARS characters.
+    let value = "x".repeat(MAX_FIELD_BYTES);
+    let text = format!("{HEAD}2000-01-01T00:00,{value},0,1,270,0.5\n");
+    let e = parse(&text).unwrap_err();
+    match &e {
+        ForcingError::BadValue { value, .. } => {
+            assert!(
+                value.chars().count() <= crate::MAX_ECHO_CHARS + 20,
+                "{value}"
+            );
+            assert!(value.ends_with("... (1024 bytes)"), "{value}");
+        }
+        e => panic!("{e:?}"),
+    }
+    assert!(e.to_string().len() < 400, "{e}");
+    // The header of a file missing a column is cut too.
+    let text = wide_file(200).replace("wind_speed_m_s", "wind");
+    let e = parse(&text).unwrap_err();
+    assert!(matches!(e, ForcingError::MissingColumn { .. }), "{e:?}");
+    assert!(e.to_string().len() < 400, "{e}");
+    // And an altitude comment.
+    let text = format!(
+        "# station_altitude_m = {}\n{HEAD}2000-01-01,1,0,1,,\n",
+        "9".repeat(5000)
+    );
+    let e = parse(&text).unwrap_err();
+    assert!(
+        matches!(e, ForcingError::BadAltitude { line: 1, .. }),
+        "{e:?}"
+    );
+    assert!(e.to_string().len() < 300, "{e}");
+}
+
+#[test]
+fn more_records_than_the_limit_are_refused_before_they_are_parsed() {
+    // Hourly records for 300 years, plus one: refused on the first line past the limit.
+    let mut text = String::with_capacity(2 * (MAX_RECORDS + 2) + HEAD.len());
+    text.push_str(HEAD);
+    for _ in 0..=MAX_RECORDS {
+        text.push_str("x\n");
+    }
+    let e = parse(&text).unwrap_err();
+    assert!(
+        matches!(e, ForcingError::TooManyRecords { line, max: MAX_RECORDS, .. } if line == MAX_RECORDS as u64 + 2),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn a_file_larger_than_the_limit_is_refused_before_it_is_read() {
+    let d = std::env::temp_dir().join(format!("snowscape-forcing-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join("huge.csv");
+    let f = std::fs::File::create(&p).unwrap();
+    // A sparse file: no disk space taken.
+    f.set_len(MAX_FILE_BYTES + 1).unwrap();
+    let e = from_path(&p, None).unwrap_err();
+    std::fs::remove_dir_all(&d).unwrap();
+    assert!(
+        matches!(e, ForcingError::TooLarge { bytes, max: MAX_FILE_BYTES, .. } if bytes == MAX_FILE_BYTES + 1),
+        "{e:?}"
+    );
+}

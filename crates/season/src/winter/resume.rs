@@ -2,16 +2,314 @@
 //! file is intact (`checkpoint::read` checks lengths and checksum) and was written for the
 //! same terrain and scenario. The cheap checks (file, terrain, scenario) run before the
 //! environment precompute, so a refused resume costs no time; a refusal names what changed.
+//!
+//! The checksum detects damage, not nonsense, so every decoded value is then validated as a
+//! scenario is ([`validate_state`]): the scheduler's clock finite and within the season (its
+//! end plus one event's reach), the timeline indices within their tables, every number of the
+//! run state finite and within [`MAX_MAGNITUDE`] (counters within [`MAX_COUNT`]), each
+//! avalanche's cell on the grid, the seed and the constant event rates the scenario's, the
+//! snow layers finite and ≥ 0 and the other maps finite. A refusal is a
+//! [`CheckpointError::Implausible`] naming the field and the value.
 
 use super::{RunState, SeasonError, SnowpackState, Winter};
 use crate::avalanches::HazardSources;
-use crate::checkpoint::{self, bedrock_fingerprint};
+use crate::checkpoint::{self, CheckpointError, bedrock_fingerprint};
 use crate::forcing::StationForcing;
 use crate::scenario::Scenario;
+use crate::scheduler::EventKind;
 use snowscape_terrain::LayeredTerrain;
 
 /// Extra per-cell maps after the four layers: scour, deposit, the pack's four arrays, rain.
 const EXTRA_MAPS: usize = 7;
+
+/// Largest magnitude of any number in a checkpointed run state (volumes in m³, days, metres):
+/// 10^15 m³ is a million km³ of snow, beyond any terrain's.
+pub const MAX_MAGNITUDE: f64 = 1e15;
+/// Largest counter or index in a checkpointed run state (events, draws, skier steps): at a
+/// microsecond an event, 10^12 events are eleven days of computing.
+pub const MAX_COUNT: u64 = 1_000_000_000_000;
+
+/// Keys of the run state that are identifiers (any 64-bit value) or checked elsewhere.
+const NOT_MAGNITUDES: [&str; 4] = [
+    "scenario",
+    "fingerprint",
+    "scenario_digest",
+    "scheduler.seed",
+];
+
+/// Every number under `value` (at `key`) finite and within [`MAX_MAGNITUDE`], every integer
+/// within [`MAX_COUNT`] (JSON has no NaN: a NaN was refused as a malformed header).
+fn check_numbers(key: &str, value: &serde_json::Value) -> Result<(), CheckpointError> {
+    use serde_json::Value;
+    if NOT_MAGNITUDES.contains(&key) {
+        return Ok(());
+    }
+    let join = |k: &str| {
+        if key.is_empty() {
+            k.to_string()
+        } else {
+            format!("{key}.{k}")
+        }
+    };
+    match value {
+        Value::Number(n) => {
+            if let Some(u) = n.as_u64() {
+                if u > MAX_COUNT {
+                    return Err(CheckpointError::implausible(
+                        key,
+                        u,
+                        format!("a count or index of at most {MAX_COUNT}"),
+                    ));
+                }
+            } else if let Some(i) = n.as_i64() {
+                if i.unsigned_abs() > MAX_COUNT {
+                    return Err(CheckpointError::implausible(
+                        key,
+                        i,
+                        format!("a count or index of at most {MAX_COUNT}"),
+                    ));
+                }
+            } else {
+                let v = n.as_f64().unwrap_or(f64::NAN);
+                if !(v.is_finite() && v.abs() <= MAX_MAGNITUDE) {
+                    return Err(CheckpointError::implausible(
+                        key,
+                        v,
+                        format!("a finite number within ±{MAX_MAGNITUDE:e}"),
+                    ));
+                }
+            }
+            Ok(())
+        }
+        Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, v)| check_numbers(&format!("{key}[{i}]"), v)),
+        Value::Object(o) => o.iter().try_for_each(|(k, v)| check_numbers(&join(k), v)),
+        _ => Ok(()),
+    }
+}
+
+/// A number of the state's JSON at `path` (keys), when it is one.
+fn number_at(v: &serde_json::Value, path: &[&str]) -> Option<f64> {
+    path.iter().try_fold(v, |v, k| v.get(k))?.as_f64()
+}
+
+/// Validates a decoded run state against the scenario and terrain it resumes (module docs).
+fn validate_state(
+    state: &RunState,
+    scenario: &Scenario,
+    terrain: &LayeredTerrain,
+) -> Result<(), CheckpointError> {
+    let json = serde_json::to_value(state)?;
+    check_numbers("", &json)?;
+    // The clock: within the season, plus the reach of one event past its end (the last draw
+    // comes at most 1 / (the always-active rates) after a time inside the season) and a day
+    // for the clock an avalanche or a skier run advances.
+    let days = scenario.days;
+    let e = &scenario.events;
+    let steady =
+        e.melt_and_state.max(0.0) + e.powder_diffusion.max(0.0) + e.wind_transport.max(0.0);
+    let reach = if steady > 0.0 {
+        1.0 / steady
+    } else {
+        crate::scenario::MAX_SEASON_DAYS
+    };
+    let latest = days + reach + 1.0;
+    let within = |field: &str, v: f64| -> Result<(), CheckpointError> {
+        if v.is_finite() && (0.0..=latest).contains(&v) {
+            Ok(())
+        } else {
+            Err(CheckpointError::implausible(
+                field,
+                v,
+                format!("a day of the season, within [0, {latest}]"),
+            ))
+        }
+    };
+    within("scheduler.time_days", state.scheduler.time_days())?;
+    within("melt_clock_days", state.melt_clock_days)?;
+    if let Some(d) = state.shed_clock_days {
+        within("shed_clock_days", d)?;
+    }
+    if let Some(d) = number_at(&json, &["scheduler", "snowfall_until"]) {
+        // A snowfall period may outlast the season; not the clock's reach by a year.
+        if !(d >= 0.0 && d <= latest + 365.0 * 2.0) {
+            return Err(CheckpointError::implausible(
+                "scheduler.snowfall_until",
+                d,
+                "a day within the season",
+            ));
+        }
+    }
+    match number_at(&json, &["scheduler", "snowfall_mean_days"]) {
+        Some(d) if d > 0.0 && d <= 365.0 => {}
+        d => {
+            return Err(CheckpointError::implausible(
+                "scheduler.snowfall_mean_days",
+                d.map_or("(none)".into(), |d| d.to_string()),
+                "a mean snowfall period within (0, 365] days",
+            ));
+        }
+    }
+    if json["scheduler"]["seed"].as_u64() != Some(scenario.seed) {
+        return Err(CheckpointError::implausible(
+            "scheduler.seed",
+            &json["scheduler"]["seed"],
+            format!("the scenario's seed {}", scenario.seed),
+        ));
+    }
+    // The rates: the steady kinds at the scenario's frequencies, none negative.
+    let rates = json["scheduler"]["rates"].as_array().map_or(&[][..], |a| a);
+    if rates.len() > 16 {
+        return Err(CheckpointError::implausible(
+            "scheduler.rates",
+            format!("{} rates", rates.len()),
+            "one per event kind",
+        ));
+    }
+    for (k, r) in rates.iter().enumerate() {
+        let per_day = r["per_day"].as_f64().unwrap_or(f64::NAN);
+        if per_day.is_nan() || per_day < 0.0 {
+            return Err(CheckpointError::implausible(
+                format!("scheduler.rates[{k}].per_day"),
+                per_day,
+                "a rate >= 0 per day",
+            ));
+        }
+        let want = match r["kind"].as_str() {
+            Some("melt_and_state_step" | "MeltAndStateStep") => Some(e.melt_and_state),
+            Some("powder_diffusion_step" | "PowderDiffusionStep") => Some(e.powder_diffusion),
+            Some("wind_transport_step" | "WindTransportStep") => Some(e.wind_transport),
+            _ => None,
+        };
+        if let Some(want) = want
+            && per_day != want.max(0.0)
+        {
+            return Err(CheckpointError::implausible(
+                format!("scheduler.rates[{k}].per_day"),
+                per_day,
+                format!("the scenario's {} per day", want.max(0.0)),
+            ));
+        }
+    }
+    // Counters: the drawn kinds were counted once a draw.
+    let draws = state.scheduler.draws();
+    let drawn: u64 = state
+        .event_counts
+        .iter()
+        .filter(|(k, _)| {
+            matches!(
+                k,
+                EventKind::SnowfallStart
+                    | EventKind::SnowfallStep
+                    | EventKind::MeltAndStateStep
+                    | EventKind::PowderDiffusionStep
+                    | EventKind::WindTransportStep
+            )
+        })
+        .map(|(_, &n)| n)
+        .sum();
+    if drawn > draws {
+        return Err(CheckpointError::implausible(
+            "event_counts",
+            format!("{drawn} drawn events"),
+            format!("at most the scheduler's {draws} draws"),
+        ));
+    }
+    if state.ski.finished > state.ski.runs {
+        return Err(CheckpointError::implausible(
+            "ski.finished",
+            state.ski.finished,
+            format!("at most the {} runs started", state.ski.runs),
+        ));
+    }
+    // The timeline's indices (the weather's is checked against the resolved timeline).
+    for (field, index, len) in [
+        (
+            "forced_index",
+            state.forced_index,
+            scenario.snowfall_periods.len(),
+        ),
+        (
+            "user_avalanche_index",
+            state.user_avalanche_index,
+            scenario.avalanches.len(),
+        ),
+    ] {
+        if index > len {
+            return Err(CheckpointError::implausible(
+                field,
+                index,
+                format!("an index within the scenario's {len} entries"),
+            ));
+        }
+    }
+    // The terrain: the summary the fingerprint was taken with, every avalanche on the grid.
+    let g = terrain.geometry();
+    let summary = terrain_summary(terrain);
+    if state.terrain != summary {
+        return Err(CheckpointError::implausible(
+            "terrain",
+            &state.terrain,
+            format!("this terrain's `{summary}`"),
+        ));
+    }
+    for (k, a) in state.avalanches.iter().enumerate() {
+        if a.cell[0] >= g.width() || a.cell[1] >= g.height() {
+            return Err(CheckpointError::implausible(
+                format!("avalanches[{k}].cell"),
+                format!("{:?}", a.cell),
+                format!("a cell of the {}x{} grid", g.width(), g.height()),
+            ));
+        }
+        within(&format!("avalanches[{k}].day"), a.day)?;
+    }
+    Ok(())
+}
+
+/// Every snow layer finite and ≥ 0 (0 off the terrain's valid cells, as
+/// [`LayeredTerrain::check_invariants`] wants), every other map finite on the valid cells.
+fn validate_maps(
+    terrain: &LayeredTerrain,
+    layers: &[Vec<f32>; 4],
+    extra: &[Vec<f32>],
+) -> Result<(), CheckpointError> {
+    let valid = |i: usize| terrain.mask().is_valid(i);
+    const EXTRA_NAMES: [&str; EXTRA_MAPS] = [
+        "scour",
+        "deposit",
+        "surface_age",
+        "cold_content",
+        "liquid_water",
+        "melting",
+        "pending_rain",
+    ];
+    for (k, layer) in layers.iter().enumerate() {
+        let ok = |(i, v): (usize, &f32)| v.is_finite() && *v >= 0.0 && (valid(i) || *v == 0.0);
+        if let Some(i) = layer.iter().enumerate().position(|c| !ok(c)) {
+            return Err(CheckpointError::implausible(
+                format!("layer {k} cell {i}"),
+                layer[i],
+                "a finite snow thickness >= 0 m (0 off the terrain)",
+            ));
+        }
+    }
+    for (k, map) in extra.iter().enumerate() {
+        if let Some(i) = map
+            .iter()
+            .enumerate()
+            .position(|(i, v)| valid(i) && !v.is_finite())
+        {
+            return Err(CheckpointError::implausible(
+                format!("{} cell {i}", EXTRA_NAMES.get(k).unwrap_or(&"map")),
+                map[i],
+                "a finite number",
+            ));
+        }
+    }
+    Ok(())
+}
 
 /// Size and cell size of a terrain, for messages.
 pub(super) fn terrain_summary(terrain: &LayeredTerrain) -> String {
@@ -115,7 +413,28 @@ impl Winter {
         forcing: Option<StationForcing>,
         r: &mut impl std::io::Read,
     ) -> Result<Self, SeasonError> {
-        let mut saved = checkpoint::read::<RunState>(r, terrain.geometry().len(), EXTRA_MAPS)?;
+        let saved = checkpoint::read::<RunState>(r, terrain.geometry().len(), EXTRA_MAPS)?;
+        Self::resume_from(scenario, terrain, forcing, saved)
+    }
+
+    /// [`Winter::resume_with_forcing`] from the checkpoint file at `path`: only a regular file
+    /// of at most the terrain's largest checkpoint is read ([`checkpoint::read_file`]).
+    pub fn resume_from_file(
+        scenario: Scenario,
+        terrain: LayeredTerrain,
+        forcing: Option<StationForcing>,
+        path: &std::path::Path,
+    ) -> Result<Self, SeasonError> {
+        let saved = checkpoint::read_file::<RunState>(path, terrain.geometry().len(), EXTRA_MAPS)?;
+        Self::resume_from(scenario, terrain, forcing, saved)
+    }
+
+    fn resume_from(
+        scenario: Scenario,
+        terrain: LayeredTerrain,
+        forcing: Option<StationForcing>,
+        mut saved: checkpoint::Contents<RunState>,
+    ) -> Result<Self, SeasonError> {
         if saved.header.fingerprint != bedrock_fingerprint(&terrain) {
             let now = terrain_summary(&terrain);
             let now = if now == saved.header.terrain {
@@ -124,7 +443,7 @@ impl Winter {
                 now
             };
             return Err(SeasonError::CheckpointTerrain {
-                checkpoint: saved.header.terrain.clone(),
+                checkpoint: crate::clip_for_message(&saved.header.terrain),
                 now,
             });
         }
@@ -136,9 +455,19 @@ impl Winter {
                 now,
             });
         }
+        validate_state(&saved.header, &scenario, &terrain)?;
+        validate_maps(&terrain, &saved.layers, &saved.extra)?;
         let mut w = Self::with_forcing(scenario, terrain, forcing)?;
         if saved.header.scenario_digest != w.state.scenario_digest {
             return Err(SeasonError::CheckpointForcing);
+        }
+        if saved.header.weather_index >= w.weather.len() {
+            return Err(CheckpointError::implausible(
+                "weather_index",
+                saved.header.weather_index,
+                format!("an index within the {} weather periods", w.weather.len()),
+            )
+            .into());
         }
         saved.restore_layers(&mut w.terrain);
         let mut extra = std::mem::take(&mut saved.extra);

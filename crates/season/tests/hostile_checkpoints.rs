@@ -1,0 +1,328 @@
+//! Regression tests of issue 46 items 3 and 4: a checkpoint is read only from a regular file
+//! of bounded size (a link to /dev/zero read 4.2 GB, a FIFO hung), and a checkpoint whose
+//! checksum matches but whose values are absurd (forged here: each edit re-computes the CRC)
+//! is refused with a typed error naming the field, never a panic or a hang.
+
+use serde_json::{Value, json};
+use snowscape_season::checkpoint::{self, CheckpointError};
+use snowscape_season::scenario::Scenario;
+use snowscape_season::winter::{SeasonError, Winter};
+use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain};
+use std::path::Path;
+
+/// Bytes before the JSON header: magic, version, header length, maps length.
+const PREAMBLE: usize = 28;
+const COLS: usize = 24;
+const ROWS: usize = 20;
+
+/// A 24x20 terrain of 20 m cells: a cone from 900 m to 2100 m.
+fn terrain() -> LayeredTerrain {
+    let g = GridGeometry::square(COLS, ROWS, 20.0).unwrap();
+    LayeredTerrain::from_bedrock(Grid::from_fn(g, |c, r| {
+        let (x, y) = (c as f32 / COLS as f32 - 0.5, r as f32 / ROWS as f32 - 0.5);
+        900.0 + 1200.0 * (1.0 - 2.0 * (x * x + y * y).sqrt()).max(0.0)
+    }))
+}
+
+fn scenario() -> Scenario {
+    let mut s = Scenario {
+        days: 6.0,
+        ..Scenario::default()
+    };
+    s.parameters.environment.sky.directions = 8;
+    s.parameters.environment.sun.day_step = 30;
+    s
+}
+
+/// A genuine checkpoint of the season stopped at `day`.
+fn checkpoint_at(day: f64) -> Vec<u8> {
+    let mut w = Winter::new(scenario(), terrain()).unwrap();
+    w.run_until(day).unwrap();
+    let mut bytes = Vec::new();
+    w.write_checkpoint(&mut bytes).unwrap();
+    bytes
+}
+
+/// The JSON header and the raw maps of a checkpoint.
+fn split(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let len = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap()) as usize;
+    let (header_len, maps_len) = (len(12), len(20));
+    let header = serde_json::from_slice(&bytes[PREAMBLE..PREAMBLE + header_len]).unwrap();
+    let maps = bytes[PREAMBLE + header_len..PREAMBLE + header_len + maps_len].to_vec();
+    (header, maps)
+}
+
+/// A checkpoint of `header` and `maps` with lengths and CRC computed anew: what a forger (or
+/// a writer with a bug) produces, and the checksum accepts.
+fn assemble(header: &Value, maps: &[u8]) -> Vec<u8> {
+    let json = serde_json::to_vec(header).unwrap();
+    let mut out = b"SNOWCKPT".to_vec();
+    out.extend_from_slice(&checkpoint::VERSION.to_le_bytes());
+    out.extend_from_slice(&(json.len() as u64).to_le_bytes());
+    out.extend_from_slice(&(maps.len() as u64).to_le_bytes());
+    out.extend_from_slice(&json);
+    out.extend_from_slice(maps);
+    let crc = crc32fast::hash(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
+
+/// `bytes` with the header edited by `edit`, the CRC re-computed.
+fn forge(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
+    let (mut header, maps) = split(bytes);
+    edit(&mut header);
+    assemble(&header, &maps)
+}
+
+/// `bytes` with map `map` (0..4 the layers, then the extra maps) at `cell` set to `v`.
+fn forge_map(bytes: &[u8], map: usize, cell: usize, v: f32) -> Vec<u8> {
+    let (header, mut maps) = split(bytes);
+    let at = 4 * (map * COLS * ROWS + cell);
+    maps[at..at + 4].copy_from_slice(&v.to_le_bytes());
+    assemble(&header, &maps)
+}
+
+fn resume(bytes: &[u8]) -> Result<Winter, SeasonError> {
+    Winter::resume(scenario(), terrain(), &mut &bytes[..])
+}
+
+/// The field an `Implausible` refusal names, and its message.
+fn refused_field(bytes: &[u8]) -> (String, String) {
+    match resume(bytes) {
+        Err(SeasonError::Checkpoint(e @ CheckpointError::Implausible { .. })) => {
+            let m = e.to_string();
+            let CheckpointError::Implausible { field, .. } = e else {
+                unreachable!()
+            };
+            (field, m)
+        }
+        Err(e) => panic!("expected an implausible value, got {e:?}"),
+        Ok(_) => panic!("a forged checkpoint was resumed"),
+    }
+}
+
+#[test]
+fn the_forger_round_trips_a_genuine_checkpoint() {
+    // A genuine checkpoint resumes (mid-season and at the season's end), and so does one
+    // re-assembled untouched (its keys re-ordered): a forged one differs only in its edit.
+    let bytes = checkpoint_at(2.5);
+    let w = resume(&bytes).unwrap();
+    assert!(w.day() >= 2.5);
+    let same = resume(&forge(&bytes, |_| {})).unwrap();
+    assert_eq!(same.day(), w.day());
+    let end = checkpoint_at(6.0);
+    assert!(resume(&end).unwrap().finished());
+}
+
+/// An edit of a checkpoint's header.
+type Edit = Box<dyn Fn(&mut Value)>;
+
+#[test]
+fn absurd_indices_times_and_counters_are_refused_naming_the_field() {
+    let bytes = checkpoint_at(2.5);
+    let cases: Vec<(&str, Edit)> = vec![
+        (
+            "weather_index",
+            Box::new(|h| h["weather_index"] = json!(1u64 << 63)),
+        ),
+        ("weather_index", Box::new(|h| h["weather_index"] = json!(7))),
+        ("forced_index", Box::new(|h| h["forced_index"] = json!(3))),
+        (
+            "user_avalanche_index",
+            Box::new(|h| h["user_avalanche_index"] = json!(u64::MAX)),
+        ),
+        (
+            "scheduler.time_days",
+            Box::new(|h| h["scheduler"]["time_days"] = json!(-1e300)),
+        ),
+        (
+            "scheduler.time_days",
+            Box::new(|h| h["scheduler"]["time_days"] = json!(1e300)),
+        ),
+        (
+            "scheduler.time_days",
+            Box::new(|h| h["scheduler"]["time_days"] = json!(-1.0)),
+        ),
+        (
+            "scheduler.time_days",
+            Box::new(|h| h["scheduler"]["time_days"] = json!(500.0)),
+        ),
+        (
+            "scheduler.draws",
+            Box::new(|h| h["scheduler"]["draws"] = json!(u64::MAX)),
+        ),
+        (
+            "scheduler.seed",
+            Box::new(|h| h["scheduler"]["seed"] = json!(12345)),
+        ),
+        (
+            "scheduler.snowfall_mean_days",
+            Box::new(|h| h["scheduler"]["snowfall_mean_days"] = json!(0.0)),
+        ),
+        (
+            "scheduler.rates[2].per_day",
+            Box::new(|h| h["scheduler"]["rates"][2]["per_day"] = json!(1e-300)),
+        ),
+        (
+            "scheduler.rates[0].per_day",
+            Box::new(|h| h["scheduler"]["rates"][0]["per_day"] = json!(-5.0)),
+        ),
+        (
+            "melt_clock_days",
+            Box::new(|h| h["melt_clock_days"] = json!(-3.0)),
+        ),
+        (
+            "budget.snowfall",
+            Box::new(|h| h["budget"]["snowfall"] = json!(1e300)),
+        ),
+        (
+            "budget.water.store",
+            Box::new(|h| h["budget"]["water"]["store"] = json!(-1e200)),
+        ),
+        (
+            "event_counts.wind_transport_step",
+            Box::new(|h| h["event_counts"]["wind_transport_step"] = json!(1u64 << 62)),
+        ),
+        (
+            "event_counts",
+            Box::new(|h| h["event_counts"]["wind_transport_step"] = json!(1_000_000)),
+        ),
+        (
+            "ski.finished",
+            Box::new(|h| h["ski"]["finished"] = json!(9)),
+        ),
+        (
+            "terrain",
+            Box::new(|h| h["terrain"] = json!("x".repeat(100_000))),
+        ),
+    ];
+    for (want, edit) in cases {
+        let forged = forge(&bytes, edit);
+        let t = std::time::Instant::now();
+        let (field, message) = refused_field(&forged);
+        assert_eq!(field, want, "{message}");
+        assert!(
+            message.len() < 400,
+            "{} bytes: {message:.400}",
+            message.len()
+        );
+        assert!(t.elapsed().as_secs() < 20, "{want}: {:?}", t.elapsed());
+    }
+}
+
+#[test]
+fn an_avalanche_off_the_grid_is_refused() {
+    let bytes = checkpoint_at(2.5);
+    let record = json!({
+        "day": 1.0, "trigger": "user", "cell": [COLS + 5, 0], "map_xy": [0.0, 0.0],
+        "released_m3": 1.0, "entrained_m3": 0.0, "deposited_m3": 1.0, "outflow_m3": 0.0,
+        "runout_length_m": 10.0, "travel_angle_deg": 30.0, "footprint_area_m2": 400.0,
+        "max_speed_m_s": 5.0, "simulated_s": 10.0, "steps": 100,
+        "release_temperature_c": null, "alpha": 0.5
+    });
+    let forged = forge(&bytes, |h| h["avalanches"] = json!([record.clone()]));
+    let (field, message) = refused_field(&forged);
+    assert_eq!(field, "avalanches[0].cell", "{message}");
+    // On the grid but on a day past the season's reach.
+    let mut late = record.clone();
+    late["cell"] = json!([3, 4]);
+    late["day"] = json!(-2.0);
+    let (field, message) = refused_field(&forge(&bytes, |h| h["avalanches"] = json!([late])));
+    assert_eq!(field, "avalanches[0].day", "{message}");
+}
+
+#[test]
+fn nan_negative_or_off_terrain_snow_is_refused() {
+    let bytes = checkpoint_at(2.5);
+    for (map, cell, v, want) in [
+        (0, 5, f32::NAN, "layer 0 cell 5"),
+        (2, 17, -1.0, "layer 2 cell 17"),
+        (3, 0, f32::INFINITY, "layer 3 cell 0"),
+        (4, 9, f32::NAN, "scour cell 9"),
+        (10, 3, f32::NEG_INFINITY, "pending_rain cell 3"),
+    ] {
+        let (field, message) = refused_field(&forge_map(&bytes, map, cell, v));
+        assert_eq!(field, want, "{message}");
+    }
+}
+
+/// A fresh folder under the system's temporary one.
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("snowscape-ckpt-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn resume_file(path: &Path) -> Result<Winter, SeasonError> {
+    Winter::resume_from_file(scenario(), terrain(), None, path)
+}
+
+#[test]
+fn only_a_regular_file_of_bounded_length_is_read() {
+    let d = temp_dir("files");
+    let bytes = checkpoint_at(2.5);
+    let p = d.join("checkpoint.bin");
+    std::fs::write(&p, &bytes).unwrap();
+    assert!(resume_file(&p).is_ok());
+
+    // A link to /dev/zero (read 4.2 GB before), a directory: refused before any read.
+    let zero = d.join("zero.bin");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    for (path, kind) in [(&zero, "a character device"), (&d, "a directory")] {
+        match resume_file(path) {
+            Err(SeasonError::Checkpoint(CheckpointError::NotRegular { kind: k, .. })) => {
+                assert_eq!(k, kind)
+            }
+            other => panic!("{}: {:?}", path.display(), other.map(|_| ())),
+        }
+    }
+    // A FIFO (hung before): refused without opening it.
+    let fifo = d.join("fifo.bin");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    if made {
+        let t = std::time::Instant::now();
+        assert!(matches!(
+            resume_file(&fifo),
+            Err(SeasonError::Checkpoint(CheckpointError::NotRegular {
+                kind: "a FIFO (named pipe)",
+                ..
+            }))
+        ));
+        assert!(t.elapsed().as_secs() < 5);
+    }
+    // Longer than the largest checkpoint of this terrain (sparse: no disk used).
+    let big = d.join("big.bin");
+    let max = checkpoint::max_len(COLS * ROWS, 7);
+    std::fs::File::create(&big)
+        .unwrap()
+        .set_len(max + 1)
+        .unwrap();
+    assert!(matches!(
+        resume_file(&big),
+        Err(SeasonError::Checkpoint(CheckpointError::TooLarge { bytes, .. })) if bytes == max + 1
+    ));
+    // A preamble announcing the largest header, in a short file: refused by the file's
+    // length before the body is allocated.
+    let mut lying = bytes.clone();
+    lying[12..20].copy_from_slice(&checkpoint::MAX_HEADER.to_le_bytes());
+    std::fs::write(&p, &lying).unwrap();
+    assert!(matches!(
+        resume_file(&p),
+        Err(SeasonError::Checkpoint(CheckpointError::Truncated { found, .. })) if found == bytes.len() as u64
+    ));
+    // One byte more than announced.
+    let mut longer = bytes.clone();
+    longer.push(0);
+    std::fs::write(&p, &longer).unwrap();
+    assert!(matches!(
+        resume_file(&p),
+        Err(SeasonError::Checkpoint(CheckpointError::TrailingBytes {
+            extra: 1
+        }))
+    ));
+    std::fs::remove_dir_all(&d).unwrap();
+}
