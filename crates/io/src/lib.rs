@@ -110,7 +110,9 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
     tracing::warn!(
         "{}: declares {} (degrees) but spans x {:.1}..{:.1}, y {:.1}..{:.1}: taking the coordinates as metres with no CRS; pass --crs to set the right one",
         path.display(),
-        g.crs().map(|c| c.to_string()).unwrap_or_default(),
+        g.crs()
+            .map(|c| error::clip(&c.to_string(), error::MAX_ECHO))
+            .unwrap_or_default(),
         t.origin_x,
         t.origin_x + g.width() as f64 * t.pixel_width,
         t.origin_y - g.height() as f64 * t.pixel_height,

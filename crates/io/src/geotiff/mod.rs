@@ -18,6 +18,7 @@
 //!
 //! Writing: see [`write_geotiff_bands`]; Cloud-Optimized: [`write_cog`].
 
+pub mod check;
 mod cog;
 pub(crate) mod geokeys;
 mod read;
