@@ -1,6 +1,6 @@
 //! The plausibility check every (Geo)TIFF passes before the `tiff` crate decodes anything.
 //!
-//! [`precheck`] parses the header and the first image directory itself, in time linear in
+//! `precheck` parses the header and the first image directory itself, in time linear in
 //! the directory, and refuses, with a typed error naming the file and the value:
 //! - an image directory, a tag's values, a strip or a tile whose offset is past the end of the
 //!   file ([`RasterError::PastEnd`]) or that runs past it ([`RasterError::RunsPastEnd`]): a
