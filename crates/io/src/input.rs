@@ -266,6 +266,29 @@ mod tests {
     }
 
     #[test]
+    fn a_bounded_reader_refuses_seeks_past_the_end_with_the_offset() {
+        use std::io::{Cursor, Seek, SeekFrom};
+        let mut r = BoundedReader::new(Cursor::new(vec![1u8, 2, 3, 4]), 4);
+        assert_eq!(r.seek(SeekFrom::Start(4)).unwrap(), 4);
+        assert_eq!(r.seek(SeekFrom::Current(-2)).unwrap(), 2);
+        let mut b = [0u8; 2];
+        r.read_exact(&mut b).unwrap();
+        assert_eq!((b, r.position()), ([3, 4], 4));
+        // 2^64 - 616: the OS would say "Invalid argument (os error 22)".
+        let e = r.seek(SeekFrom::Start(u64::MAX - 615)).unwrap_err();
+        let p = PastEnd::of(&e).unwrap();
+        assert_eq!((p.offset, p.len), (u64::MAX - 615, 4));
+        assert_eq!(
+            e.to_string(),
+            "offset 18446744073709551000 is past the end of the 4-byte file"
+        );
+        assert!(PastEnd::of(&r.seek(SeekFrom::Current(-5)).unwrap_err()).is_some());
+        assert!(PastEnd::of(&r.seek(SeekFrom::End(1)).unwrap_err()).is_some());
+        // A refused seek leaves the position where it was.
+        assert_eq!(r.position(), 4);
+    }
+
+    #[test]
     fn devices_and_directories_are_refused() {
         let e = open_regular(Path::new("/dev/zero")).unwrap_err();
         assert!(
