@@ -30,22 +30,62 @@ use std::path::Path;
 /// The nodata value written by [`write`].
 pub const ASC_NODATA: f64 = -9999.0;
 
-/// A line-by-line reader over a reused byte buffer that counts lines.
+/// The most bytes a line may hold per value of a row: 48, twice the longest shortest
+/// round-trip f64 (`-1.2345678901234567e-308`, 24 characters) and its separator.
+pub const MAX_LINE_BYTES_PER_VALUE: usize = 48;
+
+/// The most bytes of any line beyond [`MAX_LINE_BYTES_PER_VALUE`] x `ncols` (header lines,
+/// and every line before `ncols` is known): 64 KiB.
+pub const MAX_LINE_BYTES_BASE: usize = 1 << 16;
+
+/// A line-by-line reader over a reused byte buffer that counts lines. A line longer than
+/// `max` bytes is an error: a file without line breaks cannot make the buffer grow to its
+/// size.
 struct Lines<R> {
     reader: R,
     buf: Vec<u8>,
     line: usize,
+    max: usize,
+    ncols: usize,
 }
 
 impl<R: BufRead> Lines<R> {
+    /// Sets the line limit for rows of `ncols` values (see [`MAX_LINE_BYTES_PER_VALUE`]).
+    fn set_ncols(&mut self, ncols: usize) {
+        self.ncols = ncols;
+        self.max = ncols
+            .saturating_mul(MAX_LINE_BYTES_PER_VALUE)
+            .saturating_add(MAX_LINE_BYTES_BASE);
+    }
+
     /// Loads the next line into `buf`; false at end of file.
     fn advance(&mut self, path: &Path) -> Result<bool> {
         self.buf.clear();
-        let n = self
-            .reader
-            .read_until(b'\n', &mut self.buf)
-            .map_err(io_err(path))?;
-        if n == 0 {
+        loop {
+            let avail = self.reader.fill_buf().map_err(io_err(path))?;
+            if avail.is_empty() {
+                break;
+            }
+            let (take, done) = match avail.iter().position(|&b| b == b'\n') {
+                Some(i) => (i + 1, true),
+                None => (avail.len(), false),
+            };
+            if self.buf.len() + take > self.max {
+                return Err(RasterError::AscLineTooLong {
+                    path: path.to_path_buf(),
+                    line: self.line + 1,
+                    max: self.max,
+                    per_value: MAX_LINE_BYTES_PER_VALUE,
+                    ncols: self.ncols,
+                });
+            }
+            self.buf.extend_from_slice(&avail[..take]);
+            self.reader.consume(take);
+            if done {
+                break;
+            }
+        }
+        if self.buf.is_empty() {
             return Ok(false);
         }
         self.line += 1;
@@ -124,7 +164,14 @@ impl Header {
 /// Reads header lines until the first line that starts with a number, which stays loaded.
 fn read_header<R: BufRead>(path: &Path, lines: &mut Lines<R>) -> Result<(Header, bool)> {
     let mut header = Header::default();
-    while lines.advance(path)? {
+    loop {
+        if let Some(ncols) = header.ncols {
+            // Known from an earlier line: it sizes the limit of the lines after it.
+            lines.set_ncols(ncols);
+        }
+        if !lines.advance(path)? {
+            break;
+        }
         let mut tokens = lines.tokens();
         let Some(first) = tokens.next() else { continue };
         if parse_f64(first).is_some() {
@@ -247,6 +294,8 @@ pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
         reader: BufReader::with_capacity(1 << 16, file),
         buf: Vec::new(),
         line: 0,
+        max: MAX_LINE_BYTES_BASE,
+        ncols: 0,
     };
     let (header, has_data) = read_header(path, &mut lines)?;
     let lay = layout(path, &header, lines.line)?;

@@ -129,7 +129,7 @@ pub enum RasterError {
         line: usize,
     },
     /// The TIFF decoder or encoder failed (truncated or corrupt file, unsupported layout).
-    #[error("{path}: TIFF error: {source}")]
+    #[error("{path}: TIFF error: {}", clip(&source.to_string(), MAX_FOREIGN_MESSAGE))]
     Tiff {
         path: PathBuf,
         #[source]
@@ -141,6 +141,61 @@ pub enum RasterError {
          image directory points to"
     )]
     TiffTruncated { path: PathBuf, bytes: u64 },
+    /// An offset in the file's directory (a TIFF strip or tile, an image directory or tag
+    /// value, an EXR chunk) that points past the end of the file.
+    #[error(
+        "{path}: {what} offset {offset} is past the end of the {bytes}-byte file (the file is \
+         truncated or corrupt)"
+    )]
+    PastEnd {
+        path: PathBuf,
+        /// What the offset locates ("strip 3", "the image directory", "chunk 12").
+        what: String,
+        offset: u64,
+        bytes: u64,
+    },
+    /// A block of the file (a TIFF strip or tile, a tag's values) that starts inside the file
+    /// but runs past its end.
+    #[error(
+        "{path}: {what} ({count} bytes at offset {offset}) runs past the end of the \
+         {bytes}-byte file (the file is truncated or corrupt)"
+    )]
+    RunsPastEnd {
+        path: PathBuf,
+        what: String,
+        offset: u64,
+        count: u64,
+        bytes: u64,
+    },
+    /// Data whose decoded size, implied by the file's own tags or header, is more than its
+    /// stored bytes can expand to with its compression (a decompression bomb, or a corrupt
+    /// size): refused before anything is allocated or inflated.
+    #[error(
+        "{path}: {what} would decode to {decoded} bytes, but its {stored} stored bytes of \
+         {compression} data expand to at most {ratio}x that: refusing it before allocating"
+    )]
+    DecodedSize {
+        path: PathBuf,
+        /// What is decoded ("the image", "strip 3", "tile 7").
+        what: String,
+        decoded: u64,
+        stored: u64,
+        compression: &'static str,
+        /// The largest expansion the compression allows (1 for uncompressed data).
+        ratio: u64,
+    },
+    /// An ESRI ASCII line longer than any line the header's width allows.
+    #[error(
+        "{path}:{line}: the line is longer than {max} bytes (at most {per_value} bytes per \
+         value of the {ncols} columns): not an ESRI ASCII grid"
+    )]
+    AscLineTooLong {
+        path: PathBuf,
+        line: usize,
+        max: usize,
+        per_value: usize,
+        ncols: usize,
+    },
     /// A TIFF sample layout this reader does not handle.
     #[error("{path}: unsupported TIFF layout: {what}")]
     TiffUnsupported { path: PathBuf, what: String },
@@ -153,7 +208,7 @@ pub enum RasterError {
         reason: String,
     },
     /// The PNG decoder or encoder failed.
-    #[error("{path}: PNG error: {source}")]
+    #[error("{path}: PNG error: {}", clip(&source.to_string(), MAX_FOREIGN_MESSAGE))]
     Png {
         path: PathBuf,
         #[source]
@@ -180,7 +235,7 @@ pub enum RasterError {
     #[error("{path}: NPY error: {reason}")]
     Npy { path: PathBuf, reason: String },
     /// An OpenEXR file that cannot be read or written.
-    #[error("{path}: EXR error: {source}")]
+    #[error("{path}: EXR error: {}", clip(&source.to_string(), MAX_FOREIGN_MESSAGE))]
     Exr {
         path: PathBuf,
         #[source]
@@ -243,14 +298,33 @@ impl From<InputError> for RasterError {
     }
 }
 
+/// The most characters of a foreign decoder's message quoted in an error.
+pub const MAX_FOREIGN_MESSAGE: usize = 160;
+
+/// The most characters of text taken from a file (a token, a tag, a header) quoted in an
+/// error: a corrupt file must not put megabytes into a message.
+pub const MAX_ECHO: usize = 80;
+
+/// `text` cut to at most `max` characters, with `...` and the full length when it was cut.
+pub fn clip(text: &str, max: usize) -> String {
+    let mut chars = text.char_indices();
+    match chars.nth(max) {
+        None => text.to_string(),
+        Some((at, _)) => format!("{}... ({} bytes in all)", &text[..at], text.len()),
+    }
+}
+
 /// Shorthand used by every module.
 pub type Result<T> = std::result::Result<T, RasterError>;
 
 /// Closure helpers that attach a path to foreign errors.
 pub(crate) fn io_err(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> RasterError + '_ {
-    move |source| RasterError::Io {
-        path: path.to_path_buf(),
-        source,
+    move |source| match crate::input::PastEnd::of(&source) {
+        Some(p) => past_end(path, "a read", p),
+        None => RasterError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
     }
 }
 
@@ -266,17 +340,36 @@ pub(crate) fn geometry_err(
 /// A TIFF decoder error; an unexpected end of file becomes [`RasterError::TiffTruncated`]
 /// (said once, instead of the decoder's "failed to fill whole buffer").
 pub(crate) fn tiff_err(path: &std::path::Path) -> impl FnOnce(tiff::TiffError) -> RasterError + '_ {
-    move |source| match source {
-        tiff::TiffError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
-            RasterError::TiffTruncated {
-                path: path.to_path_buf(),
-                bytes: std::fs::metadata(path).map_or(0, |m| m.len()),
+    move |source| {
+        if let tiff::TiffError::IoError(e) = &source {
+            if let Some(p) = crate::input::PastEnd::of(e) {
+                return past_end(path, "an image directory or tag value", p);
+            }
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                return RasterError::TiffTruncated {
+                    path: path.to_path_buf(),
+                    bytes: std::fs::metadata(path).map_or(0, |m| m.len()),
+                };
             }
         }
-        source => RasterError::Tiff {
+        RasterError::Tiff {
             path: path.to_path_buf(),
             source,
-        },
+        }
+    }
+}
+
+/// [`RasterError::PastEnd`] for an offset a decoder sought (see [`crate::input::BoundedReader`]).
+pub(crate) fn past_end(
+    path: &std::path::Path,
+    what: &str,
+    p: crate::input::PastEnd,
+) -> RasterError {
+    RasterError::PastEnd {
+        path: path.to_path_buf(),
+        what: what.to_string(),
+        offset: p.offset,
+        bytes: p.len,
     }
 }
 

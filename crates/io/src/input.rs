@@ -133,6 +133,21 @@ pub fn read_regular(path: &Path, max_bytes: u64) -> Result<Vec<u8>, InputError> 
     Ok(bytes)
 }
 
+/// Fills `buf` from `r` as far as the data goes; returns how many bytes were read (less than
+/// `buf.len()` only at the end of the data).
+pub fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match r.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(k) => got += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
+}
+
 /// Reads a whole regular UTF-8 text file of at most [`MAX_TEXT_BYTES`] bytes.
 pub fn read_regular_text(path: &Path) -> Result<String, InputError> {
     let bytes = read_regular(path, MAX_TEXT_BYTES)?;
@@ -140,6 +155,91 @@ pub fn read_regular_text(path: &Path) -> Result<String, InputError> {
         path: path.to_path_buf(),
         source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
     })
+}
+
+/// A seek or read at an offset past the end of the file: what a corrupt offset in a TIFF or
+/// EXR directory leads to. Carried inside an [`std::io::Error`] by [`BoundedReader`] so that
+/// the decoder's error can be turned back into a typed [`crate::RasterError::PastEnd`] naming
+/// the offset, instead of the operating system's "Invalid argument (os error 22)".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
+#[error("offset {offset} is past the end of the {len}-byte file")]
+pub struct PastEnd {
+    /// The offset that was asked for (as the file gives it, or as a decoder computed it).
+    pub offset: u64,
+    /// The file's length in bytes.
+    pub len: u64,
+}
+
+impl PastEnd {
+    /// The [`PastEnd`] an I/O error carries, if it is one.
+    pub fn of(e: &std::io::Error) -> Option<PastEnd> {
+        e.get_ref()?.downcast_ref::<PastEnd>().copied()
+    }
+}
+
+/// A buffered reader over a regular file of known length whose seeks cannot leave the file:
+/// a seek past the end (or before the start) fails with an [`std::io::Error`] carrying
+/// [`PastEnd`] (kind `InvalidData`), before the operating system sees the offset. The TIFF
+/// and EXR readers hand it to their decoders.
+pub struct BoundedReader<R> {
+    inner: R,
+    pos: u64,
+    len: u64,
+}
+
+impl<R> BoundedReader<R> {
+    /// Wraps `inner`, positioned at the start of a file of `len` bytes.
+    pub fn new(inner: R, len: u64) -> Self {
+        Self { inner, pos: 0, len }
+    }
+
+    /// The file's length in bytes.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// Whether the file is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The current position, bytes from the start.
+    pub fn position(&self) -> u64 {
+        self.pos
+    }
+}
+
+impl<R: Read> Read for BoundedReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.pos = self.pos.saturating_add(n as u64);
+        Ok(n)
+    }
+}
+
+impl<R: std::io::Seek> std::io::Seek for BoundedReader<R> {
+    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
+        use std::io::SeekFrom;
+        let target: i128 = match to {
+            SeekFrom::Start(p) => i128::from(p),
+            SeekFrom::Current(d) => i128::from(self.pos) + i128::from(d),
+            SeekFrom::End(d) => i128::from(self.len) + i128::from(d),
+        };
+        if target < 0 || target > i128::from(self.len) {
+            let offset = u64::try_from(target.max(0)).unwrap_or(u64::MAX);
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                PastEnd {
+                    offset,
+                    len: self.len,
+                },
+            ));
+        }
+        let target = target as u64;
+        self.inner.seek(SeekFrom::Start(target))?;
+        self.pos = target;
+        Ok(target)
+    }
 }
 
 #[cfg(test)]
@@ -163,6 +263,29 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    #[test]
+    fn a_bounded_reader_refuses_seeks_past_the_end_with_the_offset() {
+        use std::io::{Cursor, Seek, SeekFrom};
+        let mut r = BoundedReader::new(Cursor::new(vec![1u8, 2, 3, 4]), 4);
+        assert_eq!(r.seek(SeekFrom::Start(4)).unwrap(), 4);
+        assert_eq!(r.seek(SeekFrom::Current(-2)).unwrap(), 2);
+        let mut b = [0u8; 2];
+        r.read_exact(&mut b).unwrap();
+        assert_eq!((b, r.position()), ([3, 4], 4));
+        // 2^64 - 616: the OS would say "Invalid argument (os error 22)".
+        let e = r.seek(SeekFrom::Start(u64::MAX - 615)).unwrap_err();
+        let p = PastEnd::of(&e).unwrap();
+        assert_eq!((p.offset, p.len), (u64::MAX - 615, 4));
+        assert_eq!(
+            e.to_string(),
+            "offset 18446744073709551000 is past the end of the 4-byte file"
+        );
+        assert!(PastEnd::of(&r.seek(SeekFrom::Current(-5)).unwrap_err()).is_some());
+        assert!(PastEnd::of(&r.seek(SeekFrom::End(1)).unwrap_err()).is_some());
+        // A refused seek leaves the position where it was.
+        assert_eq!(r.position(), 4);
     }
 
     #[test]

@@ -19,6 +19,27 @@
 //! Rules shared by every reader:
 //! - the cell count is checked against [`ReadOptions::max_cells`] (default 2^28) before any
 //!   grid-sized allocation;
+//! - the size the file's own tags or header claim is checked against the file before
+//!   anything is allocated or inflated, in time linear in the header, and every decompression
+//!   is bounded by the size the tags say the data decodes to (a decompression bomb is refused
+//!   with [`RasterError::DecodedSize`] naming the claimed and stored bytes); the limits:
+//!
+//! | format | checked before allocating | limit |
+//! |---|---|---|
+//! | GeoTIFF (classic, BigTIFF, COG) | [`geotiff::check`]: every offset of the first directory, its tags and band 1's strips or tiles inside the file; each strip or tile's stored bytes x its compression's largest expansion >= its decoded size (else an error naming the strip or tile and both sizes); all of band 1 likewise against the file's length | Deflate 1032:1, LZW 4096:1, PackBits 64:1, none 1:1; other compressions refused; a tag holds at most 2^24 values; the decoder's `Limits` sized to one strip or tile (`decoding_buffer_size`, `intermediate_buffer_size`) and 16 MiB of tag values (`ifd_value_size`); decoded a band of strips or tiles at a time |
+//! | PNG16 | IHDR: cells, and `rows x (1 + row bytes)` against the file's length | zlib 1032:1; decoder `max_alloc` twice the image + 1 MiB |
+//! | OpenEXR | cells; the offset tables fit in the file and every chunk offset lies after them and inside the file; the layer's `cells x channel bytes` against the file's length | RLE 64:1, ZIP 1032:1, PXR24 1376:1, B44 32:1, others 65536:1; one channel read, no decoding threads |
+//! | NPY | header length and shape product before parsing, data bytes = shape x item size | none beyond the file |
+//! | ESRI ASCII | capacity bounded by the file's length (2 bytes a value); each line at most 64 KiB + 48 bytes x `ncols` | [`asc::MAX_LINE_BYTES_PER_VALUE`] |
+//! | RAW16 | file length = 2 x cells | streamed 64 KiB at a time |
+//!
+//! - an offset past the end of the file is [`RasterError::PastEnd`] naming what it locates and
+//!   the value (`strip 3 offset 18446744073709551000 is past the end of the 4096-byte file`),
+//!   never the operating system's "Invalid argument"; the TIFF and EXR decoders read through
+//!   [`input::BoundedReader`], whose seeks cannot leave the file;
+//! - text taken from a file (a token, a tag, a header) is quoted to at most
+//!   [`error::MAX_ECHO`] (80) characters, a foreign decoder's message to
+//!   [`error::MAX_FOREIGN_MESSAGE`] (160);
 //! - nodata follows one rule ([`cells`]): a declared nodata value is nodata; NaN is nodata only
 //!   in binary float files without a nodata declaration (NPY, EXR, float GeoTIFF without
 //!   `GDAL_NODATA`), an error elsewhere; infinity is always an error naming the cell;
@@ -110,7 +131,9 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Grid, RasterError> {
     tracing::warn!(
         "{}: declares {} (degrees) but spans x {:.1}..{:.1}, y {:.1}..{:.1}: taking the coordinates as metres with no CRS; pass --crs to set the right one",
         path.display(),
-        g.crs().map(|c| c.to_string()).unwrap_or_default(),
+        g.crs()
+            .map(|c| error::clip(&c.to_string(), error::MAX_ECHO))
+            .unwrap_or_default(),
         t.origin_x,
         t.origin_x + g.width() as f64 * t.pixel_width,
         t.origin_y - g.height() as f64 * t.pixel_height,

@@ -14,7 +14,7 @@
 
 use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cell_size, check_cells};
-use crate::error::{RasterError, Result, geometry_err, io_err, write_err};
+use crate::error::{MAX_ECHO, RasterError, Result, clip, geometry_err, io_err, write_err};
 use crate::input::{check_regular, open_regular};
 use crate::write_atomic;
 use npyz::{DType, NpyFile, NpyHeader, Order, TypeChar, WriterBuilder};
@@ -173,18 +173,24 @@ fn read_typed(
 fn open(path: &Path, max_cells: usize) -> Result<(NpyFile<BufReader<File>>, usize, usize)> {
     let file_len = check_regular(path)?;
     let text = header_text(path, file_len)?;
-    let product = unquoted_int_product(&text)
-        .ok_or_else(|| npy_err(path, format!("shape in header {text:?} overflows")))?;
+    let product = unquoted_int_product(&text).ok_or_else(|| {
+        npy_err(
+            path,
+            format!("shape in header {:?} overflows", clip(&text, MAX_ECHO)),
+        )
+    })?;
     if product > max_cells as u64 {
         return Err(npy_err(
             path,
             format!(
-                "header {text:?} describes {product} values, more than the {max_cells} allowed"
+                "header {:?} describes {product} values, more than the {max_cells} allowed",
+                clip(&text, MAX_ECHO)
             ),
         ));
     }
     let mut reader = BufReader::new(open_regular(path)?.0);
-    let header = NpyHeader::from_reader(&mut reader).map_err(|e| npy_err(path, e))?;
+    let header = NpyHeader::from_reader(&mut reader)
+        .map_err(|e| npy_err(path, clip(&e.to_string(), MAX_ECHO)))?;
     let &[h, w] = header.shape() else {
         return Err(npy_err(
             path,

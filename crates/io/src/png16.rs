@@ -9,7 +9,7 @@
 
 use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cells};
-use crate::error::{RasterError, Result};
+use crate::error::{RasterError, Result, io_err};
 use crate::heightmap16::{
     Png16Scale, read_sidecar, resolve_geometry, resolve_scale, write_sidecar,
 };
@@ -29,12 +29,64 @@ fn png_err(path: &Path) -> impl FnOnce(image::ImageError) -> RasterError + '_ {
     }
 }
 
+/// Reads the IHDR chunk and, before the decoder sees the file, checks the cell count and
+/// that the decoded image (a filter byte and `width x bytes per pixel` per row) can come out
+/// of the file's bytes (zlib expands at most 1032:1); returns decoder limits sized to the
+/// image (and 1 MiB for the decoder's own buffers and text chunks). A file that does not
+/// start with a PNG signature and IHDR is left to the decoder to refuse.
+fn precheck(
+    path: &Path,
+    file: &mut std::fs::File,
+    len: u64,
+    max_cells: usize,
+) -> Result<image::Limits> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut head = [0u8; 29];
+    let got = file.read(&mut head).map_err(io_err(path))?;
+    file.seek(SeekFrom::Start(0)).map_err(io_err(path))?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(1 << 20);
+    if got < 29 || &head[12..16] != b"IHDR" {
+        return Ok(limits);
+    }
+    let be = |i: usize| u32::from_be_bytes([head[i], head[i + 1], head[i + 2], head[i + 3]]);
+    let (w, h, depth, color) = (be(16), be(20), head[24], head[25]);
+    check_cells(path, u64::from(w), u64::from(h), max_cells)?;
+    let channels: u64 = match color {
+        0 => 1,
+        2 => 3,
+        3 => 1,
+        4 => 2,
+        6 => 4,
+        _ => 4,
+    };
+    let row = (u64::from(w) * channels * u64::from(depth.clamp(1, 16))).div_ceil(8) + 1;
+    let decoded = row.saturating_mul(u64::from(h));
+    if decoded > len.saturating_mul(1032) {
+        return Err(RasterError::DecodedSize {
+            path: path.to_path_buf(),
+            what: format!("the {w}x{h} image"),
+            decoded,
+            stored: len,
+            compression: "zlib",
+            ratio: 1032,
+        });
+    }
+    limits.max_image_width = Some(w);
+    limits.max_image_height = Some(h);
+    // The decoded pixels, a copy while 8-bit codes widen to 16 bits, and the decoder's buffers.
+    let budget = decoded.saturating_mul(2).saturating_add(1 << 20);
+    limits.max_alloc = Some(budget);
+    Ok(limits)
+}
+
 /// Decodes the grayscale codes and their top code (65535 or 255), checking the cell count
 /// before the pixels are decoded.
 fn decode_codes(path: &Path, max_cells: usize) -> Result<(usize, usize, Vec<u16>, u16)> {
-    let (file, _) = crate::input::open_regular(path)?;
+    let (mut file, len) = crate::input::open_regular(path)?;
+    let limits = precheck(path, &mut file, len, max_cells)?;
     let mut reader = ImageReader::with_format(BufReader::new(file), ImageFormat::Png);
-    reader.no_limits();
+    reader.limits(limits);
     let decoder = reader.into_decoder().map_err(png_err(path))?;
     let (w, h) = decoder.dimensions();
     check_cells(path, u64::from(w), u64::from(h), max_cells)?;

@@ -8,13 +8,13 @@
 
 use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cells};
-use crate::error::{RasterError, Result, write_err};
+use crate::error::{RasterError, Result, io_err, write_err};
 use crate::heightmap16::{
     Png16Scale, read_sidecar, resolve_geometry, resolve_scale, write_sidecar,
 };
 use crate::write_atomic;
 use snowscape_terrain::Grid;
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::Path;
 
 /// Columns and rows from the options, the sidecar, or a square of `bytes / 2` cells.
@@ -64,20 +64,31 @@ pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
     }
     let scale = resolve_scale(path, "RAW16", opts, sidecar.as_ref())?;
     let geometry = resolve_geometry(path, "RAW16", (w, h), opts, sidecar.as_ref())?;
-    let data = crate::input::read_regular(path, 2 * n as u64)?;
+    // Streamed 64 KiB at a time: the memory is the grid's, not the grid's and the file's.
+    let (file, _) = crate::input::open_regular(path)?;
+    let mut file = file.take(2 * n as u64);
+    let mut block = vec![0u8; 1 << 16];
     let mut sink = CellSink::new(path, w, h, NodataRule::declared(None));
-    for pair in data.chunks_exact(2).take(n) {
-        let code = u16::from_le_bytes([pair[0], pair[1]]);
-        if Some(code) == scale.nodata {
-            sink.push_nodata();
-        } else {
-            sink.push_f64(scale.height(code, u16::MAX))?;
+    let mut read = 0u64;
+    loop {
+        let got = crate::input::read_full(&mut file, &mut block).map_err(io_err(path))?;
+        read += got as u64;
+        for pair in block[..got].chunks_exact(2) {
+            let code = u16::from_le_bytes([pair[0], pair[1]]);
+            if Some(code) == scale.nodata {
+                sink.push_nodata();
+            } else {
+                sink.push_f64(scale.height(code, u16::MAX))?;
+            }
+        }
+        if got < block.len() {
+            break;
         }
     }
     if sink.len() != n {
         return Err(RasterError::RawSize {
             path: path.to_path_buf(),
-            bytes: data.len() as u64,
+            bytes: read,
             expected: format!("{} (the file changed while being read)", 2 * n),
         });
     }

@@ -49,6 +49,29 @@ pub enum TransportError {
         /// The value.
         value: f64,
     },
+    /// A wind voxel grid larger than [`crate::wind3d::voxel::MAX_VOXELS`], refused before
+    /// anything is allocated.
+    #[error(
+        "the wind grid of {nx} x {ny} x {nz} voxels (voxel_size_m = {voxel_size_m} over a \
+         {extent_x_m} x {extent_y_m} m scene, voxel_layers = {nz}) is more than the {max} \
+         voxels allowed: raise voxel_size_m or lower voxel_layers"
+    )]
+    TooManyVoxels {
+        /// Voxels along x (saturated at `u64::MAX`).
+        nx: u64,
+        /// Voxels along y (saturated at `u64::MAX`).
+        ny: u64,
+        /// Voxel layers.
+        nz: u64,
+        /// The voxel side, m.
+        voxel_size_m: f64,
+        /// The scene's extent east-west, m.
+        extent_x_m: f64,
+        /// The scene's extent north-south, m.
+        extent_y_m: f64,
+        /// The cap, [`crate::wind3d::voxel::MAX_VOXELS`].
+        max: u64,
+    },
     /// A scene grid the terrain model rejects (its message names the value).
     #[error("invalid scene grid: {0}")]
     Scene(String),

@@ -285,6 +285,8 @@ pub fn run(
 ) -> Result<RunOutputs, TransportError> {
     scenario.validate()?;
     check_len("height", heights, geometry)?;
+    // The wind grid's size, before anything is allocated (a typed error naming nx, ny, nz).
+    VoxelGrid::dimensions(geometry, scenario.voxel_size_m, scenario.voxel_layers)?;
     let timeline = Timeline(scenario.weather.clone());
     let lowest = heights.iter().fold(f32::INFINITY, |m, &z| m.min(z));
     let highest = heights.iter().fold(f32::NEG_INFINITY, |m, &z| m.max(z));

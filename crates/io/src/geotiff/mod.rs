@@ -11,13 +11,15 @@
 //! Reading: band 1 of the first image; samples u8/u16/u32/i8/i16/i32/f16/f32/f64 (64-bit
 //! integers too); strips or tiles; uncompressed, LZW, Deflate, PackBits (whatever the `tiff`
 //! crate decodes); pixel-interleaved or planar bands. The cell count is checked against
-//! [`crate::ReadOptions::max_cells`] before the decoder's memory limits are raised to fit.
+//! [`crate::ReadOptions::max_cells`], and every offset and strip or tile size against the
+//! file ([`check`]), before the decoder's memory limits are set to one strip or tile.
 //! Without georeferencing tags, `--cell-size` is required. The CRS: `ReadOptions::crs`, else
 //! the GeoKeys, else a `.prj` / `CRS.txt` sidecar. Truncated or corrupt files give
 //! [`crate::RasterError::Tiff`] (or a `GeoTiffTag` error naming the bad tag), never a panic.
 //!
 //! Writing: see [`write_geotiff_bands`]; Cloud-Optimized: [`write_cog`].
 
+pub mod check;
 mod cog;
 pub(crate) mod geokeys;
 mod read;

@@ -1,11 +1,14 @@
 //! GeoTIFF reading: band 1 of the first image, georeferencing, CRS and nodata.
 
+use super::check;
 use super::geokeys::{self, GeoKeys, RASTER_PIXEL_IS_POINT};
 use crate::ReadOptions;
 use crate::cells::{CellSink, NodataRule, check_cell_size, check_cells};
 use crate::crs_sidecar::sidecar_crs;
-use crate::error::{RasterError, Result, geometry_err, tiff_err};
-use crate::input::open_regular;
+use crate::error::{
+    MAX_ECHO, MAX_FOREIGN_MESSAGE, RasterError, Result, clip, geometry_err, tiff_err,
+};
+use crate::input::{BoundedReader, open_regular};
 use snowscape_terrain::{GeoTransform, Grid, GridGeometry};
 use std::fs::File;
 use std::io::{BufReader, Read, Seek};
@@ -13,14 +16,14 @@ use std::path::Path;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
-pub(super) type Dec = Decoder<BufReader<File>>;
+pub(super) type Dec = Decoder<BoundedReader<BufReader<File>>>;
 
 fn tag_err(path: &Path, tag: u16, name: &'static str, reason: String) -> RasterError {
     RasterError::GeoTiffTag {
         path: path.to_path_buf(),
         tag,
         name,
-        reason,
+        reason: clip(&reason, MAX_FOREIGN_MESSAGE),
     }
 }
 
@@ -85,9 +88,14 @@ fn read_gdal_nodata<R: Read + Seek>(path: &Path, dec: &mut Decoder<R>) -> Result
         .into_string()
         .map_err(|e| tag_err(path, code, name, e.to_string()))?;
     let t = text.trim_matches(|c: char| c == '\0' || c.is_whitespace());
-    t.parse::<f64>()
-        .map(Some)
-        .map_err(|_| tag_err(path, code, name, format!("{t:?} is not a number")))
+    t.parse::<f64>().map(Some).map_err(|_| {
+        tag_err(
+            path,
+            code,
+            name,
+            format!("{:?} is not a number", clip(t, MAX_ECHO)),
+        )
+    })
 }
 
 /// The affine transform from ModelTransformation, or ModelPixelScale + ModelTiepoint, shifted
@@ -230,17 +238,38 @@ pub(super) fn push_band1(
     Ok(())
 }
 
-/// Opens the decoder and checks the cell count before decoding anything.
-fn open(path: &Path, max_cells: usize) -> Result<(Dec, usize, usize)> {
-    let (file, _) = open_regular(path)?;
-    let mut dec = Decoder::new(BufReader::new(file)).map_err(tiff_err(path))?;
-    let (w, h) = dec.dimensions().map_err(tiff_err(path))?;
-    let n = check_cells(path, u64::from(w), u64::from(h), max_cells)?;
+/// The `tiff` crate's limits for a file whose band-1 strips or tiles decode to at most
+/// `chunk` bytes each and store at most `stored` bytes each: one chunk's buffers, and tag
+/// values of at most [`TAG_BYTES`] (the precheck has bounded every tag by the file).
+fn limits(chunk: u64, stored: u64) -> Limits {
     let mut limits = Limits::default();
-    // Band 1 of up to 16 interleaved f64 samples per cell; the cell check above comes first.
-    let need = n.saturating_mul(8 * 16);
-    limits.decoding_buffer_size = limits.decoding_buffer_size.max(need);
-    limits.intermediate_buffer_size = limits.intermediate_buffer_size.max(need);
+    let as_usize = |b: u64| usize::try_from(b).unwrap_or(usize::MAX);
+    limits.decoding_buffer_size = as_usize(chunk).max(TAG_BYTES);
+    limits.intermediate_buffer_size = as_usize(stored).max(1);
+    limits.ifd_value_size = TAG_BYTES;
+    limits
+}
+
+/// The most bytes the decoder may allocate for the values of one tag (the GeoKey directory,
+/// a WKT citation): 16 MiB.
+pub const TAG_BYTES: usize = 1 << 24;
+
+/// Opens the decoder after [`check::precheck`] has checked the header, the first directory,
+/// the cell count and the size of every strip or tile of band 1 against the file, and sizes
+/// the decoder's limits to one strip or tile.
+fn open(path: &Path, max_cells: usize) -> Result<(Dec, usize, usize)> {
+    let (file, len) = open_regular(path)?;
+    let mut reader = BoundedReader::new(BufReader::new(file), len);
+    let layout = check::precheck(path, &mut reader, max_cells)?;
+    let mut dec = Decoder::new(reader).map_err(tiff_err(path))?;
+    let (w, h) = dec.dimensions().map_err(tiff_err(path))?;
+    check_cells(path, u64::from(w), u64::from(h), max_cells)?;
+    let limits = match layout {
+        Some(l) => limits(l.max_chunk_bytes, l.max_stored_bytes),
+        // Not a layout the precheck understood: the decoder will refuse the file; nothing
+        // beyond the tag budget may be allocated meanwhile.
+        None => limits(0, 0),
+    };
     Ok((dec.with_limits(limits), w as usize, h as usize))
 }
 
@@ -296,11 +325,9 @@ pub(super) fn open_image(path: &Path, opts: &ReadOptions) -> Result<Opened> {
     })
 }
 
-/// Reads band 1 of a (Geo)TIFF as a DEM.
+/// Reads band 1 of a (Geo)TIFF as a DEM, one band of strips or tiles at a time (see
+/// [`super::TiffRows`]): the memory is the grid's and one band of chunks', never a buffer of
+/// the whole image's samples.
 pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Grid> {
-    let mut o = open_image(path, opts)?;
-    let samples = o.dec.read_image().map_err(tiff_err(path))?;
-    let mut sink = CellSink::new(path, o.width, o.height, o.rule);
-    push_band1(path, &mut sink, samples, o.width * o.height, o.stride)?;
-    sink.finish(o.geometry)
+    super::TiffRows::open(path, opts)?.read_all()
 }

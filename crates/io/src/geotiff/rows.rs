@@ -59,6 +59,15 @@ impl TiffRows {
         &self.opened.geometry
     }
 
+    /// The whole raster, as [`crate::read_dem`] reads it.
+    pub(crate) fn read_all(mut self) -> Result<Grid> {
+        let (w, h) = (self.opened.width, self.opened.height);
+        let path = self.path.clone();
+        let mut sink = CellSink::new(&path, w, h, self.opened.rule);
+        self.push_rows(&path, 0..h, &mut sink)?;
+        sink.finish(self.opened.geometry)
+    }
+
     /// Rows `rows` of the raster as a grid of the raster's width: its transform is the file's
     /// moved down by `rows.start` rows (same CRS).
     pub fn read_rows(&mut self, rows: Range<usize>) -> Result<Grid> {
@@ -69,11 +78,27 @@ impl TiffRows {
                 what: format!("rows {}..{} of a {h}-row image", rows.start, rows.end),
             });
         }
+        let path = self.path.clone();
+        let mut sink =
+            CellSink::new(&path, w, rows.len(), self.opened.rule).starting_at(0, rows.start);
+        self.push_rows(&path, rows.clone(), &mut sink)?;
+        let t = *self.opened.geometry.transform();
+        let moved = GeoTransform {
+            origin_y: t.origin_y - rows.start as f64 * t.pixel_height,
+            ..t
+        };
+        let geometry =
+            GridGeometry::from_transform(w, rows.len(), moved, self.opened.geometry.crs().cloned())
+                .map_err(geometry_err(&path))?;
+        sink.finish(geometry)
+    }
+
+    /// Decodes the chunks over `rows` (a band of chunks at a time, the last band kept) and
+    /// pushes those rows into `sink`.
+    fn push_rows(&mut self, path: &Path, rows: Range<usize>, sink: &mut CellSink) -> Result<()> {
+        let w = self.opened.width;
         let (cw, ch) = self.chunk;
         let across = w.div_ceil(cw);
-        let path = self.path.as_path();
-        let mut sink =
-            CellSink::new(path, w, rows.len(), self.opened.rule).starting_at(0, rows.start);
         for chunk_row in rows.start / ch..=(rows.end - 1) / ch {
             if self.band.as_ref().is_none_or(|(b, _)| *b != chunk_row) {
                 // The chunks of this band of rows, decoded to band 1, left to right.
@@ -102,15 +127,7 @@ impl TiffRows {
                 }
             }
         }
-        let t = *self.opened.geometry.transform();
-        let moved = GeoTransform {
-            origin_y: t.origin_y - rows.start as f64 * t.pixel_height,
-            ..t
-        };
-        let geometry =
-            GridGeometry::from_transform(w, rows.len(), moved, self.opened.geometry.crs().cloned())
-                .map_err(geometry_err(path))?;
-        sink.finish(geometry)
+        Ok(())
     }
 }
 

@@ -229,3 +229,4 @@ impl HandTiff {
         out
     }
 }
+pub mod craft;

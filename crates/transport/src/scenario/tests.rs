@@ -144,3 +144,27 @@ fn the_valley_wind_erodes_windward_slopes_and_loads_lee_slopes() {
     assert!(windward.len() > 200 && lee.len() > 200);
     assert!(w < 0.0 && l > 0.0, "windward {w}, lee {l}");
 }
+
+#[test]
+fn a_run_whose_wind_grid_exceeds_the_voxel_cap_is_refused_up_front() {
+    // A 16 km scene in 1 m voxels x 32 layers: 8.6 G voxels, refused before the heights are
+    // even scanned (they are not finite: the voxel check comes first).
+    let mut s = Scenario::from_toml(CASTLE).unwrap();
+    s.voxel_size_m = 1.0;
+    s.voxel_layers = 32;
+    let g = GridGeometry::square(64, 64, 256.0).unwrap();
+    let z = vec![f32::NAN; 64 * 64];
+    let e = run(&s, &g, &z).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            TransportError::TooManyVoxels {
+                nx: 16384,
+                ny: 16384,
+                nz: 32,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+}

@@ -9,10 +9,24 @@
 //!
 //! Axes: `x` east, `y` north, `z` up; voxel `(i, j, k)` is at index `(k ny + j) nx + i`.
 //! Height-map row 0 is the northern edge, so column `j` maps to rows counted from the south.
+//!
+//! Size cap: a grid holds at most [`MAX_VOXELS`] (2^26, 67 M) voxels. [`VoxelGrid::dimensions`]
+//! computes `nx`, `ny` from the scene's extent and the voxel side in floating point and
+//! refuses a larger grid with [`TransportError::TooManyVoxels`] naming `nx`, `ny`, `nz` and
+//! the cap, before anything is allocated; [`VoxelGrid::from_heights`] and the transport run
+//! ([`crate::scenario::run`], which checks it first) go through it. The voxel grid itself is
+//! 1 byte a voxel (the solid flags), but the wind solver over it keeps several f32 and f64
+//! arrays per voxel and face (velocity and its previous step, the RK4 displacement, the mean
+//! sums, the pressure and its right-hand side, the multigrid levels), so the cap bounds a
+//! run's memory to a few gigabytes; a 1 m voxel over a 16 km scene (16384² x 32 layers, 8.6 G
+//! voxels) is refused at once instead of aborting on an allocation.
 
 use crate::error::{TransportError, check_positive};
 use crate::terrain_wind::check_len;
 use snowscape_terrain::GridGeometry;
+
+/// The most voxels a [`VoxelGrid`] may hold: 2^26 (see the module docs).
+pub const MAX_VOXELS: usize = 1 << 26;
 
 /// Solid voxels over a rectangular domain.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,8 +70,37 @@ impl VoxelGrid {
         self.len() == 0
     }
 
+    /// The voxels along x and y of a grid of side `cell` m over `geometry`, and `nz`, after
+    /// checking the total against [`MAX_VOXELS`] (in floating point, so no count can
+    /// overflow): the check every voxel grid passes before it is allocated.
+    pub fn dimensions(
+        geometry: &GridGeometry,
+        cell: f64,
+        nz: usize,
+    ) -> Result<(usize, usize, usize), TransportError> {
+        check_positive("voxel_size_m", cell)?;
+        check_positive("voxel_layers", nz as f64)?;
+        let (ex, ey) = geometry.extent_m();
+        let nx = (ex / cell).round().max(1.0);
+        let ny = (ey / cell).round().max(1.0);
+        let total = nx * ny * nz as f64;
+        if !total.is_finite() || total > MAX_VOXELS as f64 {
+            return Err(TransportError::TooManyVoxels {
+                nx: nx as u64,
+                ny: ny as u64,
+                nz: nz as u64,
+                voxel_size_m: cell,
+                extent_x_m: ex,
+                extent_y_m: ey,
+                max: MAX_VOXELS as u64,
+            });
+        }
+        Ok((nx as usize, ny as usize, nz))
+    }
+
     /// Voxelises a height map over `geometry` into voxels of side `cell` m, `nz` voxels
-    /// high from altitude `base` (Section 6.3). Fails on a bad size or a non-finite height.
+    /// high from altitude `base` (Section 6.3). Fails on a bad size, a grid of more than
+    /// [`MAX_VOXELS`] (before allocating) or a non-finite height.
     pub fn from_heights(
         geometry: &GridGeometry,
         heights: &[f32],
@@ -66,11 +109,8 @@ impl VoxelGrid {
         base: f64,
     ) -> Result<Self, TransportError> {
         check_len("height", heights, geometry)?;
-        check_positive("voxel_size_m", cell)?;
-        check_positive("voxel_layers", nz as f64)?;
-        let (ex, ey) = geometry.extent_m();
-        let nx = ((ex / cell).round() as usize).max(1);
-        let ny = ((ey / cell).round() as usize).max(1);
+        let (nx, ny, nz) = Self::dimensions(geometry, cell, nz)?;
+        let (_, ey) = geometry.extent_m();
         let (w, h) = (geometry.width(), geometry.height());
         let mut column_top = vec![f32::NEG_INFINITY; nx * ny];
         for row in 0..h {
@@ -210,6 +250,47 @@ mod tests {
         assert_eq!(v.column_top, vec![0.0, 10.0, 0.0, 10.0]);
         assert_eq!(v.ground_layers(1, 0), 2); // centres at 2 and 6 m are below 10 m
         assert_eq!(v.ground_layers(0, 0), 0);
+    }
+
+    #[test]
+    fn a_grid_beyond_the_voxel_cap_is_refused_before_allocating() {
+        // 16384² cells of 1 m in 1 m voxels x 32 layers: 8.6 G voxels (the old code asked for
+        // 8.6 GB of solid flags alone, then the solver's arrays).
+        let g = GridGeometry::square(16384, 16384, 1.0).unwrap();
+        let e = VoxelGrid::dimensions(&g, 1.0, 32).unwrap_err();
+        assert_eq!(
+            e,
+            TransportError::TooManyVoxels {
+                nx: 16384,
+                ny: 16384,
+                nz: 32,
+                voxel_size_m: 1.0,
+                extent_x_m: 16384.0,
+                extent_y_m: 16384.0,
+                max: 1 << 26,
+            }
+        );
+        let msg = e.to_string();
+        assert!(
+            msg.contains("16384 x 16384 x 32 voxels") && msg.contains("67108864"),
+            "{msg}"
+        );
+        // from_heights refuses it the same way, before its first allocation (the heights
+        // are checked for length only, so a short slice shows nothing was voxelised).
+        let small = GridGeometry::square(2, 2, 8192.0).unwrap();
+        let e = VoxelGrid::from_heights(&small, &[0.0; 4], 1.0, 32, 0.0).unwrap_err();
+        assert!(
+            matches!(e, TransportError::TooManyVoxels { nz: 32, .. }),
+            "{e:?}"
+        );
+        // A tiny voxel side cannot overflow the count.
+        let e = VoxelGrid::dimensions(&g, 1e-300, 4096).unwrap_err();
+        assert!(matches!(e, TransportError::TooManyVoxels { .. }), "{e:?}");
+        // At the cap: accepted (2^13 x 2^13 x 1 = 2^26).
+        assert_eq!(
+            VoxelGrid::dimensions(&GridGeometry::square(8192, 8192, 1.0).unwrap(), 1.0, 1).unwrap(),
+            (8192, 8192, 1)
+        );
     }
 
     #[test]
