@@ -39,6 +39,9 @@ target/release/examples/season_phases 128 > /dev/null
 target/release/examples/season_phases 128 shed > /dev/null
 # The large-export memory check at a reduced size (16384² by hand: scripts/export-memory.sh).
 bash scripts/export-memory.sh "$scratch/large_run" 600 > /dev/null
+# Crafted rasters (decompression bombs, offsets past the end) read under `ulimit -v`: each is
+# refused with exit 2, none killed for memory.
+bash scripts/reader-limits.sh > /dev/null
 # The Python package: built by pip (maturin) into a fresh virtual environment, from the same
 # target folder as the rest, then its tests (the same bytes as `snowscape run`) and example.
 python3 -m venv "$scratch/venv"
