@@ -33,7 +33,6 @@ pub const RESOLVED_SCENARIO: &str = "scenario.toml";
 /// The largest earlier frame read back on a resume (a 512-pixel RGBA PNG is at most ~1 MiB).
 const MAX_FRAME_BYTES: u64 = 64 << 20;
 
-
 /// Longest stretch of simulated days between two checks of the interrupt flag.
 pub const CHUNK_DAYS: f64 = 0.25;
 

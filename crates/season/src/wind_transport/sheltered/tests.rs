@@ -43,7 +43,7 @@ fn sequential_sweep(
             eroded += f64::from(e);
             let load = carry + from_above + e;
             carry = 0.0;
-            let mut kept = load * keep[i].abs();
+            let kept = load * keep[i].abs();
             let out = load - kept;
             let to_x = out * fx;
             let to_y = out - to_x;
