@@ -11,6 +11,7 @@ use crate::dem_input::DemInputArgs;
 use crate::failure::{BAD_INPUT, ExitCodeExt, Failure};
 use crate::outputs::{earlier_outputs, prepare_dir, write_png, write_report};
 use crate::report::InputSummary;
+use crate::stdout::outln;
 use anyhow::{Context, anyhow, bail};
 use clap::{Args, ValueEnum};
 use snowscape::cover::{
@@ -390,7 +391,7 @@ fn cover_diffusion(
     write_report(dir, &input.earlier, report).job_failed()?;
     if !global.quiet {
         let s = &c.stats;
-        println!(
+        outln!(
             "cover (diffusion): {} sites + {} bridge sites, snow {} vertices / {} triangles, \
              max {:.3} m, kernel {:.0} sites/s, {:.2} s -> {}",
             s.ground_sites,
@@ -477,7 +478,7 @@ fn cover_fearing(
     snowscape::cover::write_fearing_outputs(&args.out, scene, &c, Some(summary)).job_failed()?;
     if !global.quiet {
         let r = &c.report;
-        println!(
+        outln!(
             "cover (fearing): {} sites in {} edge groups, {} flakes ({:.0} flakes/s), snow {} \
              triangles, max {:.3} m, {:.3} m³ caught, {:.3} m³ left the scene, {:.2} s -> {}",
             r.sites_final,

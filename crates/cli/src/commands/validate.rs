@@ -10,6 +10,7 @@
 use crate::cli::{GlobalArgs, ValidateArgs};
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::{prepare_dir, write_png};
+use crate::stdout::{out, outln};
 use crate::validation::figures::{density_scatter, side_by_side};
 use crate::validation::{
     Input, Inputs, Settings, Validation, ValidationError, compare, prevailing_wind_from, summary,
@@ -181,8 +182,8 @@ pub fn run(args: &ValidateArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let scatter = density_scatter(&compared(&maps.observed), &compared(&maps.simulated));
     write_png(&out.join("scatter.png"), &scatter).job_failed()?;
     if !global.quiet {
-        print!("{}", summary::table(&validation));
-        println!("wrote {} in {}", outputs.join(", "), out.display());
+        out!("{}", summary::table(&validation));
+        outln!("wrote {} in {}", outputs.join(", "), out.display());
     }
     Ok(())
 }
