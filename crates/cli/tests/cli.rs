@@ -637,6 +637,37 @@ fn warnings_into_a_pipe_have_no_colour_codes_and_name_the_file_once() {
 }
 
 #[test]
+fn avalanche_warnings_name_the_release_file_once_and_the_stop_reads_in_words() {
+    // Issue 46 items 3 and 4: `relKot.shp: /…/relKot.shp: the release area is in EPSG:31287…`
+    // and `ran 5.0 s (Some(Duration))`. avaKot's release polygon carries a CRS, its DEM none.
+    let dem = data_dir().join("avaframe_avaKot/avaKot.asc");
+    let rel = data_dir().join("avaframe_avaKot/REL/relKot.shp");
+    let d = tempfile::tempdir().unwrap();
+    let o = run(&[
+        "avalanche",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--release",
+        rel.to_str().unwrap(),
+        "--duration",
+        "1",
+        "--out",
+        d.path().join("av").to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let warnings: Vec<&str> = err.lines().filter(|l| l.contains("WARN")).collect();
+    assert!(!warnings.is_empty(), "{err}");
+    for line in warnings {
+        assert_eq!(line.matches("relKot.shp").count(), 1, "{line}");
+        assert!(!line.contains('\x1b'), "{line:?}");
+    }
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("(stopped: duration reached)"), "{out}");
+    assert!(!out.contains("Some("), "{out}");
+}
+
+#[test]
 fn convert_and_render_say_what_they_wrote_unless_quiet() {
     // Issue 46 item 5: both printed nothing on success.
     let dem = data_dir().join("rme_idaho_50m/dem.asc");
