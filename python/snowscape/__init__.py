@@ -26,6 +26,54 @@ __all__ = ["Raster", "read_dem", "write", "Winter", "avalanche", "cover", "trans
 
 PathLike = Union[str, "os.PathLike[str]"]
 
+#: The longest user value an error message shows whole (as the command line's messages).
+_MAX_VALUE_CHARS = 80
+#: The deepest nesting a scenario dict may have (a scenario file's deepest table is 4 levels).
+_MAX_SCENARIO_DEPTH = 32
+#: ``threads=`` range: at least one worker, at most this many.
+_MAX_THREADS = 1024
+
+
+def _clip(value: Any) -> str:
+    """``repr(value)`` cut to about 80 characters (its start and end around the count left
+    out): error messages name the value without echoing megabytes of it."""
+    text = value if isinstance(value, str) else repr(value)
+    if len(text) <= _MAX_VALUE_CHARS:
+        return text
+    return f"{text[:50]}…({len(text) - 70} more chars)…{text[-20:]}"
+
+
+def _check_threads(threads: Any) -> Optional[int]:
+    """``threads`` as an int in 1..=1024, or None; else a ValueError naming it."""
+    if threads is None:
+        return None
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not (
+        1 <= threads <= _MAX_THREADS
+    ):
+        raise ValueError(f"threads={_clip(threads)}: must be a whole number in 1..={_MAX_THREADS}")
+    return int(threads)
+
+
+def _check_depth(value: Any, where: str) -> None:
+    """Refuses dicts and lists nested deeper than ``_MAX_SCENARIO_DEPTH``, naming the key path
+    where the limit is passed (the parsers behind would say "recursion limit" and no place)."""
+    stack = [(value, where, 1)]
+    while stack:
+        v, path, depth = stack.pop()
+        if isinstance(v, dict):
+            children = [(c, f"{path}[{_clip(k)!s}]") for k, c in v.items()]
+        elif isinstance(v, (list, tuple)):
+            children = [(c, f"{path}[{i}]") for i, c in enumerate(v)]
+        else:
+            continue
+        if depth > _MAX_SCENARIO_DEPTH:
+            shown = path if len(path) <= 200 else path[:120] + " ... " + path[-60:]
+            raise ValueError(
+                f"the scenario dict: {shown} is nested {depth} levels deep; at most "
+                f"{_MAX_SCENARIO_DEPTH} are accepted"
+            )
+        stack.extend((c, p, depth + 1) for c, p in children)
+
 
 class Raster:
     """A georeferenced raster: ``values`` (2-D float32, row 0 north, NaN = nodata), the cell
@@ -57,7 +105,7 @@ class Raster:
             dx, dy = (float(v) for v in cell_size)  # type: ignore[union-attr]
         for name, v in (("cell_size x", dx), ("cell_size y", dy)):
             if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive number of metres, got {v}")
+                raise ValueError(f"{name} must be a positive number of metres, got {_clip(v)}")
         h, w = a.shape
         if origin is None:
             ox, oy = 0.0, h * dy
@@ -173,10 +221,11 @@ def _scenario_text(scenario: Union[None, PathLike, Dict[str, Any]]) -> Tuple[Opt
     if scenario is None:
         return None, False, "the default scenario"
     if isinstance(scenario, dict):
+        _check_depth(scenario, "scenario")
         try:
             return json.dumps(scenario, allow_nan=False), True, "the scenario dict"
         except (TypeError, ValueError) as e:
-            raise ValueError(f"the scenario dict: {e}") from None
+            raise ValueError(f"the scenario dict: {_clip(str(e))}") from None
     path = os.fspath(scenario)
     with open(path, encoding="utf-8") as f:
         return f.read(), False, path
@@ -205,7 +254,8 @@ class Winter:
         dem = _as_raster(dem)
         text, is_json, name = _scenario_text(scenario)
         if seed is not None and (not isinstance(seed, (int, np.integer)) or seed < 0):
-            raise ValueError(f"seed must be a whole number >= 0, got {seed!r}")
+            raise ValueError(f"seed must be a whole number >= 0, got {_clip(seed)}")
+        threads = _check_threads(threads)
         self._w = _snowscape._Winter(
             dem._native(), text, is_json, name, None if seed is None else int(seed), threads
         )
@@ -215,6 +265,7 @@ class Winter:
         """Resumes a season saved by :meth:`save_checkpoint` (or written by ``snowscape run``)
         in the folder ``path``, on its terrain ``dem``: it continues bit-identically."""
         dem = _as_raster(dem)
+        threads = _check_threads(threads)
         return cls(dem, _native=_snowscape._Winter.resume(os.fspath(path), dem._native(), threads))
 
     @property
@@ -237,7 +288,7 @@ class Winter:
         """Advances the season by ``days``."""
         d = float(days)
         if not (np.isfinite(d) and d >= 0):
-            raise ValueError(f"days {days} must be finite and >= 0")
+            raise ValueError(f"days {_clip(days)} must be finite and >= 0")
         self._w.run_until(self.day + d, None)
         return self
 
@@ -296,10 +347,16 @@ def avalanche(
     (``None``: a shapefile's own thickness field); ``slope_normal`` reads it normal to the
     slope (AvaFrame's convention); ``snow_cover`` lays loose snow outside the release for the
     flow to entrain. ``**params`` are the flow parameters (``[parameters.avalanche.flow]`` keys:
-    ``friction="voellmy"``, ``voellmy_mu=0.2``, ``samos_at={"mu": 0.22}``...).
+    ``friction="voellmy"``, ``voellmy_mu=0.2``, ``samosat={"mu": 0.22}``...). ``friction``
+    takes the command line's names: ``"coulomb"``, ``"voellmy"``, ``"samosat"`` and
+    ``"samosat-small"`` (samosAT with AvaFrame's samosATSmall μ = 0.22, which ``samosat={...}``
+    keys override).
 
     Returns ``{"peak_thickness", "peak_velocity", "deposit", "entrained"}`` rasters and
-    ``"summary"`` (volumes, runout, travel angle, footprint...).
+    ``"summary"``, one flat dict: the volumes (``released_volume_m3``,
+    ``entrained_volume_m3``, ``deposited_volume_m3``, ``border_outflow_m3``), ``runout_length_m``,
+    ``travel_angle_deg``, ``footprint_area_m2``, ``stop``..., ``release_cells``,
+    ``release_area_m2`` and the ``parameters`` used.
     """
     dem = _as_raster(dem)
     path = mask = point = None

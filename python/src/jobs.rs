@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use snowscape::avalanche::validation::ThicknessConvention;
 use snowscape::avalanche::{
-    AvalancheError, AvalancheParams, AvalancheWorkspace, ReleasedCells, RestOutcome,
+    AvalancheError, AvalancheParams, AvalancheWorkspace, ReleasedCells, RestOutcome, SamosAtParams,
 };
 use snowscape::avalanche_release::{ReleaseSpec, release_terrain};
 use snowscape::cover::{CoverParameters, DiffusionCoverReport, MeshInputSummary};
@@ -35,8 +35,7 @@ pub(crate) fn avalanche<'py>(
 ) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
     let dem = grid_in(dem)?;
     dem.check_terrain().map_err(py_err)?;
-    let params: AvalancheParams = serde_json::from_str(&params_json)
-        .map_err(|e| value_err(format!("avalanche parameters: {e}")))?;
+    let params = avalanche_params(&params_json)?;
     params.validate().map_err(py_err)?;
     let options = snowscape::avalanche::RunOptions {
         duration_s: duration,
@@ -126,16 +125,79 @@ pub(crate) fn avalanche<'py>(
         .into_iter()
         .map(|(name, v)| (name.to_string(), grid_out(py, g, dem.mask(), &v)))
         .collect();
-    let summary = serde_json::json!({
-        "summary": outcome.summary,
-        "released_volume_m3": outcome.released_m3,
-        "entrained_volume_m3": outcome.entrained_m3,
-        "deposited_volume_m3": outcome.deposited_m3,
-        "release_cells": area.count(),
-        "release_area_m2": area.area_m2(),
-        "parameters": params,
-    });
-    Ok((rasters, summary.to_string()))
+    Ok((
+        rasters,
+        summary_json(&outcome, area.count(), area.area_m2(), &params)?,
+    ))
+}
+
+/// The avalanche summary, one flat object: the run's figures ([`RestOutcome::summary`]:
+/// runout, travel angle, footprint, stop...), the volumes, the release and the parameters.
+fn summary_json(
+    outcome: &RestOutcome,
+    release_cells: usize,
+    release_area_m2: f64,
+    params: &AvalancheParams,
+) -> PyResult<String> {
+    let mut summary = match serde_json::to_value(&outcome.summary) {
+        Ok(serde_json::Value::Object(m)) => m,
+        Ok(_) => serde_json::Map::new(),
+        Err(e) => return Err(value_err(format!("the avalanche summary: {e}"))),
+    };
+    for (key, value) in [
+        ("released_volume_m3", serde_json::json!(outcome.released_m3)),
+        (
+            "entrained_volume_m3",
+            serde_json::json!(outcome.entrained_m3),
+        ),
+        (
+            "deposited_volume_m3",
+            serde_json::json!(outcome.deposited_m3),
+        ),
+        ("release_cells", serde_json::json!(release_cells)),
+        ("release_area_m2", serde_json::json!(release_area_m2)),
+        ("parameters", serde_json::json!(params)),
+    ] {
+        summary.insert(key.to_string(), value);
+    }
+    Ok(serde_json::Value::Object(summary).to_string())
+}
+
+/// The flow parameters from the keyword arguments' JSON. `friction` takes the command line's
+/// names (`coulomb`, `voellmy`, `samosat`, `samosat-small`): `samosat-small` is the samosAT
+/// law with AvaFrame's samosATSmall coefficients ([`SamosAtParams::small`]), under any
+/// `samosat={...}` keys given.
+fn avalanche_params(json: &str) -> PyResult<AvalancheParams> {
+    let mut v: serde_json::Value =
+        serde_json::from_str(json).map_err(|e| value_err(format!("avalanche parameters: {e}")))?;
+    if let Some(obj) = v.as_object_mut()
+        && obj.get("friction").and_then(|f| f.as_str()) == Some("samosat-small")
+    {
+        obj.insert("friction".into(), "samosat".into());
+        let mut small = match serde_json::to_value(SamosAtParams::small()) {
+            Ok(serde_json::Value::Object(m)) => m,
+            _ => serde_json::Map::new(),
+        };
+        let given = obj.remove("samosat").or_else(|| obj.remove("samos_at"));
+        match given {
+            Some(serde_json::Value::Object(m)) => small.extend(m),
+            Some(other) => {
+                return Err(value_err(format!(
+                    "avalanche parameters: samosat={other}: expected a dict of the samosAT coefficients"
+                )));
+            }
+            None => {}
+        }
+        obj.insert("samosat".into(), serde_json::Value::Object(small));
+    }
+    serde_json::from_value(v).map_err(|e| {
+        let hint = if e.to_string().contains("unknown variant") {
+            " (friction is one of coulomb, voellmy, samosat, samosat-small)"
+        } else {
+            ""
+        };
+        value_err(format!("avalanche parameters: {e}{hint}"))
+    })
 }
 
 /// A snow cover of a mesh scene (`method` `diffusion` or `fearing`, `params_json` the method's

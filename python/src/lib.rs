@@ -54,7 +54,7 @@ pub(crate) fn py_err(e: impl std::error::Error + 'static) -> PyErr {
         io |= s.downcast_ref::<std::io::Error>().is_some();
         cur = s.source();
     }
-    let text = message(&e);
+    let text = snowscape::messages::clip_values(&message(&e));
     if io {
         PyOSError::new_err(text)
     } else {
@@ -62,8 +62,10 @@ pub(crate) fn py_err(e: impl std::error::Error + 'static) -> PyErr {
     }
 }
 
+/// `ValueError` with `text`, every over-long value in it clipped
+/// ([`snowscape::messages::clip_values`]: a 10 MB string is not echoed whole).
 pub(crate) fn value_err(text: impl Into<String>) -> PyErr {
-    PyValueError::new_err(text.into())
+    PyValueError::new_err(snowscape::messages::clip_values(&text.into()))
 }
 
 /// A [`Grid`] from a raster coming in (NaN cells are nodata).
@@ -194,12 +196,20 @@ fn on_pool<T: Send>(pool: &Option<rayon::ThreadPool>, f: impl FnOnce() -> T + Se
     }
 }
 
-fn thread_pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
+/// The most worker threads `threads=` takes.
+const MAX_THREADS: i64 = 1024;
+
+/// A pool of `threads` workers (`None`: the global pool). Taken as a signed integer so that
+/// `threads=-1` is a `ValueError` naming it, not an `OverflowError` of the conversion.
+fn thread_pool(threads: Option<i64>) -> PyResult<Option<rayon::ThreadPool>> {
     threads
         .map(|n| {
-            if n == 0 || n > 1024 {
-                return Err(value_err(format!("threads must be in 1..=1024, got {n}")));
+            if !(1..=MAX_THREADS).contains(&n) {
+                return Err(value_err(format!(
+                    "threads={n}: must be a whole number in 1..={MAX_THREADS}"
+                )));
             }
+            let n = n as usize;
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build()
@@ -241,7 +251,7 @@ impl PyWinter {
         is_json: bool,
         scenario_name: String,
         seed: Option<u64>,
-        threads: Option<usize>,
+        threads: Option<i64>,
     ) -> PyResult<Self> {
         let bedrock = grid_in(dem)?;
         bedrock.check_terrain().map_err(py_err)?;
@@ -275,7 +285,7 @@ impl PyWinter {
     /// `save_checkpoint` and `snowscape run` write them) on its terrain.
     #[staticmethod]
     #[pyo3(signature = (dir, dem, threads=None))]
-    fn resume(py: Python<'_>, dir: PathBuf, dem: GridIn, threads: Option<usize>) -> PyResult<Self> {
+    fn resume(py: Python<'_>, dir: PathBuf, dem: GridIn, threads: Option<i64>) -> PyResult<Self> {
         let bedrock = grid_in(dem)?;
         bedrock.check_terrain().map_err(py_err)?;
         let scenario_path = dir.join("scenario.toml");

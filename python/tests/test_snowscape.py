@@ -122,8 +122,9 @@ def test_avalanche_on_avawog_and_its_release_forms():
     s = a["summary"]
     released = s["released_volume_m3"]
     assert released > 1e5
-    assert abs(released - s["deposited_volume_m3"] - s["summary"]["border_outflow_m3"]) < 1e-6 * released
-    assert s["summary"]["runout_length_m"] > 200
+    assert abs(released - s["deposited_volume_m3"] - s["border_outflow_m3"]) < 1e-6 * released
+    assert s["runout_length_m"] > 200
+    assert "summary" not in s  # one flat dict (issue 46: it sat at out["summary"]["summary"])
     peak = a["peak_thickness"].values
     assert np.nanmax(peak) > 0.5 and a["peak_thickness"].transform == dem.transform
     # A point release: a uniform 0.5 m cover breaks at a cell of the release.
@@ -265,3 +266,54 @@ def test_ctrl_c_stops_a_season_between_two_events():
     assert w.day >= day + 1.0
     d = w.depth().values
     assert np.all(np.isnan(d) | (d >= 0))
+
+
+def test_friction_names_are_the_command_lines():
+    # Issue 46: Python said samos_at where the command line says samosat / samosat-small.
+    dem = snowscape.read_dem(wog_dem())
+    # A point release where the shapefile's release flows (as the test above finds one).
+    a = snowscape.avalanche(dem, WOG / "REL" / "relWog.shp", thickness=1.0, duration=20)
+    rows, cols = np.nonzero(np.nan_to_num(a["peak_thickness"].values) > 1.0)
+    x, y = dem.xy(rows[0], cols[0])
+    used = {}
+    for kwargs in [
+        {"friction": "samosat"},
+        {"friction": "samosat-small"},
+        {"friction": "samosat-small", "samosat": {"mu": 0.3}},
+        {"friction": "samos_at", "samos_at": {"mu": 0.2}},  # the old spelling still reads
+    ]:
+        p = snowscape.avalanche(dem, (x, y), thickness=0.5, duration=1, **kwargs)["summary"]["parameters"]
+        assert p["friction"] == "samosat", (kwargs, p)
+        used[len(used)] = p["samosat"]["mu"]
+    assert used == {0: 0.155, 1: 0.22, 2: 0.3, 3: 0.2}
+    with pytest.raises(ValueError, match="samosat-small"):
+        snowscape.avalanche(dem, (x, y), friction="samosat_tiny")
+
+
+def test_threads_values_and_messages_are_bounded(tmp_path):
+    dem = snowscape.read_dem(wog_dem())
+    # threads=-1 was an OverflowError from the conversion.
+    for bad in (-1, 0, 1025, 10**30, True, 2.5):
+        with pytest.raises(ValueError, match=r"threads=.*1\.\.=1024"):
+            snowscape.Winter(dem, scenario={"days": 2}, threads=bad)
+    # A 10 MB value is named, not echoed whole.
+    huge = "x" * 10_000_000
+    for call in (
+        lambda: snowscape.avalanche(dem, (0.0, 0.0), friction=huge),
+        lambda: snowscape.Winter(dem, scenario={"days": 2, "start_date": huge}),
+        lambda: snowscape.Winter(dem, scenario={"days": 2, huge: 1}),
+    ):
+        with pytest.raises(ValueError) as e:
+            call()
+        text = str(e.value)
+        assert len(text) < 2000 and "more chars" in text, text[:300]
+    # Deep nesting: refused with the place, not "recursion limit" alone.
+    deep: dict = {"x": 1}
+    for _ in range(100):
+        deep = {"a": deep}
+    with pytest.raises(ValueError, match="nested 33 levels deep"):
+        snowscape.Winter(dem, scenario={"days": 2, "parameters": deep})
+    f = tmp_path / "deep.toml"
+    f.write_text("days = 2\n" + ".".join(["a"] * 5000) + " = 1\n")
+    with pytest.raises(ValueError, match="deep.toml.*line 2"):
+        snowscape.Winter(dem, scenario=f)

@@ -275,8 +275,8 @@ fn avakot_as_avaframe_runs_it_slope_normal_with_samosat_small() {
         "{v} m³ vs {avaframe} m³"
     );
     assert_eq!(r["parameters"]["thickness_measured"], "slope-normal");
-    assert_eq!(r["parameters"]["flow"]["friction"], "samos_at");
-    assert_eq!(r["parameters"]["flow"]["samos_at"]["mu"], 0.22);
+    assert_eq!(r["parameters"]["flow"]["friction"], "samosat");
+    assert_eq!(r["parameters"]["flow"]["samosat"]["mu"], 0.22);
     // The AIMEC-like comparison along AvaFrame's own path: runout within 5 % of the
     // reference's (measured −29 m of 1583 m), footprint Jaccard ≥ 0.6 (measured 0.675).
     let c = &r["comparison"];

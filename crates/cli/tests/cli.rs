@@ -554,3 +554,224 @@ fn parameters_lists_help_defaults_ranges_and_choices() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("no scenario parameter starts with"));
 }
+
+/// Runs `args` with stdout a pipe whose reading end is closed before the program writes
+/// (`snowscape parameters | head` once head has gone): every write meets EPIPE.
+fn with_stdout_closed(args: &[&str]) -> Output {
+    use std::process::Stdio;
+    let mut child = bin()
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the snowscape binary runs");
+    drop(child.stdout.take());
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_closed_stdout_pipe_ends_quietly() {
+    // Issue 46 item 2: `println!` panicked ("failed printing to stdout: Broken pipe", exit 101).
+    let dem = data_dir().join("rme_idaho_50m/dem.asc");
+    let d = tempfile::tempdir().unwrap();
+    let tif = d.path().join("out.tif");
+    let png = d.path().join("out.png");
+    for args in [
+        vec!["parameters"],
+        vec!["parameters", "--json"],
+        vec!["info", dem.to_str().unwrap()],
+        vec!["info", "--json", dem.to_str().unwrap()],
+        vec!["convert", dem.to_str().unwrap(), tif.to_str().unwrap()],
+        vec![
+            "render",
+            dem.to_str().unwrap(),
+            "--out",
+            png.to_str().unwrap(),
+        ],
+    ] {
+        let o = with_stdout_closed(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+        assert!(
+            !err.contains("panicked") && !err.contains("Broken pipe"),
+            "{args:?}: {err}"
+        );
+    }
+    // The work itself was done.
+    assert!(tif.is_file() && png.is_file());
+    // A reader that takes the first line and goes (`| head -1`) does not make it fail either.
+    use std::io::BufRead;
+    let mut child = bin()
+        .args(["parameters"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.contains(" = "), "{first}");
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+}
+
+#[test]
+fn warnings_into_a_pipe_have_no_colour_codes_and_name_the_file_once() {
+    // Issue 46 item 4: the tiny-cell warning went out as `\x1b[33m WARN\x1b[0m ...` into a
+    // pipe. The Jacksboro grid is in degrees with no CRS: the warning is the one a user meets.
+    let dem = data_dir().join("matplotlib_jacksboro/jacksboro_fault_dem_deg.asc");
+    let o = run(&["info", dem.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("WARN"), "no warning: {err}");
+    assert!(!err.contains('\x1b'), "colour codes into a pipe: {err:?}");
+    for line in err.lines().filter(|l| l.contains("WARN")) {
+        assert_eq!(
+            line.matches("jacksboro_fault_dem_deg.asc").count(),
+            1,
+            "the path said more or less than once: {line}"
+        );
+    }
+}
+
+#[test]
+fn avalanche_warnings_name_the_release_file_once_and_the_stop_reads_in_words() {
+    // Issue 46 items 3 and 4: `relKot.shp: /…/relKot.shp: the release area is in EPSG:31287…`
+    // and `ran 5.0 s (Some(Duration))`. avaKot's release polygon carries a CRS, its DEM none.
+    let dem = data_dir().join("avaframe_avaKot/avaKot.asc");
+    let rel = data_dir().join("avaframe_avaKot/REL/relKot.shp");
+    let d = tempfile::tempdir().unwrap();
+    let o = run(&[
+        "avalanche",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--release",
+        rel.to_str().unwrap(),
+        "--duration",
+        "1",
+        "--out",
+        d.path().join("av").to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let warnings: Vec<&str> = err.lines().filter(|l| l.contains("WARN")).collect();
+    assert!(!warnings.is_empty(), "{err}");
+    for line in warnings {
+        assert_eq!(line.matches("relKot.shp").count(), 1, "{line}");
+        assert!(!line.contains('\x1b'), "{line:?}");
+    }
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("(stopped: duration reached)"), "{out}");
+    assert!(!out.contains("Some("), "{out}");
+}
+
+#[test]
+fn convert_and_render_say_what_they_wrote_unless_quiet() {
+    // Issue 46 item 5: both printed nothing on success.
+    let dem = data_dir().join("rme_idaho_50m/dem.asc");
+    let d = tempfile::tempdir().unwrap();
+    let tif = d.path().join("idaho.tif");
+    let o = run(&["convert", dem.to_str().unwrap(), tif.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let size = std::fs::metadata(&tif).unwrap().len();
+    assert_eq!(out.lines().count(), 1, "{out}");
+    assert!(
+        out.starts_with(&format!("wrote {}", tif.display()))
+            && out.contains("GeoTIFF")
+            && out.contains("18 x 19 cells"),
+        "{out}"
+    );
+    assert!(
+        out.contains(&format!("{size} B")) || out.contains("KiB"),
+        "{out}"
+    );
+    let png = d.path().join("idaho.png");
+    let o = run(&[
+        "render",
+        dem.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let img = image::open(&png).unwrap();
+    assert_eq!(out.lines().count(), 1, "{out}");
+    assert!(
+        out.starts_with(&format!("wrote {}", png.display()))
+            && out.contains("PNG")
+            && out.contains(&format!("{} x {} px", img.width(), img.height())),
+        "{out}"
+    );
+    for args in [
+        vec![
+            "--quiet",
+            "convert",
+            dem.to_str().unwrap(),
+            tif.to_str().unwrap(),
+        ],
+        vec![
+            "--quiet",
+            "render",
+            dem.to_str().unwrap(),
+            "--out",
+            png.to_str().unwrap(),
+        ],
+    ] {
+        let o = run(&args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        assert!(
+            o.stdout.is_empty(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+    }
+}
+
+#[test]
+fn huge_and_deeply_nested_scenario_values_are_refused_briefly_with_their_place() {
+    // Issue 46 item 6: messages echoed 10 MB values whole, and keys nested thousands deep
+    // gave "recursion limit" with no line.
+    let dem = data_dir().join("rme_idaho_50m/dem.asc");
+    let d = tempfile::tempdir().unwrap();
+    let huge = "x".repeat(10_000_000);
+    let cases = [
+        (
+            "huge_value.toml",
+            format!("days = 2\nstart_date = \"{huge}\"\n"),
+            "start_date",
+        ),
+        ("huge_key.toml", format!("days = 2\n{huge} = 1\n"), "line 2"),
+        (
+            "deep.toml",
+            format!("days = 2\n{} = 1\n", vec!["a"; 5000].join(".")),
+            "line 2",
+        ),
+    ];
+    for (name, text, needle) in cases {
+        let f = d.path().join(name);
+        std::fs::write(&f, text).unwrap();
+        let out = d.path().join(format!("out_{name}"));
+        let o = run(&[
+            "run",
+            "--dem",
+            dem.to_str().unwrap(),
+            "--scenario",
+            f.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{name}: {}",
+            &err[..err.len().min(500)]
+        );
+        assert!(err.len() < 3000, "{name}: {} bytes of message", err.len());
+        assert!(err.contains(name) && err.contains(needle), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+    }
+}

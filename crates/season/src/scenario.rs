@@ -281,6 +281,63 @@ impl Default for Scenario {
     }
 }
 
+/// The 1-based line of `text` (TOML) that nests deepest, and its depth: the dots of dotted
+/// keys and the opening brackets and braces on the line, outside strings and comments. For
+/// error messages only (the parser's own errors name the place when it has one).
+fn deepest_line(text: &str) -> Option<(usize, usize)> {
+    let mut best: Option<(usize, usize)> = None;
+    // The multi-line string a line starts in, if any (`"""` or `'''`).
+    let mut open_multiline: Option<&str> = None;
+    for (k, line) in text.lines().enumerate() {
+        let mut depth = 0;
+        let mut rest = line;
+        while !rest.is_empty() {
+            if let Some(delim) = open_multiline {
+                match rest.find(delim) {
+                    Some(end) => {
+                        rest = &rest[end + delim.len()..];
+                        open_multiline = None;
+                    }
+                    None => break,
+                }
+                continue;
+            }
+            let c = rest.chars().next().unwrap_or(' ');
+            if rest.starts_with("\"\"\"") || rest.starts_with("\'\'\'") {
+                open_multiline = Some(&rest[..3]);
+                rest = &rest[3..];
+            } else if c == '"' || c == '\'' {
+                // A one-line string: to its closing quote (a basic string's escapes skipped).
+                let body = &rest[1..];
+                let mut end = body.len();
+                let mut escaped = false;
+                for (i, ch) in body.char_indices() {
+                    if escaped {
+                        escaped = false;
+                    } else if ch == '\\' && c == '"' {
+                        escaped = true;
+                    } else if ch == c {
+                        end = i + 1;
+                        break;
+                    }
+                }
+                rest = &body[end.min(body.len())..];
+            } else if c == '#' {
+                break;
+            } else {
+                if matches!(c, '.' | '[' | '{') {
+                    depth += 1;
+                }
+                rest = &rest[c.len_utf8()..];
+            }
+        }
+        if best.is_none_or(|(_, d)| depth > d) {
+            best = Some((k + 1, depth));
+        }
+    }
+    best
+}
+
 /// Day of year (1..=365) of `MM-DD` or `YYYY-MM-DD` (no leap day: Feb 29 counts as Mar 1).
 pub fn day_of_year(date: &str) -> Option<u32> {
     let parts: Vec<&str> = date.trim().split('-').collect();
@@ -309,9 +366,22 @@ impl Scenario {
                 max: MAX_SCENARIO_BYTES,
             });
         }
-        let s: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Parse {
-            source_name: source_name.to_string(),
-            message: clip_parse_message(&e.to_string()),
+        let s: Scenario = toml::from_str(text).map_err(|e| {
+            let mut message = clip_parse_message(&e.to_string());
+            // The parser's "recursion limit" (keys of thousands of dotted parts) comes with no
+            // place: the line that nests deepest is the one.
+            if e.span().is_none()
+                && let Some((line, depth)) = deepest_line(text)
+            {
+                message = format!(
+                    "line {line}: {} (a key, table or array nested {depth} levels deep)",
+                    message.trim_end()
+                );
+            }
+            ScenarioError::Parse {
+                source_name: source_name.to_string(),
+                message,
+            }
         })?;
         s.validate(source_name)?;
         Ok(s)
@@ -659,6 +729,36 @@ pub fn default_winter(altitudes: &[f32], days: f64) -> Vec<WeatherPeriod> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn too_deep_keys_are_refused_with_their_line() {
+        // Issue 46: thousands of dotted parts gave "recursion limit" and no place.
+        let deep = vec!["a"; 5000].join(".");
+        for text in [
+            format!("days = 10\n# a.b.c.d\nname = \"x.y.z\"\n{deep} = 1\n"),
+            format!("days = 10\n\n[{deep}]\n"),
+        ] {
+            let e = Scenario::from_toml(&text, "deep.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("deep.toml") && e.contains("line "), "{e}");
+            let line = if text.contains('[') {
+                "line 3"
+            } else {
+                "line 4"
+            };
+            assert!(e.contains(line) && e.contains("recursion"), "{e}");
+        }
+        // Deep arrays: the parser names the line itself.
+        let arrays = format!("days = 10\nx = {}{}\n", "[".repeat(300), "]".repeat(300));
+        let e = Scenario::from_toml(&arrays, "deep.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 2"), "{e}");
+        // Strings and comments do not count.
+        let text = "a = \"[[[.{{\" # ...[[\nb.c = '...'\nd = \"\"\"\n[[[[....\n\"\"\"\n";
+        assert_eq!(deepest_line(text), Some((2, 1)));
+    }
 
     #[test]
     fn full_scenario_parses() {

@@ -121,8 +121,15 @@ fn release_only(
                     } else {
                         release_from_raster(path, g, dem.mask(), dem_options, RasterRelease::Mask)?
                     };
+                    let name = path.display().to_string();
                     for w in &area.warnings {
-                        tracing::warn!("{}: {w}", path.display());
+                        // The readers' warnings name the file already (they go into report.json
+                        // as they are): it is said once.
+                        if w.contains(&name) {
+                            tracing::warn!("{w}");
+                        } else {
+                            tracing::warn!("{name}: {w}");
+                        }
                     }
                     area
                 }

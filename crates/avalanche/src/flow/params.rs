@@ -34,6 +34,10 @@ pub enum FrictionLaw {
     /// `μ·g·(1 + Rs0/(Rs0 + Rs))` with `Rs = u²/(g·h)` (twice μ at rest, μ when fast) and a
     /// turbulent drag `u²/(h·(ln(max(h/R, 1))/κ + B)²)`. AvaFrame's τ0 enters its
     /// configuration but not that function, and is left out here too.
+    ///
+    /// Named `samosat` as on the command line (`--friction-model samosat`); `samos_at`, its
+    /// name in scenario files and reports before, is still read so that they keep loading.
+    #[serde(rename = "samosat", alias = "samos_at")]
     SamosAt,
 }
 
@@ -135,7 +139,9 @@ pub struct AvalancheParams {
     /// Voellmy turbulence coefficient ξ, m/s² (with `friction = "voellmy"`). Default 4000
     /// (AvaFrame com1DFA's `xsivoellmy`; RAMMS uses 1000–3000 for large avalanches).
     pub voellmy_xi_m_s2: f64,
-    /// The samosAT law's coefficients (with `friction = "samos_at"`).
+    /// The samosAT law's coefficients (with `friction = "samosat"`), the table
+    /// `[parameters.avalanche.flow.samosat]` (`samos_at`, its name before, is still read).
+    #[serde(rename = "samosat", alias = "samos_at")]
     pub samos_at: SamosAtParams,
     /// How gravity acts on a sloping bed. Default `shallow` (the paper's). `projected`
     /// (Savage-Hutter on the horizontal grid) brings AvaFrame's analytic tests from a front
@@ -231,17 +237,17 @@ impl AvalancheParams {
         }
         let s = &self.samos_at;
         for (name, v, lo, hi, expected) in [
-            ("samos_at.mu", s.mu, 0.0, 2.0, "in [0, 2]"),
-            ("samos_at.rs0", s.rs0, 1e-6, 100.0, "in [1e-6, 100]"),
-            ("samos_at.kappa", s.kappa, 0.01, 10.0, "in [0.01, 10]"),
+            ("samosat.mu", s.mu, 0.0, 2.0, "in [0, 2]"),
+            ("samosat.rs0", s.rs0, 1e-6, 100.0, "in [1e-6, 100]"),
+            ("samosat.kappa", s.kappa, 0.01, 10.0, "in [0.01, 10]"),
             (
-                "samos_at.roughness_m",
+                "samosat.roughness_m",
                 s.roughness_m,
                 1e-4,
                 10.0,
                 "in [1e-4, 10] m",
             ),
-            ("samos_at.b", s.b, 0.1, 100.0, "in [0.1, 100]"),
+            ("samosat.b", s.b, 0.1, 100.0, "in [0.1, 100]"),
         ] {
             if !(v.is_finite() && v >= lo && v <= hi) {
                 return bad(name, v, expected);

@@ -7,6 +7,7 @@ use crate::commands::render::preview_options;
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::{Written, write_png, write_report};
 use crate::report::InputSummary;
+use crate::stdout::outln;
 use anyhow::{Context, anyhow, bail};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -17,7 +18,7 @@ use snowscape::output_folder::OutputFolder;
 use snowscape_avalanche::validation::ThicknessConvention;
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, FrictionLaw, FrictionMaps,
-    MapMatch, ReleasedCells, RestOutcome, RunOptions, SamosAtParams, SlopeGravity,
+    MapMatch, ReleasedCells, RestOutcome, RunOptions, SamosAtParams, SlopeGravity, StopReason,
 };
 use snowscape_io::ReadOptions;
 use snowscape_io::{write_bytes_atomic, write_geotiff};
@@ -477,12 +478,12 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .job_failed()?;
     write_report(folder, report).job_failed()?;
     if !global.quiet {
-        println!(
-            "avalanche: released {:.0} m³, entrained {:.0} m³, ran {:.1} s ({:?}), runout {:.0} m, travel angle {:.1}°, footprint {:.0} m², {:.2} s wall -> {}",
+        outln!(
+            "avalanche: released {:.0} m³, entrained {:.0} m³, ran {:.1} s ({}), runout {:.0} m, travel angle {:.1}°, footprint {:.0} m², {:.2} s wall -> {}",
             summary.released_volume_m3,
             summary.entrained_volume_m3,
             summary.simulated_s,
-            summary.stop,
+            stop_words(summary.stop),
             summary.runout_length_m,
             summary.travel_angle_deg,
             summary.footprint_area_m2,
@@ -493,9 +494,40 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Why the run ended, in words for the summary line (`report.json` keeps the snake_case name).
+fn stop_words(stop: Option<StopReason>) -> &'static str {
+    match stop {
+        Some(StopReason::AtRest) => "stopped at rest",
+        Some(StopReason::EnergyCriterion) => {
+            "stopped: kinetic energy below the stop fraction of its peak"
+        }
+        Some(StopReason::Duration) => "stopped: duration reached",
+        Some(StopReason::Empty) => "stopped: all the snow left the grid",
+        None => "still moving when it ended",
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stop_reasons_are_told_in_words() {
+        for stop in [
+            None,
+            Some(StopReason::AtRest),
+            Some(StopReason::EnergyCriterion),
+            Some(StopReason::Duration),
+            Some(StopReason::Empty),
+        ] {
+            let words = stop_words(stop);
+            assert!(
+                !words.contains("Some(") && !words.contains("Criterion"),
+                "{words}"
+            );
+        }
+        assert!(stop_words(Some(StopReason::EnergyCriterion)).contains("kinetic energy"));
+    }
 
     #[test]
     fn release_points_and_files_are_told_apart() {

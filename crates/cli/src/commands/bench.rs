@@ -2,6 +2,7 @@
 
 use crate::cli::{BenchArgs, GlobalArgs};
 use crate::failure::{ExitCodeExt, Failure};
+use crate::stdout::outln;
 use anyhow::anyhow;
 use snowscape_bench::{BenchConfig, run as run_bench};
 use snowscape_io::write_bytes_atomic;
@@ -32,16 +33,22 @@ pub fn run(args: &BenchArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let json = serde_json::to_vec_pretty(&report).job_failed()?;
     write_bytes_atomic(&args.out, &json).job_failed()?;
     if !quiet {
-        println!(
+        outln!(
             "copy bandwidth {:.2} GB/s; grid {}², {} repeats",
-            report.copy_bandwidth_gb_s, report.size, args.repeats
+            report.copy_bandwidth_gb_s,
+            report.size,
+            args.repeats
         );
-        println!(
+        outln!(
             "{:<28} {:>14} {:>12} {:>10} {:>8}",
-            "kernel", "cells/s", "ms/call", "GB/s", "of bw"
+            "kernel",
+            "cells/s",
+            "ms/call",
+            "GB/s",
+            "of bw"
         );
         for k in &report.kernels {
-            println!(
+            outln!(
                 "{:<28} {:>14.3e} {:>12.3} {:>10.2} {:>7.1}%",
                 k.name,
                 k.cells_per_s,
@@ -50,7 +57,7 @@ pub fn run(args: &BenchArgs, global: &GlobalArgs) -> Result<(), Failure> {
                 100.0 * k.bandwidth_fraction
             );
         }
-        println!("wrote {}", args.out.display());
+        outln!("wrote {}", args.out.display());
     }
     Ok(())
 }

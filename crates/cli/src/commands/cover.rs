@@ -11,6 +11,7 @@ use crate::dem_input::DemInputArgs;
 use crate::failure::{BAD_INPUT, ExitCodeExt, Failure};
 use crate::outputs::{write_png, write_report};
 use crate::report::InputSummary;
+use crate::stdout::outln;
 use anyhow::{Context, anyhow, bail};
 use clap::{Args, ValueEnum};
 use snowscape::cover::{
@@ -391,7 +392,7 @@ fn cover_diffusion(
     write_report(folder, report).job_failed()?;
     if !global.quiet {
         let s = &c.stats;
-        println!(
+        outln!(
             "cover (diffusion): {} sites + {} bridge sites, snow {} vertices / {} triangles, \
              max {:.3} m, kernel {:.0} sites/s, {:.2} s -> {}",
             s.ground_sites,
@@ -486,7 +487,7 @@ fn cover_fearing(
     folder.commit(&files, None).job_failed()?;
     if !global.quiet {
         let r = &c.report;
-        println!(
+        outln!(
             "cover (fearing): {} sites in {} edge groups, {} flakes ({:.0} flakes/s), snow {} \
              triangles, max {:.3} m, {:.3} m³ caught, {:.3} m³ left the scene, {:.2} s -> {}",
             r.sites_final,

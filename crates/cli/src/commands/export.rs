@@ -3,6 +3,7 @@
 
 use crate::cli::{EngineArg, ExportArgs, GlobalArgs};
 use crate::failure::{ExitCodeExt, Failure};
+use crate::stdout::outln;
 use snowscape::engine_export::{Engine, ExportError, ExportOptions, export_run};
 
 pub fn run(args: &ExportArgs, global: &GlobalArgs) -> Result<(), Failure> {
@@ -24,7 +25,7 @@ pub fn run(args: &ExportArgs, global: &GlobalArgs) -> Result<(), Failure> {
         Err(err) => return Err(anyhow::Error::from(err)).bad_input(),
     };
     if !global.quiet {
-        println!(
+        outln!(
             "export ({:?}): {} x {} samples every {:.2} x {:.2} m, heights {:.1}..{:.1} m, {} files -> {}",
             e.engine,
             e.size[0],

@@ -4,6 +4,7 @@
 
 use crate::cli::ParametersArgs;
 use crate::failure::{ExitCodeExt, Failure};
+use crate::stdout::outln;
 use snowscape_season::parameter_catalogue::{ParameterKind, parameter_catalogue};
 
 pub fn run(args: &ParametersArgs) -> Result<(), Failure> {
@@ -19,7 +20,7 @@ pub fn run(args: &ParametersArgs) -> Result<(), Failure> {
         .bad_input();
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&list).job_failed()?);
+        outln!("{}", serde_json::to_string_pretty(&list).job_failed()?);
         return Ok(());
     }
     for p in list {
@@ -42,7 +43,7 @@ pub fn run(args: &ParametersArgs) -> Result<(), Failure> {
             ParameterKind::Choice => format!("  one of {}", p.choices.join(", ")),
             ParameterKind::Boolean => "  true or false".to_string(),
         };
-        println!("{} = {}{range}\n    {}", p.path, p.default, p.help);
+        outln!("{} = {}{range}\n    {}", p.path, p.default, p.help);
     }
     Ok(())
 }

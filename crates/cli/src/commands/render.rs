@@ -1,8 +1,10 @@
 //! `snowscape render FILE --out FILE.png`: a shaded-relief preview of a terrain file.
 
-use crate::cli::{RenderArgs, RenderMode, ViewArgs};
+use crate::cli::{GlobalArgs, RenderArgs, RenderMode, ViewArgs};
+use crate::commands::convert::wrote_line;
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::write_png;
+use crate::stdout::outln;
 use anyhow::bail;
 use snowscape_render::{ColourMode, PreviewOptions, render_dem, render_preview};
 use snowscape_terrain::LayeredTerrain;
@@ -42,7 +44,7 @@ pub fn preview_options(view: &ViewArgs, mode: ColourMode) -> anyhow::Result<Prev
     })
 }
 
-pub fn run(args: &RenderArgs) -> Result<(), Failure> {
+pub fn run(args: &RenderArgs, global: &GlobalArgs) -> Result<(), Failure> {
     if args
         .out
         .extension()
@@ -68,5 +70,9 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         }
     };
     write_png(&args.out, &img).job_failed()?;
+    if !global.quiet {
+        let detail = format!("{} x {} px", img.width(), img.height());
+        outln!("{}", wrote_line(&args.out, "PNG", &detail));
+    }
     Ok(())
 }

@@ -3,6 +3,7 @@
 //! command line around it: the progress bar, Ctrl-C, the exit codes and the summary line.
 
 use crate::failure::Failure;
+use crate::stdout::outln;
 use anyhow::anyhow;
 use snowscape::season_run::{SeasonOutcome, SeasonProgress, run_season as run_job};
 use std::sync::Arc;
@@ -73,7 +74,7 @@ pub fn run_season(job: SeasonJob, quiet: bool) -> Result<(), Failure> {
         SeasonOutcome::Stopped { day } => {
             bar.0.finish_and_clear();
             if !quiet {
-                println!(
+                outln!(
                     "stopped at day {day:.2} as asked; continue with --resume {}",
                     out.display()
                 );
@@ -84,7 +85,7 @@ pub fn run_season(job: SeasonJob, quiet: bool) -> Result<(), Failure> {
             bar.0.finish_and_clear();
             if !quiet {
                 let b = &report.mass_budget;
-                println!(
+                outln!(
                     "{}: {:.0} days on {}x{} cells; snowfall {:.3e} m³, final store {:.3e} m³ (closure error {:.1e}); {} files in {}",
                     report.command,
                     days,

@@ -5,6 +5,7 @@
 use crate::cli::{GlobalArgs, ServeArgs, ViewArgs};
 use crate::commands::render::preview_options;
 use crate::failure::{ExitCodeExt, Failure};
+use crate::stdout::outln;
 use anyhow::{Context, anyhow};
 use snowscape_editor::{Assets, BUILD_HINT, ProjectDir, ServeConfig, Session, serve_blocking};
 use snowscape_render::ColourMode;
@@ -95,7 +96,7 @@ pub fn run(args: &ServeArgs, global: &GlobalArgs) -> Result<(), Failure> {
     };
     let root = config.project.root().display().to_string();
     serve_blocking(config, |served| {
-        println!(
+        outln!(
             "snowscape editor: {}  (project folder {root}; Ctrl-C stops)",
             served.url()
         );

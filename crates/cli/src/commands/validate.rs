@@ -10,6 +10,7 @@
 use crate::cli::{GlobalArgs, ValidateArgs};
 use crate::failure::{ExitCodeExt, Failure};
 use crate::outputs::write_png;
+use crate::stdout::{out, outln};
 use crate::validation::figures::{density_scatter, side_by_side};
 use crate::validation::{
     Input, Inputs, Settings, Validation, ValidationError, compare, prevailing_wind_from, summary,
@@ -185,8 +186,8 @@ pub fn run(args: &ValidateArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let names: Vec<String> = outputs.iter().map(|n| n.to_string()).collect();
     folder.commit(&names, None).job_failed()?;
     if !global.quiet {
-        print!("{}", summary::table(&validation));
-        println!("wrote {} in {}", outputs.join(", "), out.display());
+        out!("{}", summary::table(&validation));
+        outln!("wrote {} in {}", outputs.join(", "), out.display());
     }
     Ok(())
 }

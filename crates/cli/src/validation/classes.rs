@@ -11,12 +11,18 @@
 //! | steep/moderate | slope > 60° | slope 20..=35° |
 //! | lee/windward | aspect within ±45° of the direction the wind blows TO, slope > 15° | aspect within ±45° of the direction it blows FROM, slope > 15° |
 //!
-//! Within each band of [`BAND_M`] metres of altitude, the ratio is the mean depth of class A
-//! over the mean depth of class B. A band counts when it holds cells of both classes and both
-//! the simulated and the observed class-B means are positive (so the simulated and observed
-//! ratios average over the same bands); the reported ratio is the mean of the per-band ratios
-//! weighted by the band's class-A plus class-B cell count. Comparing within bands keeps the
-//! altitude gradient of depth out of the aspect, slope and wind contrasts.
+//! The cells are stratified by bands of [`BAND_M`] metres of altitude. A band is used when it
+//! holds cells of both classes. The reported ratio pools the cells of the used bands: it is the
+//! ratio of the two classes' mean depths, each class mean taken over the bands with the same
+//! band weights (the band's class-A plus class-B cell count), i.e.
+//!
+//! `ratio = Σ_b w_b·mean_A,b / Σ_b w_b·mean_B,b`, `w_b = n_A,b + n_B,b`.
+//!
+//! Giving both classes the same band weights keeps the altitude gradient of depth out of the
+//! aspect, slope and wind contrasts; pooling (a ratio of weighted sums, not a mean of per-band
+//! ratios) keeps a nearly bare band, whose class-B mean is close to 0 and whose own ratio may
+//! be 20 or 90, from dominating: it adds little depth to either sum. The per-band ratios are
+//! reported beside it (with each class's cell count and mean depths) for inspection only.
 
 use serde::Serialize;
 use snowscape_terrain::{Grid, surface};
@@ -109,11 +115,16 @@ pub struct BandRatio {
     pub from_m: f64,
     pub cells_a: usize,
     pub cells_b: usize,
-    /// Mean simulated depth of class A over class B.
+    /// Mean simulated depth of class A and of class B in the band, metres (`None` without cells).
+    pub simulated_mean_m: [Option<f64>; 2],
+    /// Mean observed depth of class A and of class B in the band, metres.
+    pub observed_mean_m: [Option<f64>; 2],
+    /// Mean simulated depth of class A over class B in this band alone (`None` when a class has
+    /// no cells or the class-B mean is 0). For inspection: the contrast pools the bands.
     pub simulated: Option<f64>,
-    /// Mean observed depth of class A over class B.
+    /// The same for the observed depth.
     pub observed: Option<f64>,
-    /// Whether the band enters the weighted means.
+    /// Whether the band enters the pooled ratio (it holds cells of both classes).
     pub used: bool,
 }
 
@@ -122,10 +133,17 @@ pub struct BandRatio {
 pub struct ContrastRatio {
     pub class_a: &'static str,
     pub class_b: &'static str,
-    /// Count-weighted mean over the used bands of the simulated per-band ratio.
+    /// Pooled simulated ratio over the used bands: `Σ w_b·mean_A,b / Σ w_b·mean_B,b` with
+    /// `w_b` the band's class-A plus class-B cell count (`None` when no band is used or the
+    /// denominator is 0).
     pub simulated: Option<f64>,
     /// The same for the observed depth.
     pub observed: Option<f64>,
+    /// The band-weighted mean simulated depth of class A and of class B over the used bands,
+    /// metres: the numerator and denominator of `simulated` divided by `Σ w_b`.
+    pub simulated_mean_m: [Option<f64>; 2],
+    /// The same for the observed depth.
+    pub observed_mean_m: [Option<f64>; 2],
     /// Cells of class A, all bands.
     pub cells_a: usize,
     /// Cells of class B, all bands.
@@ -142,7 +160,7 @@ struct Sums {
     obs: f64,
 }
 
-/// The depth ratio of `contrast` within elevation bands.
+/// The depth ratio of `contrast`, stratified by elevation bands and pooled over them.
 pub fn contrast_ratio(
     contrast: Contrast,
     terrain: &[CellTerrain],
@@ -171,23 +189,30 @@ pub fn contrast_ratio(
         class_b,
         simulated: None,
         observed: None,
+        simulated_mean_m: [None; 2],
+        observed_mean_m: [None; 2],
         cells_a: 0,
         cells_b: 0,
         cells_used: 0,
         bands: Vec::new(),
     };
-    let (mut ws, mut wo, mut w) = (0.0, 0.0, 0.0);
+    // Σ w_b·mean for class A and B, simulated and observed, and Σ w_b.
+    let (mut sim, mut obs, mut w) = ([0.0; 2], [0.0; 2], 0.0);
     for (band, [a, b]) in bands {
-        let mean_ratio = |sa: f64, sb: f64| {
-            (a.n > 0 && b.n > 0 && sb > 0.0).then(|| (sa / a.n as f64) / (sb / b.n as f64))
+        let mean = |sum: f64, n: usize| (n > 0).then(|| sum / n as f64);
+        let sim_mean = [mean(a.sim, a.n), mean(b.sim, b.n)];
+        let obs_mean = [mean(a.obs, a.n), mean(b.obs, b.n)];
+        let ratio = |m: [Option<f64>; 2]| match m {
+            [Some(ma), Some(mb)] if mb > 0.0 => Some(ma / mb),
+            _ => None,
         };
-        let simulated = mean_ratio(a.sim, b.sim);
-        let observed = mean_ratio(a.obs, b.obs);
-        let used = simulated.is_some() && observed.is_some();
-        if let (Some(s), Some(o)) = (simulated, observed) {
+        let used = a.n > 0 && b.n > 0;
+        if used {
             let weight = (a.n + b.n) as f64;
-            ws += weight * s;
-            wo += weight * o;
+            for k in 0..2 {
+                sim[k] += weight * sim_mean[k].unwrap_or(0.0);
+                obs[k] += weight * obs_mean[k].unwrap_or(0.0);
+            }
             w += weight;
             out.cells_used += a.n + b.n;
         }
@@ -197,14 +222,18 @@ pub fn contrast_ratio(
             from_m: band as f64 * BAND_M,
             cells_a: a.n,
             cells_b: b.n,
-            simulated,
-            observed,
+            simulated_mean_m: sim_mean,
+            observed_mean_m: obs_mean,
+            simulated: ratio(sim_mean),
+            observed: ratio(obs_mean),
             used,
         });
     }
     if w > 0.0 {
-        out.simulated = Some(ws / w);
-        out.observed = Some(wo / w);
+        out.simulated_mean_m = [Some(sim[0] / w), Some(sim[1] / w)];
+        out.observed_mean_m = [Some(obs[0] / w), Some(obs[1] / w)];
+        out.simulated = (sim[1] > 0.0).then(|| sim[0] / sim[1]);
+        out.observed = (obs[1] > 0.0).then(|| obs[0] / obs[1]);
     }
     out
 }
@@ -273,5 +302,58 @@ mod tests {
         assert_eq!(c.class(&cell(0.0, 61.0, 0.0), 0.0), Some(true));
         assert_eq!(c.class(&cell(0.0, 35.0, 0.0), 0.0), Some(false));
         assert_eq!(c.class(&cell(0.0, 40.0, 0.0), 0.0), None);
+    }
+
+    #[test]
+    fn a_nearly_bare_band_does_not_dominate_the_pooled_ratio() {
+        // Band 0..200 m, nearly bare: 10 north cells at 0.201 m, 10 south cells at 0.01 m
+        // (its own ratio 20.1). Band 200..400 m, deep: 10 north cells at 1.0 m, 10 south at
+        // 2.0 m (ratio 0.5). Both bands weigh 20 cells.
+        // The old mean of per-band ratios: (20·20.1 + 20·0.5) / 40 = 10.3.
+        // Pooled: (20·0.201 + 20·1.0) / (20·0.01 + 20·2.0) = 24.02 / 40.2 = 0.597 51...
+        let mut terrain = Vec::new();
+        let mut sim = Vec::new();
+        for (altitude, north, south) in [(100.0, 0.201, 0.01), (300.0, 1.0, 2.0)] {
+            for _ in 0..10 {
+                terrain.push(cell(altitude, 30.0, 0.0));
+                sim.push(north);
+                terrain.push(cell(altitude, 30.0, 180.0));
+                sim.push(south);
+            }
+        }
+        let obs: Vec<f64> = sim.iter().map(|v| 2.0 * v).collect();
+        let r = contrast_ratio(Contrast::NorthSouth, &terrain, &sim, &obs, 270.0);
+        let hand: f64 = (20.0 * 0.201 + 20.0 * 1.0) / (20.0 * 0.01 + 20.0 * 2.0);
+        assert!((hand - 0.597_512_437_810_945_3).abs() < 1e-12);
+        let s = r.simulated.unwrap();
+        assert!((s - hand).abs() < 1e-12, "pooled {s}, hand {hand}");
+        // Doubling every depth leaves the ratio alone.
+        assert!((r.observed.unwrap() - hand).abs() < 1e-12);
+        // The class means behind it: (0.201 + 1.0) / 2 and (0.01 + 2.0) / 2.
+        let [ma, mb] = r.simulated_mean_m;
+        assert!((ma.unwrap() - 0.6005).abs() < 1e-12 && (mb.unwrap() - 1.005).abs() < 1e-12);
+        // The per-band table keeps the band ratios and the cell counts of each class.
+        assert_eq!(r.bands.len(), 2);
+        assert!((r.bands[0].simulated.unwrap() - 20.1).abs() < 1e-9);
+        assert!((r.bands[1].simulated.unwrap() - 0.5).abs() < 1e-12);
+        assert_eq!((r.bands[0].cells_a, r.bands[0].cells_b), (10, 10));
+        assert_eq!((r.cells_a, r.cells_b, r.cells_used), (20, 20, 40));
+        // A band whose class B is bare (mean 0) still enters the pooled sums.
+        let bare: Vec<f64> = sim
+            .iter()
+            .zip(&terrain)
+            .map(|(&v, t)| {
+                if t.altitude_m < 200.0 && t.aspect_deg > 90.0 {
+                    0.0
+                } else {
+                    v
+                }
+            })
+            .collect();
+        let r = contrast_ratio(Contrast::NorthSouth, &terrain, &bare, &bare, 270.0);
+        assert_eq!(r.bands[0].simulated, None);
+        assert!(r.bands[0].used);
+        let hand = (20.0 * 0.201 + 20.0 * 1.0) / (20.0 * 2.0);
+        assert!((r.simulated.unwrap() - hand).abs() < 1e-12);
     }
 }

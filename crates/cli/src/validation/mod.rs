@@ -13,8 +13,10 @@
 //!   observed distribution ordered by altitude; (b) **altitude + northness**: the least-squares
 //!   plane depth ≈ c₀ + c₁·altitude + c₂·northness fitted on the compared cells themselves
 //!   (in-sample, so an optimistic baseline: it has seen the observations);
-//! - depth ratios within 200 m elevation bands, simulated and observed: north/south,
-//!   steep/moderate, lee/windward, with the cell counts per class ([`classes`]);
+//! - depth ratios stratified by 200 m elevation bands and pooled over them (the ratio of the
+//!   band-weighted class means, not a mean of per-band ratios), simulated and observed:
+//!   north/south, steep/moderate, lee/windward, with the per-band table and the cell counts
+//!   per class ([`classes`]);
 //! - ρ of each depth with altitude (measured snow is far less tied to altitude than a
 //!   temperature-driven model: see `docs/model.md#sources-and-the-reading-of-table-2`).
 //!

@@ -2,7 +2,7 @@
 //! both baselines, then the class ratios.
 
 use super::Validation;
-use super::classes::ContrastRatio;
+use super::classes::{BAND_M, ContrastRatio};
 use super::stats::Metrics;
 use std::fmt::Write;
 
@@ -33,13 +33,38 @@ fn ratio_row(out: &mut String, r: &ContrastRatio) {
     let name = format!("{}/{}", r.class_a, r.class_b);
     let _ = writeln!(
         out,
-        "{name:<20}{}{}{:>9}{:>9}{:>9}",
+        "{name:<20}{}{}{:>9}{:>9}{:>9}{}{}{}{}",
         num(r.simulated, 9, 3),
         num(r.observed, 9, 3),
         r.cells_a,
         r.cells_b,
         r.cells_used,
+        num(r.simulated_mean_m[0], 9, 3),
+        num(r.simulated_mean_m[1], 9, 3),
+        num(r.observed_mean_m[0], 9, 3),
+        num(r.observed_mean_m[1], 9, 3),
     );
+    // The bands behind the pooled ratio: each band's own ratio, its cell counts and means.
+    for b in &r.bands {
+        let name = format!("  {:.0}..{:.0} m", b.from_m, b.from_m + BAND_M);
+        let used = if b.used {
+            (b.cells_a + b.cells_b).to_string()
+        } else {
+            "-".to_string()
+        };
+        let _ = writeln!(
+            out,
+            "{name:<20}{}{}{:>9}{:>9}{used:>9}{}{}{}{}",
+            num(b.simulated, 9, 3),
+            num(b.observed, 9, 3),
+            b.cells_a,
+            b.cells_b,
+            num(b.simulated_mean_m[0], 9, 3),
+            num(b.simulated_mean_m[1], 9, 3),
+            num(b.observed_mean_m[0], 9, 3),
+            num(b.observed_mean_m[1], 9, 3),
+        );
+    }
 }
 
 /// The summary table.
@@ -77,15 +102,23 @@ pub fn table(v: &Validation) -> String {
     );
     let _ = writeln!(
         out,
-        "{:<20}{:>9}{:>9}{:>9}{:>9}{:>9}   (mean over {} m bands; wind from {:.0} deg)",
+        "{:<20}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}",
         "ratio",
         "sim",
         "obs",
         "cells_a",
         "cells_b",
         "used",
-        v.ratios.band_m,
-        v.ratios.wind_from_deg
+        "sim_a_m",
+        "sim_b_m",
+        "obs_a_m",
+        "obs_b_m"
+    );
+    let _ = writeln!(
+        out,
+        "(pooled over {} m bands: sum of w*mean_a over sum of w*mean_b, w = the band's cells \
+         of both classes; the band rows give each band's own ratio; wind from {:.0} deg)",
+        v.ratios.band_m, v.ratios.wind_from_deg
     );
     ratio_row(&mut out, &v.ratios.north_south);
     ratio_row(&mut out, &v.ratios.steep_moderate);
