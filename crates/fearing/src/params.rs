@@ -162,7 +162,7 @@ impl Default for StabilityParams {
             max_passes: 100_000,
             min_moved_fraction: 1e-4,
             quiet_m: 1e-4,
-            max_tests_per_site: 200,
+            max_tests_per_site: 1000,
             level_tolerance_m: 1e-5,
             edge_particles: 4,
             edge_speed_m_s: 0.5,

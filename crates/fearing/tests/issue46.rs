@@ -111,12 +111,16 @@ fn water_in_a_closed_pit_is_flat_within_a_centimetre() {
             height: 6,
             values,
         }),
-        target_sites: 1000,
         sky_bucket_m: Some(0.25),
+        // 8,000 sites (9,100 after refinement): the old phase cap of 400 passes left this
+        // pit's water uneven by 5 cm; it goes quiet after about 850 passes.
+        target_sites: 8000,
         flakes_per_site: 32,
+
         ..FearingParams::with_material(Material::water())
     };
     let c = cover(&scene, &p).unwrap();
+    assert!(c.report.mass.allocated_m3 > 1.5, "{:?}", c.report.mass);
     let tops: Vec<f64> = c
         .topology
         .leaves
@@ -127,11 +131,16 @@ fn water_in_a_closed_pit_is_flat_within_a_centimetre() {
         .collect();
     let lo = tops.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = tops.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    assert!(hi - lo < 0.01, "the water varies by {} m", hi - lo);
     for pass in &c.report.passes {
         eprintln!("{:?}", pass.stability);
         assert!(pass.stability.quiet, "{:?}", pass.stability);
     }
+    eprintln!(
+        "water level spread {} m over {} floor sites",
+        hi - lo,
+        tops.len()
+    );
+    assert!(hi - lo < 0.01, "the water varies by {} m", hi - lo);
 }
 
 /// Issue 46: the Fearing surface was speckled (a cone per site, corners at the neighbours'
