@@ -13,15 +13,16 @@
 //! or whatever lies just beyond it; a short horizontal probe toward it that meets something
 //! blocks the edge until the snow rises above the obstacle, else the excess leaves by
 //! [`crate::edge_transit`]. Every site affected (s, receivers, higher neighbours of s) goes to
-//! u2, which replaces u1 after the pass. Ending a phase (4.4): when u2 is empty or a pass is quiet
-//! (no shift changes a site's height by more than `quiet_m`, and it moves less than a small share
-//! of the snow) or moves less than a small share of
-//! the snow, it re-checks every site (the paper's re-run "to compensate for speed-accuracy
-//! tradeoffs"), and ends when that re-check finds nothing to do or is quiet, or at the pass cap
-//! or the test cap (`max_tests_per_site` times the sites: both bounded by the number of sites). Work, never the clock, ends a phase: the wall-clock deadline
-//! is a safety net whose expiry the caller reports as an error. The snow surfaces used by
-//! the obstacle tests are rebuilt every few passes (the paper's rebucketing "with a
-//! considerable lag").
+//! u2, which replaces u1 after the pass. Ending a phase (4.4): when u2 is empty, or a pass is
+//! quiet (no shift changes a site's height by more than `quiet_m` and it moves less than a small
+//! share of the snow), or a pass moves less than that share, every site is re-checked (the
+//! paper's re-run "to compensate for speed-accuracy tradeoffs"); the phase ends when that
+//! re-check finds nothing to do or is quiet, or at the pass cap or the test cap
+//! (`max_tests_per_site` times the sites: both bounded by the number of sites). Work, never the
+//! clock, ends a phase: the wall-clock deadline is a safety net whose expiry the caller reports
+//! as an error. The snow surfaces used by
+//! the obstacle tests are rebuilt every few passes once they have tested a quarter of the sites
+//! (the paper's rebucketing "with a considerable lag").
 
 use crate::edge_groups::Topology;
 use crate::edge_transit::{Flight, Landing, SiteGrid};
@@ -143,8 +144,16 @@ pub fn stabilise(
     let max_tests = (sp.max_tests_per_site as u64)
         .saturating_mul(n as u64)
         .max(1);
+    let (mut refreshed_at, mut tests_at_refresh) = (0u32, 0u64);
     while rep.passes < max_passes && rep.tests < max_tests {
-        if rep.passes.is_multiple_of(sp.obstacle_refresh_passes) || tracer.is_none() {
+        // Rebuild every few passes, and only once those passes have tested a quarter of the
+        // sites: the long tail of small passes a phase ends with does not rebuild the whole
+        // tracer every few hundred tests.
+        let due = rep.passes >= refreshed_at + sp.obstacle_refresh_passes
+            && rep.tests >= tests_at_refresh + (n as u64 / 4);
+        if due || tracer.is_none() {
+            refreshed_at = rep.passes;
+            tests_at_refresh = rep.tests;
             sync(sites, topo, &vol);
             let snow = SnowSurface::build(sites, topo, params.min_surface_depth_m);
             tracer = Some(Tracer::new(scene, &snow.tagged()));
