@@ -126,7 +126,7 @@ const RECORDED: &[(&str, &str, u64)] = &[
     ("run", "temperature.tif", 0x2b957da5e5e27435),
     ("run", "wind.tif", 0xd7f694f7d15963f9),
     ("cover_diffusion", "snow.obj", 0xfa5d24f00cb32d4d),
-    ("cover_fearing", "snow.obj", 0x1f3ab4d9bce21bac),
+    ("cover_fearing", "snow.obj", 0x3eb5132f1795c826),
     ("transport", "depth.tif", 0x67de4a3e5a6bfab6),
     ("transport", "density.tif", 0x6abfe3f33142848f),
     ("transport", "q_salt.tif", 0x3657c6dcd74952ac),

@@ -13,9 +13,11 @@
 //! design") on the snow depth of every top-surface vertex over its top-surface neighbours, so
 //! the per-site fans (a cone at each site centre, its corners at the minimum of the neighbours,
 //! 3.7) that speckle the surface blend, without the shrinkage of plain Laplacian passes (the
-//! snow volume under the surface changes by well under 1 %: see the tests). Depths stay >= 0,
-//! wall bottoms stay on the base, and only depth (z) moves. [`smooth_volumes`] is the other: a few Jacobi steps of mass-conserving diffusion of the
-//! snow depth between neighbouring sites of a group (each pair exchanges a share of its depth
+//! snow volume under the surface changes by well under 1 %: see the tests). Each depth stays
+//! within the range of its vertex's original neighbourhood (no overshoot above the deepest site),
+//! wall bottoms stay on the base, and only depth (z) moves. [`smooth_volumes`] is the other: a
+//! few Jacobi steps of mass-conserving diffusion of the snow depth between neighbouring sites of
+//! a group (each pair exchanges a share of its depth
 //! difference times the smaller area, so the total volume is unchanged to rounding).
 
 use crate::edge_groups::Topology;
@@ -169,9 +171,22 @@ impl SnowSurface {
                 })
                 .collect()
         };
+        // Each vertex stays within the depths of its original neighbourhood: the μ step's
+        // overshoot never raises snow above the deepest site around it.
+        let range: Vec<(f64, f64)> = (0..n)
+            .map(|v| {
+                edges[start[v]..start[v + 1]]
+                    .iter()
+                    .map(|&(_, b)| depth[b as usize])
+                    .fold((depth[v], depth[v]), |(lo, hi), d| (lo.min(d), hi.max(d)))
+            })
+            .collect();
         for _ in 0..passes {
             depth = step(&depth, 0.5);
             depth = step(&depth, -0.53);
+            for (d, &(lo, hi)) in depth.iter_mut().zip(&range) {
+                *d = d.clamp(lo, hi);
+            }
         }
         for v in 0..n {
             if start[v + 1] > start[v] {
