@@ -39,8 +39,9 @@ fn every_shared_mesh_gets_snow_aligned_with_it() {
             mesh.to_str().unwrap(),
             "--method",
             "fearing",
+            // A safety net, not a stopping rule: the work ends the cover.
             "--budget",
-            "1",
+            "600",
             "--sites",
             "2500",
             "--out",

@@ -28,6 +28,19 @@ pub enum FearingError {
     /// The snow weighting image ("snow writing") cannot be used.
     #[error("sky weight image {what}")]
     SkyWeight { what: String },
+    /// The wall-clock safety net ([`crate::FearingParams::budget_s`]) ran out before the work
+    /// (the flake budget, the stability passes) was done: an error rather than a cover that
+    /// would depend on the machine's speed.
+    #[error(
+        "the cover ran past its wall-clock safety net of {budget_s} s ({elapsed_s:.1} s, in \
+         {stage}); its work is set by flakes_per_site, target_sites and the stability passes, \
+         not the clock: raise --budget or lower the work"
+    )]
+    BudgetExceeded {
+        budget_s: f64,
+        elapsed_s: f64,
+        stage: String,
+    },
     /// No snow lies deep enough to make a surface.
     #[error("no snow settled: none of the {sites} launch sites holds {min_depth_m} m or more")]
     NoSnow { sites: usize, min_depth_m: f64 },

@@ -7,17 +7,21 @@
 //!   through the BVH of [`tracer`] (3.6);
 //! - [`sky_buckets`] (3.4): the sky's mass shared by representative flake area, optionally
 //!   weighted by an image ("snow writing");
-//! - [`importance`] (3.2) and [`accumulation`] (3.1): the anytime loop under a time budget;
+//! - [`importance`] (3.2) and [`accumulation`] (3.1): the anytime loop, ended by a flake
+//!   budget (a work count: [`FearingParams::flakes_per_site`]);
 //! - [`stability`] (4.1, 4.2, 4.4) with [`edge_transit`] (4.3): angle-of-repose avalanches with
 //!   obstacle tests and projectile particles over edges; any AOR and material ([`params`]);
-//! - [`surface`] (3.7, 5): the snow mesh with closing walls, optional smoothing;
+//! - [`surface`] (3.7, 5): the snow mesh with closing walls, Taubin-smoothed depths;
 //! - [`scenes`]: scenes built in code (plane, roof, box, basin).
 //!
 //! A cover returns data ([`FearingCover`], its [`FearingCover::meshes`] and report); its files are
 //! written by `snowscape::cover::write_fearing_outputs`.
 //!
-//! Entry point: [`cover`]. A cover is a function of (scene, parameters, seed) whatever the
-//! thread count, as long as the flake budget and not the time budget ends each pass.
+//! Entry point: [`cover`]. A cover is a function of (scene, parameters, seed): the same bytes on
+//! any machine and any thread count. Every stage ends on a work count (the flake budget of each
+//! accumulation pass; quiet, or a pass cap bounded by the number of sites, in each stability
+//! phase). The wall-clock [`FearingParams::budget_s`] is only a safety net: a cover that runs
+//! past it fails with [`FearingError::BudgetExceeded`] instead of returning a cover cut short.
 
 pub mod accumulation;
 pub mod dusting;
@@ -134,11 +138,17 @@ pub fn cover(scene: &Scene, params: &FearingParams) -> Result<FearingCover, Fear
         ..Default::default()
     };
     report.timings.launch_sites_s = start.elapsed().as_secs_f64();
-    let budget = Duration::from_secs_f64(params.budget_s);
+    // The work (flakes per site, stability passes) ends every stage; the wall clock is only a
+    // safety net, and running out of it is an error, never a different cover.
+    let deadline = start + Duration::from_secs_f64(params.budget_s.min(1e9));
+    let over = |stage: String| FearingError::BudgetExceeded {
+        budget_s: params.budget_s,
+        elapsed_s: start.elapsed().as_secs_f64(),
+        stage,
+    };
     let passes = params.passes;
     for pass in 0..passes {
         let t = Instant::now();
-        let acc_deadline = start + budget.mul_f64((pass as f64 + 0.7) / passes as f64);
         let acc = accumulation::accumulate(
             scene,
             &mut sites,
@@ -146,15 +156,19 @@ pub fn cover(scene: &Scene, params: &FearingParams) -> Result<FearingCover, Fear
             params,
             pass,
             params.depth_m / passes as f64,
-            acc_deadline,
+            deadline,
         );
+        if acc.stopped_by_time {
+            return Err(over(format!("accumulation pass {}", pass + 1)));
+        }
         surface::smooth_volumes(&mut sites, &topo, params.smoothing_iterations);
         report.timings.accumulation_s += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let stab_deadline = (start + budget.mul_f64((pass as f64 + 1.0) / passes as f64))
-            .max(t + Duration::from_millis(200));
         let blown = wind_transport::blow(scene, &mut sites, &topo, params);
-        let mut stab = stability::stabilise(scene, &mut sites, &topo, params, stab_deadline);
+        let mut stab = stability::stabilise(scene, &mut sites, &topo, params, deadline);
+        if stab.stopped_by_time {
+            return Err(over(format!("stability phase {}", pass + 1)));
+        }
         stab.wind_moved_m3 = blown;
         report.timings.stability_s += t.elapsed().as_secs_f64();
         report.flakes_shot += acc.flakes;
@@ -171,7 +185,8 @@ pub fn cover(scene: &Scene, params: &FearingParams) -> Result<FearingCover, Fear
         });
     }
     let t = Instant::now();
-    let surface = SnowSurface::build(&sites, &topo, params.min_surface_depth_m);
+    let mut surface = SnowSurface::build(&sites, &topo, params.min_surface_depth_m);
+    surface.smooth(params.surface_smoothing);
     let dusting = if params.dusting {
         dusting::dusting_mesh(&sites, &topo, params.min_surface_depth_m, params.seed)
     } else {

@@ -123,13 +123,26 @@ impl SkyWeight {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct StabilityParams {
-    /// Most passes through the unresolved list per stability phase (Section 4.4; ours: 400). A
-    /// phase that the time budget ends instead says so (`stopped_by_time`): its result then
-    /// depends on the machine's speed.
+    /// Most passes through the unresolved list per stability phase (Section 4.4); the cap in
+    /// use is the smaller of this and the number of sites + 16, so it is bounded by the sites
+    /// (ours: 100,000, so the sites set it). A phase normally ends earlier, when quiet (see
+    /// `quiet_m`); the pass count, never the clock, ends it, so its result is the same on any
+    /// machine.
     pub max_passes: u32,
-    /// A pass that moves less than this share of the snow ends the phase (Section 4.4: "all
-    /// avalanches in the last pass moved only a very small amount of snow"); ours: 1e-4.
+    /// Most site tests per stability phase, per site (the work cap that ends a phase which never
+    /// goes quiet, such as snow draining off a steep flank in ever smaller avalanches; ours:
+    /// 1000: water in a pit of 9,100 sites goes quiet, flat within 2 mm, after about 510 tests a
+    /// site; the bunny's 26 k sites, which do not always go quiet, take about 11 s a phase on
+    /// the 2-core machine).
+    pub max_tests_per_site: u32,
+    /// A pass that moves less than this share of the snow sends every site to a re-check
+    /// (Section 4.4: "all avalanches in the last pass moved only a very small amount of snow");
+    /// ours: 1e-4.
     pub min_moved_fraction: f64,
+    /// Quiet: a full re-check pass in which no avalanche changes a site's snow height by more
+    /// than this ends the phase, metres (ours: 0.1 mm; water settles flat to within about a
+    /// hundred times this over a pit a few metres wide).
+    pub quiet_m: f64,
     /// Height difference below which two sites count as level, metres (keeps water from
     /// trading micro-amounts forever); ours: 0.01 mm.
     pub level_tolerance_m: f64,
@@ -139,7 +152,8 @@ pub struct StabilityParams {
     pub edge_speed_m_s: f64,
     /// Share of the speed kept at a bounce off a surface that holds no snow (ours).
     pub restitution: f64,
-    /// Rebuild the snow surfaces used by the obstacle tests every this many passes (Section 4.2
+    /// Rebuild the snow surfaces used by the obstacle tests every this many passes, and no sooner
+    /// than a quarter of the sites has been tested since the last rebuild (Section 4.2
     /// reduces the frequency of the obstacle test "from every test, to every pass, to once per
     /// stability phase"); ours: 16.
     pub obstacle_refresh_passes: u32,
@@ -148,8 +162,10 @@ pub struct StabilityParams {
 impl Default for StabilityParams {
     fn default() -> Self {
         Self {
-            max_passes: 400,
+            max_passes: 100_000,
             min_moved_fraction: 1e-4,
+            quiet_m: 1e-4,
+            max_tests_per_site: 1000,
             level_tolerance_m: 1e-5,
             edge_particles: 4,
             edge_speed_m_s: 0.5,
@@ -183,11 +199,14 @@ pub struct FearingParams {
     pub wind_transport: f64,
     /// Seed of every random number (flakes, transition curve).
     pub seed: u64,
-    /// Wall-clock budget of the anytime accumulation loop, seconds (Section 3.2); the loop also
-    /// stops when it has shot its flake budget, so a generous budget gives results independent
-    /// of the machine.
+    /// Wall-clock safety net of the whole cover, seconds (ours: 600). The work, not the clock,
+    /// ends every stage (the flake budget `flakes_per_site` of each accumulation pass of Section
+    /// 3.2's anytime loop; quiet or the pass cap in stability), so a cover is the same bytes on
+    /// any machine; a cover still running at this time fails with
+    /// [`FearingError::BudgetExceeded`] rather than returning a result cut short by the clock.
     pub budget_s: f64,
-    /// Flake budget per pass: this many flakes per launch site on average (ours: 48).
+    /// Flake budget per pass, the work count that ends accumulation: this many flakes per
+    /// launch site on average (ours: 48).
     pub flakes_per_site: u32,
     /// Flakes per batch (Section 3.4: "within the order of 10-15 flakes").
     pub batch_size: u32,
@@ -219,6 +238,9 @@ pub struct FearingParams {
     /// Iterations of mass-conserving depth smoothing between neighbours before meshing (the
     /// "simpler documented method" standing in for Section 5's implicit functions); 0 = off.
     pub smoothing_iterations: u32,
+    /// Taubin λ|μ smoothing pairs on the finished snow surface's depths ([`crate::SnowSurface::smooth`],
+    /// standing in for Section 5's optional implicit-function smoothing); ours: 4; 0 = off.
+    pub surface_smoothing: u32,
     /// Thinnest snow drawn as a surface, metres (thinner is flake dusting, Section 3.8).
     pub min_surface_depth_m: f64,
     /// Whether to make the flake-dusting mesh (Section 3.8).
@@ -236,7 +258,7 @@ impl Default for FearingParams {
             wind_m_s: [0.0, 0.0],
             wind_transport: 0.0,
             seed: 1,
-            budget_s: 20.0,
+            budget_s: 600.0,
             flakes_per_site: 48,
             batch_size: 12,
             passes: 2,
@@ -251,6 +273,7 @@ impl Default for FearingParams {
             boring_objects: Vec::new(),
             stability: StabilityParams::default(),
             smoothing_iterations: 2,
+            surface_smoothing: 4,
             min_surface_depth_m: 1e-3,
             dusting: true,
         }
@@ -381,6 +404,10 @@ impl FearingParams {
             return Err(invalid("stability passes", 0, "at least 1"));
         }
         non_neg("stability moved fraction", s.min_moved_fraction)?;
+        non_neg("stability quiet height (m)", s.quiet_m)?;
+        if s.max_tests_per_site == 0 {
+            return Err(invalid("stability tests per site", 0, "at least 1"));
+        }
         non_neg("level tolerance (m)", s.level_tolerance_m)?;
         if !(1..=16).contains(&s.edge_particles) {
             return Err(invalid("edge particles", s.edge_particles, "1..=16"));
@@ -397,6 +424,13 @@ impl FearingParams {
                 "smoothing iterations",
                 self.smoothing_iterations,
                 "0..=1000",
+            ));
+        }
+        if self.surface_smoothing > 100 {
+            return Err(invalid(
+                "surface smoothing passes",
+                self.surface_smoothing,
+                "0..=100",
             ));
         }
         non_neg("minimum surface depth (m)", self.min_surface_depth_m)?;

@@ -13,11 +13,16 @@
 //! or whatever lies just beyond it; a short horizontal probe toward it that meets something
 //! blocks the edge until the snow rises above the obstacle, else the excess leaves by
 //! [`crate::edge_transit`]. Every site affected (s, receivers, higher neighbours of s) goes to
-//! u2, which replaces u1 after the pass. A phase ends (4.4) when u2 is empty, when a pass moves
-//! less than a small share of the snow, or at the pass limit; it then re-checks every site once
-//! (the paper's re-run "to compensate for speed-accuracy tradeoffs"). The snow surfaces used by
-//! the obstacle tests are rebuilt every few passes (the paper's rebucketing "with a
-//! considerable lag").
+//! u2, which replaces u1 after the pass. Ending a phase (4.4): when u2 is empty, or a pass is
+//! quiet (no shift changes a site's height by more than `quiet_m` and it moves less than a small
+//! share of the snow), or a pass moves less than that share, every site is re-checked (the
+//! paper's re-run "to compensate for speed-accuracy tradeoffs"); the phase ends when that
+//! re-check finds nothing to do or is quiet, or at the pass cap or the test cap
+//! (`max_tests_per_site` times the sites: both bounded by the number of sites). Work, never the
+//! clock, ends a phase: the wall-clock deadline is a safety net whose expiry the caller reports
+//! as an error. The snow surfaces used by
+//! the obstacle tests are rebuilt every few passes once they have tested a quarter of the sites
+//! (the paper's rebucketing "with a considerable lag").
 
 use crate::edge_groups::Topology;
 use crate::edge_transit::{Flight, Landing, SiteGrid};
@@ -36,8 +41,11 @@ use std::collections::{BinaryHeap, HashSet};
 #[derive(Debug, Clone, Default, Serialize, PartialEq)]
 pub struct StabilityReport {
     pub passes: u32,
-    /// Whether the time budget ended the phase (then the result depends on the machine's speed).
+    /// Whether the wall-clock safety net ended the phase (the cover is then an error).
     pub stopped_by_time: bool,
+    /// Whether the phase ended quiet (a full re-check moved no site's snow by more than the
+    /// quiet height); false when the pass cap ended it.
+    pub quiet: bool,
     /// Site tests, avalanches (snow shifts), edge transits and their particles.
     pub tests: u64,
     pub avalanches: u64,
@@ -127,8 +135,25 @@ pub fn stabilise(
     let mut rechecking = false;
     let mut tracer = None;
     let mut in_u2 = vec![false; n];
-    while rep.passes < sp.max_passes {
-        if rep.passes.is_multiple_of(sp.obstacle_refresh_passes) || tracer.is_none() {
+    // The pass cap, bounded by the number of sites (every pass that does not end the phase
+    // moves snow by more than the quiet height somewhere).
+    let max_passes = sp
+        .max_passes
+        .min(n.saturating_add(16).min(u32::MAX as usize) as u32);
+    // The work cap: site tests, bounded by the number of sites.
+    let max_tests = (sp.max_tests_per_site as u64)
+        .saturating_mul(n as u64)
+        .max(1);
+    let (mut refreshed_at, mut tests_at_refresh) = (0u32, 0u64);
+    while rep.passes < max_passes && rep.tests < max_tests {
+        // Rebuild every few passes, and only once those passes have tested a quarter of the
+        // sites: the long tail of small passes a phase ends with does not rebuild the whole
+        // tracer every few hundred tests.
+        let due = rep.passes >= refreshed_at + sp.obstacle_refresh_passes
+            && rep.tests >= tests_at_refresh + (n as u64 / 4);
+        if due || tracer.is_none() {
+            refreshed_at = rep.passes;
+            tests_at_refresh = rep.tests;
             sync(sites, topo, &vol);
             let snow = SnowSurface::build(sites, topo, params.min_surface_depth_m);
             tracer = Some(Tracer::new(scene, &snow.tagged()));
@@ -164,6 +189,8 @@ pub fn stabilise(
         let mut work = 0;
         let mut u2 = Vec::new();
         let mut moved = 0.0;
+        // The largest change of a site's snow height by one shift in this pass, metres.
+        let mut largest_shift = 0.0f64;
         // A receiver is examined later in this pass (it is lower), or in the next one once the
         // pass has done its share of work.
         macro_rules! receive {
@@ -180,6 +207,9 @@ pub fn stabilise(
             }};
         }
         while let Some((_, Reverse(s))) = heap.pop() {
+            if rep.tests >= max_tests {
+                break;
+            }
             in_heap[s] = false;
             work += 1;
             rep.tests += 1;
@@ -294,6 +324,7 @@ pub fn stabilise(
                             vol[s] -= dv;
                             vol[site] += dv;
                             moved += dv;
+                            largest_shift = largest_shift.max(dv / areas[s].min(areas[site]));
                             receive!(site);
                         }
                         Target::Edge { slot, .. } => {
@@ -319,12 +350,15 @@ pub fn stabilise(
                                         vol[s] -= give;
                                         vol[m] += give;
                                         moved += give;
+                                        largest_shift =
+                                            largest_shift.max(give / areas[s].min(areas[m]));
                                         receive!(m);
                                     }
                                     Landing::Lost => {
                                         vol[s] -= share;
                                         rep.left_scene_m3 += share;
                                         moved += share;
+                                        largest_shift = largest_shift.max(share / areas[s]);
                                     }
                                     Landing::Stuck => stuck = true,
                                 }
@@ -363,15 +397,20 @@ pub fn stabilise(
             in_u2[i] = false;
         }
         let small = moved <= sp.min_moved_fraction * total(&vol).max(1e-300);
+        // Quiet: no shift above the quiet height, and little snow moved in all.
+        let quiet = largest_shift <= sp.quiet_m && small;
         if std::time::Instant::now() > deadline {
+            // The safety net: the caller turns this into an error, never a cover.
             rep.stopped_by_time = true;
             break;
         }
-        // When a pass finds nothing to do, or moves only a little, the whole phase is re-run
-        // (Section 4.4: it "usually fixes a few missed sites and completes immediately"); after
-        // that, passes go on over the sites still touched until none is.
-        if u2.is_empty() {
+        // When a pass finds nothing to do, is quiet, or moves only a little, the whole phase is
+        // re-run (Section 4.4: it "usually fixes a few missed sites and completes
+        // immediately"); a re-check that finds nothing to do or is quiet ends the phase, else
+        // passes go on over the sites still touched.
+        if u2.is_empty() || quiet {
             if rechecking {
+                rep.quiet = true;
                 break;
             }
             rechecking = true;
@@ -380,7 +419,7 @@ pub fn stabilise(
             rechecking = true;
             u1 = (0..n).collect();
         } else {
-            rechecking &= small;
+            rechecking = false;
             u1 = u2;
         }
     }

@@ -246,8 +246,10 @@ fn basin_water(depth: f64) -> (Scene, FearingCover) {
         }),
         target_sites: 1000,
         sky_bucket_m: Some(0.25),
+        // Overflowing takes long phases: a higher work cap than the default.
         stability: snowscape_fearing::StabilityParams {
             max_passes: 3000,
+            max_tests_per_site: 5000,
             ..Default::default()
         },
         ..quick(Material::water())
@@ -462,21 +464,6 @@ fn refinement_gathers_at_the_occlusion_boundary() {
         "{near} of {} refined sites near the roof's outline",
         refined.len()
     );
-}
-
-#[test]
-fn a_spent_time_budget_still_gives_a_cover() {
-    let scene = scenes::open_plane(4.0);
-    let p = FearingParams {
-        budget_s: 1e-9,
-        passes: 1,
-        ..quick(Material::snow())
-    };
-    let c = cover(&scene, &p).unwrap();
-    let acc = &c.report.passes[0].accumulation;
-    assert!(acc.stopped_by_time && acc.rounds == 1, "{acc:?}");
-    assert!(acc.flakes < 32 * acc.sites_end as u64);
-    assert!(c.report.mass.allocated_m3 > 0.0);
 }
 
 #[test]

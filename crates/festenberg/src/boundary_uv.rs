@@ -77,7 +77,16 @@ pub fn texture(
             .iter()
             .map(|c| {
                 let (u, v) = c.map_or((0.0, scale), |(u, v, _)| (u, v));
-                [u, (v / scale).clamp(0.5 / rows, 1.0 - 0.5 / rows)]
+                // Never a NaN or infinity in a file: a coordinate the arithmetic could not
+                // give (f32 overflow on absurd geometry, which the readers refuse) is the
+                // seam (u = 0) and the far side of the mask (v = 1).
+                let u = if u.is_finite() { u } else { 0.0 };
+                let v = if (v / scale).is_finite() {
+                    v / scale
+                } else {
+                    1.0
+                };
+                [u, v.clamp(0.5 / rows, 1.0 - 0.5 / rows)]
             })
             .collect(),
         triangles: triangles.to_vec(),

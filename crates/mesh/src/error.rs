@@ -59,6 +59,52 @@ pub enum MeshError {
         vertex: usize,
         value: [f32; 3],
     },
+    /// The file holds more than a documented limit of [`crate::read`] allows (vertices,
+    /// triangles, corners of one face): refused by a linear scan before the data is loaded.
+    #[error(
+        "{path}{}: {what} {value} exceeds the limit of {limit} (see snowscape_mesh::read's limits)",
+        line.map(|l| format!(" line {l}")).unwrap_or_default()
+    )]
+    TooLarge {
+        path: PathBuf,
+        /// The line (text formats) where the limit was passed.
+        line: Option<usize>,
+        what: &'static str,
+        value: u64,
+        limit: u64,
+    },
+    /// A vertex coordinate, once scaled into scene metres, lies beyond
+    /// [`crate::read::MAX_COORDINATE_M`] (absurd geometry, or a wrong `--scale`).
+    #[error(
+        "{path}: object {object:?} vertex {vertex}{} is {value:?} in the file, {metres:e} m in \
+         the scene: beyond the limit of ±{limit_m:e} m (check the scale)",
+        line.map(|l| format!(" (line {l})")).unwrap_or_default()
+    )]
+    CoordinateTooLarge {
+        path: PathBuf,
+        object: String,
+        vertex: usize,
+        line: Option<usize>,
+        value: [f32; 3],
+        metres: f64,
+        limit_m: f64,
+    },
+    /// The scene's extent is too many times its smallest triangle for the covers' grids and
+    /// 32-bit coordinates ([`crate::read::MAX_EXTENT_TO_FEATURE`]).
+    #[error(
+        "{path}: the scene is {extent_m:e} m across but object {object:?} triangle {triangle} is \
+         only {feature_m:e} m long: a ratio of {ratio:e}, beyond the {limit:e} that the covers' \
+         grids and 32-bit coordinates can represent"
+    )]
+    ExtentTooLarge {
+        path: PathBuf,
+        object: String,
+        triangle: usize,
+        extent_m: f64,
+        feature_m: f64,
+        ratio: f64,
+        limit: f64,
+    },
     /// A face refers to a vertex that does not exist.
     #[error(
         "{path}: object {object:?} face {face} refers to vertex {index}, \

@@ -7,6 +7,12 @@
 //! - a degenerate triangle (a repeated corner, or an area below 1e-10 of its longest edge
 //!   squared: collinear corners) is dropped and counted; so is a face with fewer than three
 //!   corners. Polygons with more than three corners are split into a fan;
+//! - a triangle repeating an earlier one's corners in the same cyclic order (on positions welded
+//!   by exact equality) is dropped and counted as a duplicate (one linear pass with a hash set);
+//! - a coordinate beyond [`crate::read::MAX_COORDINATE_M`] in scene metres is
+//!   [`MeshError::CoordinateTooLarge`], and a scene whose extent is more than
+//!   [`crate::read::MAX_EXTENT_TO_FEATURE`] times its smallest triangle is
+//!   [`MeshError::ExtentTooLarge`] (both name the object and the vertex or triangle);
 //! - open edges (used by one triangle) and non-manifold edges (used by three or more) are
 //!   counted, not repaired: both snow methods work on open and non-manifold scenes. Edges are
 //!   counted on positions welded by exact equality, so a vertex split for UV or normal seams
@@ -16,7 +22,7 @@
 use crate::MeshError;
 use crate::scene::{SceneObject, SourceFrame, cross, norm};
 use serde::Serialize;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 /// What a reader found in one object, in file coordinates, before checks.
@@ -41,6 +47,8 @@ pub struct ObjectReport {
     pub triangles: usize,
     /// Degenerate triangles (and faces of fewer than 3 corners) dropped.
     pub degenerate_dropped: usize,
+    /// Triangles repeating an earlier triangle of the object (same corners, same order) dropped.
+    pub duplicates_dropped: usize,
     /// Polygons of more than three corners split into triangle fans.
     pub polygons_split: usize,
     /// Edges used by exactly one triangle (holes, open borders).
@@ -86,6 +94,9 @@ impl MeshReport {
     pub fn degenerate_dropped(&self) -> usize {
         self.total(|o| o.degenerate_dropped)
     }
+    pub fn duplicates_dropped(&self) -> usize {
+        self.total(|o| o.duplicates_dropped)
+    }
     pub fn open_edges(&self) -> usize {
         self.total(|o| o.open_edges)
     }
@@ -118,6 +129,20 @@ pub(crate) fn check_object(
                 value: *p,
             });
         }
+        if let Some(c) = scaled
+            .iter()
+            .find(|c| (**c as f64).abs() > crate::read::MAX_COORDINATE_M)
+        {
+            return Err(MeshError::CoordinateTooLarge {
+                path: path.to_path_buf(),
+                object: raw.name.clone(),
+                vertex,
+                line: None,
+                value: *p,
+                metres: *c as f64,
+                limit_m: crate::read::MAX_COORDINATE_M,
+            });
+        }
     }
     let mut report = ObjectReport {
         name: raw.name.clone(),
@@ -125,6 +150,7 @@ pub(crate) fn check_object(
         faces: raw.faces.len(),
         triangles: 0,
         degenerate_dropped: 0,
+        duplicates_dropped: 0,
         polygons_split: 0,
         open_edges: 0,
         non_manifold_edges: 0,
@@ -133,6 +159,8 @@ pub(crate) fn check_object(
     };
     let positions: Vec<[f32; 3]> = raw.positions.iter().map(|p| frame.to_scene(*p)).collect();
     let mut triangles = Vec::with_capacity(raw.faces.len());
+    let weld = weld_ids(&positions);
+    let mut seen: HashSet<[u32; 3]> = HashSet::with_capacity(raw.faces.len());
     for (face, corners) in raw.faces.iter().enumerate() {
         for &index in corners {
             if index < 0 || index as u64 >= n as u64 {
@@ -156,6 +184,8 @@ pub(crate) fn check_object(
             let t = [corners[0], corners[k], corners[k + 1]].map(|i| i as u32);
             if is_degenerate(&positions, t) {
                 report.degenerate_dropped += 1;
+            } else if !seen.insert(rotated(t.map(|i| weld[i as usize]))) {
+                report.duplicates_dropped += 1;
             } else {
                 triangles.push(t);
             }
@@ -203,6 +233,59 @@ pub(crate) fn is_degenerate(positions: &[[f32; 3]], t: [u32; 3]) -> bool {
     area2.is_nan() || area2 <= DEGENERATE_RELATIVE_AREA * longest * longest
 }
 
+/// `t` rotated so that its smallest index comes first (same cyclic order: same orientation).
+fn rotated(t: [u32; 3]) -> [u32; 3] {
+    let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+}
+
+/// An id per position, equal for exactly equal positions (+0.0 and -0.0 alike).
+fn weld_ids(positions: &[[f32; 3]]) -> Vec<u32> {
+    let mut weld: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+    positions
+        .iter()
+        .map(|p| {
+            let key = p.map(|c| if c == 0.0 { 0 } else { c.to_bits() });
+            let next = weld.len() as u32;
+            *weld.entry(key).or_insert(next)
+        })
+        .collect()
+}
+
+/// The smallest kept triangle of the scene against its extent: [`MeshError::ExtentTooLarge`]
+/// beyond [`crate::read::MAX_EXTENT_TO_FEATURE`].
+fn check_extent(path: &Path, scene: &crate::Scene) -> Result<(), MeshError> {
+    let Some(b) = scene.bounds() else {
+        return Ok(());
+    };
+    let s = b.size().map(f64::from);
+    let extent = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+    let mut smallest: Option<(f64, usize, usize)> = None;
+    for (k, o) in scene.objects.iter().enumerate() {
+        for t in 0..o.triangles.len() {
+            let [a, b, c] = o.corners(t).map(|p| p.map(f64::from));
+            let len = |p: [f64; 3], q: [f64; 3]| norm([p[0] - q[0], p[1] - q[1], p[2] - q[2]]);
+            let longest = len(a, b).max(len(b, c)).max(len(c, a));
+            if smallest.is_none_or(|(l, _, _)| longest < l) {
+                smallest = Some((longest, k, t));
+            }
+        }
+    }
+    let limit = crate::read::MAX_EXTENT_TO_FEATURE;
+    match smallest {
+        Some((feature, k, t)) if extent > limit * feature => Err(MeshError::ExtentTooLarge {
+            path: path.to_path_buf(),
+            object: scene.objects[k].name.clone(),
+            triangle: t,
+            extent_m: extent,
+            feature_m: feature,
+            ratio: extent / feature,
+            limit,
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Edge and piece counts of a triangle set.
 pub(crate) struct Topology {
     pub open_edges: usize,
@@ -213,17 +296,9 @@ pub(crate) struct Topology {
 /// Open and non-manifold edges and connected pieces of `triangles`, on positions welded by
 /// exact equality.
 pub(crate) fn count_edges(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Topology {
-    let mut weld: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
-    let ids: Vec<u32> = positions
-        .iter()
-        .map(|p| {
-            // +0.0 and -0.0 are the same point.
-            let key = p.map(|c| if c == 0.0 { 0 } else { c.to_bits() });
-            let next = weld.len() as u32;
-            *weld.entry(key).or_insert(next)
-        })
-        .collect();
-    let mut parent: Vec<u32> = (0..weld.len() as u32).collect();
+    let ids = weld_ids(positions);
+    let welded = ids.iter().copied().max().map_or(0, |m| m + 1);
+    let mut parent: Vec<u32> = (0..welded).collect();
     fn root(parent: &mut [u32], mut i: u32) -> u32 {
         while parent[i as usize] != i {
             let up = parent[parent[i as usize] as usize];
@@ -289,6 +364,7 @@ pub(crate) fn check_objects(
             reason: format!("{raw_count} object(s), none with a non-degenerate triangle"),
         });
     }
+    check_extent(path, &scene)?;
     Ok((scene, report))
 }
 

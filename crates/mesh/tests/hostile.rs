@@ -384,3 +384,164 @@ fn devices_and_fifos_are_not_meshes() {
         }
     }
 }
+
+/// Issue 46: an OBJ of one triangle pasted 100,000 times (the issue's 8 MB file had a million:
+/// the covers' neighbour searches went quadratic and the process grew to 5 GB) is one triangle.
+#[test]
+fn repeated_triangle_is_one_triangle_and_duplicates_are_counted() {
+    let d = tempfile::tempdir().unwrap();
+    let text = format!(
+        "v 0 0 0\nv 1 0 0\nv 0 0 -1\n{}",
+        "f 1 2 3\n".repeat(100_000)
+    );
+    let p = write(d.path(), "repeated.obj", text.as_bytes());
+    let t = std::time::Instant::now();
+    let (scene, report) = read_scene(&p, &SourceFrame::default()).unwrap();
+    assert!(t.elapsed().as_secs_f64() < 5.0, "{:?}", t.elapsed());
+    assert_eq!(scene.triangle_count(), 1);
+    assert_eq!(report.duplicates_dropped(), 99_999);
+    // The same corners in the other order face the other way: a second triangle, kept.
+    let p = write(
+        d.path(),
+        "two_sided.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\nf 2 3 1\nf 1 3 2\n",
+    );
+    let (scene, report) = read_scene(&p, &SourceFrame::default()).unwrap();
+    assert_eq!(
+        (scene.triangle_count(), report.duplicates_dropped()),
+        (2, 1)
+    );
+}
+
+/// Issue 46: a 2 MB OBJ with one face of a million corners ran past a minute at 3.8 GB; a face
+/// beyond MAX_FACE_CORNERS is refused by the pre-scan, naming the line and the corner count.
+#[test]
+fn huge_face_is_refused_before_loading_naming_line_and_count() {
+    use snowscape_mesh::read::MAX_FACE_CORNERS;
+    let d = tempfile::tempdir().unwrap();
+    let corners: Vec<String> = (0..1_000_000).map(|i| (1 + i % 4).to_string()).collect();
+    let text = format!(
+        "v 0 0 0\nv 1 0 0\nv 1 0 -1\nv 0 0 -1\nf {}\n",
+        corners.join(" ")
+    );
+    let p = write(d.path(), "huge_face.obj", text.as_bytes());
+    let t = std::time::Instant::now();
+    match read(&p) {
+        Err(
+            e @ MeshError::TooLarge {
+                line: Some(5),
+                value: 1_000_000,
+                ..
+            },
+        ) => {
+            let s = e.to_string();
+            assert!(s.contains("huge_face.obj") && s.contains("line 5"), "{s}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(t.elapsed().as_secs_f64() < 2.0, "{:?}", t.elapsed());
+    // At the limit the polygon is a fan.
+    let corners: Vec<String> = (0..MAX_FACE_CORNERS).map(|i| (i + 1).to_string()).collect();
+    let ring: String = (0..MAX_FACE_CORNERS)
+        .map(|i| {
+            let a = i as f64 / MAX_FACE_CORNERS as f64 * std::f64::consts::TAU;
+            format!("v {} 0 {}\n", a.cos(), -a.sin())
+        })
+        .collect();
+    let p = write(
+        d.path(),
+        "disc.obj",
+        format!("{ring}f {}\n", corners.join(" ")).as_bytes(),
+    );
+    let (scene, _) = read_scene(&p, &SourceFrame::default()).unwrap();
+    assert_eq!(scene.triangle_count() as u64, MAX_FACE_CORNERS - 2);
+}
+
+/// A PLY header announcing four billion vertices is refused before the body is parsed.
+#[test]
+fn ply_header_beyond_the_limits_is_refused_naming_the_line() {
+    let d = tempfile::tempdir().unwrap();
+    let text = ascii_ply(&["0 0 0", "1 0 0", "0 1 0"], &["3 0 1 2"])
+        .replace("element vertex 3", "element vertex 4000000000");
+    let p = write(d.path(), "huge.ply", text.as_bytes());
+    match read(&p) {
+        Err(MeshError::TooLarge {
+            line: Some(3),
+            value: 4_000_000_000,
+            what: "vertex count",
+            ..
+        }) => {}
+        other => panic!("{other:?}"),
+    }
+}
+
+/// Issue 46: a 1e30 triangle beside a 1 m one (a panic in the BVH crate) and 1e18 coordinates
+/// (the Fearing cover spun past its budget) are refused at read time, naming the value and line.
+#[test]
+fn absurd_coordinates_are_refused_naming_value_and_line() {
+    let d = tempfile::tempdir().unwrap();
+    for (exp, value) in [(30, 1e30f32), (18, 1e18)] {
+        let text = format!(
+            "v 0 0 0\nv 1 0 0\nv 0 0 -1\no far\nv 1e{exp} 0 0\nv 2e{exp} 0 0\nv 1e{exp} 0 -1e{exp}\n\
+             f 1 2 3\nf 4 5 6\n"
+        );
+        let p = write(d.path(), "far.obj", text.as_bytes());
+        match read(&p) {
+            Err(
+                e @ MeshError::CoordinateTooLarge {
+                    line: Some(5),
+                    vertex: 3,
+                    ..
+                },
+            ) => {
+                let s = e.to_string();
+                assert!(s.contains("far.obj") && s.contains("line 5"), "{s}");
+                if let MeshError::CoordinateTooLarge { value: v, .. } = e {
+                    assert_eq!(v[0], value);
+                }
+            }
+            other => panic!("1e{exp}: {other:?}"),
+        }
+    }
+    // The limit is in scene metres, after the scale: 2e6 units of 10 m is 2e7 m.
+    let text = "v 0 0 0\nv 2e6 0 0\nv 0 0 -2e6\nf 1 2 3\n";
+    let p = write(d.path(), "scaled.obj", text.as_bytes());
+    assert!(read_scene(&p, &SourceFrame::default()).is_ok());
+    let ten = SourceFrame::new(snowscape_mesh::UpAxis::Y, 10.0).unwrap();
+    assert!(matches!(
+        read_scene(&p, &ten),
+        Err(MeshError::CoordinateTooLarge { line: Some(2), .. })
+    ));
+    // PLY (no line): the vertex is named.
+    let text = ascii_ply(&["0 0 0", "1 0 0", "0 1e20 0"], &["3 0 1 2"]);
+    let p = write(d.path(), "far.ply", text.as_bytes());
+    assert!(matches!(
+        read(&p),
+        Err(MeshError::CoordinateTooLarge { vertex: 2, .. })
+    ));
+}
+
+/// A 1 mm triangle beside a 10 km one: 32-bit coordinates and the covers' grids cannot hold
+/// both, refused naming the small triangle and the ratio.
+#[test]
+fn extent_to_smallest_triangle_ratio_is_limited() {
+    let d = tempfile::tempdir().unwrap();
+    let text = "v 0 0 0\nv 1e4 0 0\nv 0 0 -1e4\nv 5 0 -5\nv 5.001 0 -5\nv 5 0 -5.001\n\
+                f 1 2 3\nf 4 5 6\n";
+    let p = write(d.path(), "ratio.obj", text.as_bytes());
+    match read(&p) {
+        Err(e @ MeshError::ExtentTooLarge { triangle: 1, .. }) => {
+            assert!(e.to_string().contains("ratio.obj"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // A 1 m triangle in the same 10 km scene is fine.
+    let p = write(
+        d.path(),
+        "ok.obj",
+        text.replace("5.001", "6")
+            .replace("-5.001", "-6")
+            .as_bytes(),
+    );
+    assert!(read(&p).is_ok());
+}

@@ -190,3 +190,32 @@ fn inconsistent_meshes_are_refused_and_leave_nothing() {
     let e = write_glb(&d.path().join("no/such/dir/x.glb"), &[], &frame);
     assert!(matches!(e, Err(MeshError::Write(_))), "{e:?}");
 }
+
+/// Issue 46: the diffusion cover wrote `vt NaN NaN`. A NaN or infinite texture coordinate or
+/// normal is refused by both writers, and nothing is left behind.
+#[test]
+fn non_finite_uvs_and_normals_are_never_written() {
+    let d = tempfile::tempdir().unwrap();
+    let frame = SourceFrame::default();
+    let good = SnowMesh {
+        mesh: TriMesh {
+            name: "uv".into(),
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            ..Default::default()
+        },
+        uvs: Some(vec![[0.0, 0.5]; 3]),
+        texture: Some(image::RgbaImage::new(2, 2)),
+    };
+    let mut nan_uv = good.clone();
+    nan_uv.uvs = Some(vec![[0.0, 0.5], [f32::NAN, f32::NAN], [0.0, 0.5]]);
+    let mut inf_normal = good.clone();
+    inf_normal.mesh.normals = Some(vec![[0.0, 0.0, 1.0], [0.0, 0.0, f32::INFINITY], [0.0; 3]]);
+    for m in [nan_uv, inf_normal] {
+        let e = write_obj(&d.path().join("s.obj"), std::slice::from_ref(&m), &frame);
+        assert!(matches!(e, Err(MeshError::InvalidMesh { .. })), "{e:?}");
+        let e = write_glb(&d.path().join("s.glb"), std::slice::from_ref(&m), &frame);
+        assert!(matches!(e, Err(MeshError::InvalidMesh { .. })), "{e:?}");
+    }
+    assert!(only_files(d.path()).is_empty());
+}

@@ -89,7 +89,9 @@ pub struct CoverArgs {
     /// Also write turntable.gif: N preview frames seen from all around the scene (2..=720).
     #[arg(long, value_name = "N")]
     pub turntable: Option<usize>,
-    /// Time budget of the anytime accumulation loop, seconds (fearing; default 20).
+    /// Wall-clock safety net, seconds (fearing; default 600): the work (flakes per site,
+    /// stability passes) ends every stage, so a cover is the same bytes on any machine; a cover
+    /// still running at this time fails (exit 2) instead of returning a shorter one.
     #[arg(long, allow_negative_numbers = true, value_parser = crate::bounds::wall_seconds)]
     pub budget: Option<f64>,
     /// Mean flake flutter radius fr, metres (fearing; default: the material's, 0.05 for snow,

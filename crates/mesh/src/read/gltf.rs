@@ -10,6 +10,7 @@
 //! object; point and line primitives are skipped.
 
 use crate::MeshError;
+use crate::read::Tally;
 use crate::report::RawObject;
 use base64::Engine;
 use glam::{Mat3, Mat4, Vec3};
@@ -33,6 +34,7 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| bad("no scene".into()))?;
     let mut objects = Vec::new();
+    let mut tally = Tally::default();
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     // glTF nodes form trees (a node has at most one parent): more visits than nodes is a
@@ -59,7 +61,7 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
                 .or(mesh.name())
                 .map(str::to_string)
                 .unwrap_or_else(|| format!("node{}", node.index()));
-            objects.push(read_mesh(path, &mesh, &buffers, world, name)?);
+            objects.push(read_mesh(path, &mesh, &buffers, world, name, &mut tally)?);
         }
         for child in node.children() {
             stack.push((child, world, depth + 1));
@@ -241,6 +243,7 @@ fn read_mesh(
     buffers: &[Vec<u8>],
     world: Mat4,
     name: String,
+    tally: &mut Tally,
 ) -> Result<RawObject, MeshError> {
     let bad = |message: String| MeshError::parse(path, "glTF", message);
     let normal_matrix = {
@@ -277,6 +280,17 @@ fn read_mesh(
         if let Some(ix) = primitive.indices() {
             check_accessor(&ix, buffers, &index_shapes).map_err(bad)?;
         }
+        // The limits of crate::read, before anything is read: vertices, and the triangles the
+        // index list (or the vertices, without one) makes in this mode.
+        let corners = primitive
+            .indices()
+            .map_or(positions.count(), |ix| ix.count()) as u64;
+        let triangles = match mode {
+            Mode::Triangles => corners / 3,
+            _ => corners.saturating_sub(2),
+        };
+        tally.add(path, None, positions.count() as u64, 0)?;
+        tally.add_triangles(path, triangles)?;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let base = object.positions.len() as i64;
         let first = object.positions.len();

@@ -4,16 +4,40 @@
 //!
 //! tobj's errors carry no position, so when it rejects a file, `locate_problem` scans the
 //! text once more to name the line (and, for an index out of range, the face and the index).
+//!
+//! Before tobj sees the text, [`prescan`] counts its `v` lines and the corners of its `f` lines
+//! in one pass without allocating, and refuses a file beyond the limits of [`crate::read`]
+//! (vertices, triangles, corners per face) naming the line. A coordinate beyond
+//! [`crate::read::MAX_COORDINATE_M`] once scaled is refused naming its `v` line.
 
 use crate::MeshError;
+use crate::read::{MAX_COORDINATE_M, Tally};
 use crate::report::RawObject;
+use crate::scene::SourceFrame;
 use std::path::Path;
 
+/// Counts vertices and face corners line by line, refusing the first line past a limit.
+pub(crate) fn prescan(path: &Path, text: &[u8]) -> Result<Tally, MeshError> {
+    let mut tally = Tally::default();
+    for (n, line) in text.split(|&b| b == b'\n').enumerate() {
+        let mut words = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|w| !w.is_empty());
+        match words.next() {
+            Some(b"v") => tally.add(path, Some(n + 1), 1, 0)?,
+            Some(b"f") => tally.add(path, Some(n + 1), 0, words.count() as u64)?,
+            _ => {}
+        }
+    }
+    Ok(tally)
+}
+
 /// The objects of an OBJ file, in file coordinates.
-pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
+pub(crate) fn read_raw(path: &Path, frame: &SourceFrame) -> Result<Vec<RawObject>, MeshError> {
     // Read once ourselves: a missing file is an I/O error naming it, and the text is there to
     // locate problems.
     let text = crate::read::read_bytes(path)?;
+    prescan(path, &text)?;
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: false,
@@ -33,6 +57,12 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
     let non_finite = |v: &[f32]| !v.iter().all(|c| c.is_finite());
     if models.iter().any(|m| non_finite(&m.mesh.positions)) {
         return Err(locate_non_finite(path, &text));
+    }
+    // The limit in file units (the scale is checked positive and finite by SourceFrame).
+    let limit = MAX_COORDINATE_M / frame.metres_per_unit;
+    let too_far = |v: &[f32]| v.iter().any(|&c| (c as f64).abs() > limit);
+    if models.iter().any(|m| too_far(&m.mesh.positions)) {
+        return Err(locate_too_far(path, &text, frame, limit));
     }
     Ok(models
         .into_iter()
@@ -100,6 +130,44 @@ fn locate_non_finite(path: &Path, text: &[u8]) -> MeshError {
         }
     }
     MeshError::parse(path, "OBJ", "a non-finite vertex that could not be located")
+}
+
+/// The first `v` line with a coordinate beyond `limit` file units, as
+/// [`MeshError::CoordinateTooLarge`] (vertex numbered from 0 in file order).
+fn locate_too_far(path: &Path, text: &[u8], frame: &SourceFrame, limit: f64) -> MeshError {
+    let text = String::from_utf8_lossy(text);
+    let mut object = String::from("unnamed_object");
+    let mut vertex = 0usize;
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("o" | "g") => object = words.collect::<Vec<_>>().join(" "),
+            Some("v") => {
+                let mut value = [0.0f32; 3];
+                for (c, w) in value.iter_mut().zip(words) {
+                    *c = w.parse().unwrap_or(0.0);
+                }
+                if let Some(c) = value.iter().find(|c| (**c as f64).abs() > limit) {
+                    return MeshError::CoordinateTooLarge {
+                        path: path.to_path_buf(),
+                        object,
+                        vertex,
+                        line: Some(n + 1),
+                        value,
+                        metres: *c as f64 * frame.metres_per_unit,
+                        limit_m: MAX_COORDINATE_M,
+                    };
+                }
+                vertex += 1;
+            }
+            _ => {}
+        }
+    }
+    MeshError::parse(
+        path,
+        "OBJ",
+        "a vertex beyond the coordinate limit that could not be located",
+    )
 }
 
 /// Turns a tobj error into a [`MeshError`] naming the line, face and index where possible.

@@ -3,8 +3,13 @@
 //! `vertex_indices` (or `vertex_index`) lists. A PLY file is one object, named after the file.
 //! A truncated file or a face list of the wrong type is a [`MeshError::Parse`] (with the line
 //! for ASCII files).
+//!
+//! The header's element counts are checked against the limits of [`crate::read`] before the
+//! body is parsed (a 100-byte header may announce four billion vertices), naming the header line;
+//! each face's corner count is checked as it is converted.
 
 use crate::MeshError;
+use crate::read::{MAX_TRIANGLES, MAX_VERTICES, Tally};
 use crate::report::RawObject;
 use ply_rs_bw::ply::{DefaultElement, Property};
 use std::path::Path;
@@ -12,6 +17,7 @@ use std::path::Path;
 /// The single object of a PLY file, in file coordinates.
 pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
     let bytes = crate::read::read_bytes(path)?;
+    check_header(path, &bytes)?;
     let parser = ply_rs_bw::parser::Parser::<DefaultElement>::new();
     let ply = parser
         .read_ply(&mut std::io::Cursor::new(&bytes))
@@ -43,6 +49,7 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
         })
         .collect();
     let mut faces = Vec::new();
+    let mut tally = Tally::default();
     if let Some(elements) = ply.payload.get("face") {
         faces.reserve(elements.len());
         for (i, f) in elements.iter().enumerate() {
@@ -50,11 +57,10 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
                 .get("vertex_indices")
                 .or_else(|| f.get("vertex_index"))
                 .ok_or_else(|| bad(format!("face {i} has no vertex_indices list")))?;
-            faces.push(
-                index_list(list).ok_or_else(|| {
-                    bad(format!("face {i}: vertex_indices is not an integer list"))
-                })?,
-            );
+            let face = index_list(list)
+                .ok_or_else(|| bad(format!("face {i}: vertex_indices is not an integer list")))?;
+            tally.add(path, None, 0, face.len() as u64)?;
+            faces.push(face);
         }
     }
     let name = path
@@ -83,4 +89,35 @@ fn index_list(p: &Property) -> Option<Vec<i64>> {
         Property::ListUInt(v) => widen(v),
         _ => return None,
     })
+}
+
+/// Refuses a header whose `element vertex N` or `element face N` passes the limits of
+/// [`crate::read`], naming the header line (a face is at least one triangle).
+fn check_header(path: &Path, bytes: &[u8]) -> Result<(), MeshError> {
+    let end = bytes
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .unwrap_or(bytes.len().min(1 << 20));
+    for (n, line) in bytes[..end].split(|&b| b == b'\n').enumerate() {
+        let line = String::from_utf8_lossy(line);
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let (what, limit) = match words.as_slice() {
+            ["element", "vertex", _] => ("vertex count", MAX_VERTICES),
+            ["element", "face", _] => ("face count", MAX_TRIANGLES),
+            _ => continue,
+        };
+        let Ok(value) = words[2].parse::<u64>() else {
+            continue; // ply-rs names the malformed header line
+        };
+        if value > limit {
+            return Err(MeshError::TooLarge {
+                path: path.to_path_buf(),
+                line: Some(n + 1),
+                what,
+                value,
+                limit,
+            });
+        }
+    }
+    Ok(())
 }

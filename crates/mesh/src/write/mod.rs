@@ -67,7 +67,8 @@ impl SnowMesh {
         self.mesh.normals.as_deref().unwrap_or_default()
     }
 
-    /// Checks lengths, indices and finiteness; fills in missing normals.
+    /// Checks lengths, indices and finiteness (positions, normals, texture coordinates: no NaN
+    /// or infinity is ever written); fills in missing normals.
     pub(crate) fn checked(&self) -> Result<std::borrow::Cow<'_, SnowMesh>, MeshError> {
         let bad = |reason: String| MeshError::InvalidMesh {
             mesh: self.name.clone(),
@@ -107,6 +108,20 @@ impl SnowMesh {
             return Err(bad(format!(
                 "{} texture coordinates for {n} vertices",
                 uvs.len()
+            )));
+        }
+        if let Some(v) = normals
+            .iter()
+            .position(|n| !n.iter().all(|c| c.is_finite()))
+        {
+            return Err(bad(format!("normal {v} is not finite: {:?}", normals[v])));
+        }
+        if let Some(uvs) = &self.uvs
+            && let Some(v) = uvs.iter().position(|t| !t.iter().all(|c| c.is_finite()))
+        {
+            return Err(bad(format!(
+                "texture coordinate {v} is not finite: {:?}",
+                uvs[v]
             )));
         }
         if normals.is_empty() {

@@ -22,6 +22,8 @@ pub struct MeshInputSummary {
     pub triangles: usize,
     /// Degenerate triangles dropped on reading.
     pub degenerate_dropped: usize,
+    /// Triangles repeating an earlier one (same corners, same order) dropped on reading.
+    pub duplicates_dropped: usize,
     pub open_edges: usize,
     pub non_manifold_edges: usize,
     /// The scene's box in scene metres (z up), terrain included when on a DEM.
@@ -49,6 +51,7 @@ impl MeshInputSummary {
             vertices: report.vertices(),
             triangles: report.triangles(),
             degenerate_dropped: report.degenerate_dropped(),
+            duplicates_dropped: report.duplicates_dropped(),
             open_edges: report.open_edges(),
             non_manifold_edges: report.non_manifold_edges(),
             bounds_m: scene.bounds(),
