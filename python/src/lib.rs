@@ -289,22 +289,22 @@ impl PyWinter {
         let bedrock = grid_in(dem)?;
         bedrock.check_terrain().map_err(py_err)?;
         let scenario_path = dir.join("scenario.toml");
-        let text = std::fs::read_to_string(&scenario_path).map_err(|e| {
-            PyOSError::new_err(format!("cannot read {}: {e}", scenario_path.display()))
-        })?;
+        // Both read as regular files of bounded size (a link to /dev/zero or a FIFO is refused
+        // before any read), as `snowscape run --resume` reads them.
+        let text = snowscape::io::input::read_regular_text(&scenario_path)
+            .map_err(|e| PyOSError::new_err(e.to_string()))?;
         let scenario =
             Scenario::from_toml(&text, &scenario_path.display().to_string()).map_err(py_err)?;
         let path = dir.join(CHECKPOINT);
-        let bytes = std::fs::read(&path)
-            .map_err(|e| PyOSError::new_err(format!("cannot read {}: {e}", path.display())))?;
         let pool = thread_pool(threads)?;
         let winter = py
             .detach(|| {
                 on_pool(&pool, || {
-                    Winter::resume(
+                    Winter::resume_from_file(
                         scenario,
                         LayeredTerrain::from_bedrock(bedrock),
-                        &mut bytes.as_slice(),
+                        None,
+                        &path,
                     )
                 })
             })
