@@ -42,6 +42,8 @@ bash scripts/export-memory.sh "$scratch/large_run" 600 > /dev/null
 # Crafted rasters (decompression bombs, offsets past the end) read under `ulimit -v`: each is
 # refused with exit 2, none killed for memory.
 bash scripts/reader-limits.sh > /dev/null
+# A rerun into a full disk (a 5 MB tmpfs) fails and leaves the first run's outputs intact.
+bash scripts/full-disk.sh "$bin"
 # The Python package: built by pip (maturin) into a fresh virtual environment, from the same
 # target folder as the rest, then its tests (the same bytes as `snowscape run`) and example.
 python3 -m venv "$scratch/venv"
