@@ -211,12 +211,20 @@ fn info_and_render_work_on_every_real_dem() {
         let range = info["altitude_range"].as_array().unwrap();
         assert!(range[0].as_f64().unwrap() > -500.0 && range[1].as_f64().unwrap() < 9000.0);
         let png = d.path().join(format!("dem{k}.png"));
-        let o = run(&[
+        // A DEM in degrees without its CRS is refused as a terrain (naming --crs EPSG:4326).
+        let mut args = vec![
             "render",
             dem.to_str().unwrap(),
             "--out",
             png.to_str().unwrap(),
-        ]);
+        ];
+        if !crs.is_empty() {
+            let o = run(&args);
+            assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+            assert!(stderr(&o).contains("--crs EPSG:4326"), "{}", stderr(&o));
+        }
+        args.extend_from_slice(crs);
+        let o = run(&args);
         assert!(
             o.status.success(),
             "render {}: {}",
@@ -736,7 +744,8 @@ fn huge_and_deeply_nested_scenario_values_are_refused_briefly_with_their_place()
     // gave "recursion limit" with no line.
     let dem = data_dir().join("rme_idaho_50m/dem.asc");
     let d = tempfile::tempdir().unwrap();
-    let huge = "x".repeat(10_000_000);
+    // 3 MB: under the 4 MiB a scenario may hold (a larger text is refused by size first).
+    let huge = "x".repeat(3_000_000);
     let cases = [
         (
             "huge_value.toml",
@@ -744,6 +753,11 @@ fn huge_and_deeply_nested_scenario_values_are_refused_briefly_with_their_place()
             "start_date",
         ),
         ("huge_key.toml", format!("days = 2\n{huge} = 1\n"), "line 2"),
+        (
+            "too_big.toml",
+            format!("days = 2\nstart_date = \"{huge}{huge}\"\n"),
+            "a scenario may hold",
+        ),
         (
             "deep.toml",
             format!("days = 2\n{} = 1\n", vec!["a"; 5000].join(".")),
