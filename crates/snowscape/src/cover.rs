@@ -67,7 +67,7 @@ pub enum CoverParameterError {
     Diffusion {
         source_name: String,
         #[source]
-        source: FestenbergError,
+        source: Box<FestenbergError>,
     },
     #[error("cover parameters {source_name}: [fearing] {source}")]
     Fearing {
@@ -123,7 +123,7 @@ impl CoverParameters {
             .validate()
             .map_err(|source| CoverParameterError::Diffusion {
                 source_name: source_name.to_string(),
-                source,
+                source: Box::new(source),
             })?;
         self.fearing
             .validate()
