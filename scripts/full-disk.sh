@@ -2,16 +2,16 @@
 # A run into a full disk (issue 46): a small tmpfs holds a complete 128² demo; a 256² rerun
 # into it runs out of space while writing. The rerun must fail with a message naming the
 # file and "No space left", and leave the first run's outputs byte for byte, nothing else.
-# Needs root (mount); CI runs as root. Usage: scripts/full-disk.sh [BINARY]
+# Needs root with mount rights (CI runs as root); elsewhere it says SKIPPED and exits 0. Usage: scripts/full-disk.sh [BINARY]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${1:-target/release/snowscape}"
-if [ "$(id -u)" != 0 ]; then
-  echo "scripts/full-disk.sh: needs root to mount a small tmpfs" >&2
-  exit 1
-fi
 mnt=$(mktemp -d)
-mount -t tmpfs -o size=5m tmpfs "$mnt"
+if ! mount -t tmpfs -o size=5m tmpfs "$mnt" 2>/dev/null; then
+  rmdir "$mnt"
+  echo "scripts/full-disk.sh: SKIPPED: cannot mount a tmpfs here (needs root with mount rights)" >&2
+  exit 0
+fi
 trap 'umount "$mnt"; rmdir "$mnt"' EXIT
 "$bin" --quiet demo --size 128 --days 3 --frames 2 --out "$mnt/run"
 before=$(cd "$mnt/run" && find . -type f -print0 | sort -z | xargs -0 sha256sum)
