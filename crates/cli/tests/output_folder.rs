@@ -9,19 +9,7 @@ use common::{report, snowscape, stderr};
 use std::path::{Path, PathBuf};
 
 fn dem(dir: &Path) -> String {
-    let path = dir.join("dem.asc");
-    let mut text = String::from(
-        "ncols 40\nnrows 30\nxllcorner 0\nyllcorner 0\ncellsize 20\nNODATA_value -9999\n",
-    );
-    for r in 0..30 {
-        let row: Vec<String> = (0..40)
-            .map(|c| format!("{:.1}", 1800.0 + 25.0 * c as f64 - 3.0 * r as f64))
-            .collect();
-        text.push_str(&row.join(" "));
-        text.push('\n');
-    }
-    std::fs::write(&path, text).unwrap();
-    path.display().to_string()
+    common::slope_dem(dir)
 }
 
 fn run(dem: &str, out: &Path, extra: &[&str]) -> std::process::Output {

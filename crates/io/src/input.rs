@@ -47,8 +47,9 @@ impl InputError {
     }
 }
 
-/// What a file type is, in words, for [`InputError::NotRegular`].
-fn kind_of(t: std::fs::FileType) -> &'static str {
+/// What a file type is, in words, for [`InputError::NotRegular`] (and the checkpoint
+/// reader's own refusal).
+pub fn kind_of(t: std::fs::FileType) -> &'static str {
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt;

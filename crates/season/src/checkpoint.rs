@@ -104,31 +104,6 @@ impl CheckpointError {
     }
 }
 
-/// What a file type is, in words, for [`CheckpointError::NotRegular`].
-fn kind_of(t: std::fs::FileType) -> &'static str {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_char_device() {
-            return "a character device";
-        }
-        if t.is_block_device() {
-            return "a block device";
-        }
-        if t.is_fifo() {
-            return "a FIFO (named pipe)";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-    }
-    if t.is_dir() {
-        "a directory"
-    } else {
-        "not a file"
-    }
-}
-
 /// The largest checkpoint of a terrain of `cells` cells with `extra` extra maps, bytes.
 pub fn max_len(cells: usize, extra: usize) -> u64 {
     PREAMBLE as u64 + MAX_HEADER + 4 * (4 + extra as u64) * cells as u64 + 4
@@ -148,7 +123,7 @@ pub fn read_file<H: DeserializeOwned>(
     };
     let not_regular = |t| CheckpointError::NotRegular {
         path: path.to_path_buf(),
-        kind: kind_of(t),
+        kind: snowscape_io::input::kind_of(t),
     };
     // The path's metadata first: nothing is opened, so a FIFO cannot block.
     let meta = std::fs::metadata(path).map_err(open)?;

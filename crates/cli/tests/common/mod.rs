@@ -60,3 +60,21 @@ pub fn assert_refused(o: &Output, args: &[&str], out: Option<&Path>, needles: &[
     }
     err
 }
+
+/// A 40x30 ESRI ASCII slope of 20 m cells written as `dir/dem.asc` (a small terrain for the
+/// output-folder and checkpoint tests); returns its path.
+pub fn slope_dem(dir: &Path) -> String {
+    let path = dir.join("dem.asc");
+    let mut text = String::from(
+        "ncols 40\nnrows 30\nxllcorner 0\nyllcorner 0\ncellsize 20\nNODATA_value -9999\n",
+    );
+    for r in 0..30 {
+        let row: Vec<String> = (0..40)
+            .map(|c| format!("{:.1}", 1800.0 + 25.0 * c as f64 - 3.0 * r as f64))
+            .collect();
+        text.push_str(&row.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
