@@ -231,6 +231,13 @@ fn scenario_of(text: Option<&str>, name: &str, seed: Option<u64>) -> PyResult<Sc
     Ok(s)
 }
 
+/// Refuses a season on `cells` cells that would not fit in the memory available
+/// (`MemoryError`, before any work: the check `snowscape run` makes).
+fn check_memory(cells: usize) -> PyResult<()> {
+    snowscape::memory::check_season(cells, None)
+        .map_err(|e| pyo3::exceptions::PyMemoryError::new_err(e.to_string()))
+}
+
 /// A winter on a terrain (the `Winter` of the Python package).
 #[pyclass(name = "_Winter", module = "snowscape._snowscape")]
 struct PyWinter {
@@ -270,6 +277,7 @@ impl PyWinter {
         scenario
             .validate_on(bedrock.geometry(), &scenario_name)
             .map_err(py_err)?;
+        check_memory(bedrock.geometry().len())?;
         let pool = thread_pool(threads)?;
         let winter = py
             .detach(|| {
@@ -295,6 +303,7 @@ impl PyWinter {
             .map_err(|e| PyOSError::new_err(e.to_string()))?;
         let scenario =
             Scenario::from_toml(&text, &scenario_path.display().to_string()).map_err(py_err)?;
+        check_memory(bedrock.geometry().len())?;
         let path = dir.join(CHECKPOINT);
         let pool = thread_pool(threads)?;
         let winter = py

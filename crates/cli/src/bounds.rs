@@ -33,6 +33,11 @@ pub fn season_days(text: &str) -> Result<f64, String> {
     positive_up_to(text, 3650.0, " days")
 }
 
+/// A memory budget, GiB: (0, 1048576] (a pebibyte); returned in bytes.
+pub fn memory_budget(text: &str) -> Result<u64, String> {
+    positive_up_to(text, 1_048_576.0, " GiB").map(|g| (g * f64::from(1u32 << 30)) as u64)
+}
+
 /// A day of the season: [0, 3650].
 pub fn season_day(text: &str) -> Result<f64, String> {
     number_within(text, 0.0, 3650.0, " days")

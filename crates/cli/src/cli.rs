@@ -150,7 +150,8 @@ pub struct DemoArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out/demo")]
     pub out: PathBuf,
-    /// Cells per side of the procedural terrain (128..=8192).
+    /// Cells per side of the procedural terrain (128..=8192). The season's memory is checked
+    /// first: 2048 needs about 3 GiB, 4096 about 11, 8192 about 43 (see --memory-budget).
     #[arg(long, default_value_t = 512)]
     pub size: usize,
     /// Random seed: the same seed gives the same bytes.
@@ -179,6 +180,11 @@ pub struct DemoArgs {
     /// the floating-point predictor, GDAL's COG layout; wind.tif, two bands, stays plain).
     #[arg(long)]
     pub cog: bool,
+    /// The memory the season may take, GiB. Default: what the machine has available (free
+    /// memory, a container's limit, `ulimit -v`); a season whose estimate exceeds it is
+    /// refused before any work (exit 2).
+    #[arg(long, value_name = "GIB", value_parser = crate::bounds::memory_budget)]
+    pub memory_budget: Option<u64>,
 }
 
 #[derive(Debug, Args)]
@@ -227,6 +233,11 @@ pub struct RunArgs {
     /// the floating-point predictor, GDAL's COG layout; wind.tif, two bands, stays plain).
     #[arg(long)]
     pub cog: bool,
+    /// The memory the season may take, GiB. Default: what the machine has available (free
+    /// memory, a container's limit, `ulimit -v`); a season whose estimate exceeds it is
+    /// refused before any work (exit 2).
+    #[arg(long, value_name = "GIB", value_parser = crate::bounds::memory_budget)]
+    pub memory_budget: Option<u64>,
     #[command(flatten)]
     pub skiers: SkierArgs,
     #[command(flatten)]

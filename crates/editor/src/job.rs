@@ -287,6 +287,12 @@ impl Job {
                         .validate_on(bedrock.geometry(), "the current scenario")
                         .map_err(|e| e.to_string())
                         .and_then(|()| {
+                            // A terrain whose season would not fit in memory is refused
+                            // before the season is built (the check `snowscape run` makes).
+                            snowscape::memory::check_season(bedrock.geometry().len(), None)
+                                .map_err(|e| e.to_string())
+                        })
+                        .and_then(|()| {
                             Winter::new(*scenario, LayeredTerrain::from_bedrock(bedrock))
                                 .map_err(|e| e.to_string())
                         }) {

@@ -60,6 +60,7 @@ pub mod avalanche_release;
 pub mod cover;
 pub mod cpu;
 pub mod engine_export;
+pub mod memory;
 pub mod messages;
 pub mod output_folder;
 pub mod outputs;

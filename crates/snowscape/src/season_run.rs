@@ -111,6 +111,9 @@ pub struct SeasonJob {
     pub cog: bool,
     /// Write the resolved scenario ([`RESOLVED_SCENARIO`]) beside the outputs (`run`).
     pub write_scenario: bool,
+    /// The memory the season may take, bytes (`--memory-budget`); `None`: what the machine
+    /// has available ([`crate::memory`]).
+    pub memory_budget: Option<u64>,
 }
 
 /// What a front end hears while a season runs (all optional).
@@ -172,6 +175,9 @@ pub enum SeasonJobError {
     Output(#[from] OutputError),
     #[error("environment map {0} is missing")]
     MissingMap(&'static str),
+    /// The season would not fit in memory (refused before any work).
+    #[error(transparent)]
+    NotEnoughMemory(#[from] crate::memory::NotEnoughMemory),
 }
 
 impl SeasonJobError {
@@ -184,6 +190,7 @@ impl SeasonJobError {
                 | Self::EarlierFrameFile(_)
                 | Self::Resume { .. }
                 | Self::EarlierFrame { .. }
+                | Self::NotEnoughMemory(_)
         )
     }
 }
@@ -296,6 +303,7 @@ pub fn run_season(
     progress: &mut dyn SeasonProgress,
 ) -> Result<SeasonOutcome, SeasonJobError> {
     let started = Instant::now();
+    crate::memory::check_season(job.bedrock.geometry().len(), job.memory_budget)?;
     let mut folder = OutputFolder::open(&job.out).map_err(SeasonJobError::OutputFolder)?;
     folder
         .check_subfolder("frames")

@@ -39,6 +39,8 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
         ))
         .bad_input();
     }
+    // Refused before the terrain is generated, as run_season would refuse it after.
+    snowscape::memory::check_season(args.size * args.size, args.memory_budget).bad_input()?;
     let view = preview_options(&ViewArgs::default(), ColourMode::Snow).job_failed()?;
     let params = AlpineParams {
         size: args.size,
@@ -80,6 +82,7 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
             out: args.out.clone(),
             resume: None,
             write_scenario: false,
+            memory_budget: args.memory_budget,
             forcing: None,
             stop_at: None,
             view,

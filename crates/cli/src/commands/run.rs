@@ -132,6 +132,7 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
             view,
             cog: args.cog,
             write_scenario: true,
+            memory_budget: args.memory_budget,
         },
         global.quiet,
     )
