@@ -15,9 +15,9 @@
 //! | 512² | 274 MB | 1044 |
 //! | 1024² | 815 MB | 777 |
 //! | 2048² | 2.60 GB | 619 |
-//! | 4096² | see `SEASON_BYTES_PER_CELL` | |
+//! | 4096² | 8.62 GB | 514 |
 //!
-//! The per-cell figure is the slope between the two largest sizes measured, plus a margin; the
+//! The per-cell figure is the slope between 1024² and 2048² (593), plus a margin; the
 //! fixed part covers the smaller sizes (where per-run buffers of fixed size weigh more). A
 //! test (`crates/cli/tests/memory_estimate.rs`) runs seasons and checks the estimate covers
 //! their measured peak. Issue 50 brings the per-cell figure down; update the table with it.
