@@ -51,9 +51,23 @@
 //! deepest cell's celerity, which may lie far apart) and `δt ≤ C · sqrt(min(dx, dy)/g)` (the
 //! latter bounds the first sub-step from rest on steep beds), `C` = [`AvalancheParams::courant`].
 //!
-//! **Borders.** Nodata cells are walls (pipes to them carry nothing). [`Border::Closed`] makes
-//! the ghost ring walls; [`Border::Open`] gives the ghost ring the bed of the nearest grid cell
-//! and no snow: snow that flows into it leaves the grid and is counted as `border_outflow`.
+//! **Borders.** The ghost ring and the nodata cells (the outline of a clipped DEM, and holes in
+//! it) are the two edges of the terrain, and [`AvalancheParams::border`] sets the condition of
+//! both:
+//!
+//! - [`Border::Open`] (the default, and the season's natural avalanches): an open boundary.
+//!   The ghost ring takes the bed of the nearest grid cell, a nodata cell the bed of the
+//!   nearest valid cell (`state::nearest_valid`: by 8-neighbour steps, an edge neighbour
+//!   before a corner one, ties in row-major order; found once at setup, O(cells), from the
+//!   mask alone, so a lazily read bed takes the same), and both hold no snow: their pipes are
+//!   computed as any other, the snow that flows into them in a sub-step leaves the terrain at
+//!   its end and is counted as `border_outflow` (the volume budget closes with it), and the
+//!   surface gradient of a cell next to them reads their surface, their bed. Their own surface
+//!   gradient is undefined: a pipe to them takes the valid cell's. The bed is copied when it is
+//!   read (at setup, or per tile in a lazy state): bed the flow scours from a valid cell during
+//!   a run is not scoured from its copies.
+//! - [`Border::Closed`]: walls. Pipes to the ghost ring and to nodata cells carry nothing, and
+//!   the surface gradient next to a nodata cell replaces it by the cell itself.
 //!
 //! **Cost.** Only an *active set* is visited. The padded grid is cut into tiles of 16x16
 //! cells; each tile keeps the box of its *content* cells (flowing snow or a moving owned pipe),
@@ -235,6 +249,9 @@ pub struct AvalancheState {
     maxima: (f64, f64),
     /// Padded flags: the cell or one of its 8 neighbours is a nodata cell.
     near_wall: Vec<bool>,
+    /// Per grid cell, the valid cell whose bed it takes (`state::nearest_valid`; empty: every
+    /// cell its own).
+    bed_from: Vec<u32>,
     /// Pipe lengths, widths and directions of the grid.
     pg: PipeGeometry,
     /// The tiles this run touched; whether the bed is read lazily.

@@ -153,7 +153,7 @@ pub enum StopReason {
     EnergyCriterion,
     /// `duration_s` reached.
     Duration,
-    /// No snow left on the grid (all of it flowed across an open border).
+    /// No snow left on the grid (all of it flowed across an open border or into nodata).
     Empty,
 }
 
@@ -164,7 +164,8 @@ pub struct RunSummary {
     pub released_volume_m3: f64,
     /// Volume on the grid at the end (in motion plus deposit), m³.
     pub final_volume_m3: f64,
-    /// Volume that left the grid across an open border, m³.
+    /// Volume that left the terrain across an open border (the grid's border or the nodata
+    /// outline), m³.
     pub border_outflow_m3: f64,
     /// Volume the flow entrained from the snowpack on its way, m³ ([`crate::entrainment`]).
     #[serde(default)]

@@ -136,8 +136,10 @@ impl Consts {
         }
     }
 
+    /// Whether padded cell `k` at `(c, r)` is a wall (pipes to it carry nothing): with
+    /// [`Border::Closed`] the ghost ring and nodata cells, with [`Border::Open`] none.
     pub(super) fn is_wall(&self, nodata: &[bool], k: usize, c: usize, r: usize) -> bool {
-        nodata[k] || (self.closed && (r == 0 || c == 0 || r == self.ph - 1 || c == self.pw - 1))
+        self.closed && (nodata[k] || r == 0 || c == 0 || r == self.ph - 1 || c == self.pw - 1)
     }
 
     /// Padded index of the neighbour of `(c, r)` along owned direction `d`.

@@ -118,27 +118,25 @@ impl AvalancheState {
         }
         let source = source.ok_or(AvalancheError::BedSourceMissing)?;
         let ntx = self.tiles.ntx();
-        let (w, hgt) = (self.geometry.width(), self.geometry.height());
         let (r0, c0) = ((t / ntx) * TILE, (t % ntx) * TILE);
         for r in r0..(r0 + TILE).min(self.ph) {
             for c in c0..(c0 + TILE).min(self.pw) {
                 let k = r * self.pw + c;
-                // As `AvalancheState::new`: the ghost ring takes the nearest grid cell's bed,
-                // nodata cells 0.
-                let i = (r.clamp(1, hgt) - 1) * w + c.clamp(1, w) - 1;
-                let inside = c >= 1 && c <= w && r >= 1 && r <= hgt;
-                self.bed[k] = if self.nodata[k] {
-                    0.0
-                } else {
-                    let b = source.bed(i);
-                    if inside && !b.is_finite() {
-                        return Err(AvalancheError::BadValue {
-                            what: "bed",
-                            index: i,
-                            value: b,
-                        });
+                // As `AvalancheState::new`: the ghost ring and nodata cells take the bed of a
+                // valid cell (`AvalancheState::bed_source`).
+                self.bed[k] = match self.bed_source(k) {
+                    None => 0.0,
+                    Some(i) => {
+                        let b = source.bed(i);
+                        if !b.is_finite() {
+                            return Err(AvalancheError::BadValue {
+                                what: "bed",
+                                index: i,
+                                value: b,
+                            });
+                        }
+                        b
                     }
-                    if b.is_finite() { b } else { 0.0 }
                 };
             }
         }

@@ -2,16 +2,18 @@
 
 use super::*;
 
-/// What happens at the edge of the grid.
+/// What happens at the edges of the terrain: the grid's border and the nodata outline (see
+/// the flow module's *Borders*).
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
 )]
 #[serde(rename_all = "lowercase")]
 pub enum Border {
-    /// Snow leaves the grid (counted in [`AvalancheReport::border_outflow`]).
+    /// Snow leaves the terrain across the grid's border and into nodata cells (counted in
+    /// [`AvalancheReport::border_outflow`]).
     #[default]
     Open,
-    /// The border is a wall.
+    /// The border and the nodata cells are walls.
     Closed,
 }
 
@@ -127,7 +129,7 @@ pub struct AvalancheParams {
     /// Include momentum advection `(v·∇)u`. Default true (`docs/model.md#flow-model`: needed for Ritter's
     /// front); false gives the paper's hydrostatic pipe model with a depth cross-section.
     pub momentum_advection: bool,
-    /// Grid border condition. Default open.
+    /// Condition at the grid border and the nodata outline. Default open.
     pub border: Border,
     /// Upper bound on the number of sub-steps in one call to [`step`]. Default 1 000 000.
     pub max_substeps: usize,
@@ -359,7 +361,8 @@ pub enum AvalancheError {
 pub struct AvalancheReport {
     /// Volume that crossed pipes, summed over pipes and sub-steps, m³.
     pub moved_volume: f64,
-    /// Volume that left the grid across its border, m³.
+    /// Volume that left the terrain across an open border (the grid's border or the nodata
+    /// outline), m³.
     pub border_outflow: f64,
     /// Largest pipe speed at the end of any sub-step, m/s.
     pub max_speed: f64,

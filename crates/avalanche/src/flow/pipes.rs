@@ -120,11 +120,16 @@ pub(super) fn cell_flow_border(
     let vx_d = (p[2] - p[3]) * k.inv_den_x;
     let vy_d = (p[2] + p[3]) * k.inv_den_y;
     let (vx, vy) = (0.5 * (p[0] + vx_d), 0.5 * (p[1] + vy_d));
-    let [gx, gy, c2] = match surface_gradient(pg, inp.h, inp.bed, inp.nodata, k.pw, kk) {
+    let cells = GradientCells {
+        nodata: inp.nodata,
+        walls: k.closed,
+        pw: k.pw,
+    };
+    let [gx, gy, c2] = match surface_gradient(pg, inp.h, inp.bed, cells, kk) {
         None => [f64::NAN; 3],
         Some([gx, gy]) if k.projected => {
-            let [bx, by] = bed_gradient(pg, inp.bed, inp.nodata, k.pw, kk)
-                .expect("defined where the surface's is");
+            let [bx, by] =
+                bed_gradient(pg, inp.bed, cells, kk).expect("defined where the surface's is");
             projected_gradient(gx, gy, bx, by)
         }
         Some([gx, gy]) => [gx, gy, 1.0],

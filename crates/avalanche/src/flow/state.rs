@@ -18,27 +18,30 @@ impl AvalancheState {
             });
         }
         let (pw, ph) = (w + 2, hgt + 2);
+        let bed_from = nearest_valid(w, hgt, mask);
         let mut nodata = vec![false; pw * ph];
         let mut pbed = vec![0.0; pw * ph];
         for r in 0..ph {
             for c in 0..pw {
-                let ic = c.clamp(1, w) - 1;
-                let ir = r.clamp(1, hgt) - 1;
-                let i = ir * w + ic;
+                let i = (r.clamp(1, hgt) - 1) * w + c.clamp(1, w) - 1;
                 let inside = c >= 1 && c <= w && r >= 1 && r <= hgt;
-                if inside && !mask.is_valid(i) {
-                    nodata[r * pw + c] = true;
+                nodata[r * pw + c] = inside && !mask.is_valid(i);
+                // The ghost ring and nodata cells take the bed of a valid cell (module
+                // documentation, *Borders*).
+                let src = bed_from.get(i).map_or(i, |&j| j as usize);
+                if !mask.is_valid(src) {
+                    // No valid cell anywhere.
                     continue;
                 }
-                let b = bed[i];
-                if mask.is_valid(i) && !b.is_finite() {
+                let b = bed[src];
+                if !b.is_finite() {
                     return Err(AvalancheError::BadValue {
                         what: "bed",
-                        index: i,
+                        index: src,
                         value: b,
                     });
                 }
-                pbed[r * pw + c] = if b.is_finite() { b } else { 0.0 };
+                pbed[r * pw + c] = b;
             }
         }
         let mut near_wall = vec![false; pw * ph];
@@ -66,6 +69,7 @@ impl AvalancheState {
             tiles: TileSet::new(pw, ph),
             maxima: (0.0, 0.0),
             near_wall,
+            bed_from,
             pg: PipeGeometry::new(geometry, ph),
             footprint: footprint::Footprint::new(pw.div_ceil(TILE) * ph.div_ceil(TILE), false),
             mu: Vec::new(),
@@ -123,6 +127,17 @@ impl AvalancheState {
             })
             .collect();
         Self::new(terrain.geometry(), terrain.mask(), &bed)
+    }
+
+    /// The valid grid cell whose bed the padded cell `k` takes: itself for a valid cell, the
+    /// nearest valid cell for a nodata cell ([`nearest_valid`]), that of the nearest grid cell
+    /// for the ghost ring; `None` where the grid has no valid cell.
+    pub(super) fn bed_source(&self, k: usize) -> Option<usize> {
+        let (w, hgt) = (self.geometry.width(), self.geometry.height());
+        let (r, c) = (k / self.pw, k % self.pw);
+        let i = (r.clamp(1, hgt) - 1) * w + c.clamp(1, w) - 1;
+        let src = self.bed_from.get(i).map_or(i, |&j| j as usize);
+        (!self.nodata[self.pad(src % w, src / w)]).then_some(src)
     }
 
     /// The grid geometry.
@@ -397,4 +412,55 @@ impl AvalancheState {
             self.touch_tile(self.tiles.occupied()[o] as usize);
         }
     }
+}
+
+/// For every grid cell of a `w x hgt` grid, the valid cell whose bed it takes: itself where it
+/// is valid, else the nearest valid cell by 8-neighbour steps (a breadth-first fill from all
+/// valid cells at once, one ring of steps at a time: at each ring first across edges, then
+/// across corners, each cell taking the source of the first cell to reach it; the sources in
+/// row-major order, the neighbours west, east, north, south, then north-west, north-east,
+/// south-west, south-east). A nodata cell next to valid cells thus takes the bed of one of its
+/// edge neighbours where it has one. Empty where the grid has no nodata cell (every cell is
+/// its own source) or no valid cell (none has one). O(cells), depends on the mask only.
+pub(super) fn nearest_valid(w: usize, hgt: usize, mask: &NodataMask) -> Vec<u32> {
+    let n = w * hgt;
+    if !mask.has_nodata() || (0..n).all(|i| !mask.is_valid(i)) {
+        return Vec::new();
+    }
+    // (Grids hold at most 2³² cells, so an index fits in u32.)
+    let mut src = vec![0u32; n];
+    let mut reached = vec![false; n];
+    let mut ring: Vec<usize> = Vec::new();
+    for (i, s) in src.iter_mut().enumerate() {
+        if mask.is_valid(i) {
+            *s = i as u32;
+            reached[i] = true;
+            ring.push(i);
+        }
+    }
+    let edges: [(isize, isize); 4] = [(-1, 0), (1, 0), (0, -1), (0, 1)];
+    let corners: [(isize, isize); 4] = [(-1, -1), (1, -1), (-1, 1), (1, 1)];
+    let mut next = Vec::new();
+    while !ring.is_empty() {
+        for steps in [&edges, &corners] {
+            for &i in &ring {
+                let (c, r) = ((i % w) as isize, (i / w) as isize);
+                for &(dc, dr) in steps {
+                    let (cc, rr) = (c + dc, r + dr);
+                    if cc < 0 || rr < 0 || cc >= w as isize || rr >= hgt as isize {
+                        continue;
+                    }
+                    let j = rr as usize * w + cc as usize;
+                    if !reached[j] {
+                        reached[j] = true;
+                        src[j] = src[i];
+                        next.push(j);
+                    }
+                }
+            }
+        }
+        std::mem::swap(&mut ring, &mut next);
+        next.clear();
+    }
+    src
 }

@@ -209,7 +209,7 @@ pub(super) fn substep(
         let inp = Inputs {
             h: empty,
             bed: empty,
-            nodata: &[],
+            nodata: &state.nodata,
             near_wall: &[],
             pipes: [empty; 4],
             vel: [empty; 7],

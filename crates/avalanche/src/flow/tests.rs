@@ -84,3 +84,45 @@ fn lanes_match_scalar() {
         }
     }
 }
+
+/// The nearest-valid fill: a nodata cell takes the bed of its first valid edge neighbour in
+/// row-major order, else of a corner neighbour, else of the nearest valid cell; a grid with no
+/// nodata (or no valid cell) has no map.
+#[test]
+fn nodata_cells_take_the_nearest_valid_cell() {
+    // 5 x 4, `#` nodata:
+    //   . . # # #
+    //   . # # # #
+    //   . . # # #
+    //   # # # # #
+    let (w, h) = (5, 4);
+    let rows = ["..###", ".####", "..###", "#####"];
+    let invalid: Vec<bool> = rows
+        .iter()
+        .flat_map(|r| r.chars().map(|ch| ch == '#'))
+        .collect();
+    let src = state::nearest_valid(w, h, &NodataMask::from_invalid(invalid.clone()));
+    let at = |c: usize, r: usize| src[r * w + c] as usize;
+    for i in (0..w * h).filter(|&i| !invalid[i]) {
+        assert_eq!(src[i] as usize, i);
+    }
+    // (1, 1): edge neighbours (1, 0), (0, 1), (1, 2) valid: the first in row-major order.
+    assert_eq!(at(1, 1), 1);
+    // (2, 0): edge neighbour (1, 0). (2, 1): no valid edge neighbour, corners (1, 0) first.
+    assert_eq!(at(2, 0), 1);
+    assert_eq!(at(2, 1), 1);
+    // (0, 3): edge neighbour (0, 2); (2, 3): corner (1, 2); (3, 1): two steps, through (2, 1).
+    assert_eq!(at(0, 3), 2 * w);
+    assert_eq!(at(2, 3), 2 * w + 1);
+    assert_eq!(at(3, 1), 1);
+    assert!(state::nearest_valid(w, h, &NodataMask::all_valid()).is_empty());
+    assert!(state::nearest_valid(w, h, &NodataMask::from_invalid(vec![true; w * h])).is_empty());
+
+    // The flow state reads those beds; the ghost ring that of the nearest grid cell's source.
+    let bed: Vec<f64> = (0..w * h).map(|i| i as f64 + 100.0).collect();
+    let g = GridGeometry::new(w, h, 1.0, 1.0).unwrap();
+    let s = AvalancheState::new(&g, &NodataMask::from_invalid(invalid), &bed).unwrap();
+    assert_eq!(s.bed_at(1, 1), 101.0);
+    assert_eq!(s.bed_at(2, 3), 111.0);
+    assert_eq!(s.bed[s.pad(2, 3) + s.pw], 111.0, "ghost below (2, 3)");
+}

@@ -168,7 +168,10 @@ pub(super) fn update_row_lanes<V: Lanes>(
             None => (false, usize::MAX),
         }
     };
-    for (c, visit) in walk(seg3, lo, hi, None, V::N) {
+    // Nodata cells take the general code: with an open border, the snow that flows into them
+    // leaves as the ghost ring's does.
+    let nodata = &inp.nodata[r * pw..(r + 1) * pw];
+    for (c, visit) in walk(seg3, lo, hi, Some(nodata), V::N) {
         let kk = r * pw + c;
         let bits = match visit {
             Visit::Chunk | Visit::Half | Visit::One => {
@@ -250,7 +253,8 @@ pub(super) fn update_row_lanes<V: Lanes>(
                     if hn < 0.0 {
                         hn = 0.0;
                     }
-                    if ghost_row || c == 0 || c == pw - 1 {
+                    if ghost_row || c == 0 || c == pw - 1 || nodata[c] {
+                        // (With a closed border no snow reaches them: `hn` is 0.)
                         st.outflow += hn * k.area;
                         hn = 0.0;
                     } else if hn > 0.0 {
@@ -588,46 +592,54 @@ pub(super) fn pipe_update(
     (u, pg.width[d] * hup * u * dt)
 }
 
-/// Central-difference gradient of the surface `A = B + h` at padded cell `k` (one-sided next
-/// to nodata cells); `None` on the ghost ring.
+/// Where a gradient reads its cells: the padded nodata flags, and whether nodata cells are
+/// walls ([`Border::Closed`]: a wall neighbour is replaced by the cell itself) or open (their
+/// bed, and no snow, as the ghost ring's).
+#[derive(Clone, Copy)]
+pub(super) struct GradientCells<'a> {
+    pub nodata: &'a [bool],
+    pub walls: bool,
+    pub pw: usize,
+}
+
+/// Central-difference gradient of the surface `A = B + h` at padded cell `k` (next to a nodata
+/// wall the cell itself replaces the wall); `None` on the ghost ring and nodata cells.
 pub(super) fn surface_gradient(
     pg: &PipeGeometry,
     h: &[f64],
     bed: &[f64],
-    nodata: &[bool],
-    pw: usize,
+    cells: GradientCells,
     k: usize,
 ) -> Option<[f64; 2]> {
-    gradient(pg, |i| bed[i] + h[i], nodata, pw, k)
+    gradient(pg, |i| bed[i] + h[i], cells, k)
 }
 
 /// Central-difference gradient of the bed at padded cell `k`, as [`surface_gradient`].
 pub(super) fn bed_gradient(
     pg: &PipeGeometry,
     bed: &[f64],
-    nodata: &[bool],
-    pw: usize,
+    cells: GradientCells,
     k: usize,
 ) -> Option<[f64; 2]> {
-    gradient(pg, |i| bed[i], nodata, pw, k)
+    gradient(pg, |i| bed[i], cells, k)
 }
 
-/// Central-difference gradient of the field `a` at padded cell `k` (one-sided next to nodata
-/// cells); `None` on the ghost ring.
+/// Central-difference gradient of the field `a` at padded cell `k` (next to a nodata wall the
+/// cell itself replaces the wall); `None` on the ghost ring and nodata cells.
 #[inline(always)]
 fn gradient(
     pg: &PipeGeometry,
     a: impl Fn(usize) -> f64,
-    nodata: &[bool],
-    pw: usize,
+    cells: GradientCells,
     k: usize,
 ) -> Option<[f64; 2]> {
+    let GradientCells { nodata, walls, pw } = cells;
     let (r, c) = (k / pw, k % pw);
     if r == 0 || c == 0 || r + 1 >= pg.ph || c + 1 >= pw || nodata[k] {
         return None;
     }
     let ak = a(k);
-    let side = |i: usize| if nodata[i] { ak } else { a(i) };
+    let side = |i: usize| if walls && nodata[i] { ak } else { a(i) };
     let gx = (side(k + 1) - side(k - 1)) * pg.inv_two_dx;
     let gy = (side(k + pw) - side(k - pw)) * pg.inv_two_dy;
     Some([gx, gy])
