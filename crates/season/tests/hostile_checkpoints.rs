@@ -141,6 +141,18 @@ fn absurd_indices_times_and_counters_are_refused_naming_the_field() {
 }
 
 #[test]
+fn huge_values_are_named_with_an_exponent() {
+    // -1e300 written out is 302 characters, cut before its value shows.
+    let bytes = checkpoint_at(2.5);
+    let forged = forge(&bytes, |h| h["scheduler"]["time_days"] = json!(-1e300));
+    let (_, message) = refused_field(&forged);
+    assert!(
+        message.contains("scheduler.time_days = -1e300 is implausible"),
+        "{message}"
+    );
+}
+
+#[test]
 fn an_avalanche_off_the_grid_is_refused() {
     let bytes = checkpoint_at(2.5);
     let record = json!({

@@ -4,6 +4,7 @@
 //! and the accepted range or cap.
 
 use super::{Parameters, Scenario, ScenarioError, day_of_year};
+use crate::number_for_message;
 use snowscape_terrain::timeline::check_timeline;
 
 /// Most frames (`snapshot_every_days` and `snapshot_days` together) one season may take.
@@ -117,7 +118,7 @@ impl Scenario {
         if !(self.days.is_finite() && self.days > 0.0 && self.days <= MAX_SEASON_DAYS) {
             return Err(bad(
                 "days",
-                self.days.to_string(),
+                number_for_message(self.days),
                 "must be within (0, 3650]",
             ));
         }
@@ -133,7 +134,7 @@ impl Scenario {
         {
             return Err(bad(
                 "latitude_deg",
-                l.to_string(),
+                number_for_message(l),
                 "must be within [-90, 90]",
             ));
         }
@@ -142,7 +143,7 @@ impl Scenario {
         {
             return Err(bad(
                 "station_altitude_m",
-                z.to_string(),
+                number_for_message(z),
                 "must be a plausible altitude (|z| <= 9000 m)",
             ));
         }
@@ -161,14 +162,14 @@ impl Scenario {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(bad(
                     key,
-                    v.to_string(),
+                    number_for_message(v),
                     "must be a non-negative number of days (0: never)",
                 ));
             }
             if v > 0.0 && self.days / v > most {
                 return Err(bad(
                     key,
-                    v.to_string(),
+                    number_for_message(v),
                     "is too frequent: at most 1000 per season (0: never)",
                 ));
             }
@@ -177,7 +178,7 @@ impl Scenario {
             if !(d.is_finite() && d >= 0.0 && d <= self.days) {
                 return Err(bad(
                     &format!("snapshot_days[{k}]"),
-                    d.to_string(),
+                    number_for_message(d),
                     "must be a day of the season, within [0, days]",
                 ));
             }
@@ -193,7 +194,7 @@ impl Scenario {
             return Err(ScenarioError::Invalid {
                 source_name: source_name.to_string(),
                 key: format!("weather[{}].{}", e.index, e.key),
-                value: e.start.to_string(),
+                value: number_for_message(e.start),
                 reason: e.reason.into(),
             });
         }
@@ -232,7 +233,7 @@ impl Scenario {
                 ),
             ] {
                 if !(v.is_finite() && ok) {
-                    return Err(bad(&key(f), v.to_string(), reason));
+                    return Err(bad(&key(f), number_for_message(v), reason));
                 }
             }
         }
@@ -244,7 +245,11 @@ impl Scenario {
             {
                 return Err(bad(
                     &format!("snowfall_period[{k}]"),
-                    format!("start_day {} days {}", p.start_day, p.days),
+                    format!(
+                        "start_day {} days {}",
+                        number_for_message(p.start_day),
+                        number_for_message(p.days)
+                    ),
                     "needs start_day >= 0 and days > 0",
                 ));
             }
@@ -253,14 +258,19 @@ impl Scenario {
             if !(a.day.is_finite() && a.x.is_finite() && a.y.is_finite()) {
                 return Err(bad(
                     &format!("avalanche[{k}]"),
-                    format!("day {} x {} y {}", a.day, a.x, a.y),
+                    format!(
+                        "day {} x {} y {}",
+                        number_for_message(a.day),
+                        number_for_message(a.x),
+                        number_for_message(a.y)
+                    ),
                     "needs a finite day and finite map coordinates x, y",
                 ));
             }
             if !(0.0..=self.days).contains(&a.day) {
                 return Err(bad(
                     &format!("avalanche[{k}].day"),
-                    a.day.to_string(),
+                    number_for_message(a.day),
                     "must be a day of the season, within [0, days]",
                 ));
             }
@@ -304,7 +314,7 @@ impl Scenario {
         let outside = |key: String, x: f64, y: f64| ScenarioError::Invalid {
             source_name: source_name.to_string(),
             key,
-            value: format!("x {x} y {y}"),
+            value: format!("x {} y {}", number_for_message(x), number_for_message(y)),
             reason: "lies outside the terrain".into(),
         };
         for (k, a) in self.avalanches.iter().enumerate() {
@@ -415,5 +425,26 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    #[test]
+    fn huge_and_tiny_values_are_named_with_an_exponent() {
+        // 1e308 written out is 309 digits, cut before its value shows.
+        for (text, want) in [
+            ("days = 1e308\n", "days = 1e308: "),
+            ("days = -3\n", "days = -3: "),
+            (
+                "snapshot_every_days = 1e-300\n",
+                "snapshot_every_days = 1e-300: ",
+            ),
+            ("latitude_deg = 90.5\n", "latitude_deg = 90.5: "),
+            (
+                "[[avalanche]]\nday = 1\nx = 1e300\ny = -inf\n",
+                "avalanche[0] = day 1 x 1e300 y -inf: ",
+            ),
+        ] {
+            let e = Scenario::from_toml(text, "s.toml").unwrap_err().to_string();
+            assert!(e.contains(want), "{text}: {e}");
+        }
     }
 }
