@@ -42,6 +42,10 @@ bash scripts/export-memory.sh "$scratch/large_run" 600 > /dev/null
 # Crafted rasters (decompression bombs, offsets past the end) read under `ulimit -v`: each is
 # refused with exit 2, none killed for memory.
 bash scripts/reader-limits.sh > /dev/null
+# Crafted meshes, forcing CSVs, scenarios and checkpoints (a face of a million corners, a GLB
+# reusing one mesh for 10 million triangles, an 8 MiB CSV line, forged checkpoints) given to
+# `snowscape` under `ulimit -v`: each refused with exit 2 naming the value.
+bash scripts/input-limits.sh > /dev/null
 # A rerun into a full disk (a 5 MB tmpfs) fails and leaves the first run's outputs intact.
 bash scripts/full-disk.sh "$bin"
 # The Python package: built by pip (maturin) into a fresh virtual environment, from the same

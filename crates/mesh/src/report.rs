@@ -124,7 +124,7 @@ pub(crate) fn check_object(
         if !(p.iter().all(|c| c.is_finite()) && scaled.iter().all(|c| c.is_finite())) {
             return Err(MeshError::NonFiniteVertex {
                 path: path.to_path_buf(),
-                object: raw.name.clone(),
+                object: crate::read::echo(&raw.name),
                 vertex,
                 value: *p,
             });
@@ -135,7 +135,7 @@ pub(crate) fn check_object(
         {
             return Err(MeshError::CoordinateTooLarge {
                 path: path.to_path_buf(),
-                object: raw.name.clone(),
+                object: crate::read::echo(&raw.name),
                 vertex,
                 line: None,
                 value: *p,
@@ -166,7 +166,7 @@ pub(crate) fn check_object(
             if index < 0 || index as u64 >= n as u64 {
                 return Err(MeshError::IndexOutOfRange {
                     path: path.to_path_buf(),
-                    object: raw.name.clone(),
+                    object: crate::read::echo(&raw.name),
                     face,
                     index,
                     vertex_count: n,
@@ -275,7 +275,7 @@ fn check_extent(path: &Path, scene: &crate::Scene) -> Result<(), MeshError> {
     match smallest {
         Some((feature, k, t)) if extent > limit * feature => Err(MeshError::ExtentTooLarge {
             path: path.to_path_buf(),
-            object: scene.objects[k].name.clone(),
+            object: crate::read::echo(&scene.objects[k].name),
             triangle: t,
             extent_m: extent,
             feature_m: feature,

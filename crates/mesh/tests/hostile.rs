@@ -251,6 +251,19 @@ fn broken_gltf_and_glb_are_parse_errors() {
         o.corners(0),
         [[0.0, 0.0, 5.0], [2.0, 0.0, 5.0], [0.0, 0.0, 7.0]]
     );
+    // A POSITION naming an accessor the file lacks: the gltf crate's validation indexed it
+    // unchecked and panicked (found by the mutation tests).
+    let p = write(
+        d.path(),
+        "no_accessor.gltf",
+        ok.replace("\"POSITION\":0", "\"POSITION\":255").as_bytes(),
+    );
+    match read(&p) {
+        Err(MeshError::Parse { message, .. }) => {
+            assert!(message.contains("accessor 255"), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
     // A node graph with a cycle (node 0 its own child) is refused, not walked forever.
     let cyclic = ok.replace("\"name\":\"roof\"", "\"name\":\"roof\",\"children\":[0]");
     let p = write(d.path(), "cycle.gltf", cyclic.as_bytes());

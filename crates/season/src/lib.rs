@@ -46,6 +46,17 @@ pub fn clip_for_message(s: &str) -> String {
     format!("{head}... ({} bytes)", s.len())
 }
 
+/// `v` for an error message: as Rust writes it (`0.5`, `-3`, `NaN`), but with an exponent
+/// when it is very large or very small (`1e308`, `-1e-300`), whose plain form runs to hundreds
+/// of digits and would be cut before its value shows.
+pub fn number_for_message(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-5..1e16).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
 /// Snow volume a step added to and removed from the terrain, m³ of snow.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct VolumeChange {

@@ -3,84 +3,14 @@
 //! checksum matches but whose values are absurd (forged here: each edit re-computes the CRC)
 //! is refused with a typed error naming the field, never a panic or a hang.
 
+#[path = "support/forge.rs"]
+mod forge;
+
+use forge::*;
 use serde_json::{Value, json};
 use snowscape_season::checkpoint::{self, CheckpointError};
-use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::{SeasonError, Winter};
-use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain};
 use std::path::Path;
-
-/// Bytes before the JSON header: magic, version, header length, maps length.
-const PREAMBLE: usize = 28;
-const COLS: usize = 24;
-const ROWS: usize = 20;
-
-/// A 24x20 terrain of 20 m cells: a cone from 900 m to 2100 m.
-fn terrain() -> LayeredTerrain {
-    let g = GridGeometry::square(COLS, ROWS, 20.0).unwrap();
-    LayeredTerrain::from_bedrock(Grid::from_fn(g, |c, r| {
-        let (x, y) = (c as f32 / COLS as f32 - 0.5, r as f32 / ROWS as f32 - 0.5);
-        900.0 + 1200.0 * (1.0 - 2.0 * (x * x + y * y).sqrt()).max(0.0)
-    }))
-}
-
-fn scenario() -> Scenario {
-    let mut s = Scenario {
-        days: 6.0,
-        ..Scenario::default()
-    };
-    s.parameters.environment.sky.directions = 8;
-    s.parameters.environment.sun.day_step = 30;
-    s
-}
-
-/// A genuine checkpoint of the season stopped at `day`.
-fn checkpoint_at(day: f64) -> Vec<u8> {
-    let mut w = Winter::new(scenario(), terrain()).unwrap();
-    w.run_until(day).unwrap();
-    let mut bytes = Vec::new();
-    w.write_checkpoint(&mut bytes).unwrap();
-    bytes
-}
-
-/// The JSON header and the raw maps of a checkpoint.
-fn split(bytes: &[u8]) -> (Value, Vec<u8>) {
-    let len = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap()) as usize;
-    let (header_len, maps_len) = (len(12), len(20));
-    let header = serde_json::from_slice(&bytes[PREAMBLE..PREAMBLE + header_len]).unwrap();
-    let maps = bytes[PREAMBLE + header_len..PREAMBLE + header_len + maps_len].to_vec();
-    (header, maps)
-}
-
-/// A checkpoint of `header` and `maps` with lengths and CRC computed anew: what a forger (or
-/// a writer with a bug) produces, and the checksum accepts.
-fn assemble(header: &Value, maps: &[u8]) -> Vec<u8> {
-    let json = serde_json::to_vec(header).unwrap();
-    let mut out = b"SNOWCKPT".to_vec();
-    out.extend_from_slice(&checkpoint::VERSION.to_le_bytes());
-    out.extend_from_slice(&(json.len() as u64).to_le_bytes());
-    out.extend_from_slice(&(maps.len() as u64).to_le_bytes());
-    out.extend_from_slice(&json);
-    out.extend_from_slice(maps);
-    let crc = crc32fast::hash(&out);
-    out.extend_from_slice(&crc.to_le_bytes());
-    out
-}
-
-/// `bytes` with the header edited by `edit`, the CRC re-computed.
-fn forge(bytes: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
-    let (mut header, maps) = split(bytes);
-    edit(&mut header);
-    assemble(&header, &maps)
-}
-
-/// `bytes` with map `map` (0..4 the layers, then the extra maps) at `cell` set to `v`.
-fn forge_map(bytes: &[u8], map: usize, cell: usize, v: f32) -> Vec<u8> {
-    let (header, mut maps) = split(bytes);
-    let at = 4 * (map * COLS * ROWS + cell);
-    maps[at..at + 4].copy_from_slice(&v.to_le_bytes());
-    assemble(&header, &maps)
-}
 
 fn resume(bytes: &[u8]) -> Result<Winter, SeasonError> {
     Winter::resume(scenario(), terrain(), &mut &bytes[..])
@@ -208,6 +138,18 @@ fn absurd_indices_times_and_counters_are_refused_naming_the_field() {
         );
         assert!(t.elapsed().as_secs() < 20, "{want}: {:?}", t.elapsed());
     }
+}
+
+#[test]
+fn huge_values_are_named_with_an_exponent() {
+    // -1e300 written out is 302 characters, cut before its value shows.
+    let bytes = checkpoint_at(2.5);
+    let forged = forge(&bytes, |h| h["scheduler"]["time_days"] = json!(-1e300));
+    let (_, message) = refused_field(&forged);
+    assert!(
+        message.contains("scheduler.time_days = -1e300 is implausible"),
+        "{message}"
+    );
 }
 
 #[test]

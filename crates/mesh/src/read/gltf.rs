@@ -1,7 +1,9 @@
 //! glTF 2.0 input (`.gltf` JSON with external or `data:` buffers, and `.glb`) through the
 //! `gltf` crate, without its `import` feature: buffers are resolved here, and every accessor is
 //! checked against its buffer before it is read, so a truncated or inconsistent file is a
-//! [`MeshError::Parse`] naming the accessor rather than a panic.
+//! [`MeshError::Parse`] naming the accessor rather than a panic. The vertices and triangles of
+//! every node's mesh (a mesh reused by several nodes counts for each) are checked against the
+//! limits of [`crate::read`] before any mesh is read.
 //!
 //! The default scene (or, without one, the first) is walked from its root nodes; each node
 //! with a mesh becomes one object named after the node (else the mesh), with the node's world
@@ -26,15 +28,15 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
     let bytes = crate::read::read_bytes(path)?;
     let bad = |message: String| MeshError::parse(path, "glTF", message);
     check_glb_header(&bytes).map_err(bad)?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| bad(e.to_string()))?;
+    let gltf = parse(&bytes).map_err(bad)?;
     let buffers = load_buffers(path, &gltf)?;
     let doc = &gltf.document;
     let scene = doc
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| bad("no scene".into()))?;
-    let mut objects = Vec::new();
-    let mut tally = Tally::default();
+    // The nodes with a mesh, with their world transforms.
+    let mut placed = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     // glTF nodes form trees (a node has at most one parent): more visits than nodes is a
@@ -55,21 +57,76 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
             )));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if let Some(mesh) = node.mesh() {
-            let name = node
-                .name()
-                .or(mesh.name())
-                .map(str::to_string)
-                .unwrap_or_else(|| format!("node{}", node.index()));
-            objects.push(read_mesh(path, &mesh, &buffers, world, name, &mut tally)?);
-        }
         for child in node.children() {
             stack.push((child, world, depth + 1));
         }
+        if let Some(mesh) = node.mesh() {
+            placed.push((node, mesh, world));
+        }
+    }
+    // The limits of crate::read over every placed mesh before any is read: a mesh that many
+    // nodes reuse counts once for each (a small file could otherwise load millions of
+    // triangles before the count passed the limit).
+    let mut tally = Tally::default();
+    for (_, mesh, _) in &placed {
+        for primitive in mesh.primitives() {
+            if let Some((vertices, triangles)) = primitive_counts(&primitive) {
+                tally.add(path, None, vertices, 0)?;
+                tally.add_triangles(path, triangles)?;
+            }
+        }
+    }
+    let mut objects = Vec::with_capacity(placed.len());
+    for (node, mesh, world) in placed {
+        let name = node
+            .name()
+            .or(mesh.name())
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("node{}", node.index()));
+        objects.push(read_mesh(path, &mesh, &buffers, world, name)?);
     }
     // Walking with a stack reverses sibling order; keep the file's order.
     objects.reverse();
     Ok(objects)
+}
+
+/// Parses a glTF or GLB and validates it as `gltf::Gltf::from_slice` does, checking first
+/// what that validation takes for granted: it indexes the accessor a primitive's POSITION
+/// names without a bounds check, so an index past the accessors panicked (found by the
+/// mutation tests, issue 46).
+fn parse(bytes: &[u8]) -> Result<gltf::Gltf, String> {
+    use gltf::json::validation::{Checked, Validate};
+    // serde quotes the values it could not read, whatever their length.
+    let foreign = |e: gltf::Error| {
+        snowscape_io::error::clip(&e.to_string(), snowscape_io::error::MAX_FOREIGN_MESSAGE)
+    };
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(foreign)?;
+    let root = gltf.document.as_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&Checked::Valid(gltf::json::mesh::Semantic::Positions));
+            if let Some(i) = position
+                && i.value() >= root.accessors.len()
+            {
+                return Err(format!(
+                    "mesh {m} primitive {p}: POSITION is accessor {}, but the file has {} accessors",
+                    i.value(),
+                    root.accessors.len()
+                ));
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        errors.push((path(), error))
+    });
+    if errors.is_empty() {
+        Ok(gltf)
+    } else {
+        Err(foreign(gltf::Error::Validation(errors)))
+    }
 }
 
 /// Checks a GLB header's declared length before the gltf crate subtracts from it.
@@ -218,8 +275,12 @@ fn check_accessor(
         .and_then(|x| x.checked_add(accessor.offset()));
     if end.is_none_or(|e| e > view.length()) {
         return Err(format!(
-            "accessor {i} runs past the end of buffer view {}",
-            view.index()
+            "accessor {i} of count {} ({size}-byte elements, stride {stride}, offset {}) runs \
+             past the end of buffer view {} ({} bytes)",
+            accessor.count(),
+            accessor.offset(),
+            view.index(),
+            view.length()
         ));
     }
     let data = buffers.get(view.buffer().index()).map_or(0, Vec::len);
@@ -229,8 +290,11 @@ fn check_accessor(
         .is_none_or(|e| e > data)
     {
         return Err(format!(
-            "buffer view {} runs past the end of its buffer",
-            view.index()
+            "buffer view {} ({} bytes from offset {}) runs past the end of buffer {} ({data} bytes)",
+            view.index(),
+            view.length(),
+            view.offset(),
+            view.buffer().index()
         ));
     }
     Ok(())
@@ -243,7 +307,6 @@ fn read_mesh(
     buffers: &[Vec<u8>],
     world: Mat4,
     name: String,
-    tally: &mut Tally,
 ) -> Result<RawObject, MeshError> {
     let bad = |message: String| MeshError::parse(path, "glTF", message);
     let normal_matrix = {
@@ -280,17 +343,6 @@ fn read_mesh(
         if let Some(ix) = primitive.indices() {
             check_accessor(&ix, buffers, &index_shapes).map_err(bad)?;
         }
-        // The limits of crate::read, before anything is read: vertices, and the triangles the
-        // index list (or the vertices, without one) makes in this mode.
-        let corners = primitive
-            .indices()
-            .map_or(positions.count(), |ix| ix.count()) as u64;
-        let triangles = match mode {
-            Mode::Triangles => corners / 3,
-            _ => corners.saturating_sub(2),
-        };
-        tally.add(path, None, positions.count() as u64, 0)?;
-        tally.add_triangles(path, triangles)?;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let base = object.positions.len() as i64;
         let first = object.positions.len();
@@ -319,6 +371,28 @@ fn read_mesh(
         push_faces(&mut object.faces, &indices, mode);
     }
     Ok(object)
+}
+
+/// The vertices of a triangle primitive and the triangles its index list (or its vertices,
+/// without one) makes in its mode, as the file declares them; `None` for a point or line
+/// primitive, or one without POSITION (refused when it is read).
+fn primitive_counts(primitive: &gltf::Primitive) -> Option<(u64, u64)> {
+    let mode = primitive.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        return None;
+    }
+    let positions = primitive.get(&Semantic::Positions)?.count() as u64;
+    let corners = primitive
+        .indices()
+        .map_or(positions, |ix| ix.count() as u64);
+    let triangles = match mode {
+        Mode::Triangles => corners / 3,
+        _ => corners.saturating_sub(2),
+    };
+    Some((positions, triangles))
 }
 
 /// Triangles of an index list in a glTF triangle mode (the checker rejects bad indices).

@@ -143,6 +143,13 @@ impl Tally {
     }
 }
 
+/// Text from a file (a line, a token, an object name) as an error quotes it: at most
+/// [`snowscape_io::error::MAX_ECHO`] characters, so a corrupt file cannot put megabytes into
+/// a message.
+pub(crate) fn echo(text: &str) -> String {
+    snowscape_io::error::clip(text, snowscape_io::error::MAX_ECHO)
+}
+
 /// The largest mesh file (or glTF buffer) read: 4 GiB.
 pub const MAX_MESH_BYTES: u64 = 1 << 32;
 

@@ -11,7 +11,7 @@
 //! [`crate::read::MAX_COORDINATE_M`] once scaled is refused naming its `v` line.
 
 use crate::MeshError;
-use crate::read::{MAX_COORDINATE_M, Tally};
+use crate::read::{MAX_COORDINATE_M, Tally, echo};
 use crate::report::RawObject;
 use crate::scene::SourceFrame;
 use std::path::Path;
@@ -110,7 +110,7 @@ fn locate_non_finite(path: &Path, text: &[u8]) -> MeshError {
     for (n, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         match words.next() {
-            Some("o" | "g") => object = words.collect::<Vec<_>>().join(" "),
+            Some("o" | "g") => object = echo(&words.collect::<Vec<_>>().join(" ")),
             Some("v") => {
                 let mut value = [0.0f32; 3];
                 for (c, w) in value.iter_mut().zip(words) {
@@ -141,7 +141,7 @@ fn locate_too_far(path: &Path, text: &[u8], frame: &SourceFrame, limit: f64) -> 
     for (n, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         match words.next() {
-            Some("o" | "g") => object = words.collect::<Vec<_>>().join(" "),
+            Some("o" | "g") => object = echo(&words.collect::<Vec<_>>().join(" ")),
             Some("v") => {
                 let mut value = [0.0f32; 3];
                 for (c, w) in value.iter_mut().zip(words) {
@@ -188,7 +188,7 @@ fn locate_problem(path: &Path, text: &[u8], error: tobj::LoadError) -> MeshError
             Some("v") => {
                 let coords: Vec<&str> = words.collect();
                 if coords.len() < 3 || coords.iter().any(|w| w.parse::<f32>().is_err()) {
-                    return at(format!("{error}: vertex {:?}", line.trim()));
+                    return at(format!("{error}: vertex {:?}", echo(line.trim())));
                 }
                 vertices += 1;
             }
@@ -196,10 +196,10 @@ fn locate_problem(path: &Path, text: &[u8], error: tobj::LoadError) -> MeshError
                 let needed = if kind == "vn" { 3 } else { 1 };
                 let coords: Vec<&str> = words.collect();
                 if coords.len() < needed || coords.iter().any(|w| w.parse::<f32>().is_err()) {
-                    return at(format!("{error}: {:?}", line.trim()));
+                    return at(format!("{error}: {:?}", echo(line.trim())));
                 }
             }
-            Some("o" | "g") => object = words.collect::<Vec<_>>().join(" "),
+            Some("o" | "g") => object = echo(&words.collect::<Vec<_>>().join(" ")),
             Some("f") => {
                 let refs: Vec<&str> = words.collect();
                 if refs.len() < 3 {
@@ -207,7 +207,7 @@ fn locate_problem(path: &Path, text: &[u8], error: tobj::LoadError) -> MeshError
                 }
                 for r in refs {
                     let Some(Ok(i)) = r.split('/').next().map(str::parse::<i64>) else {
-                        return at(format!("{error}: face {faces} corner {r:?}"));
+                        return at(format!("{error}: face {faces} corner {:?}", echo(r)));
                     };
                     let resolved = if i < 0 { vertices + i } else { i - 1 };
                     if i == 0 || resolved < 0 || resolved >= vertices {

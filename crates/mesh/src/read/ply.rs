@@ -25,7 +25,11 @@ pub(crate) fn read_raw(path: &Path) -> Result<Vec<RawObject>, MeshError> {
             path: path.to_path_buf(),
             format: "PLY",
             line: e.line(),
-            message: e.to_string(),
+            // ply-rs quotes the token it could not parse, whatever its length.
+            message: snowscape_io::error::clip(
+                &e.to_string(),
+                snowscape_io::error::MAX_FOREIGN_MESSAGE,
+            ),
         })?;
     let bad = |message: String| MeshError::parse(path, "PLY", message);
     let vertices = ply

@@ -74,7 +74,7 @@ fn check_numbers(key: &str, value: &serde_json::Value) -> Result<(), CheckpointE
                 if !(v.is_finite() && v.abs() <= MAX_MAGNITUDE) {
                     return Err(CheckpointError::implausible(
                         key,
-                        v,
+                        crate::number_for_message(v),
                         format!("a finite number within ±{MAX_MAGNITUDE:e}"),
                     ));
                 }
@@ -122,7 +122,7 @@ fn validate_state(
         } else {
             Err(CheckpointError::implausible(
                 field,
-                v,
+                crate::number_for_message(v),
                 format!("a day of the season, within [0, {latest}]"),
             ))
         }
@@ -137,7 +137,7 @@ fn validate_state(
         if !(d >= 0.0 && d <= latest + 365.0 * 2.0) {
             return Err(CheckpointError::implausible(
                 "scheduler.snowfall_until",
-                d,
+                crate::number_for_message(d),
                 "a day within the season",
             ));
         }
@@ -147,7 +147,7 @@ fn validate_state(
         d => {
             return Err(CheckpointError::implausible(
                 "scheduler.snowfall_mean_days",
-                d.map_or("(none)".into(), |d| d.to_string()),
+                d.map_or("(none)".into(), crate::number_for_message),
                 "a mean snowfall period within (0, 365] days",
             ));
         }
@@ -173,7 +173,7 @@ fn validate_state(
         if per_day.is_nan() || per_day < 0.0 {
             return Err(CheckpointError::implausible(
                 format!("scheduler.rates[{k}].per_day"),
-                per_day,
+                crate::number_for_message(per_day),
                 "a rate >= 0 per day",
             ));
         }
@@ -188,7 +188,7 @@ fn validate_state(
         {
             return Err(CheckpointError::implausible(
                 format!("scheduler.rates[{k}].per_day"),
-                per_day,
+                crate::number_for_message(per_day),
                 format!("the scenario's {} per day", want.max(0.0)),
             ));
         }
