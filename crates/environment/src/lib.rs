@@ -13,7 +13,7 @@
 //! | [`temperature`](mod@temperature) | temperature | `T = T0 + kt·A + ki·I` (4.1) |
 //! | [`wind`](mod@wind) | wind vectors, wind-effect surface, shadows | Venturi, Eq. 2, `W·∇Wz = Wsz` (4.2) |
 //! | [`insolation`] | hour-by-hour sun of each month, clear-sky irradiance | Hock 1999 Eq. 3 |
-//! | [`wind::sheltering`] | maximum upwind slope `Sx` | Winstral et al. 2002 |
+//! | [`wind::sheltering`] | maximum upwind slope `Sx`, short and long range | Winstral et al. 2002, 2013 |
 //! | [`precompute`](mod@precompute) | all of the above in one call | |
 //!
 //! Shadows and horizons come from directional sweeps (the internal `sweep` module):
@@ -55,7 +55,10 @@ pub use sky::{SkyMaps, horizon_angles, sky_exposure};
 pub use solar::{DeclinationModel, SunSample};
 pub use sun::{direct_sun, direct_sun_for};
 pub use temperature::temperature;
-pub use wind::{ShelteringParams, WindMaps, WindSolveStats, max_upwind_slope, wind};
+pub use wind::{
+    LongRangePlan, ShelteringParams, WindMaps, WindSolveStats, long_range_upwind_slope,
+    max_upwind_slope, sheltering_index, wind,
+};
 
 /// Stores every map of `maps` into `terrain.maps` under its stable name ([`map_names`]).
 pub fn store_maps(

@@ -116,6 +116,7 @@ fn phenomena(c: &mut Criterion) {
         effect_surface: &s.wz,
         sx: None,
         terms: None,
+        air_temperature: None,
     };
     group.bench_function("wind_transport", |b| {
         let mut t = s.terrain.clone();

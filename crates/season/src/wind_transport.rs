@@ -35,7 +35,9 @@
 //! [`WindTransportParams::sx_redistribution`] enabled, a second term scours exposed cells and
 //! drifts the snow onto sheltered cells downwind ([`sheltered`]); it works over distances in
 //! metres, so lee slopes load at 5 m and at 50 m cells alike, where the paper's curvature term
-//! fades with the cell size. Without a map (`sx: None`) the step is the paper's alone.
+//! fades with the cell size. Its drifting snow sublimates on the way where the maps carry the
+//! air temperature (Liston & Sturm 1998, [`sheltered::blowing_snow`]); the paper's one-hop
+//! transport is left lossless. Without a map (`sx: None`) the step is the paper's alone.
 //!
 //! **Stencils.** Second differences are central in the interior. At the grid border, and
 //! next to nodata, they are one-sided (`A_0 − 2A_1 + A_2`, the curvature of the nearest full
@@ -52,7 +54,7 @@ use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
 pub mod sheltered;
 mod stencils;
 mod terms;
-pub use sheltered::SxParams;
+pub use sheltered::{DriftSublimationParams, SxParams};
 pub use stencils::{
     downwind_split, eroded_depth, erosion_curvature, one_sided_second_difference,
     second_difference, tamping_share, vertical_wind_change,
@@ -156,6 +158,9 @@ pub struct WindMaps<'a> {
     /// The terms of this wind field that do not depend on the snow ([`WindTerms::new`], once
     /// per wind field). `None`: each step computes them.
     pub terms: Option<&'a WindTerms>,
+    /// Air temperature of every cell, °C: the Sx term's drifting snow sublimates at it
+    /// ([`sheltered::blowing_snow`]). `None`: no sublimation.
+    pub air_temperature: Option<&'a [f32]>,
 }
 
 impl WindMaps<'_> {
@@ -167,6 +172,9 @@ impl WindMaps<'_> {
         if let Some(terms) = self.terms {
             terms.check(geometry)?;
         }
+        if let Some(t) = self.air_temperature {
+            check_map("air_temperature", t, geometry)?;
+        }
         sheltered::check(self, geometry)
     }
 }
@@ -175,9 +183,10 @@ impl WindMaps<'_> {
 /// `deposited_unstable` and `border_outflow` cover both terms (the paper's and the Sx one).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct WindReport {
-    /// Snow scoured from the surface (powder and unstable snow).
+    /// Snow scoured from the surface (powder and unstable snow; stable snow too by the Sx
+    /// term).
     pub eroded: f64,
-    /// Snow deposited inside the grid (`eroded − border_outflow`).
+    /// Snow deposited inside the grid (`eroded − border_outflow − sublimated`).
     pub deposited: f64,
     /// The part of `deposited` that landed as unstable snow on steep slopes.
     pub deposited_unstable: f64,
@@ -189,14 +198,16 @@ pub struct WindReport {
     pub sx_eroded: f64,
     /// The part of `deposited` laid down by the Sx term.
     pub sx_deposited: f64,
+    /// Drifting snow of the Sx term that sublimated on its way (blowing-snow sublimation).
+    pub sublimated: f64,
 }
 
 impl WindReport {
-    /// The step's volume budget: border outflow is the only volume removed.
+    /// The step's volume budget: border outflow and sublimation are the volumes removed.
     pub fn volume_change(&self) -> VolumeChange {
         VolumeChange {
             added: 0.0,
-            removed: self.border_outflow,
+            removed: self.border_outflow + self.sublimated,
         }
     }
 }
@@ -282,6 +293,7 @@ pub fn step(
         tamped: col(&pass2, 2),
         sx_eroded: sx.eroded * area,
         sx_deposited: sx.deposited * area,
+        sublimated: sx.sublimated * area,
     })
 }
 

@@ -40,6 +40,7 @@ fn a_westerly_wind_over_a_ridge_builds_a_cornice_on_its_lee_side() {
         effect_surface: &raw.effect_surface,
         sx: None,
         terms: None,
+        air_temperature: None,
     };
     let before = t.snow_volume();
     let mut scratch = WindScratch::default();

@@ -96,6 +96,7 @@ fn season(s: &mut Scene, events: usize) -> Result<Vec<VolumeChange>, PhenomenonE
                     effect_surface: &s.wz,
                     sx: None,
                     terms: None,
+                    air_temperature: None,
                 };
                 wind_transport::step(&Default::default(), t, &maps, &mut wind_scratch, 0.5)?
                     .volume_change()

@@ -3,7 +3,7 @@
 //! to 50 m: under a westerly, lee (east-facing) slopes end up holding clearly more snow than
 //! windward (west-facing) slopes at the same altitude.
 
-use snowscape_environment::{ShelteringParams, WindParams, max_upwind_slope, wind};
+use snowscape_environment::{ShelteringParams, WindParams, sheltering_index, wind};
 use snowscape_season::wind_transport::{self, WindMaps, WindScratch, WindTransportParams};
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer, surface};
 use std::time::Instant;
@@ -127,8 +127,9 @@ fn run(bed: Grid, min_cells: usize) -> Outcome {
     };
     let maps = wind(&t.bedrock, &geo, &mask, &wp).unwrap();
     let start = Instant::now();
+    // The season's sheltering index: the 100 m and the 1 km searches.
     let sx =
-        max_upwind_slope(&t.bedrock, &geo, &mask, 270.0, &ShelteringParams::default()).unwrap();
+        sheltering_index(&t.bedrock, &geo, &mask, 270.0, &ShelteringParams::default()).unwrap();
     let sx_seconds = start.elapsed().as_secs_f64();
     let p = WindTransportParams::default();
     let valid: Vec<usize> = (0..geo.len()).filter(|&i| mask.is_valid(i)).collect();
@@ -141,6 +142,7 @@ fn run(bed: Grid, min_cells: usize) -> Outcome {
         t.layer_mut(SnowLayer::Powder)[i] = 0.5;
     }
     let mut paper = t.clone();
+    let air = vec![-5.0f32; geo.len()];
     let blow = |t: &mut LayeredTerrain, sx: Option<&[f32]>| {
         let before = t.snow_volume();
         let m = WindMaps {
@@ -150,13 +152,16 @@ fn run(bed: Grid, min_cells: usize) -> Outcome {
             effect_surface: &maps.effect_surface,
             sx,
             terms: None,
+            air_temperature: Some(&air),
         };
         let mut scratch = WindScratch::default();
         let (mut out, mut sx_eroded) = (0.0, 0.0);
         for _ in 0..20 {
             let r = wind_transport::step(&p, t, &m, &mut scratch, 0.5).unwrap();
-            assert!((r.eroded - r.deposited - r.border_outflow).abs() <= 1e-6 * before);
-            out += r.border_outflow;
+            let moved = r.eroded - r.deposited - r.border_outflow - r.sublimated;
+            assert!(moved.abs() <= 1e-6 * before);
+            // Border outflow and the drift's sublimation both leave the terrain.
+            out += r.border_outflow + r.sublimated;
             sx_eroded += r.sx_eroded;
         }
         t.check_invariants().unwrap();

@@ -156,6 +156,7 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
             effect_surface: &e,
             sx: None,
             terms,
+            air_temperature: None,
         };
         let terms = WindTerms::new(t.geometry(), t.mask(), &maps_of(None))?;
         // Surface (5 arrays read, 1 written), erosion (surface, wind, shadow, powder and
@@ -173,6 +174,7 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
                     effect_surface: &e,
                     sx: None,
                     terms: Some(&terms),
+                    air_temperature: None,
                 };
                 wind_transport::step(
                     &WindTransportParams::default(),

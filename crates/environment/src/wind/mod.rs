@@ -27,7 +27,9 @@ use crate::{EnvironmentError, WindParams};
 pub use effect_surface::WindSolveStats;
 use effect_surface::{SolveSettings, build_cells, solve};
 use rayon::prelude::*;
-pub use sheltering::{ShelteringParams, max_upwind_slope};
+pub use sheltering::{
+    LongRangePlan, ShelteringParams, long_range_upwind_slope, max_upwind_slope, sheltering_index,
+};
 use snowscape_terrain::{GridGeometry, NodataMask};
 use vectors::{dominant_wind, redirect, venturi};
 

@@ -44,6 +44,26 @@
 //! **Cost and determinism.** `O(cells · rays · min(dmax / min(dx, dy), MAX_SX_STEPS))`, parallel over rows; each
 //! cell's value is a pure function of the surface, so the map is bit-identical for any thread
 //! count.
+//!
+//! **Two scales: the sheltering index.** Snow redistribution follows the terrain at more than
+//! one scale: the 100 m search delineates drifts and scour at the scale of a slope (Winstral
+//! et al. 2002), while basin-scale exposure and shelter (a crest kilometres long, a cirque in
+//! the lee of a range) need a search of the order of the range's own scale (Winstral, Marks &
+//! Gurney 2013, "Simulating wind-affected snow accumulations at catchment to basin scales",
+//! Adv. Water Resour. 55, 64-79, carry Sx-based redistribution from the catchment to the basin
+//! scale). [`sheltering_index`] returns
+//!
+//! ```text
+//! Sx = Sx_short + w_long · Sx_long
+//! ```
+//!
+//! with `Sx_short` the search of `dmax_m` on the grid's own cells and `Sx_long` a search of
+//! `long_range_dmax_m` ([`long_range`]) on a coarsened grid; where both scales agree (a crest
+//! exposed to the whole range, a lee slope below a ridge in a sheltered basin) the index is
+//! strongest, and a windward slope deep in a valley in the lee of the upwind range is
+//! exposed locally but sheltered at the scale of the range. `w_long` = 1 (both scales count
+//! alike) is chosen here; `long_range_dmax_m = 0` or `w_long = 0` gives Winstral et al.
+//! 2002's single search.
 
 use crate::EnvironmentError;
 use crate::error::check_param;
@@ -69,6 +89,19 @@ pub struct ShelteringParams {
     /// Spacing of the directions in the window, degrees (> 0). Default 5°: Winstral et al. 2002
     /// (seven rays for the 30° window). The rays are `A + k·step`, `|k·step| ≤ half`.
     pub window_step_deg: f64,
+    /// Search distance of the long-range `Sx` ([`long_range`]), metres, in [0, 5000]; 0
+    /// switches it off. Default 1000 m: chosen here, the scale of a range's crests and
+    /// valleys (basin-scale exposure, Winstral et al. 2013; the lidar depths of a high-Sierra
+    /// basin follow `Sx` over about 1000 m better than over 100 m, issue 47).
+    pub long_range_dmax_m: f64,
+    /// Cell size of the coarse grid the long-range search runs on, metres (> 0): the grid's
+    /// cells are averaged in blocks of `max(1, ⌊long_range_cell_m / min(dx, dy)⌋)` cells a
+    /// side. Default 50 m: chosen here, half the short search, so the long search takes
+    /// `long_range_dmax_m / 50 m` = 20 samples per ray whatever the grid's cells.
+    pub long_range_cell_m: f64,
+    /// Weight `w_long` of the long-range `Sx` in the sheltering index (module docs), in
+    /// [0, 10]. Default 1: chosen here (both scales count alike).
+    pub long_range_weight: f64,
 }
 
 impl Default for ShelteringParams {
@@ -77,6 +110,9 @@ impl Default for ShelteringParams {
             dmax_m: 100.0,
             window_half_deg: 15.0,
             window_step_deg: 5.0,
+            long_range_dmax_m: 1000.0,
+            long_range_cell_m: 50.0,
+            long_range_weight: 1.0,
         }
     }
 }
@@ -104,6 +140,27 @@ impl ShelteringParams {
             s,
             (0.5..=90.0).contains(&s),
             "must be in [0.5, 90] °",
+        )?;
+        let d = self.long_range_dmax_m;
+        check_param(
+            "sheltering.long_range_dmax_m",
+            d,
+            (0.0..=5000.0).contains(&d),
+            "must be in [0, 5000] m",
+        )?;
+        let c = self.long_range_cell_m;
+        check_param(
+            "sheltering.long_range_cell_m",
+            c,
+            c > 0.0 && c <= 1000.0,
+            "must be in (0, 1000] m",
+        )?;
+        let w = self.long_range_weight;
+        check_param(
+            "sheltering.long_range_weight",
+            w,
+            (0.0..=10.0).contains(&w),
+            "must be in [0, 10]",
         )
     }
 
@@ -348,6 +405,9 @@ fn pad_surface(
         });
     padded
 }
+
+pub mod long_range;
+pub use long_range::{LongRangePlan, long_range_upwind_slope, sheltering_index};
 
 #[cfg(test)]
 mod tests;

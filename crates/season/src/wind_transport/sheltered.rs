@@ -10,9 +10,14 @@
 //! e = min(P + U, k_exposed · (exposed_below_deg − Sx) · (|W| / W_ref)^n · δt)
 //! ```
 //!
-//! (powder first, then unstable snow when the paper's `erode_unstable` is set), with `|W|`
-//! the cell's wind speed. `n = 3`: saltation transport grows with the cube of the wind speed
-//! (Bagnold 1941; Pomeroy & Gray 1990, Water Resour. Res. 26(7)).
+//! (powder first, then unstable snow when the paper's `erode_unstable` is set, then stable
+//! snow at the share `f_S` of the rest that the wind's excess shear over its threshold leaves
+//! when [`SxParams::erode_stable`] is set: [`blowing_snow`]), with `|W|` the cell's wind speed.
+//! `n = 3`: saltation transport grows with the cube of the wind speed (Bagnold 1941; Pomeroy &
+//! Gray 1990, Water Resour. Res. 26(7)). `Sx` is the sheltering index of
+//! `snowscape_environment::sheltering_index`, the short-range (100 m) search plus the
+//! long-range (1 km) one: crests exposed to the whole range are scoured hardest, basins in
+//! the lee of a range are sheltered even where the slope faces the wind.
 //!
 //! **Transport and deposit.** The scoured snow is carried downwind by one ordered sweep along
 //! the dominant wind (the mean of the wind field, so the sweep follows the direction the `Sx`
@@ -20,10 +25,18 @@
 //! wind components as in the paper's deposit (`|Ŵx| / (|Ŵx| + |Ŵy|)` to the east/west one),
 //! and every cell it crosses keeps the share `1 − exp(−ℓ (1/L + k_deposit · max(0, Sx −
 //! sheltered_above_deg)))` of the load reaching it, `ℓ` the mean advance along the wind of one
-//! hop (`dx/(|Ŵx| + |Ŵy|)` for square cells) and `L` the settling length on open ground. So
+//! hop (`dx/(|Ŵx| + |Ŵy|)` for square cells) and `L` the settling length on open ground,
+//! but for exposed cells (`Sx < exposed_below_deg`), scour zones that keep none unless
+//! [`SxParams::deposit_on_exposed`] is set (issue 47: the drift from a whole windward slope
+//! otherwise settles on the crest it crosses). So
 //! snow settles within about `1 / (k_deposit · shelter)` metres of lee slope, whatever the cell
 //! size. It lands as powder, or as unstable snow on slopes steeper than `slab_slope_deg` (the
-//! paper's wind slabs). **Boundary condition:** the grid's border and the nodata outline are
+//! paper's wind slabs). **Sublimation:** before a cell keeps its share, the share
+//! `λ ℓ / (1 + λ ℓ)` of the load reaching it sublimates, `λ` (m⁻¹) from the air temperature of
+//! the cell and the humidity ([`blowing_snow`]; Liston & Sturm 1998), when the maps carry the
+//! air temperature ([`WindMaps::air_temperature`]) and [`DriftSublimationParams::enabled`] is
+//! set; it is reported as its own volume ([`super::WindReport::sublimated`]), the season's
+//! `wind_sublimation`. **Boundary condition:** the grid's border and the nodata outline are
 //! both open: a share leaving the grid or aimed at a nodata cell leaves the terrain as border
 //! outflow. (Kept by the sending cell, as before issue 46, the drift piled into walls along
 //! the outline: on avaMal the one-cell rim held 2.0 m between 1400 and 1700 m where the cells
@@ -34,8 +47,8 @@
 //! snow it has not touched yet); the sweep runs row after row in a fixed order, the carries
 //! along each row by a scan over fixed segments of it ([`drift_row`]: the cell-by-cell
 //! recurrence regrouped, equal to it to f32 round-off), so the result is bit-identical for any
-//! thread count, and every depth scoured is deposited once or counted as border outflow (each
-//! cell keeps what it does not send on), but for loads below
+//! thread count, and every depth scoured is deposited once, sublimated or counted as border
+//! outflow (each cell keeps what it does not send on), but for loads below
 //! [`crate::phenomenon::NEGLIGIBLE_DEPTH_M`] (1e-20 m) and shares below 1e-15, which the sweep
 //! sets to 0 ([`drift_row`]: they would decay into subnormal floats).
 
@@ -48,7 +61,10 @@ use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
+pub mod blowing_snow;
 mod drift_row;
+pub use blowing_snow::DriftSublimationParams;
+use blowing_snow::{StableErodibility, SublimationTable, table_at};
 use drift_row::{DriftRow, Exits, NEGLIGIBLE_LOAD, NEGLIGIBLE_SHARE, RowTotals, share_out};
 
 /// Parameters of the Sx-driven redistribution.
@@ -67,9 +83,10 @@ pub struct SxParams {
     /// Scour rate, m of snow per day per degree of exposure at the reference wind speed (>= 0).
     /// Default 0.002: our choice; a windward slope at Sx = −15° loses 14 cm in five days of
     /// reference wind (more where the Venturi speed-up raises the wind). After ten days of
-    /// westerly on 0.5 m of powder, avaMal's lee slopes hold 2.1 times the depth of its
-    /// windward slopes within 200 m altitude bands at 5 m cells, 5.8 times at 50 m, against
-    /// 1.14 and 1.05 with the paper's curvature term alone (tests/sx_redistribution.rs).
+    /// westerly at −5 °C on 0.5 m of powder, avaMal's lee slopes hold 2.8 times the depth of
+    /// its windward slopes within 200 m altitude bands at 5 m cells, 7.1 times at 50 m
+    /// (2.1 and 5.8 with the 100 m search alone, before issue 47), against 1.14 and 1.05 with
+    /// the paper's curvature term alone (tests/sx_redistribution.rs).
     pub k_exposed: f64,
     /// Deposit rate, per metre of downwind travel per degree of shelter (>= 0). Default 0.002:
     /// our choice; on a lee slope at Sx = +15° drifting snow settles within about 36 m, a lee
@@ -85,6 +102,18 @@ pub struct SxParams {
     /// Exponent `n` of the wind-speed factor (>= 0). Default 3 (cube law, see the module
     /// documentation).
     pub speed_exponent: f64,
+    /// Whether stable snow is scoured too, after the powder and the unstable snow, at the
+    /// share of the wind's excess shear over its threshold ([`blowing_snow`]; Liston & Sturm
+    /// 1998's threshold by density). Default true: the snowfall lays most new snow down as
+    /// stable snow, which the wind otherwise never reaches.
+    pub erode_stable: bool,
+    /// Sublimation of the drifting snow ([`blowing_snow`]; Liston & Sturm 1998).
+    pub sublimation: DriftSublimationParams,
+    /// Whether exposed cells (`Sx < exposed_below_deg`) keep the open-ground share of the
+    /// drifting snow. Default false: exposed ground is a scour zone that holds no drift
+    /// (Winstral et al. 2002's scour and drift zones; the wind speeds up over it); true is the
+    /// redistribution before issue 47.
+    pub deposit_on_exposed: bool,
 }
 
 impl Default for SxParams {
@@ -98,6 +127,9 @@ impl Default for SxParams {
             settling_length_m: 200.0,
             reference_speed_m_s: 10.0,
             speed_exponent: 3.0,
+            erode_stable: true,
+            sublimation: DriftSublimationParams::default(),
+            deposit_on_exposed: false,
         }
     }
 }
@@ -151,7 +183,7 @@ impl SxParams {
                 });
             }
         }
-        Ok(())
+        self.sublimation.validate()
     }
 }
 
@@ -162,6 +194,7 @@ pub(super) struct SxSums {
     pub deposited: f64,
     pub deposited_unstable: f64,
     pub border: f64,
+    pub sublimated: f64,
 }
 
 /// Buffers of the sweep.
@@ -173,23 +206,35 @@ pub(super) struct SxScratch {
     /// slab sign), cached while the `Sx` map and the [`KeepShare`] stay the same (a weather
     /// period): it costs an `exp` per cell.
     keep_share: KeepShareCache,
+    /// The sublimation per metre by air temperature ([`blowing_snow`]).
+    sublimation: SublimationTable,
 }
 
 /// [`SxScratch::keep_share`]: the shares and what they were computed from.
 #[derive(Debug, Clone, Default)]
 struct KeepShareCache {
-    /// `(a, b, sheltered_above_deg)` bits of the [`KeepShare`] and the `Sx` map.
-    key: Option<([u64; 3], Vec<f32>)>,
+    /// `(a, b, sheltered_above_deg, scour-zone limit)` bits of the [`KeepShare`] and the `Sx`
+    /// map.
+    key: Option<([u64; 4], Vec<f32>)>,
     share: Vec<f32>,
 }
 
 impl KeepShareCache {
-    /// The shares for `sx` under `keep`, recomputed (row-parallel) if either changed.
-    fn shares(&mut self, keep: &KeepShare, sheltered: f32, sx: &[f32], w: usize) -> &[f32] {
+    /// The shares for `sx` under `keep`, recomputed (row-parallel) if either changed; 0 on
+    /// cells whose `Sx` is below `scour_zone` (the exposed cells, unless they take deposits:
+    /// `f32::NEG_INFINITY`).
+    fn shares(
+        &mut self,
+        keep: &KeepShare,
+        (sheltered, scour_zone): (f32, f32),
+        sx: &[f32],
+        w: usize,
+    ) -> &[f32] {
         let params = [
             keep.a.to_bits(),
             keep.b.to_bits(),
             u64::from(sheltered.to_bits()),
+            u64::from(scour_zone.to_bits()),
         ];
         let same = self.key.as_ref().is_some_and(|(k, old)| {
             *k == params
@@ -206,7 +251,11 @@ impl KeepShareCache {
                 .zip(sx.par_chunks(w))
                 .for_each(|(out, sx)| {
                     for (o, &s) in out.iter_mut().zip(sx) {
-                        *o = keep.at(s - sheltered);
+                        *o = if s < scour_zone {
+                            0.0
+                        } else {
+                            keep.at(s - sheltered)
+                        };
                     }
                 });
             self.key = Some((params, sx.to_vec()));
@@ -262,7 +311,7 @@ pub(super) fn run<V: Validity>(
         (ctx, valid),
         params,
         (sx, surface, wind),
-        &mut scratch.keep_share,
+        (&mut scratch.keep_share, &mut scratch.sublimation),
         dt_days,
     );
     sweep(&maps, terrain, &mut scratch.from_row)
@@ -279,20 +328,35 @@ struct CellTerms<'a> {
     expo: f32,
     exposed: f32,
     sheltered: f32,
+    /// How readily stable snow erodes, when it does ([`SxParams::erode_stable`]).
+    stable: Option<StableErodibility>,
+}
+
+/// One row's snow as the step found it: powder, unstable snow (when it erodes) and stable snow.
+type RowSnow<'a> = (&'a [f32], Option<&'a [f32]>, &'a [f32]);
+
+/// What sublimates of the load reaching each cell ([`blowing_snow`]).
+struct DriftLoss<'a> {
+    /// `λ` by air temperature, m⁻¹.
+    table: &'a [f32],
+    /// Air temperature of every cell, °C.
+    temperature: &'a [f32],
+    /// The sweep's advance along the wind per hop `ℓ`, m.
+    hop: f32,
 }
 
 impl CellTerms<'_> {
-    /// Depth scoured from the cells `r` of one row, with `powder` (and the `unstable` snow,
-    /// when it erodes) on them: `min(P + U, k_exposed · (exposed_below_deg − Sx) · (|W| /
-    /// W_ref)^n · δt)`, 0 in the wind shadow. Straight loops over the row's slices, so that they
-    /// vectorise.
+    /// Depth scoured from the cells `r` of one row with `snow` on them: into `out`, of the
+    /// powder and the unstable snow (when it erodes), `min(P + U, e)` with the demand
+    /// `e = k_exposed · (exposed_below_deg − Sx) · (|W| / W_ref)^n · δt`; into `from_stable`,
+    /// of the stable snow (when it erodes), `min(S, f_S · (e − P − U))`; 0 in the wind shadow.
+    /// Straight loops over the row's slices, so that they vectorise.
     fn scour_row(
         &self,
         wind: &WindMaps,
         r: std::ops::Range<usize>,
-        powder: &[f32],
-        unstable: Option<&[f32]>,
-        out: &mut [f32],
+        (powder, unstable, stable): RowSnow,
+        (out, from_stable): (&mut [f32], &mut [f32]),
     ) {
         let (u, v, shadow, sx) = (
             &wind.u[r.clone()],
@@ -316,20 +380,35 @@ impl CellTerms<'_> {
                 out[k] = self.scour_dt * exposure * speed.powf(self.expo);
             }
         }
+        // What the loose snow leaves of the demand waits in `from_stable`.
+        let rest = &mut from_stable[..w];
         match unstable {
             Some(unstable) => {
                 let unstable = &unstable[..w];
                 for k in 0..w {
                     let e = out[k].min(powder[k] + unstable[k]).max(0.0);
+                    rest[k] = (out[k] - e).max(0.0);
                     out[k] = if shadow[k] > 0.5 { 0.0 } else { e };
                 }
             }
             None => {
                 for k in 0..w {
                     let e = out[k].min(powder[k]).max(0.0);
+                    rest[k] = (out[k] - e).max(0.0);
                     out[k] = if shadow[k] > 0.5 { 0.0 } else { e };
                 }
             }
+        }
+        match self.stable {
+            Some(erodibility) => {
+                let stable = &stable[..w];
+                for k in 0..w {
+                    let share = erodibility.share(u[k] * u[k] + v[k] * v[k]);
+                    let e = (rest[k] * share).min(stable[k]).max(0.0);
+                    rest[k] = if shadow[k] > 0.5 { 0.0 } else { e };
+                }
+            }
+            None => rest.fill(0.0),
         }
     }
 }
@@ -366,13 +445,18 @@ fn sweep<V: Validity>(
     from_row.clear();
     from_row.resize(w, 0.0);
     let mid = w / 2;
-    let [_, _, unstable, powder] = &mut terrain.snow;
-    // Each row's (unstable, powder) in the west and east halves.
+    let [_, stable, unstable, powder] = &mut terrain.snow;
+    // Each row's (stable, unstable, powder) in the west and east halves.
     let (mut west, mut east) = (Vec::with_capacity(h), Vec::with_capacity(h));
-    for (u, p) in unstable.chunks_mut(w).zip(powder.chunks_mut(w)) {
+    for ((s, u), p) in stable
+        .chunks_mut(w)
+        .zip(unstable.chunks_mut(w))
+        .zip(powder.chunks_mut(w))
+    {
+        let (sw, se) = s.split_at_mut(mid);
         let ((uw, ue), (pw, pe)) = (u.split_at_mut(mid), p.split_at_mut(mid));
-        west.push((uw, pw));
-        east.push((ue, pe));
+        west.push((sw, uw, pw));
+        east.push((se, ue, pe));
     }
     let (from_west, from_east) = from_row.split_at_mut(mid);
     let west = Half {
@@ -425,6 +509,7 @@ fn sweep<V: Validity>(
         deposited: up.deposited + down.deposited,
         deposited_unstable: up.deposited_unstable + down.deposited_unstable,
         border: up.border + down.border,
+        sublimated: up.sublimated + down.sublimated,
     }
 }
 
@@ -434,6 +519,8 @@ struct SweepMaps<'a, V> {
     valid: &'a V,
     /// The scour's and the kept share's parameters and maps.
     cell: CellTerms<'a>,
+    /// The sublimation of the drifting snow, when it runs.
+    loss: Option<DriftLoss<'a>>,
     /// The share of the arriving load each cell keeps, before the slab sign
     /// ([`KeepShareCache`]).
     share: &'a [f32],
@@ -446,12 +533,13 @@ struct SweepMaps<'a, V> {
 
 impl<'a, V: Validity> SweepMaps<'a, V> {
     /// What the sweep along the dominant wind `(ex, ey)` reads in a step of `dt_days` (the
-    /// kept shares from `shares`, recomputed if the `Sx` map or the parameters changed).
+    /// kept shares from `shares`, recomputed if the `Sx` map or the parameters changed; the
+    /// sublimation per metre from `table`, if the humidity changed).
     fn new(
         (ctx, valid): (&'a Context<'a>, &'a V),
         params: &SxParams,
         (sx, surface, (ex, ey)): (&'a [f32], &'a [f32], (f64, f64)),
-        shares: &'a mut KeepShareCache,
+        (shares, table): (&'a mut KeepShareCache, &'a mut SublimationTable),
         dt_days: f64,
     ) -> Self {
         let (dx, dy) = (ctx.geometry.cell_size_x(), ctx.geometry.cell_size_y());
@@ -473,12 +561,34 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
             expo: params.speed_exponent as f32,
             exposed: params.exposed_below_deg as f32,
             sheltered: params.sheltered_above_deg as f32,
+            stable: params.erode_stable.then(StableErodibility::new),
         };
-        let share = shares.shares(&cell.keep, cell.sheltered, sx, ctx.geometry.width());
+        let scour_zone = if params.deposit_on_exposed {
+            f32::NEG_INFINITY
+        } else {
+            cell.exposed
+        };
+        let share = shares.shares(
+            &cell.keep,
+            (cell.sheltered, scour_zone),
+            sx,
+            ctx.geometry.width(),
+        );
+        let air = &params.sublimation;
+        let loss = ctx
+            .wind
+            .air_temperature
+            .filter(|_| air.enabled && air.relative_humidity_pct < 100.0)
+            .map(|temperature| DriftLoss {
+                table: table.for_air(air.relative_humidity_pct, params.reference_speed_m_s),
+                temperature,
+                hop: hop as f32,
+            });
         Self {
             ctx,
             valid,
             cell,
+            loss,
             share,
             surface,
             fx: fx as f32,
@@ -487,23 +597,26 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
         }
     }
 
-    /// The scour and the share kept (negative where deposits land as unstable snow: surface
-    /// slope above the slab slope) of the cells `cols` of `row`, with `powder` and `unstable`
-    /// on them as the step found them, into `terms`; 0 on nodata.
+    /// The scour (of the loose and of the stable snow), the share kept (negative where
+    /// deposits land as unstable snow: surface slope above the slab slope) and the share
+    /// sublimated of the cells `cols` of `row`, with `powder`, `unstable` and `stable` snow on
+    /// them as the step found them, into `terms`; 0 on nodata.
     fn cell_terms(
         &self,
         row: usize,
         cols: std::ops::Range<usize>,
-        (powder, unstable): (&[f32], &[f32]),
+        (powder, unstable, stable): (&[f32], &[f32], &[f32]),
         terms: &mut RowTerms,
     ) {
         let ctx = self.ctx;
         let n = cols.len();
         let r = row * ctx.geometry.width() + cols.start..row * ctx.geometry.width() + cols.end;
-        let (gradient, scour, keep) = (
+        let (gradient, scour, from_stable, keep, sublimated) = (
             &mut terms.gradient[..n],
             &mut terms.scour[..n],
+            &mut terms.from_stable[..n],
             &mut terms.keep[..n],
+            &mut terms.sublimated[..n],
         );
         row_gradient_norm_in(
             self.surface,
@@ -515,12 +628,25 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
             gradient,
         );
         let erodible = ctx.erode_unstable.then_some(unstable);
-        self.cell
-            .scour_row(ctx.wind, r.clone(), powder, erodible, scour);
+        self.cell.scour_row(
+            ctx.wind,
+            r.clone(),
+            (powder, erodible, stable),
+            (scour, from_stable),
+        );
         keep_row(&self.share[r.clone()], gradient, ctx.slab_gradient, keep);
+        match &self.loss {
+            Some(loss) => {
+                for (s, &t) in sublimated.iter_mut().zip(&loss.temperature[r.clone()]) {
+                    let x = table_at(loss.table, t) * loss.hop;
+                    *s = x / (1.0 + x);
+                }
+            }
+            None => sublimated.fill(0.0),
+        }
         for (k, i) in r.enumerate() {
             if !self.valid.at(i) {
-                (scour[k], keep[k]) = (0.0, 0.0);
+                (scour[k], from_stable[k], keep[k], sublimated[k]) = (0.0, 0.0, 0.0, 0.0);
             }
         }
     }
@@ -529,8 +655,13 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
 /// One half-row's terms ([`SweepMaps::cell_terms`]) and the surface gradient they use.
 struct RowTerms {
     gradient: Vec<f32>,
+    /// Scour of the powder and the unstable snow.
     scour: Vec<f32>,
+    /// Scour of the stable snow.
+    from_stable: Vec<f32>,
     keep: Vec<f32>,
+    /// Share of the load reaching the cell that sublimates.
+    sublimated: Vec<f32>,
 }
 
 impl RowTerms {
@@ -538,16 +669,18 @@ impl RowTerms {
         Self {
             gradient: vec![0.0; cells],
             scour: vec![0.0; cells],
+            from_stable: vec![0.0; cells],
             keep: vec![0.0; cells],
+            sublimated: vec![0.0; cells],
         }
     }
 }
 
-/// A half of the columns: per row its (unstable, powder) and the loads handed down from the
-/// row before, indexed from `first_col`.
+/// A half of the columns: per row its (stable, unstable, powder) and the loads handed down
+/// from the row before, indexed from `first_col`.
 struct Half<'a> {
     first_col: usize,
-    rows: Vec<(&'a mut [f32], &'a mut [f32])>,
+    rows: Vec<(&'a mut [f32], &'a mut [f32], &'a mut [f32])>,
     from_row: &'a mut [f32],
 }
 
@@ -604,11 +737,17 @@ impl Half<'_> {
         for (k, &row) in rows.iter().enumerate() {
             let has_y = k + 1 < rows.len();
             let base = row * w + self.first_col;
-            let (unstable, powder) = &mut self.rows[row];
-            let (unstable, powder) = (&mut unstable[..n], &mut powder[..n]);
+            let (stable, unstable, powder) = &mut self.rows[row];
+            let (stable, unstable, powder) =
+                (&mut stable[..n], &mut unstable[..n], &mut powder[..n]);
             let cols = self.first_col..self.first_col + n;
-            m.cell_terms(row, cols, (powder, unstable), &mut terms);
-            let (scour, keep) = (&terms.scour[..n], &terms.keep[..n]);
+            m.cell_terms(row, cols, (powder, unstable, stable), &mut terms);
+            let (scour, from_stable, keep, sublimated) = (
+                &terms.scour[..n],
+                &terms.from_stable[..n],
+                &terms.keep[..n],
+                &terms.sublimated[..n],
+            );
             let from_row = &mut self.from_row[..n];
             // Scour (a pure function of the cell, applied before its load: the cell's own
             // layers are not touched before it is reached) and what arrives.
@@ -618,17 +757,20 @@ impl Half<'_> {
                 for p in 0..n {
                     let l = local(p);
                     let i = base + l;
-                    let e = scour[l];
-                    let from_powder = e.min(powder[l]);
+                    let loose = scour[l];
+                    let from_powder = loose.min(powder[l]);
                     powder[l] -= from_powder;
-                    unstable[l] -= (e - from_powder).min(unstable[l]);
+                    unstable[l] -= (loose - from_powder).min(unstable[l]);
+                    stable[l] -= from_stable[l];
+                    let e = loose + from_stable[l];
                     eroded[p] = e;
                     let along = Some(p) != edge
                         && m.valid.at(i)
                         && m.valid.at(i.wrapping_add_signed(step_x));
                     arriving[p] = flush_below(from_row[l] + e, NEGLIGIBLE_LOAD);
+                    let on = (1.0 - keep[l].abs()) * (1.0 - sublimated[l]);
                     passed[p] = if along {
-                        flush_below((1.0 - keep[l].abs()) * m.fx, NEGLIGIBLE_SHARE)
+                        flush_below(on * m.fx, NEGLIGIBLE_SHARE)
                     } else {
                         0.0
                     };
@@ -637,10 +779,11 @@ impl Half<'_> {
             let out = buf.carries(carry_in(k));
             carry_out(k, out);
             let (carry, arriving) = (&buf.carry[..n + 1], &buf.arriving[..n]);
-            let (kept_row, kept_unstable, border_row) = (
+            let (kept_row, kept_unstable, border_row, sublimated_row) = (
                 &mut totals.kept[..n],
                 &mut totals.kept_unstable[..n],
                 &mut totals.border[..n],
+                &mut totals.sublimated[..n],
             );
             for p in 0..n {
                 let l = local(p);
@@ -657,7 +800,8 @@ impl Half<'_> {
                 };
                 let load = carry[p] + arriving[p];
                 let k_share = keep[l];
-                let [across, kept, border] = share_out(load, k_share, carry[p + 1], m.fx, exits);
+                let shares = (k_share, sublimated[l], m.fx);
+                let [across, kept, border, lost] = share_out(load, shares, carry[p + 1], exits);
                 from_row[l] = across;
                 let slab = k_share < 0.0;
                 unstable[l] = flush_negligible(unstable[l] + if slab { kept } else { 0.0 });
@@ -665,6 +809,7 @@ impl Half<'_> {
                 kept_row[p] = kept;
                 kept_unstable[p] = if slab { kept } else { 0.0 };
                 border_row[p] = border;
+                sublimated_row[p] = lost;
             }
             totals.add_to(&mut sums);
         }

@@ -28,6 +28,7 @@ impl Wind {
             effect_surface: &self.z,
             sx: None,
             terms: None,
+            air_temperature: None,
         }
     }
 }
@@ -530,4 +531,41 @@ fn terms_computed_once_give_the_bits_of_terms_computed_per_step() {
     };
     let e = step(&p, &mut a, &bad, &mut sa, 0.5).unwrap_err();
     assert!(e.to_string().contains("wind terms"), "{e}");
+}
+
+#[test]
+fn drifting_snow_sublimates_in_dry_wind_only() {
+    let (t, _, sx) = ridge_with_sx();
+    let air = vec![-5.0f32; t.geometry().len()];
+    // Only the Sx term, whose drift sublimates.
+    let blow = |wind: &Wind, rh: f64| {
+        let mut t = t.clone();
+        let mut p = WindTransportParams {
+            k_erosion: 0.0,
+            k_tamping: 0.0,
+            ..Default::default()
+        };
+        p.sx_redistribution.sublimation.relative_humidity_pct = rh;
+        let maps = WindMaps {
+            sx: Some(&sx),
+            air_temperature: Some(&air),
+            ..wind.maps()
+        };
+        let before = t.snow_volume();
+        let mut scratch = WindScratch::default();
+        let (mut lost, mut out) = (0.0, 0.0);
+        for _ in 0..10 {
+            let r = step(&p, &mut t, &maps, &mut scratch, 0.5).unwrap();
+            assert_eq!(r.volume_change().removed, r.border_outflow + r.sublimated);
+            lost += r.sublimated;
+            out += r.border_outflow;
+        }
+        assert!((before - out - lost - t.snow_volume()).abs() < 1e-5 * before);
+        lost
+    };
+    let dry = blow(&Wind::uniform(&t, 10.0, 0.0), 70.0);
+    assert!(dry > 0.0);
+    assert!(blow(&Wind::uniform(&t, 10.0, 0.0), 40.0) > dry);
+    assert_eq!(blow(&Wind::uniform(&t, 10.0, 0.0), 100.0), 0.0);
+    assert_eq!(blow(&Wind::uniform(&t, 0.0, 0.0), 70.0), 0.0);
 }

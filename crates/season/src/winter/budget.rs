@@ -18,7 +18,8 @@ pub struct SeasonBudget {
     pub diffusion_outflow: f64,
     /// Snow blown out of the grid.
     pub wind_outflow: f64,
-    /// Blowing snow sublimated (the physical wind transport only).
+    /// Blowing snow sublimated: the drifting snow of the Sx redistribution (Liston & Sturm
+    /// 1998) or of the physical wind transport.
     #[serde(default)]
     pub wind_sublimation: f64,
     /// Avalanche snow that flowed out of the grid.

@@ -192,6 +192,7 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     )
     .map_err(err)?;
     w.state.budget.wind_outflow += r.border_outflow;
+    w.state.budget.wind_sublimation += r.sublimated;
     Ok(())
 }
 

@@ -10,14 +10,15 @@ use crate::wind_transport::{WindMaps, WindModel, WindTerms};
 use std::time::Instant;
 
 impl Winter {
-    /// What the current period's wind field gives wind transport: the maximum upwind slope
-    /// (when the Sx redistribution is on), then the field's snow-independent terms.
+    /// What the current period's wind field gives wind transport: the sheltering index (the
+    /// short- and long-range maximum upwind slopes, when the Sx redistribution is on), then the
+    /// field's snow-independent terms.
     pub(super) fn refresh_wind_terms(&mut self) -> Result<(), SeasonError> {
         let p = &self.scenario.parameters.wind_transport;
         if p.sx_redistribution.enabled {
             let t = Instant::now();
             let w = &self.weather[self.state.weather_index];
-            self.sx = snowscape_environment::max_upwind_slope(
+            self.sx = snowscape_environment::sheltering_index(
                 &self.terrain.bedrock,
                 self.terrain.geometry(),
                 self.terrain.mask(),
@@ -155,8 +156,8 @@ impl Winter {
     }
 }
 
-/// The wind maps of wind transport: the environment's wind field, the `sx` map (none when
-/// empty) and the field's `terms`.
+/// The wind maps of wind transport: the environment's wind field and air temperature, the
+/// `sx` map (none when empty) and the field's `terms`.
 pub(super) fn wind_maps<'a>(
     e: &'a snowscape_environment::EnvironmentMaps,
     sx: &'a [f32],
@@ -169,5 +170,6 @@ pub(super) fn wind_maps<'a>(
         effect_surface: &e.wind_effect_surface,
         sx: (!sx.is_empty()).then_some(sx),
         terms,
+        air_temperature: Some(&e.temperature),
     }
 }

@@ -3,9 +3,10 @@
 //!
 //! Along a row the load is a linear recurrence: the carry into the next cell downwind is
 //! `c_{p+1} = (c_p + a_p) · g_p`, with `a_p` what reaches cell `p` apart from the carry (the
-//! share sent from the row upwind plus the cell's own scour) and `g_p = (1 − |k_p|) · f_x` the
-//! share of its load it passes on along the row (`k_p` the share it keeps, `f_x` the
-//! east/west share of what leaves; 0 where the next cell is nodata or off the grid). Computed
+//! share sent from the row upwind plus the cell's own scour) and `g_p = (1 − |k_p|)(1 − σ_p)
+//! f_x` the share of its load it passes on along the row (`σ_p` the share that sublimates,
+//! `k_p` the share of the rest it keeps, `f_x` the east/west share of what leaves; 0 where the
+//! next cell is nodata or off the grid). Computed
 //! cell after cell, each carry waits on the operations of the one before, and a cell's
 //! branches on its neighbours and its layer: the sweep took 1.15-1.19 s of a calm 1024² season
 //! (193 wind steps, two threads). Here the row is cut into [`SEGMENTS`] segments, each
@@ -55,14 +56,15 @@ pub(super) struct DriftRow {
     pub(super) carry: Vec<f32>,
 }
 
-/// Per cell of a row: scour, depth kept, of it as unstable snow, and border outflow, summed
-/// per row in a fixed order.
+/// Per cell of a row: scour, depth kept, of it as unstable snow, border outflow and depth
+/// sublimated, summed per row in a fixed order.
 #[derive(Debug, Default)]
 pub(super) struct RowTotals {
     pub(super) eroded: Vec<f32>,
     pub(super) kept: Vec<f32>,
     pub(super) kept_unstable: Vec<f32>,
     pub(super) border: Vec<f32>,
+    pub(super) sublimated: Vec<f32>,
 }
 
 impl RowTotals {
@@ -72,6 +74,7 @@ impl RowTotals {
             kept: vec![0.0; cells],
             kept_unstable: vec![0.0; cells],
             border: vec![0.0; cells],
+            sublimated: vec![0.0; cells],
         }
     }
 
@@ -81,6 +84,7 @@ impl RowTotals {
         sums.deposited += crate::row_sum(&self.kept);
         sums.deposited_unstable += crate::row_sum(&self.kept_unstable);
         sums.border += crate::row_sum(&self.border);
+        sums.sublimated += crate::row_sum(&self.sublimated);
     }
 }
 
@@ -147,12 +151,20 @@ impl DriftRow {
     }
 }
 
-/// What a cell of load `load`, keeping the share `|keep|` and sending `carried_on` along the
-/// row, does with its load: `(sent to the next row, kept, border outflow)`. What leaves is
-/// split `f_x` along the row, the rest across; a share aimed off the grid or at nodata is
-/// border outflow (`exits`); the cell keeps the rest of what it does not send on.
+/// What a cell of load `load`, of which the share `sublimated` sublimates, keeping the share
+/// `|keep|` of the rest and sending `carried_on` along the row, does with its load: `(sent to
+/// the next row, kept, border outflow, sublimated)`. What leaves is split `f_x` along the row,
+/// the rest across; a share aimed off the grid or at nodata is border outflow (`exits`); the
+/// cell keeps the rest of what it does not send on.
 #[inline(always)]
-pub(super) fn share_out(load: f32, keep: f32, carried_on: f32, fx: f32, exits: Exits) -> [f32; 3] {
+pub(super) fn share_out(
+    load: f32,
+    (keep, sublimated, fx): (f32, f32, f32),
+    carried_on: f32,
+    exits: Exits,
+) -> [f32; 4] {
+    let lost = load * sublimated;
+    let load = load - lost;
     let out = load - load * keep.abs();
     let along = out * fx;
     let across = out - along;
@@ -160,5 +172,5 @@ pub(super) fn share_out(load: f32, keep: f32, carried_on: f32, fx: f32, exits: E
     let border =
         if exits.off_along { along } else { 0.0 } + if exits.off_across { across } else { 0.0 };
     let kept = (load - carried_on - sent_across - border).max(0.0);
-    [sent_across, kept, border]
+    [sent_across, kept, border, lost]
 }

@@ -11,10 +11,9 @@ fn sequential_sweep(
     valid: &[bool],
     (w, h): (usize, usize),
     (dc, dr, fx): (isize, isize, f32),
-    (scour, keep): (&[f32], &[f32]),
-    unstable: &mut [f32],
-    powder: &mut [f32],
-) -> [f64; 4] {
+    (scour, from_stable, keep, sublimated): (&[f32], &[f32], &[f32], &[f32]),
+    [stable, unstable, powder]: [&mut [f32]; 3],
+) -> [f64; 5] {
     let rows: Vec<usize> = if dr < 0 {
         (0..h).rev().collect()
     } else {
@@ -26,7 +25,13 @@ fn sequential_sweep(
         (0..w).rev().collect()
     };
     let mut from_row = vec![0.0f32; w];
-    let [mut eroded, mut deposited, mut unstable_dep, mut border] = [0.0f64; 4];
+    let [
+        mut eroded,
+        mut deposited,
+        mut unstable_dep,
+        mut border,
+        mut lost,
+    ] = [0.0f64; 5];
     for (k, &row) in rows.iter().enumerate() {
         let mut carry = 0.0f32;
         for &col in &cols {
@@ -36,13 +41,19 @@ fn sequential_sweep(
                 carry = 0.0;
                 continue;
             }
-            let e = scour[i];
-            let from_powder = e.min(powder[i]);
+            let loose = scour[i];
+            let from_powder = loose.min(powder[i]);
             powder[i] -= from_powder;
-            unstable[i] -= (e - from_powder).min(unstable[i]);
+            unstable[i] -= (loose - from_powder).min(unstable[i]);
+            stable[i] -= from_stable[i];
+            let e = loose + from_stable[i];
             eroded += f64::from(e);
             let load = carry + from_above + e;
             carry = 0.0;
+            // The share that sublimates on the way, then the shares of the rest.
+            let sublimating = load * sublimated[i];
+            lost += f64::from(sublimating);
+            let load = load - sublimating;
             let kept = load * keep[i].abs();
             let out = load - kept;
             let to_x = out * fx;
@@ -72,7 +83,7 @@ fn sequential_sweep(
             }
         }
     }
-    [eroded, deposited, unstable_dep, border]
+    [eroded, deposited, unstable_dep, border, lost]
 }
 
 /// A rough terrain with nodata, random `Sx`, winds and shadows (so that cells are exposed,
@@ -111,6 +122,7 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
     let zero = |v: f64, i: usize| if valid[i] { v as f32 } else { 0.0 };
     let mut terrain = LayeredTerrain::from_bedrock(bed);
     for i in 0..n {
+        terrain.snow[1][i] = zero(0.4 * uniform(3, 8, i as u64), i);
         terrain.snow[2][i] = zero(0.3 * uniform(3, 1, i as u64), i);
         terrain.snow[3][i] = zero(0.5 * uniform(3, 2, i as u64), i);
     }
@@ -125,6 +137,10 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
         .collect();
     let v: Vec<f32> = (0..n)
         .map(|i| (8.0 * uniform(3, 5, i as u64)) as f32)
+        .collect();
+    // Air from −30 to +3 °C (the table's clamps too).
+    let air: Vec<f32> = (0..n)
+        .map(|i| (33.0 * uniform(3, 9, i as u64) - 30.0) as f32)
         .collect();
     let shadow: Vec<f32> = (0..n)
         .map(|i| {
@@ -142,12 +158,19 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
         effect_surface: &surface,
         sx: Some(&sx),
         terms: None,
+        air_temperature: Some(&air),
     };
     let params = crate::wind_transport::WindTransportParams::default();
     let mask = terrain.mask().clone();
     let ctx = Context::new(&geo, &mask, &wind, &params, 0.5);
+    // A fast scour (it reaches the stable snow) and dry air (a tenth of the load sublimates
+    // per 10 m hop at −1 °C).
     let sx_params = SxParams {
-        k_exposed: 0.02,
+        k_exposed: 0.05,
+        sublimation: DriftSublimationParams {
+            relative_humidity_pct: 40.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     for (ex, ey) in [
@@ -161,38 +184,52 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
     ] {
         // The per-cell terms the sweep computes, over whole rows, for the reference.
         let (mut scour, mut keep) = (vec![0.0f32; n], vec![0.0f32; n]);
+        let (mut from_stable, mut sublimated) = (vec![0.0f32; n], vec![0.0f32; n]);
         let mut cache = KeepShareCache::default();
+        let mut table = SublimationTable::default();
         let (fx, dc, dr) = with_validity!(mask, |v| {
             let maps = SweepMaps::new(
                 (&ctx, v),
                 &sx_params,
                 (&sx, &surface, (ex, ey)),
-                &mut cache,
+                (&mut cache, &mut table),
                 0.5,
             );
             let mut terms = RowTerms::new(w);
             for row in 0..h {
                 let r = row * w..(row + 1) * w;
-                let layers = (&terrain.snow[3][r.clone()], &terrain.snow[2][r.clone()]);
+                let layers = (
+                    &terrain.snow[3][r.clone()],
+                    &terrain.snow[2][r.clone()],
+                    &terrain.snow[1][r.clone()],
+                );
                 maps.cell_terms(row, 0..w, layers, &mut terms);
                 scour[r.clone()].copy_from_slice(&terms.scour);
-                keep[r].copy_from_slice(&terms.keep);
+                from_stable[r.clone()].copy_from_slice(&terms.from_stable);
+                keep[r.clone()].copy_from_slice(&terms.keep);
+                sublimated[r].copy_from_slice(&terms.sublimated);
             }
             (maps.fx, maps.dc, maps.dr)
         });
-        let (mut eu, mut ep) = (terrain.snow[2].clone(), terrain.snow[3].clone());
+        let (mut es, mut eu, mut ep) = (
+            terrain.snow[1].clone(),
+            terrain.snow[2].clone(),
+            terrain.snow[3].clone(),
+        );
         let sums = sequential_sweep(
             &valid,
             (w, h),
             (dc, dr, fx),
-            (&scour, &keep),
-            &mut eu,
-            &mut ep,
+            (&scour, &from_stable, &keep, &sublimated),
+            [&mut es, &mut eu, &mut ep],
         );
         if coverage {
             assert!(
                 keep.iter().any(|&k| k < 0.0)
                     && scour.iter().filter(|&&e| e > 0.0).count() > n / 10
+                    && from_stable.iter().filter(|&&e| e > 0.0).count() > n / 20
+                    && sublimated.iter().all(|&s| (0.0..0.2).contains(&s))
+                    && sublimated.iter().filter(|&&s| s > 0.0).count() > n / 2
             );
         }
         for threads in [1, 2] {
@@ -214,7 +251,7 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
                     ))
                 });
             for i in 0..n {
-                for (layer, want) in [(2, eu[i]), (3, ep[i])] {
+                for (layer, want) in [(1, es[i]), (2, eu[i]), (3, ep[i])] {
                     let d = (t.snow[layer][i] - want).abs();
                     assert!(
                         d <= 2e-6,
@@ -228,6 +265,7 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
                 got.deposited,
                 got.deposited_unstable,
                 got.border,
+                got.sublimated,
             ];
             for (g, s) in got.iter().zip(&sums) {
                 assert!(
@@ -236,8 +274,14 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
                 );
             }
             if coverage {
-                assert!(sums[0] > 1.0 && sums[2] > 0.1 && sums[3] > 0.1, "{sums:?}");
+                assert!(
+                    sums[0] > 1.0 && sums[2] > 0.1 && sums[3] > 0.1 && sums[4] > 0.1,
+                    "{sums:?}"
+                );
             }
+            // Every depth scoured is kept, sublimated or border outflow.
+            let closure = got[0] - got[1] - got[3] - got[4];
+            assert!(closure.abs() <= 1e-5 * got[0], "{got:?}");
         }
     }
 }
