@@ -87,6 +87,14 @@ pub enum ScenarioError {
         count: usize,
         max: usize,
     },
+    /// Two settings that cannot be given together; both are named.
+    #[error("scenario {source_name}: {first} and {second} are both set: {reason}")]
+    Conflict {
+        source_name: String,
+        first: String,
+        second: String,
+        reason: &'static str,
+    },
     /// A value out of range.
     #[error("scenario {source_name}: {key} = {value}: {reason}")]
     Invalid {
@@ -181,9 +189,7 @@ impl Parameters {
             r.map_err(|e| (name, e.to_string()))
         }
         section("parameters.environment", self.environment.validate())?;
-        if let Err((key, value, reason)) = self.climate.validate() {
-            return Err(("parameters.climate", format!("{key} = {value}: {reason}")));
-        }
+        section("parameters.climate", self.climate.validate())?;
         section("parameters.snowfall", self.snowfall.validate())?;
         section("parameters.melt", self.melt.validate())?;
         section("parameters.stability", self.stability.validate())?;
@@ -543,6 +549,15 @@ impl Scenario {
                     return Err(bad(&key(f), v.to_string(), reason));
                 }
             }
+            if let Some(v) = w.precipitation_mm_per_day
+                && !(v.is_finite() && (0.0..=500.0).contains(&v))
+            {
+                return Err(bad(
+                    &key("precipitation_mm_per_day"),
+                    v.to_string(),
+                    "must be within [0, 500] mm/day",
+                ));
+            }
         }
         for (k, p) in self.snowfall_periods.iter().enumerate() {
             if !(p.start_day.is_finite()
@@ -594,7 +609,7 @@ impl Scenario {
                 message,
             });
         }
-        Ok(())
+        crate::storms::check_precipitation_sources(self, source_name)
     }
 
     /// Checks what needs the terrain: every `[[avalanche]]` and skier start lies on the grid.
