@@ -18,11 +18,17 @@
 //! - **Precipitation** during a snowfall period: `P = P_ref · clamp(1 + g · (z − z_ref)/100 m)`
 //!   with `g` = 0.05 per 100 m, the linearised orographic adjustment of MicroMet (Liston &
 //!   Elder 2006, J. Hydrometeorol. 7, Eq. 33, χ ≈ 0.27 km⁻¹ after Thornton et al. 1997),
-//!   `P_ref` = 10 mm/day at `z_ref` = 1500 m (about 90 mm a month over the snowfall periods
-//!   of one week in three, a mid-altitude winter month in the Alps or the Sierra Nevada).
-//! - **Phase**: the snow share falls linearly from 1 at `T50 − r/2` to 0 at `T50 + r/2`, with
-//!   the 50 % rain-snow temperature `T50` = 1.0 °C (Jennings et al. 2018, Nat. Commun. 9,
-//!   1148: the Northern Hemisphere mean) and a 2 °C transition.
+//!   `P_ref` the storm rate at `z_ref` = 1500 m: 10 mm/day by default (chosen here: about
+//!   90 mm a month over the snowfall periods of three days in ten, a mid-altitude winter
+//!   month in the Alps or the Sierra Nevada), a scenario's rate, or the rate that gives its
+//!   `annual_precipitation_mm` or `monthly_precipitation_mm` ([`crate::storms`]).
+//! - **Storms** are colder than fair weather, with a damped diurnal cycle, and their phase
+//!   comes from the hydrometeor temperature of Harder & Pomeroy 2013 with the storm's
+//!   humidity ([`crate::storms`]).
+//! - **Phase** by air temperature alone (`rain_snow_phase = "air_temperature"`): the snow
+//!   share falls linearly from 1 at `T50 − r/2` to 0 at `T50 + r/2`, with the 50 % rain-snow
+//!   temperature `T50` = 1.0 °C (Jennings et al. 2018, Nat. Commun. 9, 1148: the Northern
+//!   Hemisphere mean) and a 2 °C transition.
 //! - **Clouds**: the shortwave is the clear sky times 0.8 on fair days and 0.25 during
 //!   snowfall periods (our choice: overcast skies pass about a quarter of the clear-sky
 //!   shortwave, Kasten & Czeplak 1980's cloud law at 8/8 cover gives 0.25).
@@ -59,9 +65,20 @@ pub struct ClimateParams {
     pub warmest_solar_hour: f64,
     /// Added to the climatology's temperatures, °C (a warmer or colder winter). Default 0.
     pub temperature_offset_c: f64,
-    /// Precipitation during snowfall periods at `reference_altitude_m`, mm of water per day
-    /// (module docs). Default 10.
-    pub precipitation_mm_per_day: f64,
+    /// Precipitation during snowfall periods at `reference_altitude_m`, mm of water per day.
+    /// Unset: 10 (module docs), or the rate a season total gives. Not with a season total.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub precipitation_mm_per_day: Option<f64>,
+    /// A year's precipitation at `reference_altitude_m`, mm of water, spread evenly over the
+    /// year and falling in the season's storms ([`crate::storms`]). Unset by default; not
+    /// with `precipitation_mm_per_day` or `monthly_precipitation_mm`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub annual_precipitation_mm: Option<f64>,
+    /// Each calendar month's precipitation at `reference_altitude_m` (January first), mm of
+    /// water, falling in that month's storms ([`crate::storms`]). Unset by default; not with
+    /// `precipitation_mm_per_day` or `annual_precipitation_mm`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub monthly_precipitation_mm: Option<[f64; 12]>,
     /// Altitude of `precipitation_mm_per_day`, m (a station's altitude replaces it). Default 1500.
     pub reference_altitude_m: f64,
     /// Orographic precipitation gradient, fraction per 100 m. Liston & Elder 2006: 0.05.
@@ -72,6 +89,24 @@ pub struct ClimateParams {
     pub rain_snow_t50_c: f64,
     /// Width of the rain-snow transition, °C. Chosen here: 2.
     pub rain_snow_range_c: f64,
+    /// How precipitation splits into rain and snow: `psychrometric` (Harder & Pomeroy 2013,
+    /// from air temperature and humidity; the default) or `air_temperature` (the ramp of
+    /// `rain_snow_t50_c` and `rain_snow_range_c`).
+    pub rain_snow_phase: crate::storms::RainSnowPhase,
+    /// Relative humidity of the air during snowfall periods, 0..1 (with respect to water).
+    /// Anderson 2006 (SNOW-17's rain-on-snow air): 0.9. A station's record replaces it.
+    pub storm_relative_humidity: f64,
+    /// `b` of the psychrometric rain share `1 / (1 + b c^T_i)`. Harder & Pomeroy 2013
+    /// (hourly data): 2.630006.
+    pub psychrometric_b: f64,
+    /// `c` of the psychrometric rain share. Harder & Pomeroy 2013 (hourly data): 0.09336.
+    pub psychrometric_c: f64,
+    /// Diurnal amplitude of snowfall periods over the fair-weather one, k. Dai et al. 1999
+    /// (clouds and precipitation cut the diurnal range by 25-50 %): 0.5.
+    pub storm_diurnal_factor: f64,
+    /// Added to the air of snowfall periods, °C, beyond the damped cycle (which keeps the
+    /// fair night's minimum, Richardson 1981). Default 0.
+    pub storm_temperature_offset_c: f64,
     /// Clear-sky shortwave.
     pub clear_sky: ClearSkyParams,
     /// Shortwave share of the clear sky on fair days. Chosen here: 0.8.
@@ -88,12 +123,20 @@ impl Default for ClimateParams {
             diurnal_amplitude_c: 5.0,
             warmest_solar_hour: 15.0,
             temperature_offset_c: 0.0,
-            precipitation_mm_per_day: 10.0,
+            precipitation_mm_per_day: None,
+            annual_precipitation_mm: None,
+            monthly_precipitation_mm: None,
             reference_altitude_m: 1500.0,
             orographic_gradient_per_100m: 0.05,
             orographic_factor_range: [0.2, 3.0],
             rain_snow_t50_c: 1.0,
             rain_snow_range_c: 2.0,
+            rain_snow_phase: crate::storms::RainSnowPhase::Psychrometric,
+            storm_relative_humidity: 0.9,
+            psychrometric_b: 2.630006,
+            psychrometric_c: 0.09336,
+            storm_diurnal_factor: 0.5,
+            storm_temperature_offset_c: 0.0,
             clear_sky: ClearSkyParams::default(),
             fair_cloud_factor: 0.8,
             storm_cloud_factor: 0.25,
@@ -101,10 +144,47 @@ impl Default for ClimateParams {
     }
 }
 
+/// Why climate parameters were refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ClimateError {
+    /// A value out of its range.
+    #[error("{key} = {value}: {reason}")]
+    OutOfRange {
+        /// `climate.<field>`.
+        key: String,
+        value: f64,
+        reason: &'static str,
+    },
+    /// Two settings that say the same thing differently.
+    #[error("{first} and {second} are both set: {reason}")]
+    Conflict {
+        first: &'static str,
+        second: &'static str,
+        reason: &'static str,
+    },
+}
+
+/// `Ok` when `value` is finite and `ok`, else the error naming `climate.<name>`.
+fn check(name: &str, value: f64, ok: bool, reason: &'static str) -> Result<(), ClimateError> {
+    if value.is_finite() && ok {
+        return Ok(());
+    }
+    Err(ClimateError::OutOfRange {
+        key: format!("climate.{name}"),
+        value,
+        reason,
+    })
+}
+
+/// The default storm rate, mm/day at the reference altitude (module docs).
+pub const DEFAULT_PRECIPITATION_MM_PER_DAY: f64 = 10.0;
+
 impl ClimateParams {
-    /// Checks every field; the error names the key (`climate.<field>`) and its value.
-    pub fn validate(&self) -> Result<(), (String, f64, &'static str)> {
-        let mut checks: Vec<(&str, f64, bool, &'static str)> = vec![
+    /// Checks every field and that at most one of the storm rate and the season totals is
+    /// given; the error names the key (`climate.<field>`) and its value, or both keys.
+    pub fn validate(&self) -> Result<(), ClimateError> {
+        self.check_precipitation()?;
+        let mut fixed: Vec<(&str, f64, bool, &'static str)> = vec![
             (
                 "lapse_rate_c_per_km",
                 self.lapse_rate_c_per_km,
@@ -128,12 +208,6 @@ impl ClimateParams {
                 self.temperature_offset_c,
                 self.temperature_offset_c.abs() <= 30.0,
                 "must be within [-30, 30] °C",
-            ),
-            (
-                "precipitation_mm_per_day",
-                self.precipitation_mm_per_day,
-                (0.0..=500.0).contains(&self.precipitation_mm_per_day),
-                "must be within [0, 500] mm/day",
             ),
             (
                 "reference_altitude_m",
@@ -173,36 +247,135 @@ impl ClimateParams {
             ),
         ];
         let [lo, hi] = self.orographic_factor_range;
-        checks.push((
+        fixed.push((
             "orographic_factor_range[0]",
             lo,
             (0.0..=1.0).contains(&lo),
             "must be within [0, 1]",
         ));
-        checks.push((
+        fixed.push((
             "orographic_factor_range[1]",
             hi,
             (1.0..=10.0).contains(&hi),
             "must be within [1, 10]",
         ));
-        checks.push((
+        fixed.push((
             "clear_sky.transmissivity",
             self.clear_sky.transmissivity,
             self.clear_sky.transmissivity > 0.0 && self.clear_sky.transmissivity <= 1.0,
             "must be within (0, 1]",
         ));
-        checks.push((
+        fixed.push((
             "clear_sky.diffuse_share",
             self.clear_sky.diffuse_share,
             (0.0..=1.0).contains(&self.clear_sky.diffuse_share),
             "must be within [0, 1]",
         ));
-        for (name, v, ok, reason) in checks {
-            if !(v.is_finite() && ok) {
-                return Err((format!("climate.{name}"), v, reason));
+        fixed.extend(self.storm_checks());
+        for (name, value, ok, reason) in fixed {
+            check(name, value, ok, reason)?;
+        }
+        Ok(())
+    }
+
+    /// At most one of the storm rate and the season totals, each within its range.
+    fn check_precipitation(&self) -> Result<(), ClimateError> {
+        let given = [
+            (
+                "climate.precipitation_mm_per_day",
+                self.precipitation_mm_per_day.is_some(),
+            ),
+            (
+                "climate.annual_precipitation_mm",
+                self.annual_precipitation_mm.is_some(),
+            ),
+            (
+                "climate.monthly_precipitation_mm",
+                self.monthly_precipitation_mm.is_some(),
+            ),
+        ];
+        let mut set = given.iter().filter(|g| g.1).map(|g| g.0);
+        if let (Some(first), Some(second)) = (set.next(), set.next()) {
+            return Err(ClimateError::Conflict {
+                first,
+                second,
+                reason: "give one of the storm rate, the annual total and the monthly totals",
+            });
+        }
+        if let Some(v) = self.precipitation_mm_per_day {
+            check(
+                "precipitation_mm_per_day",
+                v,
+                (0.0..=500.0).contains(&v),
+                "must be within [0, 500] mm/day",
+            )?;
+        }
+        if let Some(v) = self.annual_precipitation_mm {
+            check(
+                "annual_precipitation_mm",
+                v,
+                (0.0..=20_000.0).contains(&v),
+                "must be within [0, 20000] mm (the wettest places get about 12000 a year)",
+            )?;
+        }
+        for (m, &v) in self.monthly_precipitation_mm.iter().flatten().enumerate() {
+            if !(v.is_finite() && (0.0..=5000.0).contains(&v)) {
+                return Err(ClimateError::OutOfRange {
+                    key: format!("climate.monthly_precipitation_mm[{m}]"),
+                    value: v,
+                    reason: "must be within [0, 5000] mm (the wettest month on record is about 9300)",
+                });
             }
         }
         Ok(())
+    }
+
+    /// The ranges of the storm parameters ([`crate::storms`]).
+    fn storm_checks(&self) -> [(&'static str, f64, bool, &'static str); 5] {
+        [
+            (
+                "storm_relative_humidity",
+                self.storm_relative_humidity,
+                (0.0..=1.0).contains(&self.storm_relative_humidity),
+                "must be within [0, 1] (a fraction, not percent)",
+            ),
+            (
+                "psychrometric_b",
+                self.psychrometric_b,
+                self.psychrometric_b > 0.0 && self.psychrometric_b <= 100.0,
+                "must be within (0, 100]",
+            ),
+            (
+                "psychrometric_c",
+                self.psychrometric_c,
+                self.psychrometric_c > 0.0 && self.psychrometric_c < 1.0,
+                "must be within (0, 1): rain must grow with temperature",
+            ),
+            (
+                "storm_diurnal_factor",
+                self.storm_diurnal_factor,
+                (0.0..=1.0).contains(&self.storm_diurnal_factor),
+                "must be within [0, 1]",
+            ),
+            (
+                "storm_temperature_offset_c",
+                self.storm_temperature_offset_c,
+                self.storm_temperature_offset_c.abs() <= 20.0,
+                "must be within [-20, 20] °C",
+            ),
+        ]
+    }
+
+    /// The storm rate the climate sets, mm/day at the reference altitude, when no season
+    /// total is given.
+    pub fn storm_precipitation_mm_per_day(&self) -> f64 {
+        self.precipitation_mm_per_day
+            .unwrap_or(DEFAULT_PRECIPITATION_MM_PER_DAY)
+    }
+
+    /// Whether a season total sets the storm rates ([`crate::storms::StormRates`]).
+    pub fn has_season_total(&self) -> bool {
+        self.annual_precipitation_mm.is_some() || self.monthly_precipitation_mm.is_some()
     }
 
     /// Lapse rate, °C per m.
@@ -216,9 +389,33 @@ impl ClimateParams {
             * (std::f64::consts::TAU * (hour - self.warmest_solar_hour) / 24.0).cos()
     }
 
-    /// Share of precipitation falling as snow at air temperature `t` °C.
+    /// The diurnal term of an hour of a snowfall period, °C ([`crate::storms`]): the
+    /// fair-weather cycle damped by `k` about the same night-time minimum, plus the storm
+    /// offset, `ΔT_s − a (1 − k) + k a cos(...)`.
+    pub fn storm_diurnal_c(&self, hour: f64) -> f64 {
+        let k = self.storm_diurnal_factor;
+        self.storm_temperature_offset_c - self.diurnal_amplitude_c * (1.0 - k)
+            + k * self.diurnal_c(hour)
+    }
+
+    /// Share of precipitation falling as snow in air at `t` °C and relative humidity
+    /// `relative_humidity` (0..1), by [`ClimateParams::rain_snow_phase`].
     #[inline]
-    pub fn snow_share(&self, t: f32) -> f32 {
+    pub fn snow_share(&self, t: f32, relative_humidity: f32) -> f32 {
+        match self.rain_snow_phase {
+            crate::storms::RainSnowPhase::Psychrometric => crate::storms::psychrometric_snow_share(
+                t as f64,
+                relative_humidity as f64,
+                self.psychrometric_b,
+                self.psychrometric_c,
+            ) as f32,
+            crate::storms::RainSnowPhase::AirTemperature => self.ramp_snow_share(t),
+        }
+    }
+
+    /// Share of precipitation falling as snow at air temperature `t` °C by the linear ramp
+    /// around `T50`.
+    fn ramp_snow_share(&self, t: f32) -> f32 {
         let r = self.rain_snow_range_c as f32;
         if r <= 0.0 {
             return if t <= self.rain_snow_t50_c as f32 {
@@ -360,10 +557,13 @@ mod tests {
 
     #[test]
     fn phase_and_orography() {
-        let p = ClimateParams::default();
-        assert_eq!(p.snow_share(-3.0), 1.0);
-        assert_eq!(p.snow_share(3.0), 0.0);
-        assert!((p.snow_share(1.0) - 0.5).abs() < 1e-6);
+        let p = ClimateParams {
+            rain_snow_phase: crate::storms::RainSnowPhase::AirTemperature,
+            ..ClimateParams::default()
+        };
+        assert_eq!(p.snow_share(-3.0, 0.9), 1.0);
+        assert_eq!(p.snow_share(3.0, 0.9), 0.0);
+        assert!((p.snow_share(1.0, 0.9) - 0.5).abs() < 1e-6);
         assert!((p.orographic_factor(2500.0, 1500.0) - 1.5).abs() < 1e-6);
         assert!((p.orographic_factor(1000.0, 1500.0) - 0.75).abs() < 1e-6);
         assert_eq!(p.orographic_factor(9000.0, 0.0), 3.0);
@@ -374,6 +574,70 @@ mod tests {
             lapse_rate_c_per_km: f64::NAN,
             ..ClimateParams::default()
         };
-        assert_eq!(bad.validate().unwrap_err().0, "climate.lapse_rate_c_per_km");
+        assert!(
+            matches!(bad.validate(), Err(ClimateError::OutOfRange { key, .. }) if key == "climate.lapse_rate_c_per_km")
+        );
+    }
+
+    #[test]
+    fn storm_hours_are_colder_than_fair_hours_of_the_same_day() {
+        let p = ClimateParams::default();
+        for h in 0..24 {
+            let (fair, storm) = (p.diurnal_c(h as f64), p.storm_diurnal_c(h as f64));
+            assert!(storm <= fair + 1e-12, "hour {h}: storm {storm} fair {fair}");
+        }
+        // The afternoon is 5 °C colder, the night's minimum the same, the day 2.5 °C colder.
+        assert!((p.diurnal_c(15.0) - p.storm_diurnal_c(15.0) - 5.0).abs() < 1e-12);
+        assert!((p.diurnal_c(3.0) - p.storm_diurnal_c(3.0)).abs() < 1e-12);
+        let mean = |f: &dyn Fn(f64) -> f64| (0..24).map(|h| f(h as f64)).sum::<f64>() / 24.0;
+        let cooler = mean(&|h| p.diurnal_c(h)) - mean(&|h| p.storm_diurnal_c(h));
+        assert!((cooler - 2.5).abs() < 1e-9, "{cooler}");
+    }
+
+    #[test]
+    fn a_rate_and_a_season_total_are_refused_together_naming_both() {
+        let both = ClimateParams {
+            precipitation_mm_per_day: Some(20.0),
+            annual_precipitation_mm: Some(1500.0),
+            ..ClimateParams::default()
+        };
+        let e = both.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("climate.precipitation_mm_per_day")
+                && e.contains("climate.annual_precipitation_mm"),
+            "{e}"
+        );
+        let both = ClimateParams {
+            annual_precipitation_mm: Some(1500.0),
+            monthly_precipitation_mm: Some([100.0; 12]),
+            ..ClimateParams::default()
+        };
+        assert!(matches!(
+            both.validate(),
+            Err(ClimateError::Conflict {
+                first: "climate.annual_precipitation_mm",
+                second: "climate.monthly_precipitation_mm",
+                ..
+            })
+        ));
+        let mut months = [100.0; 12];
+        months[3] = -1.0;
+        let bad = ClimateParams {
+            monthly_precipitation_mm: Some(months),
+            ..ClimateParams::default()
+        };
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("climate.monthly_precipitation_mm[3] = -1")
+        );
+        for (rh, ok) in [(0.9, true), (1.0, true), (90.0, false), (f64::NAN, false)] {
+            let p = ClimateParams {
+                storm_relative_humidity: rh,
+                ..ClimateParams::default()
+            };
+            assert_eq!(p.validate().is_ok(), ok, "{rh}");
+        }
     }
 }

@@ -85,6 +85,7 @@ pub mod time;
 #[cfg(test)]
 mod tests;
 
+pub use snobal::saturation_vapour_pressure_pa;
 pub use time::ForcingTime;
 
 use std::path::{Path, PathBuf};

@@ -8,11 +8,13 @@
 //! Beyond the paper, the default season follows sun, wind and slope on real terrain, each model
 //! selectable against the paper's by name: [`melt::enhanced`] (enhanced temperature-index
 //! melt with albedo, cold content and refreezing), [`climate`] and [`weather`] (climatology,
-//! lapse rate, diurnal cycle, orographic precipitation and phase, hour by hour),
+//! lapse rate, diurnal cycle, orographic precipitation and phase, hour by hour), [`storms`]
+//! (storm temperature, psychrometric phase, season precipitation totals),
 //! [`snowfall::add_precipitation`], [`slope_shedding`] (SnowSlide), the Sx redistribution of
 //! [`wind_transport`], and station forcing ([`forcing`]).
 
 pub mod avalanches;
+pub mod bands;
 pub mod checkpoint;
 pub mod climate;
 pub mod forcing;
@@ -27,6 +29,7 @@ pub mod slope_shedding;
 pub mod snowfall;
 pub mod snowtran_transport;
 pub mod stability;
+pub mod storms;
 pub mod weather;
 pub mod wind_transport;
 pub mod winter;

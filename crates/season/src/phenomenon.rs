@@ -51,9 +51,9 @@ pub enum PhenomenonError {
 }
 
 /// Checks that a per-cell map covers the grid.
-pub(crate) fn check_map(
+pub(crate) fn check_map<T>(
     map: &'static str,
-    values: &[f32],
+    values: &[T],
     geometry: &GridGeometry,
 ) -> Result<(), PhenomenonError> {
     if values.len() == geometry.len() {

@@ -94,6 +94,14 @@ pub enum ScenarioError {
         count: usize,
         max: usize,
     },
+    /// Two settings that cannot be given together; both are named.
+    #[error("scenario {source_name}: {first} and {second} are both set: {reason}")]
+    Conflict {
+        source_name: String,
+        first: String,
+        second: String,
+        reason: &'static str,
+    },
     /// A value out of range.
     #[error("scenario {source_name}: {key} = {value}: {reason}")]
     Invalid {

@@ -80,6 +80,9 @@ pub struct Scheduler {
     rates: Vec<EventRate>,
     /// End of the current snowfall period, days, when one is running.
     snowfall_until: Option<f64>,
+    /// Start of the current snowfall period, days, when one is running.
+    #[serde(default)]
+    snowfall_since: Option<f64>,
     /// Mean length of a snowfall period, days (Cordonnier: three days).
     snowfall_mean_days: f64,
 }
@@ -172,6 +175,7 @@ impl Scheduler {
                 rate(EventKind::WindTransportStep, f.wind_transport, true),
             ],
             snowfall_until: None,
+            snowfall_since: None,
             snowfall_mean_days: f.snowfall_mean_days.max(1e-6),
         }
     }
@@ -187,6 +191,15 @@ impl Scheduler {
     /// Whether a snowfall period is running.
     pub fn snowing(&self) -> bool {
         self.snowfall_until.is_some()
+    }
+
+    /// The running snowfall period: its start and end, days.
+    pub fn snowfall_period(&self) -> Option<(f64, f64)> {
+        let until = self.snowfall_until?;
+        Some((
+            self.snowfall_since.unwrap_or(self.time_days).min(until),
+            until,
+        ))
     }
 
     /// Adds or updates the rate of an event kind (e.g. avalanche steps while one runs).
@@ -210,10 +223,22 @@ impl Scheduler {
         self.time_days += days.max(0.0);
     }
 
-    /// Starts a snowfall period of `days` now (scenario-forced snowfall).
-    pub fn force_snowfall(&mut self, days: f64) {
-        let until = self.time_days + days.max(0.0);
-        self.snowfall_until = Some(self.snowfall_until.map_or(until, |u| u.max(until)));
+    /// Starts a snowfall period of `days` now.
+    fn start_snowfall(&mut self, days: f64) {
+        self.force_snowfall(self.time_days, self.time_days + days.max(0.0));
+    }
+
+    /// Runs a snowfall period scheduled from `since` until `until`, days (scenario-forced
+    /// snowfall, started at the first event at or after `since`): a running period that has
+    /// not ended is extended, else one starts, dated `since`.
+    pub fn force_snowfall(&mut self, since: f64, until: f64) {
+        match self.snowfall_until {
+            Some(u) if u > self.time_days => self.snowfall_until = Some(u.max(until)),
+            _ => {
+                self.snowfall_until = Some(until);
+                self.snowfall_since = Some(since.min(self.time_days));
+            }
+        }
         self.set_active(EventKind::SnowfallStep, true);
     }
 
@@ -237,6 +262,7 @@ impl Scheduler {
             && self.time_days >= until
         {
             self.snowfall_until = None;
+            self.snowfall_since = None;
             self.set_active(EventKind::SnowfallStep, false);
         }
         let total = self.total_rate();
@@ -264,7 +290,7 @@ impl Scheduler {
         if kind == EventKind::SnowfallStart && self.snowfall_until.is_none() {
             let v = random::uniform(self.seed, STREAM_PERIOD, index).max(f64::MIN_POSITIVE);
             let length = -self.snowfall_mean_days * v.ln();
-            self.force_snowfall(length);
+            self.start_snowfall(length);
         }
         Some(Event {
             kind,

@@ -245,6 +245,17 @@ pub fn step(
     })
 }
 
+/// One hour (or part of one) of precipitation, as the phase table reads it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PrecipitationHour {
+    /// Sea-level air temperature, °C (a cell's is this plus its lapse offset).
+    pub sea_level_c: f32,
+    /// Precipitation at the reference altitude, m of water.
+    pub water_m: f32,
+    /// Relative humidity of the air, 0..1 (the same at every altitude).
+    pub relative_humidity: f32,
+}
+
 /// Precipitation of a window at the reference altitude as a function of a cell's lapse
 /// offset (its air temperature minus the sea-level one), split into snow and rain by the
 /// phase of each hour: a table, so the per-cell cost does not grow with the hours.
@@ -263,11 +274,10 @@ impl PrecipitationTable {
     /// is exact for hours whose ramp corners fall on samples and within 0.05 °C otherwise).
     pub const STEP_C: f32 = 0.05;
 
-    /// The table for `hours` of (sea-level air temperature °C, precipitation m of water at
-    /// the reference altitude) over lapse offsets in `[offset_min, offset_max]`.
+    /// The table for precipitation `hours` over lapse offsets in `[offset_min, offset_max]`.
     pub fn new(
         climate: &crate::climate::ClimateParams,
-        hours: &[(f32, f32)],
+        hours: &[PrecipitationHour],
         offset_min: f32,
         offset_max: f32,
     ) -> Self {
@@ -275,10 +285,10 @@ impl PrecipitationTable {
         let (mut snow_m, mut rain_m) = (vec![0.0f32; n], vec![0.0f32; n]);
         for k in 0..n {
             let offset = offset_min + k as f32 * Self::STEP_C;
-            for &(t, p) in hours {
-                let share = climate.snow_share(t + offset);
-                snow_m[k] += p * share;
-                rain_m[k] += p * (1.0 - share);
+            for h in hours {
+                let share = climate.snow_share(h.sea_level_c + offset, h.relative_humidity);
+                snow_m[k] += h.water_m * share;
+                rain_m[k] += h.water_m * (1.0 - share);
             }
         }
         Self {
@@ -339,6 +349,9 @@ pub struct PrecipitationTargets<'a> {
     pub reset_swe_m: f64,
     /// Rain per cell, m of water, added to (the melt's liquid water).
     pub rain_out: &'a mut [f32],
+    /// The altitude band of each cell ([`crate::bands::Bands::band_of`]) and the snow water
+    /// and rain summed per band, m of water over its cells, added to.
+    pub bands: (&'a [u16], &'a mut [[f64; 2]]),
 }
 
 /// Adds a window's precipitation (the orographic model): snow water `s · f_oro` by the
@@ -358,6 +371,7 @@ pub fn add_precipitation(
         surface_age,
         reset_swe_m,
         rain_out,
+        bands: (band_of, band_water),
     } = targets;
     params.validate()?;
     let geometry = terrain.geometry().clone();
@@ -366,6 +380,7 @@ pub fn add_precipitation(
     check_map("orographic factor", maps.orographic, &geometry)?;
     check_map("surface age", surface_age, &geometry)?;
     check_map("rain", rain_out, &geometry)?;
+    check_map("altitude band", band_of, &geometry)?;
     if table.is_dry() {
         return Ok(PrecipitationReport::default());
     }
@@ -377,7 +392,8 @@ pub fn add_precipitation(
     let depth_per_water = densities_kg_m3.map(|d| (1000.0 / d) as f32);
     let reset = reset_swe_m as f32;
     let [_, stable, unstable, powder] = &mut terrain.snow;
-    let rows: Vec<[f64; 3]> = with_validity!(mask, |valid| {
+    let n_bands = band_water.len();
+    let rows: Vec<([f64; 3], Vec<[f64; 2]>)> = with_validity!(mask, |valid| {
         stable
             .par_chunks_mut(w)
             .zip(unstable.par_chunks_mut(w))
@@ -391,6 +407,8 @@ pub fn add_precipitation(
                     row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
                     // Four interleaved partial sums of each term (as `crate::row_sum`).
                     let mut sums = [[0.0f64; crate::SUM_LANES]; 3];
+                    // Per band: snow water and rain (each band's in column order).
+                    let mut by_band = vec![[0.0f64; 2]; n_bands];
                     for col in 0..w {
                         let i = row * w + col;
                         let lane = col % crate::SUM_LANES;
@@ -402,7 +420,11 @@ pub fn add_precipitation(
                         let (swe, r) = (s_ref * oro, r_ref * oro);
                         rain[col] += r;
                         sums[2][lane] += r as f64;
+                        let band = by_band.get_mut(band_of[i] as usize);
                         if swe <= 0.0 {
+                            if let Some(b) = band {
+                                b[1] += r as f64;
+                            }
                             continue;
                         }
                         let (xp, xu, _) = k.shares(gradient[col], maps.temperature[i]);
@@ -421,18 +443,26 @@ pub fn add_precipitation(
                         }
                         sums[0][lane] += dp as f64 + du as f64 + ds as f64;
                         sums[1][lane] += (wp + wu + ws) as f64;
+                        if let Some(b) = band {
+                            b[0] += (wp + wu + ws) as f64;
+                            b[1] += r as f64;
+                        }
                     }
-                    sums.map(crate::lane_total)
+                    (sums.map(crate::lane_total), by_band)
                 },
             )
             .collect()
     });
     let a = geometry.cell_area();
     let mut r = PrecipitationReport::default();
-    for s in rows {
+    for (s, by_band) in rows {
         r.snow_m3 += s[0] * a;
         r.snow_water_m3 += s[1] * a;
         r.rain_m3 += s[2] * a;
+        for (total, row) in band_water.iter_mut().zip(&by_band) {
+            total[0] += row[0];
+            total[1] += row[1];
+        }
     }
     Ok(r)
 }

@@ -1,14 +1,15 @@
 //! The season's weather, hour by hour, as the default melt and snowfall read it: the
 //! sea-level air temperature of each hour (climatology, `[[weather]]` periods or station
-//! forcing, plus the diurnal cycle of [`crate::climate`]), per-cell lapse offsets and
-//! orographic factors, the hours of a melt window with their sun, and the phase table of a
-//! window's precipitation.
+//! forcing, plus the diurnal cycle of [`crate::climate`], damped and colder in the hours of
+//! snowfall periods, [`crate::storms`]), per-cell lapse offsets and orographic factors, the
+//! hours of a melt window with their sun, and the phase table of a window's precipitation.
 
 use crate::climate::ClimateParams;
 use crate::forcing::StationForcing;
 use crate::melt::MeltHour;
 use crate::scenario::WeatherPeriod;
-use crate::snowfall::PrecipitationTable;
+use crate::snowfall::{PrecipitationHour, PrecipitationTable};
+use crate::storms::StormRates;
 use rayon::prelude::*;
 use snowscape_environment::SeasonSun;
 use snowscape_environment::insolation::clear_sky;
@@ -48,6 +49,15 @@ pub struct Air {
     radiation_altitude_m: f64,
     /// The hourly sun of the season's months.
     pub sun: Arc<SeasonSun>,
+    /// The storm rates of a season total, when the climate sets one.
+    storm_rates: Option<StormRates>,
+}
+
+/// Whether season time `day` lies in one of the snowfall periods `storms` (start, end), days.
+pub fn in_storm(storms: &[(f64, f64)], day: f64) -> bool {
+    storms
+        .iter()
+        .any(|&(from, until)| from <= day && day < until)
 }
 
 impl Air {
@@ -109,7 +119,14 @@ impl Air {
             reference_altitude_m,
             radiation_altitude_m,
             sun,
+            storm_rates: None,
         }
+    }
+
+    /// The same air with the storm rates of a season total ([`crate::storms`]).
+    pub fn with_storm_rates(mut self, rates: Option<StormRates>) -> Self {
+        self.storm_rates = rates;
+        self
     }
 
     /// The climate parameters.
@@ -159,24 +176,55 @@ impl Air {
         }
     }
 
-    /// Sea-level air temperature at season time `day` (with the diurnal cycle), °C.
-    pub fn sea_level_c(&self, day: f64) -> f64 {
+    /// Sea-level air temperature at season time `day` (with the diurnal cycle), °C: the
+    /// storm cycle of [`crate::storms`] when `storm` (a snowfall period), except under a
+    /// station's record.
+    pub fn sea_level_c(&self, day: f64, storm: bool) -> f64 {
         if let Some(r) = self.station_record(day) {
             return r.air_temperature_c as f64
                 - self.climate.lapse_c_per_m() * self.reference_altitude_m;
         }
         let hour = day.rem_euclid(1.0) * 24.0;
-        self.sea_level_daily_c(day) + self.climate.diurnal_c(hour)
+        let cycle = if storm {
+            self.climate.storm_diurnal_c(hour)
+        } else {
+            self.climate.diurnal_c(hour)
+        };
+        self.sea_level_daily_c(day) + cycle
     }
 
     /// Precipitation during snowfall periods at the reference altitude, m of water per day
-    /// (climatology and periods).
+    /// (climatology and periods): the period's rate, else a season total's, else the
+    /// climate's ([`crate::storms`]).
     pub fn storm_precipitation_m_per_day(&self, day: f64) -> f64 {
-        let mm = self
-            .period_at(day)
-            .and_then(|p| p.precipitation_mm_per_day)
-            .unwrap_or(self.climate.precipitation_mm_per_day);
+        let mm = match self.period_at(day).and_then(|p| p.precipitation_mm_per_day) {
+            Some(mm) => mm,
+            None => match &self.storm_rates {
+                Some(r) => r.at(day),
+                None => self.climate.storm_precipitation_mm_per_day(),
+            },
+        };
         mm * 1e-3
+    }
+
+    /// The phase table of the storm hours `[t0, t1]` (season days; climatology and periods):
+    /// each hour's storm air and rate, at the storm humidity.
+    pub fn storm_precipitation(&self, t0: f64, t1: f64) -> PrecipitationTable {
+        let rh = self.climate.storm_relative_humidity as f32;
+        let hours: Vec<PrecipitationHour> = Self::slots(t0, t1)
+            .into_iter()
+            .filter(|&(_, w)| w > 0.0)
+            .map(|(t, w)| {
+                let mid = t + 0.5 * w as f64 / 24.0;
+                PrecipitationHour {
+                    sea_level_c: self.sea_level_c(mid, true) as f32,
+                    water_m: (self.storm_precipitation_m_per_day(mid) * w as f64 / 24.0) as f32,
+                    relative_humidity: rh,
+                }
+            })
+            .filter(|h| h.water_m > 0.0)
+            .collect();
+        self.precipitation_table(&hours)
     }
 
     /// Whether precipitation comes from a station record (then the Poisson snowfall is off).
@@ -217,19 +265,21 @@ impl Air {
         out
     }
 
-    /// The hours of the melt window `[t0, t1]`: sea-level temperature, sun and clouds
-    /// (`storm`: snowfall is on; station shortwave, when recorded, sets the clouds instead).
-    pub fn melt_hours(&self, t0: f64, t1: f64, storm: bool) -> Vec<MeltHour<'_>> {
-        let clouds = if storm {
-            self.climate.storm_cloud_factor
-        } else {
-            self.climate.fair_cloud_factor
-        };
+    /// The hours of the melt window `[t0, t1]`: sea-level temperature, sun and clouds, of a
+    /// storm in the hours inside the snowfall periods `storms` (start, end), days (station
+    /// shortwave, when recorded, sets the clouds instead).
+    pub fn melt_hours(&self, t0: f64, t1: f64, storms: &[(f64, f64)]) -> Vec<MeltHour<'_>> {
         Self::slots(t0, t1)
             .into_iter()
             .filter(|&(_, w)| w > 0.0)
             .map(|(t, weight)| {
                 let mid = t + 0.5 * weight as f64 / 24.0;
+                let storm = in_storm(storms, mid);
+                let clouds = if storm {
+                    self.climate.storm_cloud_factor
+                } else {
+                    self.climate.fair_cloud_factor
+                };
                 let doy = self.day_of_year(mid);
                 let hour = (mid.rem_euclid(1.0) * 24.0).floor() as u32;
                 let month_index = self
@@ -263,7 +313,7 @@ impl Air {
                 MeltHour {
                     longwave_balance_w_m2,
                     weight,
-                    sea_level_c: self.sea_level_c(mid) as f32,
+                    sea_level_c: self.sea_level_c(mid, storm) as f32,
                     beam,
                     direct_w_m2: direct,
                     diffuse_w_m2: diffuse,
@@ -296,23 +346,27 @@ impl Air {
     }
 
     /// The precipitation table of a station window `[t0, t1]` (snow and rain at the
-    /// reference altitude by each record's temperature), or `None` without a station.
+    /// reference altitude by each record's temperature and relative humidity, the storm
+    /// humidity where none is recorded), or `None` without a station.
     pub fn station_precipitation(&self, t0: f64, t1: f64) -> Option<PrecipitationTable> {
         let AirSource::Station(_) = &self.source else {
             return None;
         };
         let lapse = self.climate.lapse_c_per_m();
-        let hours: Vec<(f32, f32)> = Self::slots(t0, t1)
+        let storm_rh = self.climate.storm_relative_humidity as f32;
+        let hours: Vec<PrecipitationHour> = Self::slots(t0, t1)
             .into_iter()
             .filter_map(|(t, w)| {
                 let r = self.station_record(t + 0.5 * w as f64 / 24.0)?;
                 let per_hour = r.precipitation_mm as f64 * 1e-3 / self.station_step_hours();
-                Some((
-                    (r.air_temperature_c as f64 - lapse * self.reference_altitude_m) as f32,
-                    (per_hour * w as f64) as f32,
-                ))
+                Some(PrecipitationHour {
+                    sea_level_c: (r.air_temperature_c as f64 - lapse * self.reference_altitude_m)
+                        as f32,
+                    water_m: (per_hour * w as f64) as f32,
+                    relative_humidity: r.relative_humidity.unwrap_or(storm_rh),
+                })
             })
-            .filter(|&(_, p)| p > 0.0)
+            .filter(|h| h.water_m > 0.0)
             .collect();
         Some(self.precipitation_table(&hours))
     }
@@ -324,9 +378,8 @@ impl Air {
         }
     }
 
-    /// The phase table of `hours` of (sea-level temperature °C, precipitation m at the
-    /// reference altitude) over this terrain's lapse offsets.
-    pub fn precipitation_table(&self, hours: &[(f32, f32)]) -> PrecipitationTable {
+    /// The phase table of precipitation `hours` over this terrain's lapse offsets.
+    pub fn precipitation_table(&self, hours: &[PrecipitationHour]) -> PrecipitationTable {
         PrecipitationTable::new(
             &self.climate,
             hours,

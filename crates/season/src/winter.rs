@@ -119,6 +119,12 @@ struct RunState {
     /// Day of the last slope-shedding step (none yet: `None`).
     #[serde(default)]
     shed_clock_days: Option<f64>,
+    /// The snowfall periods the next melt window may reach, and the running one.
+    #[serde(default)]
+    storms: Vec<snowpack::StormSpan>,
+    /// Precipitation and peak SWE per altitude band.
+    #[serde(default)]
+    bands: crate::bands::BandRecord,
 }
 
 /// Where the season's latitude came from.
@@ -180,6 +186,8 @@ pub struct Winter {
     /// Rain since the last melt window, m of water per cell (checkpointed).
     pending_rain: Vec<f32>,
     latitude_source: LatitudeSource,
+    /// The altitude band of each cell.
+    bands: crate::bands::Bands,
 }
 
 fn scenario_digest(
@@ -267,6 +275,8 @@ impl Winter {
             ski: SkiStats::default(),
             melt_clock_days: 0.0,
             shed_clock_days: None,
+            storms: Vec::new(),
+            bands: crate::bands::BandRecord::default(),
         };
         let t = Instant::now();
         let params = weather_params(&env, &weather[0]);
@@ -301,6 +311,16 @@ impl Winter {
             }
             None => AirSource::Periods,
         };
+        let storm_rates = crate::storms::StormRates::new(
+            &scenario.parameters.climate,
+            &crate::storms::SeasonStorms {
+                weather: &weather,
+                forced: &scenario.snowfall_periods,
+                mean_storm_days: scenario.events.snowfall_mean_days,
+                start_day_of_year: env.sun.start_day,
+                days: scenario.days,
+            },
+        );
         let air = Air::new(
             &scenario.parameters.climate,
             source,
@@ -309,9 +329,12 @@ impl Winter {
             env.sun.start_day,
             &terrain,
             Arc::new(season_sun),
-        );
+        )
+        .with_storm_rates(storm_rates);
         let n_cells = terrain.geometry().len();
+        let bands = crate::bands::Bands::new(&terrain);
         let mut w = Self {
+            bands,
             air,
             pack: SnowpackState::new(n_cells),
             pending_rain: vec![0.0; n_cells],
@@ -352,6 +375,7 @@ impl Winter {
                 .scheduler
                 .set_rate(EventKind::SnowfallStart, 0.0, false);
         }
+        w.state.bands.ensure(w.bands.len());
         w.slope_deg = avalanches::bedrock_slopes_deg(&w.terrain);
         let n = w.terrain.geometry().len();
         w.avalanche_maps = AvalancheMaps {
@@ -426,6 +450,13 @@ impl Winter {
     pub fn avalanche_hazard(&self) -> &[f64] {
         &self.hazard.lambda
     }
+    /// The season by 200 m altitude band so far: precipitation, rain share and peak SWE
+    /// ([`crate::bands`]; the peak counts the snow now as well as the daily samples).
+    pub fn altitude_bands(&self) -> Vec<crate::bands::BandSummary> {
+        let mut record = self.state.bands.clone();
+        record.raise_peaks(&self.band_mean_swe());
+        self.bands.summary(&record)
+    }
     /// Whether the season is over.
     pub fn finished(&self) -> bool {
         self.day() >= self.scenario.days
@@ -472,9 +503,10 @@ impl Winter {
             if now < p.start_day {
                 break;
             }
-            let remaining = p.start_day + p.days - now;
-            if remaining > 0.0 {
-                self.state.scheduler.force_snowfall(remaining);
+            let until = p.start_day + p.days;
+            if until > now {
+                self.state.scheduler.force_snowfall(p.start_day, until);
+                self.follow_storms();
             }
             self.state.forced_index += 1;
         }
@@ -716,6 +748,8 @@ impl Winter {
     fn apply(&mut self, event: Event) -> Result<(), SeasonError> {
         let t = Instant::now();
         let day = event.time_days;
+        self.follow_storms();
+        self.sample_band_swe(day);
         // An avalanche runs inside its start event: its time is the avalanche's.
         let name = match event.kind {
             EventKind::AvalancheStart => phenomenon_name(EventKind::AvalancheStep),

@@ -77,6 +77,7 @@ fn bit_identical_for_any_thread_count() {
         let b = run(20.0, threads);
         assert_eq!(a.terrain, b.terrain, "{threads} threads differ from 1");
         assert_eq!(a.budget(), b.budget());
+        assert_eq!(a.altitude_bands(), b.altitude_bands());
     }
 }
 
@@ -93,6 +94,7 @@ fn resumed_run_ends_bit_identical() {
     assert_eq!(resumed.terrain, full.terrain);
     assert_eq!(resumed.budget(), full.budget());
     assert_eq!(resumed.event_counts(), full.event_counts());
+    assert_eq!(resumed.altitude_bands(), full.altitude_bands());
     // A checkpoint of another scenario is refused.
     let mut other = scenario(30.0);
     other.seed = 99;

@@ -102,6 +102,10 @@ pub struct Report {
     /// The pack's liquid water, m³ of water (season runs with the enhanced melt).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub water_budget: Option<snowscape_season::winter::WaterBudget>,
+    /// The season per 200 m altitude band: precipitation (mm of water), rain share and peak
+    /// SWE (mm of water) (season runs; [`snowscape_season::bands`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bands: Option<Vec<snowscape_season::bands::BandSummary>>,
     /// Things the user should know (e.g. an assumed latitude), also logged.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,

@@ -691,6 +691,7 @@ fn season_report(
         skiers: Some(winter.ski_stats().clone()),
         mass_budget: budget.close(),
         water_budget: Some(b.water.clone()),
+        bands: Some(winter.altitude_bands()),
         warnings: season_warnings(winter),
         outputs,
         removed_stale: Vec::new(),

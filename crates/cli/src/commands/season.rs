@@ -97,8 +97,30 @@ pub fn run_season(job: SeasonJob, quiet: bool) -> Result<(), Failure> {
                     report.outputs.len(),
                     out.display()
                 );
+                if let Some(bands) = report.bands.as_deref() {
+                    outln!("{}", band_table(bands));
+                }
             }
             Ok(())
         }
     }
+}
+
+/// The season by altitude band, one line a band (empty bands left out).
+fn band_table(bands: &[snowscape_season::bands::BandSummary]) -> String {
+    let mut t = String::from(
+        "altitude band    cells  precipitation  rain  peak SWE\n             m             mm w.e.     %   mm w.e.",
+    );
+    for b in bands.iter().filter(|b| b.cells > 0) {
+        t.push_str(&format!(
+            "\n{:>6.0}-{:<6.0} {:>8} {:>14.0} {:>5.0} {:>9.0}",
+            b.from_m,
+            b.to_m,
+            b.cells,
+            b.precipitation_mm,
+            100.0 * b.rain_share,
+            b.peak_swe_mm
+        ));
+    }
+    t
 }

@@ -37,9 +37,7 @@ impl Parameters {
             r.map_err(|e| (name, e.to_string()))
         }
         section("parameters.environment", self.environment.validate())?;
-        if let Err((key, value, reason)) = self.climate.validate() {
-            return Err(("parameters.climate", format!("{key} = {value}: {reason}")));
-        }
+        section("parameters.climate", self.climate.validate())?;
         section("parameters.snowfall", self.snowfall.validate())?;
         section("parameters.melt", self.melt.validate())?;
         section("parameters.stability", self.stability.validate())?;
@@ -71,7 +69,8 @@ impl Scenario {
         self.check_counts(source_name)?;
         self.check_season(source_name)?;
         self.check_timelines(source_name)?;
-        self.check_sections(source_name)
+        self.check_sections(source_name)?;
+        crate::storms::check_precipitation_sources(self, source_name)
     }
 
     /// The repeated tables and lists within their caps.
@@ -235,6 +234,15 @@ impl Scenario {
                 if !(v.is_finite() && ok) {
                     return Err(bad(&key(f), number_for_message(v), reason));
                 }
+            }
+            if let Some(v) = w.precipitation_mm_per_day
+                && !(v.is_finite() && (0.0..=500.0).contains(&v))
+            {
+                return Err(bad(
+                    &key("precipitation_mm_per_day"),
+                    number_for_message(v),
+                    "must be within [0, 500] mm/day",
+                ));
             }
         }
         for (k, p) in self.snowfall_periods.iter().enumerate() {

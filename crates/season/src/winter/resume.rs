@@ -29,6 +29,9 @@ pub const MAX_MAGNITUDE: f64 = 1e15;
 /// microsecond an event, 10^12 events are eleven days of computing.
 pub const MAX_COUNT: u64 = 1_000_000_000_000;
 
+/// Most storms a checkpoint may list (those since the last melt window: a few).
+const MAX_STORMS: usize = 10_000;
+
 /// Keys of the run state that are identifiers (any 64-bit value) or checked elsewhere.
 const NOT_MAGNITUDES: [&str; 4] = [
     "scenario",
@@ -95,6 +98,46 @@ fn number_at(v: &serde_json::Value, path: &[&str]) -> Option<f64> {
     path.iter().try_fold(v, |v, k| v.get(k))?.as_f64()
 }
 
+/// The storms of a run state: days within the season (up to `latest`) and a snowfall
+/// period's reach past it, a few of them (those since the last melt window), each laid from
+/// its start to at most its end.
+fn validate_storms(
+    storms: &[super::snowpack::StormSpan],
+    latest: f64,
+) -> Result<(), CheckpointError> {
+    let storm_reach = latest + 365.0 * 2.0;
+    if storms.len() > MAX_STORMS {
+        return Err(CheckpointError::implausible(
+            "storms",
+            format!("{} storms", storms.len()),
+            format!("at most {MAX_STORMS} since the last melt window"),
+        ));
+    }
+    for (k, s) in storms.iter().enumerate() {
+        for (field, d) in [
+            ("since", s.since),
+            ("until", s.until),
+            ("delivered_to", s.delivered_to),
+        ] {
+            if !(d >= 0.0 && d <= storm_reach) {
+                return Err(CheckpointError::implausible(
+                    format!("storms[{k}].{field}"),
+                    d,
+                    "a day within the season",
+                ));
+            }
+        }
+        if !(s.since <= s.delivered_to && s.delivered_to <= s.until) {
+            return Err(CheckpointError::implausible(
+                format!("storms[{k}]"),
+                format!("{} .. {} laid to {}", s.since, s.until, s.delivered_to),
+                "a period laid from its start to at most its end",
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Validates a decoded run state against the scenario and terrain it resumes (module docs).
 fn validate_state(
     state: &RunState,
@@ -142,6 +185,7 @@ fn validate_state(
             ));
         }
     }
+    validate_storms(&state.storms, latest)?;
     match number_at(&json, &["scheduler", "snowfall_mean_days"]) {
         Some(d) if d > 0.0 && d <= 365.0 => {}
         d => {

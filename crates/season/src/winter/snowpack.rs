@@ -1,13 +1,26 @@
 //! The season's snowpack beyond the paper, as [`Winter`] runs it: the hourly air
-//! ([`crate::weather`]), the orographic snowfall, the enhanced melt windows and the Sx
+//! ([`crate::weather`]), the storms and their orographic precipitation ([`crate::storms`]),
+//! the enhanced melt windows, the altitude bands' record ([`crate::bands`]) and the Sx
 //! sheltering of each weather period.
 
 use super::{SeasonError, Winter};
 use crate::melt::{self, MeltForcing, MeltModel};
 use crate::phenomenon::PhenomenonError;
-use crate::snowfall::{self, PrecipitationMaps};
+use crate::snowfall::{self, PrecipitationMaps, SnowfallModel};
 use crate::wind_transport::{WindMaps, WindModel, WindTerms};
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
+
+/// A snowfall period of the scheduler, and how much of its precipitation has been laid.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub(super) struct StormSpan {
+    /// Start, season days.
+    pub since: f64,
+    /// End, season days (the running period's may still grow).
+    pub until: f64,
+    /// Its precipitation is laid up to here, season days.
+    pub delivered_to: f64,
+}
 
 impl Winter {
     /// What the current period's wind field gives wind transport: the sheltering index (the
@@ -57,18 +70,70 @@ impl Winter {
         }
     }
 
-    /// The default snowfall of one Snowfall-Step: the storm's precipitation at the reference
-    /// altitude over `dt_days`, at the air temperature of this hour.
-    pub(super) fn orographic_snowfall(
-        &mut self,
-        day: f64,
-        dt_days: f64,
-    ) -> Result<(), PhenomenonError> {
-        let p = self.air.storm_precipitation_m_per_day(day) * dt_days;
-        let table = self
-            .air
-            .precipitation_table(&[(self.air.sea_level_c(day) as f32, p as f32)]);
-        self.add_precipitation(&table)
+    /// Follows the scheduler's snowfall period: a new one is recorded, the running one's end
+    /// kept up to date (a forced period may lengthen it).
+    pub(super) fn follow_storms(&mut self) {
+        let Some((since, until)) = self.state.scheduler.snowfall_period() else {
+            return;
+        };
+        match self.state.storms.last_mut() {
+            Some(s) if s.since == since => s.until = until,
+            _ => self.state.storms.push(StormSpan {
+                since,
+                until,
+                delivered_to: since,
+            }),
+        }
+    }
+
+    /// The default snowfall: lays the storms' precipitation, hour by hour, up to `day` (a
+    /// Snowfall-Step, and each melt event for the hours since a storm's last step). The
+    /// paper's snowfall lays none of it here (its steps add their own).
+    pub(super) fn deliver_storms(&mut self, day: f64) -> Result<(), PhenomenonError> {
+        let orographic = self.scenario.parameters.snowfall.model == SnowfallModel::Orographic;
+        for k in 0..self.state.storms.len() {
+            let s = self.state.storms[k];
+            let to = s.until.min(day);
+            if to <= s.delivered_to {
+                continue;
+            }
+            if orographic {
+                let table = self.air.storm_precipitation(s.delivered_to, to);
+                self.add_precipitation(&table)?;
+            }
+            self.state.storms[k].delivered_to = to;
+        }
+        Ok(())
+    }
+
+    /// Forgets the storms whose precipitation is laid and that ended before `day` (the
+    /// start of the next melt window).
+    pub(super) fn forget_storms(&mut self, day: f64) {
+        self.state
+            .storms
+            .retain(|s| s.until > day || s.delivered_to < s.until);
+    }
+
+    /// Samples each altitude band's mean SWE at the first event of each season day.
+    pub(super) fn sample_band_swe(&mut self, day: f64) {
+        let today = day.max(0.0).floor() as u64;
+        if self.state.bands.sampled_day.is_some_and(|d| d >= today) {
+            return;
+        }
+        let t = Instant::now();
+        let mean = self.band_mean_swe();
+        self.state.bands.raise_peaks(&mean);
+        self.state.bands.sampled_day = Some(today);
+        *self.wall_seconds.entry("altitude_bands").or_default() += t.elapsed().as_secs_f64();
+    }
+
+    /// Each altitude band's mean SWE now, m of water.
+    pub(super) fn band_mean_swe(&self) -> Vec<f64> {
+        self.bands.mean_swe_m(
+            &self.terrain,
+            &self.pack.liquid_water_m,
+            self.scenario.parameters.melt.enhanced.layer_density_kg_m3,
+        )
     }
 
     /// Adds a precipitation table's snow to the layers and its rain to the pending rain.
@@ -92,6 +157,7 @@ impl Winter {
                 surface_age: &mut self.pack.surface_age_days,
                 reset_swe_m: p.melt.enhanced.reset_swe_m,
                 rain_out: &mut self.pending_rain,
+                bands: (self.bands.band_of(), &mut self.state.bands.water_m),
             },
             &mut self.snowfall_scratch,
         )?;
@@ -115,8 +181,13 @@ impl Winter {
         if let Some(table) = self.air.station_precipitation(t0, day) {
             self.add_precipitation(&table)?;
         }
-        let storm = self.state.scheduler.snowing();
-        let hours = self.air.melt_hours(t0, day, storm);
+        let storms: Vec<(f64, f64)> = self
+            .state
+            .storms
+            .iter()
+            .map(|s| (s.since, s.until))
+            .collect();
+        let hours = self.air.melt_hours(t0, day, &storms);
         let reflected: Vec<&[f32]> = self
             .air
             .sun
