@@ -335,7 +335,7 @@ def avalanche(
     release: Union[PathLike, np.ndarray, Tuple[float, float]],
     thickness: Optional[float] = 1.0,
     *,
-    slope_normal: bool = False,
+    slope_normal: bool = True,
     duration: float = 600.0,
     snow_cover: float = 0.0,
     **params: Any,
@@ -344,13 +344,16 @@ def avalanche(
 
     ``release``: a shapefile or raster mask path, a boolean mask array of the DEM's shape, or a
     map point ``(x, y)`` (a uniform cover of ``thickness`` breaks there). ``thickness`` in m
-    (``None``: a shapefile's own thickness field); ``slope_normal`` reads it normal to the
-    slope (AvaFrame's convention); ``snow_cover`` lays loose snow outside the release for the
-    flow to entrain. ``**params`` are the flow parameters (``[parameters.avalanche.flow]`` keys:
-    ``friction="voellmy"``, ``voellmy_mu=0.2``, ``samosat={"mu": 0.22}``...). ``friction``
-    takes the command line's names: ``"coulomb"``, ``"voellmy"``, ``"samosat"`` and
-    ``"samosat-small"`` (samosAT with AvaFrame's samosATSmall μ = 0.22, which ``samosat={...}``
-    keys override).
+    (``None``: a shapefile's own thickness field); ``slope_normal`` (the default, as the
+    command line's) reads it normal to the slope (AvaFrame's convention), ``False`` vertical;
+    ``snow_cover`` lays loose snow outside the release for the flow to entrain. ``**params``
+    are the flow parameters (``[parameters.avalanche.flow]`` keys: ``friction="voellmy"``,
+    ``voellmy_mu=0.2``, ``samosat={"mu": 0.22}``, ``slope_gravity="shallow"``...), by default
+    those of ``snowscape avalanche``: AvaFrame's samosATSmall law with the slope-projected
+    gravity and the bed's curvature. ``friction`` takes the command line's names:
+    ``"coulomb"``, ``"voellmy"``, ``"samosat"`` (AvaFrame's standard μ = 0.155) and
+    ``"samosat-small"`` (samosATSmall, μ = 0.22), whose μ ``samosat={...}`` keys override.
+    The paper's model: ``friction="coulomb", slope_gravity="shallow", slope_normal=False``.
 
     Returns ``{"peak_thickness", "peak_velocity", "deposit", "entrained"}`` rasters and
     ``"summary"``, one flat dict: the volumes (``released_volume_m3``,

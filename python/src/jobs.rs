@@ -164,31 +164,37 @@ fn summary_json(
 }
 
 /// The flow parameters from the keyword arguments' JSON. `friction` takes the command line's
-/// names (`coulomb`, `voellmy`, `samosat`, `samosat-small`): `samosat-small` is the samosAT
-/// law with AvaFrame's samosATSmall coefficients ([`SamosAtParams::small`]), under any
-/// `samosat={...}` keys given.
+/// names (`coulomb`, `voellmy`, `samosat`, `samosat-small`): `samosat` is the samosAT law with
+/// AvaFrame's standard coefficients ([`SamosAtParams::standard`]), `samosat-small` with its
+/// samosATSmall ones ([`SamosAtParams::small`], the default), under any `samosat={...}` keys
+/// given.
 fn avalanche_params(json: &str) -> PyResult<AvalancheParams> {
     let mut v: serde_json::Value =
         serde_json::from_str(json).map_err(|e| value_err(format!("avalanche parameters: {e}")))?;
-    if let Some(obj) = v.as_object_mut()
-        && obj.get("friction").and_then(|f| f.as_str()) == Some("samosat-small")
-    {
-        obj.insert("friction".into(), "samosat".into());
-        let mut small = match serde_json::to_value(SamosAtParams::small()) {
-            Ok(serde_json::Value::Object(m)) => m,
-            _ => serde_json::Map::new(),
+    if let Some(obj) = v.as_object_mut() {
+        let set = match obj.get("friction").and_then(|f| f.as_str()) {
+            Some("samosat-small") => Some(SamosAtParams::small()),
+            Some("samosat" | "samos_at") => Some(SamosAtParams::standard()),
+            _ => None,
         };
-        let given = obj.remove("samosat").or_else(|| obj.remove("samos_at"));
-        match given {
-            Some(serde_json::Value::Object(m)) => small.extend(m),
-            Some(other) => {
-                return Err(value_err(format!(
-                    "avalanche parameters: samosat={other}: expected a dict of the samosAT coefficients"
-                )));
+        if let Some(set) = set {
+            obj.insert("friction".into(), "samosat".into());
+            let mut coefficients = match serde_json::to_value(set) {
+                Ok(serde_json::Value::Object(m)) => m,
+                _ => serde_json::Map::new(),
+            };
+            let given = obj.remove("samosat").or_else(|| obj.remove("samos_at"));
+            match given {
+                Some(serde_json::Value::Object(m)) => coefficients.extend(m),
+                Some(other) => {
+                    return Err(value_err(format!(
+                        "avalanche parameters: samosat={other}: expected a dict of the samosAT coefficients"
+                    )));
+                }
+                None => {}
             }
-            None => {}
+            obj.insert("samosat".into(), serde_json::Value::Object(coefficients));
         }
-        obj.insert("samosat".into(), serde_json::Value::Object(small));
     }
     serde_json::from_value(v).map_err(|e| {
         let hint = if e.to_string().contains("unknown variant") {

@@ -266,7 +266,7 @@ mod tests {
 
     #[test]
     fn basal_shear_follows_each_law() {
-        let mut p = AvalancheParams::default();
+        let mut p = AvalancheParams::paper();
         // Coulomb, dry: g h tanθc.
         let tan30 = 30f64.to_radians().tan();
         assert!((basal_shear_per_density(&p, 2.0, 10.0) - G * 2.0 * tan30).abs() < 1e-12);

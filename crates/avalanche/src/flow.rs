@@ -29,7 +29,10 @@
 //! `c² (∇B + c² ∇h)` and the yield `c²·g·tanθc`, with `c² = cos²θ = 1/(1 + |∇B|²)` the mean
 //! of the pipe's two cells (central differences of the bed), and the Voellmy and samosAT drags
 //! are divided by `c²`; a sheet on a plane then accelerates at `g cos²θ (tanθ − tanθc)`
-//! (tests/avaframe_analytic.rs). The fourth is the viscous term `−kv·U·φ` of the paper written for the velocity (`h_face` = mean depth of the two
+//! (tests/avaframe_analytic.rs). With [`AvalancheParams::curvature`] (the default) the yield
+//! is `c²·f·g·tanθc` with the pipe's load factor `f = max(0, 1 + v·H·v/g)` of the bed's
+//! curvature (`pipes::curvature_load`, mean of the two cells) and the advection carries the
+//! speed along the bed (`update::advection`). The fourth is the viscous term `−kv·U·φ` of the paper written for the velocity (`h_face` = mean depth of the two
 //! cells), applied implicitly. `α ∈ [0, 1]` mixes dry (Coulomb) and wet (viscous) snow.
 //!
 //! **Mass (per cell).** The volume through a pipe in a sub-step is `F = w · h_up · u · δt`, with
@@ -181,7 +184,7 @@ const BLOCK: usize = 16;
 /// volumes after a copy of the block's last row).
 #[derive(Default)]
 struct BlockRows {
-    vel: [Vec<f64>; 7],
+    vel: [Vec<f64>; 9],
     np: [Vec<f64>; 4],
     fl: [Vec<f64>; 4],
 }
@@ -265,8 +268,14 @@ pub struct AvalancheState {
 /// The per-cell quantities of a sub-step the pipes read, one array each: velocity (vx, vy)
 /// reconstructed from the 8 pipes, discharge (h·vx, h·vy), the gradient gravity acts on
 /// (∂A/∂x, ∂A/∂y; with [`SlopeGravity::Projected`] `cos²θ (∇B + cos²θ ∇h)`; NaN on the ghost
-/// ring and nodata cells) and the bed's `cos²θ` (1 with [`SlopeGravity::Shallow`]; NaN where
-/// the gradient is). Seven arrays (a named constant as the array length trips the compiler).
+/// ring and nodata cells), the bed's `cos²θ` (1 with [`SlopeGravity::Shallow`]; NaN where
+/// the gradient is), the bed's load factor `f = max(0, 1 + v·H·v/g)` of the curvature
+/// (`pipes::curvature_load`; 1 with [`SlopeGravity::Shallow`] or without
+/// [`AvalancheParams::curvature`]; NaN where the gradient is) and, with the curvature, the
+/// flow's length along the bed per horizontal length `m = sqrt(1 + (v̂·∇B)²)` (`v̂` the
+/// direction of the cell's velocity; 1 at rest and where the gradient is undefined; not
+/// written without the curvature). Nine arrays (a named constant as the array length trips
+/// the compiler).
 const VX: usize = 0;
 const VY: usize = 1;
 const QX: usize = 2;
@@ -274,6 +283,8 @@ const QY: usize = 3;
 const GX: usize = 4;
 const GY: usize = 5;
 const C2: usize = 6;
+const CF: usize = 7;
+const M: usize = 8;
 
 /// Reusable work buffers for [`step`] (allocated on first use).
 #[derive(Debug, Clone, Default)]
@@ -540,7 +551,7 @@ struct Inputs<'a> {
     near_wall: &'a [bool],
     pipes: [&'a [f64]; 4],
     /// Velocities, discharges and gradients of the padded cells from index `vbase` on.
-    vel: [&'a [f64]; 7],
+    vel: [&'a [f64]; 9],
     vbase: usize,
     new_pipes: [&'a [f64]; 4],
     /// Raw volumes of the padded cells from index `fbase` on (0 outside the pipe pass).
@@ -620,7 +631,7 @@ lanes_dispatch!(
         inp: &Inputs,
         segs: &[[u32; 2]],
         r: usize,
-        out: &mut [&mut [f64]; 7],
+        out: &mut [&mut [f64]; 9],
     ) -> ()
 );
 lanes_dispatch!(

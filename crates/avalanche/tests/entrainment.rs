@@ -48,9 +48,11 @@ fn try_run(
     t: &mut LayeredTerrain,
     entrainment: EntrainmentParams,
 ) -> Result<RestOutcome, AvalancheError> {
+    // The paper's law, which the bounds below were measured with (the season's default law
+    // entrains too: crates/season's tests).
     let flow = AvalancheParams {
         entrainment,
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     };
     AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
         t,

@@ -5,8 +5,11 @@
 //! project root: AvaFrame's avaWog and avaKot DEMs, release polygons and path lines, and
 //! AvaFrame's reference run of avaKot); they panic, naming the missing file, when it is absent.
 //!
-//! Both run with the paper's parameters (pure Coulomb friction, θc = 30°) and the run driver's
-//! default stop (at rest, or kinetic energy below 1 % of its peak: AvaFrame's `stopCrit`).
+//! avaWog runs with the paper's parameters (pure Coulomb friction, θc = 30°, shallow-slope
+//! gravity: [`AvalancheParams::paper`]), avaKot with the defaults (AvaFrame's samosATSmall law,
+//! slope-projected gravity with the bed's curvature, release thickness slope-normal) and,
+//! for comparison, the other laws; all with the run driver's default stop (at rest, or kinetic
+//! energy below 1 % of its peak: AvaFrame's `stopCrit`).
 
 use snowscape_avalanche::validation::{
     RealRun, ThicknessConvention, distance_to_polyline, footprint_overlap, read_polyline,
@@ -105,7 +108,7 @@ fn avawog_release_runs_down_its_gully() {
         &rel,
         1.0,
         ThicknessConvention::Vertical,
-        &AvalancheParams::default(),
+        &AvalancheParams::paper(),
         &RunOptions::default(),
     )
     .unwrap();
@@ -222,31 +225,40 @@ fn avakot_overlap(
     (r, o)
 }
 
-/// Issue 20: the friction laws on avaKot against AvaFrame's reference run (com1DFA,
-/// samosATSmall): with the same law the footprint matches it (Jaccard ≥ 0.6; measured 0.670,
-/// recall 0.925), Voellmy with AvaFrame's defaults comes closer than the paper's Coulomb law.
+/// Issue 20 and 47: the friction laws on avaKot against AvaFrame's reference run (com1DFA,
+/// samosATSmall). Measured (2026-12-07; footprint Jaccard over the whole grid, recall,
+/// precision): the defaults (samosATSmall, projected gravity with the curvature) 0.715, 0.893,
+/// 0.782; the same without the curvature 0.729, 0.890, 0.801 (on this path the curvature
+/// changes little: 3,600 m² more footprint); the paper's Coulomb law (shallow gravity) 0.258,
+/// 0.963, 0.260; Voellmy with AvaFrame's defaults and the shallow gravity 0.364, 0.997, 0.364.
+/// Asserted: the defaults reach Jaccard ≥ 0.65 (issue 47) and recall ≥ 0.85 and come closer
+/// than the paper's law; Voellmy comes closer than the paper's Coulomb law.
 #[test]
 fn avakot_footprints_under_each_friction_law_against_avaframe() {
-    let (_, coulomb) = avakot_overlap(&AvalancheParams::default());
+    let (_, default) = avakot_overlap(&AvalancheParams::default());
+    let (_, flat) = avakot_overlap(&AvalancheParams {
+        curvature: false,
+        ..AvalancheParams::default()
+    });
+    let (_, coulomb) = avakot_overlap(&AvalancheParams::paper());
     let (_, voellmy) = avakot_overlap(&AvalancheParams {
         friction: snowscape_avalanche::FrictionLaw::Voellmy,
-        ..AvalancheParams::default()
-    });
-    let (_, samos) = avakot_overlap(&AvalancheParams {
-        friction: snowscape_avalanche::FrictionLaw::SamosAt,
-        samos_at: snowscape_avalanche::SamosAtParams::small(),
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     });
     for (name, o) in [
-        ("coulomb", &coulomb),
-        ("voellmy", &voellmy),
-        ("samosATSmall", &samos),
+        ("default (samosATSmall, projected, curvature)", &default),
+        ("samosATSmall, projected, no curvature", &flat),
+        ("paper's coulomb", &coulomb),
+        ("voellmy, shallow", &voellmy),
     ] {
         eprintln!(
             "avaKot {name} vs AvaFrame: footprint {:.0} m² vs {:.0} m², Jaccard {:.3}, recall {:.3}, precision {:.3}",
             o.ours_m2, o.reference_m2, o.jaccard, o.recall, o.precision
         );
     }
+    assert!(default.jaccard >= 0.65, "{default:?}");
+    assert!(default.recall >= 0.85, "{default:?}");
+    assert!(default.jaccard > coulomb.jaccard, "{default:?} vs {coulomb:?}");
     assert!(
         voellmy.jaccard > coulomb.jaccard,
         "{voellmy:?} vs {coulomb:?}"
@@ -254,19 +266,18 @@ fn avakot_footprints_under_each_friction_law_against_avaframe() {
     assert!(voellmy.recall >= 0.9, "recall {}", voellmy.recall);
 }
 
-/// avaKot (Kontertal): relKot.shp (1 m, measured normal to the slope as AvaFrame does) against
-/// AvaFrame com1DFA's reference run (samosATSmall friction; peak flow thickness on a 5.000 m
-/// grid offset from the 4.998 m DEM: compared by map coordinates, reference cells looked up in
-/// our grid at their centres).
+/// avaKot (Kontertal): relKot.shp (1 m, measured normal to the slope as AvaFrame does) run
+/// with the defaults against AvaFrame com1DFA's reference run (samosATSmall friction; peak flow
+/// thickness on a 5.000 m grid offset from the 4.998 m DEM: compared by map coordinates,
+/// reference cells looked up in our grid at their centres).
 ///
-/// Measured: released 21,681 m³ (AvaFrame: 4,328,073.7 kg at 200 kg/m³ = 21,640 m³); footprint
-/// (peak > 1 cm) 683,000 m² against the reference's 114,050 m²; Jaccard index 0.165; our
-/// footprint covers 98.8 % of the reference's. The flow follows the reference's gully but a
-/// thin sheet also leaves it where it bends and fans over the open slope north-west of it:
-/// pure Coulomb friction has no velocity-dependent drag to hold a thin fast film (AvaFrame's
-/// samosAT has one). Asserted, loosely (a regression bound, not an agreement claim): volume
-/// within 1 % of AvaFrame's, the reference footprint within 0.5 % of its documented 114,000 m²,
-/// recall ≥ 0.9, Jaccard ≥ 0.1 and our footprint at most 8 times the reference's.
+/// Measured (2026-12-07): released 21,681 m³ (AvaFrame: 4,328,073.7 kg at 200 kg/m³ =
+/// 21,640 m³); footprint (peak > 1 cm) 130,175 m² against the reference's 114,050 m², both
+/// 101,850 m²: Jaccard 0.715, recall 0.893, precision 0.782 (the paper's Coulomb law: 422,150
+/// m², Jaccard 0.258, its thin fast sheet fanning over the open slope north-west of the gully).
+/// Asserted: volume within 1 % of AvaFrame's, the reference footprint within 0.5 % of its
+/// documented 114,000 m², Jaccard ≥ 0.65, recall ≥ 0.85 and our footprint within 25 % of the
+/// reference's.
 #[test]
 fn avakot_release_against_avaframe_reference() {
     let (r, o) = avakot_overlap(&AvalancheParams::default());
@@ -286,10 +297,10 @@ fn avakot_release_against_avaframe_reference() {
         "reference footprint {}",
         o.reference_m2
     );
-    assert!(o.recall >= 0.9, "recall {}", o.recall);
-    assert!(o.jaccard >= 0.1, "Jaccard {}", o.jaccard);
+    assert!(o.jaccard >= 0.65, "Jaccard {}", o.jaccard);
+    assert!(o.recall >= 0.85, "recall {}", o.recall);
     assert!(
-        o.ours_m2 <= 8.0 * o.reference_m2,
+        (o.ours_m2 - o.reference_m2).abs() <= 0.25 * o.reference_m2,
         "footprint {} vs {}",
         o.ours_m2,
         o.reference_m2

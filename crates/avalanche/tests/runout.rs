@@ -21,7 +21,7 @@ use snowscape_avalanche::{AvalancheParams, RunOptions, StopReason};
 fn check(rest_angle_deg: f64, options: &RunOptions) -> f64 {
     let params = AvalancheParams {
         rest_angle_deg,
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     };
     let r = plane_runout(35.0, &params, 2.0, options).unwrap();
     let s = &r.summary;
@@ -65,7 +65,7 @@ fn plane_runout_travel_angle_is_the_rest_angle() {
         ..RunOptions::default()
     };
     check(30.0, &options);
-    let params = AvalancheParams::default();
+    let params = AvalancheParams::paper();
     let r = plane_runout(35.0, &params, 2.0, &options).unwrap();
     assert_eq!(r.summary.stop, Some(StopReason::AtRest));
     assert!(r.summary.simulated_s < 120.0);
@@ -93,7 +93,7 @@ fn plane_runout_with_a_lower_rest_angle() {
 fn plane_runout_with_film_settling() {
     let params = AvalancheParams {
         rest_angle_deg: 25.0,
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     };
     let options = RunOptions {
         duration_s: 300.0,
@@ -122,7 +122,7 @@ fn plane_runout_with_film_settling() {
 
 #[test]
 fn plane_runout_rejects_bad_inputs() {
-    let p = AvalancheParams::default();
+    let p = AvalancheParams::paper();
     let o = RunOptions::default();
     let e = plane_runout(95.0, &p, 2.0, &o).unwrap_err();
     assert!(e.to_string().contains("slope_deg"), "{e}");

@@ -10,7 +10,7 @@ fn frictionless() -> AvalancheParams {
         alpha: 0.0,
         k_viscous: 0.0,
         border: Border::Closed,
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     }
 }
 
@@ -59,7 +59,7 @@ fn dam_break_without_advection_lags() {
 /// quasi-statically. Measured: 28.8°, height 3.94 m (the 30° cone of 150 m³ is 3.63 m).
 #[test]
 fn poured_pile_flanks_at_rest_angle() {
-    let p = poured_pile(&AvalancheParams::default()).unwrap();
+    let p = poured_pile(&AvalancheParams::paper()).unwrap();
     assert!(
         p.final_speed < 1e-2,
         "poured pile still moving: {}",
@@ -110,7 +110,7 @@ fn released_cylinder_comes_to_rest_below_rest_angle() {
     let params = AvalancheParams {
         border: Border::Closed,
         momentum_advection: std::env::var("ADV").is_ok(),
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     };
     let mut scratch = AvalancheScratch::default();
     let mut t = 0.0;
@@ -152,7 +152,7 @@ fn sheet_slides_with_coulomb_acceleration() {
         let params = AvalancheParams {
             alpha,
             k_viscous: 0.0,
-            ..AvalancheParams::default()
+            ..AvalancheParams::paper()
         };
         let mut scratch = AvalancheScratch::default();
         let t = 2.0;

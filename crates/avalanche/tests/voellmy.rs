@@ -2,7 +2,8 @@
 //! inclined plane accelerates as `du/dt = g·(tanθ − μ) − g·u²/(ξ·h)` (horizontal-projection
 //! form, see [`FrictionLaw::Voellmy`]) and tends to `u∞ = sqrt(ξ·h·(tanθ − μ))`, reaching
 //! `u∞·tanh(t/τ)` with `τ = u∞ / (g·(tanθ − μ))`. Far from the layer's ends (which waves reach
-//! at ~`sqrt(g·h)` relative to the snow) the simulated speed follows it.
+//! at ~`sqrt(g·h)` relative to the snow) the simulated speed follows it. The solutions are of
+//! the shallow-slope gravity `g` ([`AvalancheParams::paper`]'s), which the runs here take.
 
 use snowscape_avalanche::{
     AvalancheParams, AvalancheScratch, AvalancheState, Border, FrictionLaw, SamosAtParams, step,
@@ -54,7 +55,7 @@ fn voellmy(mu: f64, xi: f64) -> AvalancheParams {
         voellmy_mu: mu,
         voellmy_xi_m_s2: xi,
         border: Border::Closed,
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     }
 }
 
@@ -91,7 +92,7 @@ fn voellmy_with_more_turbulent_drag_is_slower_and_a_gentle_slope_holds() {
 fn the_coulomb_law_is_unchanged_by_the_voellmy_fields() {
     let base = AvalancheParams {
         border: Border::Closed,
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     };
     let other = AvalancheParams {
         voellmy_mu: 0.9,
@@ -123,13 +124,13 @@ fn samos_steady_speed(s: &SamosAtParams, tan: f64, h: f64) -> f64 {
 fn a_uniform_layer_on_a_plane_reaches_the_steady_samosat_speed() {
     for (slope, s, h) in [
         (35.0f64, SamosAtParams::small(), 1.0),
-        (30.0, SamosAtParams::default(), 0.5),
+        (30.0, SamosAtParams::standard(), 0.5),
     ] {
         let params = AvalancheParams {
             friction: FrictionLaw::SamosAt,
             samos_at: s,
             border: Border::Closed,
-            ..AvalancheParams::default()
+            ..AvalancheParams::paper()
         };
         let (got, hc) = centre_speed(&params, slope, h, 20.0);
         let want = samos_steady_speed(&s, slope.to_radians().tan(), hc);
@@ -146,10 +147,10 @@ fn a_uniform_layer_on_a_plane_reaches_the_steady_samosat_speed() {
         friction: FrictionLaw::SamosAt,
         samos_at: SamosAtParams {
             mu: 0.45,
-            ..SamosAtParams::default()
+            ..SamosAtParams::standard()
         },
         border: Border::Closed,
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     };
     assert_eq!(centre_speed(&held, 35.0, 1.0, 5.0).0, 0.0);
 }

@@ -297,7 +297,7 @@ pub enum FrictionArg {
     /// AvaFrame com1DFA's samosAT (μ = 0.155).
     #[value(name = "samosat")]
     SamosAt,
-    /// AvaFrame com1DFA's samosATSmall (μ = 0.22), for small avalanches.
+    /// AvaFrame com1DFA's samosATSmall (μ = 0.22), for releases below 25,000 m³: the default.
     #[value(name = "samosat-small")]
     SamosAtSmall,
 }
@@ -382,30 +382,42 @@ pub struct AvalancheArgs {
     /// Release thickness, metres, (0, 50] (default: the shapefile's thickness field, else 1 m).
     #[arg(long, value_parser = crate::bounds::release_thickness)]
     pub thickness: Option<f64>,
-    /// How the release thickness is measured: vertical (the flow's own) or slope-normal (as
-    /// AvaFrame com1DFA and field measurements give it; the flow then starts with d/cosθ).
-    #[arg(long, value_enum, default_value_t = ThicknessArg::Vertical)]
+    /// How the release thickness is measured: slope-normal (the default: as AvaFrame com1DFA
+    /// and field measurements give it; the flow then starts with d/cosθ) or vertical (the
+    /// flow's own, the paper's).
+    #[arg(long, value_enum, default_value_t = ThicknessArg::SlopeNormal)]
     pub thickness_measured: ThicknessArg,
-    /// Rest (friction) angle θc of the snow, degrees (default 30, Cordonnier 2018 Table 2).
+    /// Rest (friction) angle θc of the snow, degrees (default 30, Cordonnier 2018 Table 2;
+    /// --friction-model coulomb only).
     #[arg(long)]
     pub friction_angle: Option<f64>,
     /// Viscous coefficient kv, 1/(m·s) (default 5e-4, Cordonnier 2018 Table 2); acts with
-    /// weight 1 - dry-fraction.
+    /// weight 1 - dry-fraction (--friction-model coulomb only).
     #[arg(long)]
     pub viscosity: Option<f64>,
-    /// Dry/wet mix α in [0, 1]: 1 dry (Coulomb friction only), 0 wet (viscous only).
+    /// Dry/wet mix α in [0, 1]: 1 dry (Coulomb friction only), 0 wet (viscous only)
+    /// (--friction-model coulomb only).
     #[arg(long)]
     pub dry_fraction: Option<f64>,
-    /// Basal friction law: coulomb (the paper's: --friction-angle, --viscosity,
-    /// --dry-fraction), voellmy (--mu, --xi; as RAMMS and AvaFrame com1DFA), or AvaFrame's
-    /// samosat / samosat-small (--mu overrides their μ).
-    #[arg(long, value_enum, default_value_t = FrictionArg::Coulomb)]
+    /// Basal friction law. Default samosat-small: AvaFrame com1DFA's samosAT law (Sampl &
+    /// Granig 2009) with its calibration for releases below 25,000 m³ (samosATSmall, μ =
+    /// 0.22), the law of AvaFrame's reference run of avaKot, which the defaults meet. Also
+    /// samosat (μ = 0.155), voellmy (--mu, --xi; as RAMMS and AvaFrame com1DFA) and coulomb
+    /// (the paper's, Cordonnier et al. 2018: --friction-angle, --viscosity, --dry-fraction;
+    /// the paper's whole model is `--friction-model coulomb --thickness-measured vertical
+    /// --slope-gravity shallow`). --mu overrides the μ of samosat, samosat-small and voellmy.
+    #[arg(long, value_enum, default_value_t = FrictionArg::SamosAtSmall)]
     pub friction_model: FrictionArg,
-    /// How gravity acts on the sloping bed: shallow (the paper's, gravity g) or projected
-    /// (Savage & Hutter 1989 on the horizontal grid: driving, pressure and dry friction
-    /// scaled by the bed's cos²θ; matches AvaFrame's analytic tests within 6 %).
-    #[arg(long, value_enum, default_value_t = SlopeGravityArg::Shallow)]
+    /// How gravity acts on the sloping bed: projected (the default: Savage & Hutter 1989 on
+    /// the horizontal grid, as AvaFrame solves the slope: driving, pressure and dry friction
+    /// scaled by the bed's cos²θ, and the bed's curvature in its load; matches AvaFrame's
+    /// analytic tests within 6 %) or shallow (the paper's: gravity g whatever the slope).
+    #[arg(long, value_enum, default_value_t = SlopeGravityArg::Projected)]
     pub slope_gravity: SlopeGravityArg,
+    /// Leave the centrifugal term of the bed's curvature out of the projected gravity (the
+    /// flow then loses speed wherever the slope eases).
+    #[arg(long)]
+    pub no_curvature: bool,
     /// Voellmy dry-friction coefficient μ (default 0.155, AvaFrame com1DFA).
     #[arg(long)]
     pub mu: Option<f64>,

@@ -94,6 +94,7 @@ impl LiveAvalanche {
         let cells = rupture.mask.cells;
         let mut flow = params.flow.clone();
         if params.alpha_from_temperature
+            && flow.friction == snowscape_avalanche::FrictionLaw::Coulomb
             && let Some(t) = temperature.filter(|t| t.len() == cells.len())
         {
             let (sum, n) = cells

@@ -36,7 +36,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::release_area::{ReleaseAreaError, RuptureParams};
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheWorkspace, ReleasedCells, RunOptions,
+    AvalancheError, AvalancheParams, AvalancheWorkspace, FrictionLaw, ReleasedCells, RunOptions,
 };
 use snowscape_terrain::{LayeredTerrain, SnowLayer, surface};
 use thiserror::Error;
@@ -87,7 +87,9 @@ pub struct AvalancheParameters {
     /// loaded slope makes a release there far more likely than a natural one, §6.2).
     pub skier_gain: f64,
     /// Set the flow's dry/wet mix α from the snow temperature of the release (§6.1: "α is
-    /// proportional to snow temperature"); false keeps `flow.alpha`. Default true.
+    /// proportional to snow temperature"); false keeps `flow.alpha`. Default true. α is the
+    /// Coulomb law's (`flow.friction = "coulomb"`, the paper's): the default samosAT law and
+    /// Voellmy have no dry/wet mix, and with them the release temperature sets nothing.
     pub alpha_from_temperature: bool,
     /// Release temperature at and below which the snow is dry (α = 1), °C. Default −10
     /// (Table 2's powdery-snow temperature T0powdery).
@@ -632,9 +634,9 @@ pub struct AvalancheRecord {
     pub simulated_s: f64,
     /// Flow records taken (at least `run.record_interval_s`, 0.1 s, apart).
     pub steps: u64,
-    /// Mean snow temperature of the released cells, °C (when α follows it).
+    /// Mean snow temperature of the released cells, °C (when α follows it: the Coulomb law).
     pub release_temperature_c: Option<f64>,
-    /// The dry/wet mix α of the flow.
+    /// The dry/wet mix α of the flow (the Coulomb law's; 1 under samosAT and Voellmy).
     pub alpha: f64,
 }
 
@@ -660,8 +662,8 @@ pub struct Release<'a> {
 
 /// Releases `cells` (row-major, ascending), runs the avalanche to rest and deposits it as
 /// stable snow ([`AvalancheWorkspace::run_to_rest`]: the cost follows the avalanche's
-/// footprint). With `alpha_from_temperature`, α comes from the mean `temperature` (°C per
-/// cell) of the released cells. Returns the record and the cells whose snow the flow
+/// footprint). With `alpha_from_temperature` and the Coulomb law, α comes from the mean
+/// `temperature` (°C per cell) of the released cells. Returns the record and the cells whose snow the flow
 /// entrained (ascending), beside the released ones.
 pub fn run_avalanche(
     params: &AvalancheParameters,
@@ -685,7 +687,7 @@ pub fn run_avalanche(
     }
     let mut flow = params.flow.clone();
     let mut release_t = None;
-    if params.alpha_from_temperature {
+    if params.alpha_from_temperature && flow.friction == FrictionLaw::Coulomb {
         let valid: Vec<usize> = cells
             .iter()
             .copied()
@@ -734,7 +736,7 @@ pub fn run_avalanche(
         simulated_s: summary.simulated_s,
         steps: outcome.records,
         release_temperature_c: release_t,
-        alpha: flow.alpha,
+        alpha: flow.dry_weight(),
     };
     Ok((record, entrained))
 }

@@ -52,6 +52,14 @@ pub(super) struct Consts {
     pub(super) adv: bool,
     /// [`SlopeGravity::Projected`].
     pub(super) projected: bool,
+    /// [`SlopeGravity::Projected`] with [`AvalancheParams::curvature`]: the bed's load
+    /// carries the centrifugal term (`pipes::curvature_load`) and momentum is advected along
+    /// the bed (`update::advection`).
+    pub(super) curvature: bool,
+    /// `1/dx²`, `1/dy²`, `1/(4·dx·dy)`: the bed Hessian's divisors, as factors.
+    pub(super) inv_dx2: f64,
+    pub(super) inv_dy2: f64,
+    pub(super) inv_four_dxdy: f64,
     pub(super) closed: bool,
     pub(super) alpha: f64,
     pub(super) pw: usize,
@@ -116,6 +124,10 @@ impl Consts {
             samos,
             adv: params.momentum_advection,
             projected: params.slope_gravity == SlopeGravity::Projected,
+            curvature: params.slope_gravity == SlopeGravity::Projected && params.curvature,
+            inv_dx2: 1.0 / (pg.dx * pg.dx),
+            inv_dy2: 1.0 / (pg.dy * pg.dy),
+            inv_four_dxdy: 1.0 / (4.0 * pg.dx * pg.dy),
             closed: params.border == Border::Closed,
             alpha,
             pw,

@@ -25,7 +25,6 @@ pub enum Border {
 pub enum FrictionLaw {
     /// The paper's: Coulomb friction `g·tanθc` weighted by α, and a viscous term
     /// `−(1 − α)·kv·h·u` (Cordonnier et al. 2018, §6.1, Table 2).
-    #[default]
     Coulomb,
     /// Voellmy-Salm: a dry-friction deceleration `μ·g` and a turbulent drag `g·u²/(ξ·h)`
     /// (Voellmy 1955; Salm 1993; as in RAMMS and AvaFrame com1DFA's `frictModel = Voellmy`).
@@ -39,6 +38,8 @@ pub enum FrictionLaw {
     ///
     /// Named `samosat` as on the command line (`--friction-model samosat`); `samos_at`, its
     /// name in scenario files and reports before, is still read so that they keep loading.
+    /// The default ([`AvalancheParams::default`] with AvaFrame's `samosATSmall` coefficients).
+    #[default]
     #[serde(rename = "samosat", alias = "samos_at")]
     SamosAt,
 }
@@ -56,24 +57,39 @@ pub enum SlopeGravity {
     /// `g sinθ − μ g cosθ − g cosθ ∂h_n/∂s` with `h_n = h cosθ`, `∂s = ∂x/cosθ`, `u = u_s cosθ`
     /// gives the horizontal `−g cos²θ (∇B + cos²θ ∇h)` and a dry friction `μ g cos²θ`, and a
     /// turbulent drag `g u_s²/(ξ h_n)` becomes `g u²/(ξ h cos²θ)`. On a plane: sliding at
-    /// `g cos²θ (tanθ − μ)` and waves at `cos²θ sqrt(g h)`. Curvature (centrifugal) terms are
-    /// left out, as in the shallow form, so where the slope eases the horizontal speed does
-    /// not pick up the share the slope's tilt held: on a 35° plane running out on flat ground
-    /// a block stops at a travel angle of 32.3° for θc = 30° (tests/runout.rs asks 30 ± 1°).
+    /// `g cos²θ (tanθ − μ)` and waves at `cos²θ sqrt(g h)`.
+    ///
+    /// With [`AvalancheParams::curvature`] (the default) the flow feels the bed's curvature
+    /// as Savage-Hutter on a curved bed does (Gray, Wieland & Hutter 1999, Proc. R. Soc. A 455;
+    /// AvaFrame com1DFA's curvature acceleration): (1) the bed's load becomes
+    /// `cosθ (g + v·H·v)` (`H` the bed's Hessian, `v` the horizontal velocity: the centrifugal
+    /// term, `± u_s²/R` on an arc of radius R; no less than 0, where the flow lifts off), and
+    /// the dry friction with it, `μ cos²θ (g + v·H·v)` on the grid (AvaFrame's
+    /// `curvAccInFriction`); (2) the reaction turns the flow along the bed: momentum is
+    /// advected as the speed along the bed, `u·sqrt(1 + (v̂·∇B)²)`, so that where the slope eases
+    /// the horizontal speed picks up the share the slope's tilt held (the horizontal share
+    /// `−cos²θ (v·H·v) ∇B` of the reaction; AvaFrame projects its particles' velocity back onto
+    /// the bed). Frictionless, the speed along the bed is kept through a bend
+    /// (tests/curvature.rs). Without it, the horizontal speed is kept instead: on a 35° plane
+    /// running out on flat ground a Coulomb block stops at a travel angle of 32.3° for
+    /// θc = 30°. The pressure term keeps `g` (AvaFrame's `curvAccInGradient = 0`).
+    #[default]
     Projected,
     /// The paper's shallow-slope form: gravity `g` whatever the slope (`−g ∇A`, friction
     /// `μ g`), exact for θ → 0 and 1/cos²θ too fast on steep slopes (16 % at 22°, 49 % at 35°,
     /// tests/avaframe_analytic.rs).
-    #[default]
     Shallow,
 }
 
-/// The samosAT law's coefficients (AvaFrame com1DFA; its `samosATSmall` set, for small
-/// avalanches, has μ = 0.22, `samosATMedium` μ = 0.17, the others equal).
+/// The samosAT law's coefficients (AvaFrame com1DFA, after Sampl & Granig 2009; its
+/// `samosATSmall` set, for releases below 25,000 m³, has μ = 0.22, `samosATMedium` μ = 0.17,
+/// its standard `samosAT` μ = 0.155, the others equal). The default is the small set
+/// ([`SamosAtParams::small`]); a table that names some coefficients takes the others from it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct SamosAtParams {
-    /// Dry-friction coefficient μ = tanδ. Default 0.155 (AvaFrame `musamosat`).
+    /// Dry-friction coefficient μ = tanδ. Default 0.22 (AvaFrame `musamosatsmall`; its
+    /// standard `musamosat` is 0.155: [`SamosAtParams::standard`]).
     pub mu: f64,
     /// Reference Froude-type number Rs0. Default 0.222 (AvaFrame `Rs0samosat`).
     pub rs0: f64,
@@ -87,6 +103,13 @@ pub struct SamosAtParams {
 
 impl Default for SamosAtParams {
     fn default() -> Self {
+        Self::small()
+    }
+}
+
+impl SamosAtParams {
+    /// AvaFrame's standard `samosAT` set (μ = 0.155).
+    pub fn standard() -> Self {
         Self {
             mu: 0.155,
             rs0: 0.222,
@@ -95,14 +118,13 @@ impl Default for SamosAtParams {
             b: 4.13,
         }
     }
-}
 
-impl SamosAtParams {
-    /// AvaFrame's `samosATSmall` set (μ = 0.22), the one of its avaKot reference run.
+    /// AvaFrame's `samosATSmall` set (μ = 0.22), the one of its avaKot reference run: the
+    /// default.
     pub fn small() -> Self {
         Self {
             mu: 0.22,
-            ..Self::default()
+            ..Self::standard()
         }
     }
 }
@@ -133,7 +155,10 @@ pub struct AvalancheParams {
     pub border: Border,
     /// Upper bound on the number of sub-steps in one call to [`step`]. Default 1 000 000.
     pub max_substeps: usize,
-    /// Basal friction law. Default `coulomb` (the paper's).
+    /// Basal friction law. Default `samosat` with AvaFrame's `samosATSmall` coefficients
+    /// ([`SamosAtParams::small`]): the law and calibration of AvaFrame com1DFA's reference run
+    /// of avaKot, which the default run meets (Jaccard ≥ 0.65, tests/real_paths.rs); the
+    /// paper's `coulomb` (Cordonnier et al. 2018) stays by name.
     pub friction: FrictionLaw,
     /// Voellmy dry-friction coefficient μ (with `friction = "voellmy"`). Default 0.155
     /// (AvaFrame com1DFA's `muvoellmy`).
@@ -143,15 +168,20 @@ pub struct AvalancheParams {
     pub voellmy_xi_m_s2: f64,
     /// The samosAT law's coefficients (with `friction = "samosat"`), the table
     /// `[parameters.avalanche.flow.samosat]` (`samos_at`, its name before, is still read).
+    /// Default AvaFrame's `samosATSmall` set ([`SamosAtParams::small`], μ = 0.22).
     #[serde(rename = "samosat", alias = "samos_at")]
     pub samos_at: SamosAtParams,
-    /// How gravity acts on a sloping bed. Default `shallow` (the paper's). `projected`
-    /// (Savage-Hutter on the horizontal grid) brings AvaFrame's analytic tests from a front
-    /// 11 % ahead and a centre of mass 58 % too far to within 6 %
-    /// (tests/avaframe_analytic.rs) but, without the curvature terms, stops short on real
-    /// paths (avaKot: recall of AvaFrame's footprint 0.81 against 0.965; travel angle on a
-    /// plane 32.3° for θc = 30°), so it is not the default yet.
+    /// How gravity acts on a sloping bed. Default `projected` (Savage-Hutter on the
+    /// horizontal grid, as AvaFrame com1DFA solves the slope): it brings AvaFrame's analytic
+    /// tests from a front 11 % ahead and a centre of mass 58 % too far (the paper's
+    /// `shallow`) to within 6 % (tests/avaframe_analytic.rs).
     pub slope_gravity: SlopeGravity,
+    /// With [`SlopeGravity::Projected`], the bed's curvature: its centrifugal term in the
+    /// load and the friction, and momentum carried along the bed (see
+    /// [`SlopeGravity::Projected`]). Default true (AvaFrame com1DFA's `curvAccInFriction = 1`
+    /// and its reprojection onto the bed; without it the flow loses the share of its speed the
+    /// slope's tilt held wherever the slope eases: tests/curvature.rs).
+    pub curvature: bool,
     /// Entrainment of the snowpack the flow runs over (`crate::entrainment`: AvaFrame's
     /// erosion rate `τ_b·|u|/e_b`, powder and unstable snow first, then stable snow up to a
     /// depth). On by default; it only acts where the terrain carries snow.
@@ -169,11 +199,12 @@ impl Default for AvalancheParams {
             momentum_advection: true,
             border: Border::Open,
             max_substeps: 1_000_000,
-            friction: FrictionLaw::Coulomb,
+            friction: FrictionLaw::SamosAt,
             voellmy_mu: 0.155,
             voellmy_xi_m_s2: 4000.0,
-            samos_at: SamosAtParams::default(),
-            slope_gravity: SlopeGravity::Shallow,
+            samos_at: SamosAtParams::small(),
+            slope_gravity: SlopeGravity::Projected,
+            curvature: true,
             entrainment: Default::default(),
         }
     }
@@ -183,6 +214,16 @@ impl Default for AvalancheParams {
 pub const MAX_SUBSTEPS: usize = 10_000_000;
 
 impl AvalancheParams {
+    /// The paper's model (Cordonnier et al. 2018): Coulomb friction with θc = 30° and the
+    /// shallow-slope gravity, the rest as the defaults.
+    pub fn paper() -> Self {
+        Self {
+            friction: FrictionLaw::Coulomb,
+            slope_gravity: SlopeGravity::Shallow,
+            ..Self::default()
+        }
+    }
+
     /// The dry-friction coefficient of the law: `tanθc` (Coulomb) or μ (Voellmy).
     pub fn dry_friction(&self) -> f64 {
         match self.friction {

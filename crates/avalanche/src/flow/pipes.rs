@@ -10,11 +10,13 @@ pub(super) fn vel_row_lanes<V: Lanes>(
     inp: &Inputs,
     segs: &[[u32; 2]],
     r: usize,
-    out: &mut [&mut [f64]; 7],
+    out: &mut [&mut [f64]; 9],
 ) {
     let pw = k.pw;
-    let (lo, hi) = if r >= 1 && r + 2 <= k.ph {
-        (1, pw - 2)
+    // Lanes where the 3x3 stencil holds no ghost-ring or nodata cell (the bed's curvature is
+    // read there only: [`curvature_load`]).
+    let (lo, hi) = if r >= 2 && r + 3 <= k.ph {
+        (2, pw - 3)
     } else {
         (1, 0)
     };
@@ -59,7 +61,7 @@ unsafe fn cell_flow_lanes<V: Lanes>(
     k: &Consts,
     inp: &Inputs,
     kk: usize,
-    out: &mut [&mut [f64]; 7],
+    out: &mut [&mut [f64]; 9],
     c: usize,
 ) {
     // SAFETY: the caller guarantees the stencil lies in the arrays (see `# Safety`).
@@ -80,6 +82,7 @@ unsafe fn cell_flow_lanes<V: Lanes>(
         let mut gx = (a(kk + 1) - a(kk - 1)) * inv_two_dx;
         let mut gy = (a(kk + pw) - a(kk - pw)) * inv_two_dy;
         let mut c2 = V::splat(1.0);
+        let mut cf = V::splat(1.0);
         if k.projected {
             // [`projected_gradient`] in lanes.
             let b = |i: usize| ld::<V>(inp.bed, i);
@@ -88,6 +91,10 @@ unsafe fn cell_flow_lanes<V: Lanes>(
             c2 = V::splat(1.0) / (V::splat(1.0) + (bx * bx + by * by));
             gx = c2 * (bx + c2 * (gx - bx));
             gy = c2 * (by + c2 * (gy - by));
+            if k.curvature {
+                cf = curvature_load::<V>(k, inp.bed, kk, vx, vy);
+                along_bed::<V>(vx, vy, bx, by).store(out[M], c);
+            }
         }
         let hk = ld::<V>(inp.h, kk);
         vx.store(out[VX], c);
@@ -97,6 +104,59 @@ unsafe fn cell_flow_lanes<V: Lanes>(
         gx.store(out[GX], c);
         gy.store(out[GY], c);
         c2.store(out[C2], c);
+        cf.store(out[CF], c);
+    }
+}
+
+/// The flow's length along the bed per horizontal length, `m = sqrt(1 + (v̂·∇B)²)`, at
+/// horizontal velocity `(vx, vy)` on a bed of gradient `(bx, by)` (1 at rest): the factor from
+/// the horizontal speed to the speed along the bed (`update::advection`).
+#[inline(always)]
+pub(super) fn along_bed<V: Lanes>(vx: V, vy: V, bx: V, by: V) -> V {
+    let zero = V::splat(0.0);
+    let v2 = vx * vx + vy * vy;
+    let vb = vx * bx + vy * by;
+    let rise2 = V::select(v2.gt(zero), (vb * vb) / v2, zero);
+    (V::splat(1.0) + rise2).sqrt()
+}
+
+/// The bed's load factor of the curvature at `V::N` cells from padded index `kk` moving at
+/// horizontal velocity `(vx, vy)`: `f = max(0, 1 + v·H·v/g)`, with `H` the Hessian of the bed
+/// by central differences on the 3x3 stencil (`B_xx = (B_E − 2B + B_W)/dx²`,
+/// `B_yy = (B_S − 2B + B_N)/dy²`, `B_xy = ((B_SE − B_SW) − (B_NE − B_NW))/(4·dx·dy)`; x east, y
+/// south, as the velocity).
+///
+/// A flow following a bed `z = B(x, y)` at horizontal velocity `v` accelerates normal to it by
+/// `cosθ·v·H·v` (differentiate `v·∇B`, the vertical velocity, along the path), so the bed
+/// carries `cosθ (g + v·H·v)` per unit mass instead of `g cosθ`: the centrifugal term of
+/// Savage-Hutter on a curved bed (Gray, Wieland & Hutter 1999, Proc. R. Soc. A 455; AvaFrame
+/// com1DFA's curvature acceleration in the friction, `curvAccInFriction`, its theory
+/// documentation's σ₃₃ after Zwinger 2000). Where `v·H·v < −g` the flow lifts off: no load
+/// (`f = 0`).
+///
+/// # Safety
+/// The 3x3 stencil of each of the `V::N` cells lies in `bed` (of the padded length `pw·ph`).
+#[inline(always)]
+pub(super) unsafe fn curvature_load<V: Lanes>(
+    k: &Consts,
+    bed: &[f64],
+    kk: usize,
+    vx: V,
+    vy: V,
+) -> V {
+    // SAFETY: the caller guarantees the stencil lies in `bed` (see `# Safety`).
+    unsafe {
+        let pw = k.pw;
+        let b = |i: usize| ld::<V>(bed, i);
+        let b0 = b(kk);
+        let bxx = ((b(kk + 1) + b(kk - 1)) - (b0 + b0)) * V::splat(k.inv_dx2);
+        let byy = ((b(kk + pw) + b(kk - pw)) - (b0 + b0)) * V::splat(k.inv_dy2);
+        let bxy = ((b(kk + pw + 1) - b(kk + pw - 1)) - (b(kk - pw + 1) - b(kk - pw - 1)))
+            * V::splat(k.inv_four_dxdy);
+        let vhv = vx * vx * bxx + (vx + vx) * vy * bxy + vy * vy * byy;
+        let f = V::splat(1.0) + vhv * V::splat(1.0 / G);
+        let zero = V::splat(0.0);
+        V::select(f.lt(zero), zero, f)
     }
 }
 
@@ -107,7 +167,7 @@ pub(super) fn cell_flow_border(
     inp: &Inputs,
     c: usize,
     r: usize,
-) -> [f64; 7] {
+) -> [f64; 9] {
     let kk = r * k.pw + c;
     let mut p = [0.0; 4];
     for (d, pd) in p.iter_mut().enumerate() {
@@ -125,17 +185,35 @@ pub(super) fn cell_flow_border(
         walls: k.closed,
         pw: k.pw,
     };
-    let [gx, gy, c2] = match surface_gradient(pg, inp.h, inp.bed, cells, kk) {
-        None => [f64::NAN; 3],
+    let [gx, gy, c2, cf, m] = match surface_gradient(pg, inp.h, inp.bed, cells, kk) {
         Some([gx, gy]) if k.projected => {
             let [bx, by] =
                 bed_gradient(pg, inp.bed, cells, kk).expect("defined where the surface's is");
-            projected_gradient(gx, gy, bx, by)
+            // The curvature where the 3x3 stencil holds only valid cells (next to the ghost
+            // ring and nodata cells the bed is a copy: its curvature is not the terrain's).
+            let inner = (2..=k.pw - 3).contains(&c)
+                && (2..=k.ph - 3).contains(&r)
+                && !inp.near_wall[kk];
+            let cf = if k.curvature && inner {
+                // SAFETY: `inner`: the 3x3 stencil lies in the padded bed.
+                unsafe { curvature_load::<f64>(k, inp.bed, kk, vx, vy) }
+            } else {
+                1.0
+            };
+            let m = if k.curvature {
+                along_bed::<f64>(vx, vy, bx, by)
+            } else {
+                1.0
+            };
+            let [gx, gy, c2] = projected_gradient(gx, gy, bx, by);
+            [gx, gy, c2, cf, m]
         }
-        Some([gx, gy]) => [gx, gy, 1.0],
+        // (`m` = 1 where the gradient is undefined: the ghost ring and nodata cells.)
+        None => [f64::NAN, f64::NAN, f64::NAN, f64::NAN, 1.0],
+        Some([gx, gy]) => [gx, gy, 1.0, 1.0, 1.0],
     };
     let hk = inp.h[kk];
-    [vx, vy, hk * vx, hk * vy, gx, gy, c2]
+    [vx, vy, hk * vx, hk * vy, gx, gy, c2, cf, m]
 }
 
 /// The gradient gravity acts on with [`SlopeGravity::Projected`], `cos²θ (∇B + cos²θ ∇h)`, and
@@ -327,12 +405,17 @@ unsafe fn pipe_lanes<V: Lanes>(
             (y, depth * div * div)
         });
         let c2 = half * (lv(C2, kk) + lv(C2, j));
+        let cf = half * (lv(CF, kk) + lv(CF, j));
         let yield_dt = match (samos, mu_g) {
             (None, None) => V::splat(k.yield_dt),
             (None, Some(m)) => V::splat(k.alpha) * m * V::splat(k.dt),
             (Some((y, _)), _) => y,
         };
-        let yield_dt = if k.projected { yield_dt * c2 } else { yield_dt };
+        let yield_dt = if k.projected {
+            yield_dt * (c2 * cf)
+        } else {
+            yield_dt
+        };
         let dead = if k.coulomb {
             V::or(dead, tnorm.le(yield_dt))
         } else {
@@ -448,6 +531,12 @@ unsafe fn advection_lanes<V: Lanes>(
         let mut lam = [zero; 4];
         let mut un = [zero; 4];
         let mut total = zero;
+        // With the curvature, the neighbours' velocities along the bed, `u_f·m_f/m`, `m` of a
+        // pipe the mean of its cells' ([`super::update::advection`]).
+        let mv = inp.vel[M];
+        let inv_m = k
+            .curvature
+            .then(|| V::splat(1.0) / (half * (ld::<V>(mv, kv) + ld::<V>(mv, kv + jk))));
         for (m, &(kn, knv, q, qp, rate, minus)) in nbs.iter().enumerate() {
             let qn = half * (ld::<V>(q, knv) + ld::<V>(q, knv + jk));
             let face = half * (qp + qn);
@@ -455,7 +544,13 @@ unsafe fn advection_lanes<V: Lanes>(
             lam[m] = V::select(inflow.gt(zero), rate * inflow, zero);
             // (A face without inflow has `λ = 0`: its term below is a zero whatever `u_f`, and
             // zeros leave the sums unchanged.)
-            un[m] = ld::<V>(pd, kn);
+            un[m] = match inv_m {
+                Some(inv_m) => {
+                    let m_f = half * (ld::<V>(mv, knv) + ld::<V>(mv, knv + jk));
+                    (ld::<V>(pd, kn) * m_f) * inv_m
+                }
+                None => ld::<V>(pd, kn),
+            };
             total = total + lam[m];
         }
         let one = V::splat(1.0);

@@ -57,7 +57,7 @@ pub(super) fn substep(
         nodata: &state.nodata,
         near_wall: &state.near_wall,
         pipes: [empty; 4],
-        vel: [empty; 7],
+        vel: [empty; 9],
         vbase: 0,
         new_pipes: [empty; 4],
         flux: [empty; 4],
@@ -115,7 +115,7 @@ pub(super) fn substep(
                         a.resize(2 * pw, 0.0);
                     }
                 }
-                let vel_of = |x: usize, vel: &mut [Vec<f64>; 7]| {
+                let vel_of = |x: usize, vel: &mut [Vec<f64>; 9]| {
                     let lr = (x - v0) * pw;
                     let mut row = vel.each_mut().map(|a| &mut a[lr..lr + pw]);
                     vel_row(simd, &k, pg, &inp1, seg3.row(x), x, &mut row);
@@ -212,7 +212,7 @@ pub(super) fn substep(
             nodata: &state.nodata,
             near_wall: &[],
             pipes: [empty; 4],
-            vel: [empty; 7],
+            vel: [empty; 9],
             vbase: 0,
             new_pipes: new_pipes.each_ref().map(|v| v.as_slice()),
             flux: flux.each_ref().map(|v| v.as_slice()),

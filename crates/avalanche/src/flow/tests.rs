@@ -126,3 +126,57 @@ fn nodata_cells_take_the_nearest_valid_cell() {
     assert_eq!(s.bed_at(2, 3), 111.0);
     assert_eq!(s.bed[s.pad(2, 3) + s.pw], 111.0, "ghost below (2, 3)");
 }
+
+/// The bed's curvature in its load ([`pipes::curvature_load`]): on a circular arc of radius R,
+/// a flow at speed `u_s` along the bed presses on it with `g cosθ + u_s²/R` per unit mass in a
+/// hollow and `g cosθ − u_s²/R` over a crest (the load is `cosθ·g·f`), and lifts off (f = 0)
+/// over a crest where `u_s² > g R cosθ`. The central differences of the bed reproduce it
+/// within 0.1 % on 0.5 m cells of a 100 m arc, at every slope on the arc and for any heading.
+#[test]
+fn curvature_load_on_a_circular_arc() {
+    let (n, dx, radius) = (401usize, 0.5, 100.0);
+    let g = GridGeometry::new(n, 9, dx, dx).unwrap();
+    let pg = PipeGeometry::new(&g, 9 + 2);
+    let params = AvalancheParams::default();
+    let k = Consts::new(&params, &pg, n + 2, 9 + 2, 0.1);
+    assert!(k.curvature);
+    // A cylinder about an axis along y: z = ±(R − sqrt(R² − x²)), x from the lowest point.
+    for hollow in [true, false] {
+        let sign = if hollow { 1.0 } else { -1.0 };
+        let x_of = |c: usize| (c as f64 - 1.0 - (n as f64 - 1.0) / 2.0) * dx;
+        let bed: Vec<f64> = (0..(n + 2) * 11)
+            .map(|i| {
+                let x = x_of(i % (n + 2));
+                sign * (radius - (radius * radius - x * x).sqrt())
+            })
+            .collect();
+        for c in [101usize, 160, 202, 250, 300] {
+            let x = x_of(c);
+            let sin = x / radius;
+            let cos = (1.0 - sin * sin).sqrt();
+            for (u_s, heading_deg) in [(10.0f64, 0.0f64), (25.0, 0.0), (25.0, 40.0)] {
+                // Along the arc at `u_s`, and with a cross-slope component (the axis of the
+                // cylinder is straight: only the component across it curves).
+                let (sh, ch) = heading_deg.to_radians().sin_cos();
+                let (vx, vy) = (u_s * ch * cos, u_s * sh);
+                let kk = 5 * (n + 2) + c;
+                // SAFETY: the 3x3 stencil of `kk` lies in the padded bed.
+                let f = unsafe { pipes::curvature_load::<f64>(&k, &bed, kk, vx, vy) };
+                let along = u_s * ch;
+                let exact = (G * cos + sign * along * along / radius).max(0.0);
+                let load = cos * G * f;
+                assert!(
+                    (load - exact).abs() <= 1e-3 * exact.max(G * cos),
+                    "hollow {hollow} x {x} u_s {u_s} heading {heading_deg}: {load} vs {exact}"
+                );
+            }
+        }
+        if !hollow {
+            // 35 m/s over the crest of a 100 m arc: u_s² = 1225 > g R = 981, lift-off.
+            let kk = 5 * (n + 2) + 202;
+            // SAFETY: as above.
+            let f = unsafe { pipes::curvature_load::<f64>(&k, &bed, kk, 35.0, 0.0) };
+            assert_eq!(f, 0.0);
+        }
+    }
+}

@@ -500,6 +500,8 @@ pub(super) fn pipe_update(
         (true, true) => 1.0,
     };
     let c2 = pipe_mean(C2);
+    // The pipe's load factor of the curvature (`pipes::curvature_load`), as its `cos²θ`.
+    let cf = pipe_mean(CF);
     let a = if k.projected {
         (c2 * ((bed[j] - bed[kk]) + c2 * (hj - hi))) * pg.neg_g_over_len[d]
     } else {
@@ -511,7 +513,7 @@ pub(super) fn pipe_update(
     ];
     let mut u = u0 + dt * a;
     if params.momentum_advection {
-        u += advection(pg, inp, k.pw, at, dt);
+        u += advection(pg, inp, (k.pw, k.curvature), at, dt);
     }
     // Coulomb friction as one vector: the trial velocity at the pipe, `v + δt·(−g∇A)` (cell
     // velocities and surface gradients averaged over the pipe's two cells), is slowed by
@@ -545,9 +547,9 @@ pub(super) fn pipe_update(
         ),
     };
     if k.projected {
-        // The normal load, and the dry friction with it, is `g cosθ`; its horizontal share
-        // `cosθ` more.
-        yield_dt *= c2;
+        // The normal load, and the dry friction with it, is `g cosθ` (times the curvature's
+        // `f`); its horizontal share `cosθ` more.
+        yield_dt *= c2 * cf;
     }
     let proj = if tnorm > 0.0 {
         ((pg.e[d][0] * trial[0] + pg.e[d][1] * trial[1]) / tnorm).abs()
@@ -651,7 +653,27 @@ fn gradient(
 /// `λ_f = dt · Q_f / (Δ · h̄)` with `Q_f` the inflowing discharge at the face (mean of the cell
 /// discharges `h·v` of the two pipes' end cells), `h̄` the mean depth of the pipe's cells. The
 /// `λ` are scaled so that `Σ λ ≤ 1` (a convex combination: no overshoot).
-pub(super) fn advection(pg: &PipeGeometry, inp: &Inputs, pw: usize, at: PipeAt, dt: f64) -> f64 {
+///
+/// **Along the bed** (`along_bed`: [`SlopeGravity::Projected`] with the curvature): what the
+/// flow carries from cell to cell is its speed along the bed, not its horizontal speed, so
+/// `u_f` enters as `u_f·m_f/m`, with `m = sqrt(1 + (v̂·∇B)²)` the flow's length along the bed
+/// per horizontal length (`pipes::along_bed`; of a pipe, the mean of its two cells': the
+/// flow's direction, not the pipe's, since every pipe carries the projection `e·v` of the one
+/// flow velocity). Where the slope eases the horizontal speed grows by the ratio and where it
+/// steepens it shrinks, the speed along the bed kept: the horizontal share
+/// of the bed's reaction that turns the flow along a curved bed, `−cos²θ (v·H·v) ∇B` (with
+/// `u_s = u·m`, `Du/Dt = D(u_s/m)/Dt` gives that term for a steady `u_s`), which AvaFrame
+/// com1DFA gets by projecting its particles' velocity back onto the bed. Carried by the
+/// upwind advection, it keeps its convex combination: along a path the ratios multiply to
+/// `m_start/m_end`, so a flow cannot gain speed going round a hollow, as an explicit
+/// `v·H·v` force would on a rough bed.
+pub(super) fn advection(
+    pg: &PipeGeometry,
+    inp: &Inputs,
+    (pw, along_bed): (usize, bool),
+    at: PipeAt,
+    dt: f64,
+) -> f64 {
     let PipeAt {
         owner: k,
         neighbour: j,
@@ -682,6 +704,7 @@ pub(super) fn advection(pg: &PipeGeometry, inp: &Inputs, pw: usize, at: PipeAt, 
     let mut un = [0.0f64; 4];
     let mut total = 0.0;
     let rate = [dt / (pg.dx * hbar), dt / (pg.dy * hbar)];
+    let inv_m = along_bed.then(|| 1.0 / (0.5 * (vel[M][k - vb] + vel[M][j - vb])));
     for (m, &(oc, or, axis, side)) in nbs.iter().enumerate() {
         let (cc, rr) = (c as isize + oc, r as isize + or);
         let (jc, jr) = (cc + dc, rr + dr);
@@ -699,7 +722,13 @@ pub(super) fn advection(pg: &PipeGeometry, inp: &Inputs, pw: usize, at: PipeAt, 
         let inflow = -side * q_face;
         if inflow > 0.0 {
             lam[m] = rate[axis] * inflow;
-            un[m] = inp.pipes[d][kn];
+            un[m] = match inv_m {
+                Some(inv_m) => {
+                    let m_f = 0.5 * (vel[M][kn - vb] + vel[M][jn - vb]);
+                    (inp.pipes[d][kn] * m_f) * inv_m
+                }
+                None => inp.pipes[d][kn],
+            };
             total += lam[m];
         }
     }

@@ -61,7 +61,10 @@ fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
     p.friction = match args.friction_model {
         FrictionArg::Coulomb => FrictionLaw::Coulomb,
         FrictionArg::Voellmy => FrictionLaw::Voellmy,
-        FrictionArg::SamosAt => FrictionLaw::SamosAt,
+        FrictionArg::SamosAt => {
+            p.samos_at = SamosAtParams::standard();
+            FrictionLaw::SamosAt
+        }
         FrictionArg::SamosAtSmall => {
             p.samos_at = SamosAtParams::small();
             FrictionLaw::SamosAt
@@ -71,11 +74,29 @@ fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
         SlopeGravityArg::Shallow => SlopeGravity::Shallow,
         SlopeGravityArg::Projected => SlopeGravity::Projected,
     };
+    p.curvature = !args.no_curvature;
+    if args.no_curvature && p.slope_gravity != SlopeGravity::Projected {
+        bail!("--no-curvature acts on --slope-gravity projected only (the shallow form has no curvature term)");
+    }
     if p.friction == FrictionLaw::Coulomb && (args.mu.is_some() || args.xi.is_some()) {
         bail!("--mu and --xi are the Voellmy law's: add --friction-model voellmy");
     }
     if p.friction == FrictionLaw::SamosAt && args.xi.is_some() {
-        bail!("--xi is the Voellmy law's; samosAT has no ξ");
+        bail!("--xi is the Voellmy law's (samosAT has no ξ): add --friction-model voellmy");
+    }
+    if p.friction != FrictionLaw::Coulomb {
+        for (flag, given) in [
+            ("--friction-angle", args.friction_angle.is_some()),
+            ("--viscosity", args.viscosity.is_some()),
+            ("--dry-fraction", args.dry_fraction.is_some()),
+        ] {
+            if given {
+                bail!(
+                    "{flag} is the Coulomb law's (the default law is AvaFrame's samosATSmall): \
+                     add --friction-model coulomb"
+                );
+            }
+        }
     }
     if let Some(m) = args.mu {
         p.voellmy_mu = m;
