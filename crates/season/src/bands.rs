@@ -10,8 +10,9 @@
 //! the bands' snow water and rain add up to the water budget's `snowfall_water` and `rain`.
 //! The SWE is the layers' depths at their densities plus the liquid water the pack holds,
 //! averaged over the band once a day (at the first event of each season day), so its peak is
-//! that of the daily samples. Every sum is over cells in row order, each row's per band in
-//! column order, so the table does not depend on the thread count.
+//! that of the daily samples. Every sum is over rows in order, each row's per band in four
+//! interleaved partial sums added in a fixed order, so the table does not depend on the
+//! thread count.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -23,6 +24,8 @@ pub const BAND_WIDTH_M: f64 = 200.0;
 pub const MAX_BANDS: usize = 200;
 /// The band index of a cell in no band (nodata).
 pub const NO_BAND: u16 = u16::MAX;
+/// Interleaved partial sums per band and row, added in a fixed order.
+const LANES: usize = 4;
 
 /// The band of each cell of a terrain.
 #[derive(Debug, Clone, Default)]
@@ -138,11 +141,12 @@ impl Bands {
             .par_chunks(w)
             .enumerate()
             .map(|(row, bands)| {
-                let mut sums = vec![0.0f64; n];
+                // Per band, `SUM_LANES` interleaved partial sums (no chain of additions).
+                let mut sums = vec![0.0f64; n * LANES];
                 let at = row * w;
                 for (col, &b) in bands.iter().enumerate() {
                     let i = at + col;
-                    if let Some(sum) = sums.get_mut(b as usize) {
+                    if let Some(sum) = sums.get_mut(b as usize * LANES + col % LANES) {
                         let swe = c[i] * per_water[0]
                             + s[i] * per_water[1]
                             + u[i] * per_water[2]
@@ -151,7 +155,9 @@ impl Bands {
                         *sum += swe as f64;
                     }
                 }
-                sums
+                sums.chunks_exact(LANES)
+                    .map(|l| (l[0] + l[1]) + (l[2] + l[3]))
+                    .collect()
             })
             .collect();
         let mut total = vec![0.0f64; n];

@@ -407,8 +407,8 @@ pub fn add_precipitation(
                     row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
                     // Four interleaved partial sums of each term (as `crate::row_sum`).
                     let mut sums = [[0.0f64; crate::SUM_LANES]; 3];
-                    // Per band: snow water and rain (each band's in column order).
-                    let mut by_band = vec![[0.0f64; 2]; n_bands];
+                    // Per band and lane: snow water and rain.
+                    let mut by_band = vec![[0.0f64; 2]; n_bands * crate::SUM_LANES];
                     for col in 0..w {
                         let i = row * w + col;
                         let lane = col % crate::SUM_LANES;
@@ -420,7 +420,7 @@ pub fn add_precipitation(
                         let (swe, r) = (s_ref * oro, r_ref * oro);
                         rain[col] += r;
                         sums[2][lane] += r as f64;
-                        let band = by_band.get_mut(band_of[i] as usize);
+                        let band = by_band.get_mut(band_of[i] as usize * crate::SUM_LANES + lane);
                         if swe <= 0.0 {
                             if let Some(b) = band {
                                 b[1] += r as f64;
@@ -459,9 +459,12 @@ pub fn add_precipitation(
         r.snow_m3 += s[0] * a;
         r.snow_water_m3 += s[1] * a;
         r.rain_m3 += s[2] * a;
-        for (total, row) in band_water.iter_mut().zip(&by_band) {
-            total[0] += row[0];
-            total[1] += row[1];
+        for (total, lanes) in band_water
+            .iter_mut()
+            .zip(by_band.chunks_exact(crate::SUM_LANES))
+        {
+            total[0] += crate::lane_total(std::array::from_fn(|l| lanes[l][0]));
+            total[1] += crate::lane_total(std::array::from_fn(|l| lanes[l][1]));
         }
     }
     Ok(r)

@@ -38,8 +38,10 @@
 //!   Below −8 °C air the rain share (< 3e-9) is taken as 0. `rain_snow_phase =
 //!   "air_temperature"` keeps the linear ramp of [`crate::climate`] around `T50`.
 //! - **How much** (climatology and periods): a storm's precipitation at the reference
-//!   altitude falls at a constant rate over its hours, tiled hour by hour from the storm's
-//!   start to its end whatever the events' timing, so that its total is `rate × length`.
+//!   altitude falls at a constant rate over its hours, laid hour by hour from the storm's
+//!   start to its end whatever the events' timing (each Snowfall-Step lays the hours since
+//!   the last, the first melt event after the storm those after its last step), so that its
+//!   total is `rate × length`.
 //!   The rate is, in this order of precedence, the `[[weather]]` period's
 //!   `precipitation_mm_per_day`, the rate that gives a season total
 //!   (`annual_precipitation_mm` or `monthly_precipitation_mm`, below), the climate's
@@ -55,7 +57,8 @@
 //!   an alternating process of dry spells ending at the Poisson rate `r` of the period's
 //!   `snowfall_per_week` and storms of mean length `L` (`events.snowfall_mean_days`). The
 //!   drawn storms make a season's total vary about the target as real years do; forced
-//!   periods alone (`snowfall_per_week = 0`) meet it exactly.
+//!   periods alone (`snowfall_per_week = 0`) meet it exactly. A month in which no storm can
+//!   fall (no Poisson storms, no forced period) loses its share, with a warning.
 
 use crate::scenario::{Scenario, ScenarioError, SnowfallPeriod, WeatherPeriod};
 use serde::{Deserialize, Serialize};
@@ -152,6 +155,9 @@ pub struct StormRates {
     from_day: Vec<f64>,
     /// Precipitation during that segment's storms at the reference altitude, mm/day.
     mm_per_day: Vec<f64>,
+    /// The total of the segments in which no storm can fall (no Poisson storms, no forced
+    /// period), mm at the reference altitude: it does not fall.
+    stranded_mm: f64,
 }
 
 /// What [`StormRates::new`] reads besides the climate.
@@ -188,6 +194,7 @@ impl StormRates {
             let rate = if storm_days > 0.0 {
                 total / storm_days
             } else {
+                rates.stranded_mm += total;
                 0.0
             };
             rates.mm_per_day.push(rate);
@@ -216,6 +223,12 @@ impl StormRates {
             close(&mut rates, seg);
         }
         Some(rates)
+    }
+
+    /// The part of the season total that falls in months without storms, mm at the
+    /// reference altitude (it does not fall: a warning for the user).
+    pub fn stranded_mm(&self) -> f64 {
+        self.stranded_mm
     }
 
     /// The storm rate at season day `day`, mm/day at the reference altitude.
@@ -371,6 +384,17 @@ mod tests {
         c.annual_precipitation_mm = Some(365.0);
         let r = StormRates::new(&c, &s).unwrap();
         assert!((r.at(3.0) - 31.0 / 4.0).abs() < 1e-9);
+        assert_eq!(r.stranded_mm(), 0.0);
+        // Without the January storm, January's 30 days of rain have no storm to fall in.
+        let r = StormRates::new(
+            &c,
+            &SeasonStorms {
+                forced: &forced[..1],
+                ..s
+            },
+        )
+        .unwrap();
+        assert!((r.stranded_mm() - 30.0).abs() < 1e-9, "{}", r.stranded_mm());
         // Poisson storms: one a week of three days is storming 30 % of the time.
         assert!((expected_storm_share(1.0 / 7.0, 3.0) - 0.3).abs() < 1e-12);
         c.annual_precipitation_mm = None;

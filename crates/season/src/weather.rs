@@ -129,6 +129,11 @@ impl Air {
         self
     }
 
+    /// The storm rates of a season total, when the climate sets one.
+    pub fn storm_rates(&self) -> Option<&StormRates> {
+        self.storm_rates.as_ref()
+    }
+
     /// The climate parameters.
     pub fn climate(&self) -> &ClimateParams {
         &self.climate
@@ -207,10 +212,10 @@ impl Air {
         mm * 1e-3
     }
 
-    /// The phase table of the storm hours `[t0, t1]` (season days; climatology and periods):
-    /// each hour's storm air and rate, at the storm humidity.
+    /// The phase table of the storm hours `[t0, t1]` (season days): each hour's storm air
+    /// and rate, at the storm humidity (a station's, when it records one).
     pub fn storm_precipitation(&self, t0: f64, t1: f64) -> PrecipitationTable {
-        let rh = self.climate.storm_relative_humidity as f32;
+        let storm_rh = self.climate.storm_relative_humidity as f32;
         let hours: Vec<PrecipitationHour> = Self::slots(t0, t1)
             .into_iter()
             .filter(|&(_, w)| w > 0.0)
@@ -219,7 +224,10 @@ impl Air {
                 PrecipitationHour {
                     sea_level_c: self.sea_level_c(mid, true) as f32,
                     water_m: (self.storm_precipitation_m_per_day(mid) * w as f64 / 24.0) as f32,
-                    relative_humidity: rh,
+                    relative_humidity: self
+                        .station_record(mid)
+                        .and_then(|r| r.relative_humidity)
+                        .unwrap_or(storm_rh),
                 }
             })
             .filter(|h| h.water_m > 0.0)

@@ -707,5 +707,15 @@ pub fn season_warnings(winter: &Winter) -> Vec<String> {
             winter.latitude_deg()
         ));
     }
+    if let Some(mm) = winter
+        .air()
+        .storm_rates()
+        .map(|r| r.stranded_mm())
+        .filter(|&mm| mm > 0.0)
+    {
+        w.push(format!(
+            "{mm:.0} mm of the season's precipitation total fall in months with no snowfall period (snowfall_per_week = 0 and no [[snowfall_period]]): they do not fall"
+        ));
+    }
     w
 }

@@ -63,7 +63,7 @@ fn snowfall_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
     let (day, err) = (event.time_days, failed("snowfall", event.time_days));
     let p = &w.scenario.parameters;
     if p.snowfall.model == SnowfallModel::Orographic {
-        return w.deliver_storms(day).map_err(err);
+        return w.deliver_storms(day, false).map_err(err);
     }
     let mut params = p.snowfall.clone();
     params.a0_precip = w.weather[w.state.weather_index].rain_snow_altitude_m;
@@ -85,8 +85,8 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         event.time_days,
         failed("melt_and_stability", event.time_days),
     );
-    // The storms' hours since their last Snowfall-Step, before the melt reads the snow.
-    w.deliver_storms(day).map_err(&err)?;
+    // The ended storms' hours since their last Snowfall-Step, before the melt reads the snow.
+    w.deliver_storms(day, true).map_err(&err)?;
     // Whether the melt left the snow surface for the stability step.
     let mut surface_filled = false;
     if w.scenario.parameters.melt.model == MeltModel::EnhancedTi {

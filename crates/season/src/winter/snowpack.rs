@@ -87,14 +87,19 @@ impl Winter {
     }
 
     /// The default snowfall: lays the storms' precipitation, hour by hour, up to `day` (a
-    /// Snowfall-Step, and each melt event for the hours since a storm's last step). The
-    /// paper's snowfall lays none of it here (its steps add their own).
-    pub(super) fn deliver_storms(&mut self, day: f64) -> Result<(), PhenomenonError> {
+    /// Snowfall-Step), or only that of the storms that ended by `day` (`ended_only`: a melt
+    /// event, for the hours since a storm's last step). The paper's snowfall lays none of it
+    /// here (its steps add their own).
+    pub(super) fn deliver_storms(
+        &mut self,
+        day: f64,
+        ended_only: bool,
+    ) -> Result<(), PhenomenonError> {
         let orographic = self.scenario.parameters.snowfall.model == SnowfallModel::Orographic;
         for k in 0..self.state.storms.len() {
             let s = self.state.storms[k];
             let to = s.until.min(day);
-            if to <= s.delivered_to {
+            if to <= s.delivered_to || (ended_only && s.until > day) {
                 continue;
             }
             if orographic {
