@@ -1,7 +1,11 @@
-//! Times one window of the enhanced temperature-index melt on an n² grid of snow
+//! Times one window of the enhanced temperature-index melt (or, with a second argument
+//! `energy_balance`, of the energy balance over 24 hours) on an n² grid of snow
 //! (`cargo run --release -p snowscape-season --example melt_kernel -- 1024`): ns per cell.
 
-use snowscape_season::melt::{EnhancedMeltParams, MeltForcing, MeltHour, SnowpackState, enhanced};
+use snowscape_season::melt::{
+    EnergyBalanceParams, EnhancedMeltParams, HourAir, MeltForcing, MeltHour, SnowpackState,
+    energy_balance, enhanced,
+};
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, SnowLayer};
 use std::time::Instant;
 
@@ -20,7 +24,9 @@ fn main() {
     let beam: Vec<u8> = (0..cells).map(|i| (i * 7 % 256) as u8).collect();
     let refl = vec![0.05f32; cells];
     let reflected: Vec<&[f32]> = vec![&refl];
-    let hours: Vec<MeltHour> = (6..18)
+    let energy_balance = std::env::args().nth(2).as_deref() == Some("energy_balance");
+    let (first, last) = if energy_balance { (0, 24) } else { (6, 18) };
+    let hours: Vec<MeltHour> = (first..last)
         .map(|h| MeltHour {
             weight: 1.0,
             sea_level_c: 12.0
@@ -31,6 +37,7 @@ fn main() {
             reflected_w_m2: 400.0,
             month: 0,
             longwave_balance_w_m2: 0.0,
+            air: HourAir::default(),
         })
         .collect();
     let forcing = MeltForcing {
@@ -46,7 +53,12 @@ fn main() {
     let reps = 10;
     let start = Instant::now();
     for _ in 0..reps {
-        enhanced::step(&p, &mut t, &mut pack, &forcing).unwrap();
+        if energy_balance {
+            let eb = EnergyBalanceParams::default();
+            energy_balance::step(&eb, &p, &mut t, &mut pack, &forcing).unwrap();
+        } else {
+            enhanced::step(&p, &mut t, &mut pack, &forcing).unwrap();
+        }
     }
     let s = start.elapsed().as_secs_f64() / reps as f64;
     println!(

@@ -32,6 +32,13 @@
 //! - **Clouds**: the shortwave is the clear sky times 0.8 on fair days and 0.25 during
 //!   snowfall periods (our choice: overcast skies pass about a quarter of the clear-sky
 //!   shortwave, Kasten & Czeplak 1980's cloud law at 8/8 cover gives 0.25).
+//! - **Humidity, cloud cover and wind** of the energy-balance melt ([`crate::melt::energy_balance`]):
+//!   relative humidity 0.6 on fair days and 0.95 during snowfall periods (chosen here: winter
+//!   means of mountain stations lie around 0.5-0.8; precipitating cloud is near saturation);
+//!   the cloud cover `N` that gives the shortwave share `c` above by Kasten & Czeplak 1980's
+//!   law `c = 1 − 0.75 N^3.4` (`N` = 0.68 for 0.8, 1 for 0.25), unless set; a wind speed of
+//!   3 m/s at the wind measurement height (chosen here: a light breeze over snow). Station
+//!   forcing's records replace them where it has them.
 
 use crate::scenario::WeatherPeriod;
 use serde::{Deserialize, Serialize};
@@ -113,6 +120,16 @@ pub struct ClimateParams {
     pub fair_cloud_factor: f64,
     /// Shortwave share of the clear sky during snowfall periods. Kasten & Czeplak 1980: 0.25.
     pub storm_cloud_factor: f64,
+    /// Relative humidity on fair days, 0..=1 (energy-balance melt). Chosen here: 0.6.
+    pub fair_relative_humidity: f64,
+    /// Cloud cover on fair days, 0..=1. Default: Kasten & Czeplak 1980's cover for
+    /// `fair_cloud_factor` (0.68 for 0.8).
+    pub fair_cloud_cover: Option<f64>,
+    /// Cloud cover during snowfall periods, 0..=1. Default: Kasten & Czeplak 1980's cover for
+    /// `storm_cloud_factor` (1 for 0.25).
+    pub storm_cloud_cover: Option<f64>,
+    /// Wind speed at the energy balance's wind height, m/s. Chosen here: 3.
+    pub wind_speed_m_s: f64,
 }
 
 impl Default for ClimateParams {
@@ -140,6 +157,10 @@ impl Default for ClimateParams {
             clear_sky: ClearSkyParams::default(),
             fair_cloud_factor: 0.8,
             storm_cloud_factor: 0.25,
+            fair_relative_humidity: 0.6,
+            fair_cloud_cover: None,
+            storm_cloud_cover: None,
+            wind_speed_m_s: 3.0,
         }
     }
 }
@@ -246,6 +267,19 @@ impl ClimateParams {
                 "must be within [0, 1]",
             ),
         ];
+        for (name, v) in [
+            ("fair_relative_humidity", self.fair_relative_humidity),
+            ("fair_cloud_cover", self.fair_cloud_cover.unwrap_or(0.0)),
+            ("storm_cloud_cover", self.storm_cloud_cover.unwrap_or(0.0)),
+        ] {
+            fixed.push((name, v, (0.0..=1.0).contains(&v), "must be within [0, 1]"));
+        }
+        fixed.push((
+            "wind_speed_m_s",
+            self.wind_speed_m_s,
+            (0.0..=50.0).contains(&self.wind_speed_m_s),
+            "must be within [0, 50] m/s",
+        ));
         let [lo, hi] = self.orographic_factor_range;
         fixed.push((
             "orographic_factor_range[0]",
@@ -398,6 +432,30 @@ impl ClimateParams {
             + k * self.diurnal_c(hour)
     }
 
+    /// The humidity, cloud cover and wind of a fair (`storm` false) or snowfall hour
+    /// (module docs), without a recorded longwave.
+    pub fn hour_air(&self, storm: bool) -> crate::melt::HourAir {
+        let (rh, cover, factor) = if storm {
+            (
+                self.storm_relative_humidity,
+                self.storm_cloud_cover,
+                self.storm_cloud_factor,
+            )
+        } else {
+            (
+                self.fair_relative_humidity,
+                self.fair_cloud_cover,
+                self.fair_cloud_factor,
+            )
+        };
+        crate::melt::HourAir {
+            relative_humidity: rh as f32,
+            cloud_cover: cover.unwrap_or_else(|| cloud_cover_of_factor(factor)) as f32,
+            wind_speed_m_s: self.wind_speed_m_s as f32,
+            longwave_in_w_m2: None,
+        }
+    }
+
     /// Share of precipitation falling as snow in air at `t` °C and relative humidity
     /// `relative_humidity` (0..1), by [`ClimateParams::rain_snow_phase`].
     #[inline]
@@ -434,6 +492,14 @@ impl ClimateParams {
         let [lo, hi] = self.orographic_factor_range;
         f.clamp(lo, hi) as f32
     }
+}
+
+/// The cloud cover `N` whose shortwave share of the clear sky is `factor` by Kasten &
+/// Czeplak 1980's law `factor = 1 − 0.75 N^3.4`, clamped to [0, 1].
+pub fn cloud_cover_of_factor(factor: f64) -> f64 {
+    ((1.0 - factor).max(0.0) / 0.75)
+        .powf(1.0 / 3.4)
+        .clamp(0.0, 1.0)
 }
 
 /// Sea-level-equivalent daily mean air temperature of the climatology, °C (module docs).
@@ -570,6 +636,20 @@ mod tests {
         assert!((p.diurnal_c(15.0) - 5.0).abs() < 1e-12);
         assert!((p.diurnal_c(3.0) + 5.0).abs() < 1e-12);
         assert!(p.validate().is_ok());
+        // Kasten & Czeplak's covers for the default shortwave shares.
+        assert!((cloud_cover_of_factor(0.8) - 0.678).abs() < 1e-3);
+        assert_eq!(cloud_cover_of_factor(0.25), 1.0);
+        assert_eq!(cloud_cover_of_factor(1.0), 0.0);
+        let storm = p.hour_air(true);
+        assert!(storm.cloud_cover == 1.0 && storm.relative_humidity > 0.9);
+        let bad = ClimateParams {
+            fair_relative_humidity: 1.5,
+            ..ClimateParams::default()
+        };
+        assert_eq!(
+            bad.validate().unwrap_err().0,
+            "climate.fair_relative_humidity"
+        );
         let bad = ClimateParams {
             lapse_rate_c_per_km: f64::NAN,
             ..ClimateParams::default()

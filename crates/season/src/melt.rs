@@ -1,6 +1,8 @@
-//! Melt: the season's default is the enhanced temperature-index model of [`enhanced`]
-//! (`model = "enhanced_ti"`: Hock 1999, Pellicciotti et al. 2005, with albedo decay, cold
-//! content and refreezing); `model = "cordonnier"` is the paper's degree-day law below.
+//! Melt: the season's default is the surface energy balance snowpack of [`energy_balance`]
+//! (`model = "energy_balance"`: after FSM, Essery 2015, with sublimation and deposition); the
+//! enhanced temperature-index model of [`enhanced`] stays available (`model = "enhanced_ti"`:
+//! Hock 1999, Pellicciotti et al. 2005, with albedo decay, cold content and refreezing), and
+//! `model = "cordonnier"` is the paper's degree-day law below.
 //!
 //! **Cordonnier et al. 2018, Section 5.2, first equation.**
 //!
@@ -18,8 +20,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
 
+pub mod energy_balance;
 pub mod enhanced;
-pub use enhanced::{EnhancedMeltParams, MeltForcing, MeltHour, MeltReport, SnowpackState};
+pub use energy_balance::EnergyBalanceParams;
+pub use enhanced::{EnhancedMeltParams, HourAir, MeltForcing, MeltHour, MeltReport, SnowpackState};
 
 /// Which melt law a season uses.
 #[derive(
@@ -27,22 +31,36 @@ pub use enhanced::{EnhancedMeltParams, MeltForcing, MeltHour, MeltReport, Snowpa
 )]
 #[serde(rename_all = "snake_case")]
 pub enum MeltModel {
-    /// Enhanced temperature index with the hour-by-hour sun, albedo, cold content and
-    /// refreezing ([`enhanced`]). The default.
+    /// Surface energy balance per cell and hour with a bulk pack, sublimation and deposition
+    /// ([`energy_balance`]). The default.
     #[default]
+    EnergyBalance,
+    /// Enhanced temperature index with the hour-by-hour sun, albedo, cold content and
+    /// refreezing ([`enhanced`]).
     EnhancedTi,
     /// Cordonnier 2018 §5.2: `k_melt · max(0, T − T0_melt)` on the period's temperature map
     /// (which carries the sun as `ki·I`).
     Cordonnier,
 }
 
+impl MeltModel {
+    /// Whether the model integrates the hourly air and sun in melt windows (the energy
+    /// balance and the enhanced temperature index; the paper's law reads the period's map).
+    pub fn hourly(self) -> bool {
+        self != MeltModel::Cordonnier
+    }
+}
+
 /// Parameters of melt.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct MeltParams {
-    /// The melt law (`enhanced_ti` or `cordonnier`).
+    /// The melt law (`energy_balance`, `enhanced_ti` or `cordonnier`).
     pub model: MeltModel,
-    /// The enhanced temperature-index parameters (`[parameters.melt.enhanced]`).
+    /// The energy balance's parameters (`[parameters.melt.energy_balance]`).
+    pub energy_balance: EnergyBalanceParams,
+    /// The enhanced temperature-index parameters (`[parameters.melt.enhanced]`); its albedo
+    /// curves, holding capacity, layer densities and window serve the energy balance too.
     pub enhanced: EnhancedMeltParams,
     /// Melt rate, m of snow per day per °C above `t0_melt`. Cordonnier 2018 Section 5.2 and
     /// Table 2: k_melt = 0.01 m day⁻¹ °C⁻¹.
@@ -55,6 +73,7 @@ impl Default for MeltParams {
     fn default() -> Self {
         Self {
             model: MeltModel::default(),
+            energy_balance: EnergyBalanceParams::default(),
             enhanced: EnhancedMeltParams::default(),
             k_melt: 0.01,
             t0_melt: 0.0,
@@ -64,9 +83,10 @@ impl Default for MeltParams {
 
 impl MeltParams {
     /// Checks every field against its range: `k_melt` in [0, 0.1] m/(day·°C) (ten times
-    /// Table 2's 0.01), `t0_melt` in [−10, 10] °C, and the enhanced model's fields.
+    /// Table 2's 0.01), `t0_melt` in [−10, 10] °C, and the other models' fields.
     pub fn validate(&self) -> Result<(), PhenomenonError> {
         self.enhanced.validate()?;
+        self.energy_balance.validate()?;
         check_range("melt", "k_melt", self.k_melt, [0.0, 0.1], " m/(day·°C)")?;
         check_range("melt", "t0_melt", self.t0_melt, [-10.0, 10.0], " °C")
     }

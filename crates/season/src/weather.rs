@@ -296,6 +296,7 @@ impl Air {
                     .and_then(|m| self.sun.months.iter().position(|x| x.month == m.month))
                     .unwrap_or(0);
                 let sun_hour = self.sun.months.get(month_index).and_then(|m| m.hour(hour));
+                let mut air = self.climate.hour_air(storm);
                 let (beam, direct, diffuse, reflected) = match sun_hour {
                     Some(h) => {
                         let (dir, dif) = clear_sky(
@@ -304,7 +305,12 @@ impl Air {
                             h.sin_elevation as f64,
                             self.radiation_altitude_m,
                         );
-                        let c = self.cloud_factor(mid, clouds, dir, dif, h.sin_elevation as f64);
+                        let recorded =
+                            self.recorded_cloud_factor(mid, dir, dif, h.sin_elevation as f64);
+                        if let Some(c) = recorded {
+                            air.cloud_cover = crate::climate::cloud_cover_of_factor(c) as f32;
+                        }
+                        let c = recorded.unwrap_or(clouds);
                         (
                             Some(h.beam.as_slice()),
                             (dir * c) as f32,
@@ -314,11 +320,17 @@ impl Air {
                     }
                     None => (None, 0.0, 0.0, 0.0),
                 };
-                let longwave_balance_w_m2 = self
-                    .station_record(mid)
+                let record = self.station_record(mid);
+                if let Some(r) = record {
+                    air.relative_humidity = r.relative_humidity.unwrap_or(air.relative_humidity);
+                    air.wind_speed_m_s = r.wind_speed_m_s;
+                    air.longwave_in_w_m2 = r.longwave_in_w_m2;
+                }
+                let longwave_balance_w_m2 = record
                     .and_then(|r| r.longwave_in_w_m2)
                     .map_or(0.0, |l| l - MELTING_SURFACE_LONGWAVE_W_M2);
                 MeltHour {
+                    air,
                     longwave_balance_w_m2,
                     weight,
                     sea_level_c: self.sea_level_c(mid, storm) as f32,
@@ -334,23 +346,20 @@ impl Air {
 
     /// The shortwave share of the clear sky at `day`: a station's measured shortwave over
     /// the clear-sky global irradiance on flat ground when it records one (incoming, or net
-    /// over the fresh-snow absorptance when only net shortwave is given), else `default`.
-    fn cloud_factor(&self, day: f64, default: f64, dir: f64, dif: f64, sin_e: f64) -> f64 {
-        let Some(r) = self.station_record(day) else {
-            return default;
-        };
+    /// over the fresh-snow absorptance when only net shortwave is given), else `None` (the
+    /// climate's share).
+    fn recorded_cloud_factor(&self, day: f64, dir: f64, dif: f64, sin_e: f64) -> Option<f64> {
+        let r = self.station_record(day)?;
         let clear = dir * sin_e + dif;
         if clear < 20.0 {
-            return default;
+            return None;
         }
         if let Some(sw) = r.shortwave_in_w_m2 {
-            return (sw as f64 / clear).clamp(0.0, 1.2);
+            return Some((sw as f64 / clear).clamp(0.0, 1.2));
         }
-        if let Some(net) = r.net_shortwave_w_m2 {
-            // Net shortwave over a mid-season snow absorptance (1 − 0.75).
-            return (net as f64 / (0.25 * clear)).clamp(0.0, 1.2);
-        }
-        default
+        // Net shortwave over a mid-season snow absorptance (1 − 0.75).
+        r.net_shortwave_w_m2
+            .map(|net| (net as f64 / (0.25 * clear)).clamp(0.0, 1.2))
     }
 
     /// The precipitation table of a station window `[t0, t1]` (snow and rain at the

@@ -10,7 +10,7 @@
 use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, HazardSources, Trigger};
 use crate::checkpoint::{CheckpointError, bedrock_fingerprint};
 use crate::forcing::StationForcing;
-use crate::melt::{MeltModel, SnowpackState};
+use crate::melt::SnowpackState;
 use crate::phenomenon::PhenomenonError;
 use crate::powder_diffusion::DiffusionScratch;
 use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
@@ -287,7 +287,7 @@ impl Winter {
             &params,
         )?;
         let mut hourly_sun_s = 0.0;
-        let season_sun = if scenario.parameters.melt.model == MeltModel::EnhancedTi {
+        let season_sun = if scenario.parameters.melt.model.hourly() {
             let t = Instant::now();
             let sun = snowscape_environment::season_sun(
                 &terrain.bedrock,

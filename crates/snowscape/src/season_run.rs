@@ -645,7 +645,9 @@ fn season_report(
     };
     budget.inputs.insert("snowfall".into(), b.snowfall);
     budget.inputs.insert("refreeze".into(), b.refreeze);
+    budget.inputs.insert("deposition".into(), b.deposition);
     budget.outputs.insert("melt".into(), b.melt);
+    budget.outputs.insert("sublimation".into(), b.sublimation);
     budget
         .outputs
         .insert("wind_sublimation".into(), b.wind_sublimation);

@@ -12,7 +12,9 @@ use crate::kernel::{Kernel, KernelError};
 use snowscape_environment::{
     EnvironmentParams, ShelteringParams, max_upwind_slope, precompute, season_sun,
 };
-use snowscape_season::melt::{EnhancedMeltParams, MeltForcing, MeltHour, SnowpackState, enhanced};
+use snowscape_season::melt::{
+    EnhancedMeltParams, HourAir, MeltForcing, MeltHour, SnowpackState, enhanced,
+};
 use snowscape_season::slope_shedding::{self, SheddingParams, SheddingScratch};
 use snowscape_terrain::{Grid, LayeredTerrain, SnowLayer};
 use std::hint::black_box;
@@ -67,6 +69,7 @@ pub fn snowpack_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
                         reflected_w_m2: 300.0,
                         month: sun.months.len() - 1,
                         longwave_balance_w_m2: 0.0,
+                        air: HourAir::default(),
                     })
                     .collect();
                 let reflected: Vec<&[f32]> =

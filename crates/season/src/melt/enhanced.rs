@@ -250,6 +250,30 @@ pub struct MeltHour<'a> {
     /// Longwave balance of a melting surface, `L_in − σ·273.15⁴`, W/m², when the forcing
     /// records the incoming longwave (0 otherwise: the temperature factor stands for it).
     pub longwave_balance_w_m2: f32,
+    /// Humidity, cloud, wind and recorded longwave of the hour (the energy balance reads them).
+    pub air: HourAir,
+}
+
+/// The air of one hour beyond its temperature, as the energy-balance melt reads it
+/// ([`super::energy_balance`]): the same for every cell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HourAir {
+    /// Relative humidity with respect to water at the cell's air temperature, 0..=1.
+    pub relative_humidity: f32,
+    /// Cloud cover, 0 (clear) to 1 (overcast).
+    pub cloud_cover: f32,
+    /// Wind speed at the wind measurement height, m/s.
+    pub wind_speed_m_s: f32,
+    /// Incoming longwave radiation recorded by a station, W/m² (`None`: from the air's
+    /// temperature, humidity and cloud).
+    pub longwave_in_w_m2: Option<f32>,
+}
+
+impl Default for HourAir {
+    /// Fair weather of the default climate ([`crate::climate::ClimateParams`]).
+    fn default() -> Self {
+        crate::climate::ClimateParams::default().hour_air(false)
+    }
 }
 
 /// What a window of melt reads besides the terrain.
@@ -286,6 +310,14 @@ pub struct MeltReport {
     pub rain_on_snow_m3: f64,
     /// Water that left the pack (runoff), m³.
     pub runoff_m3: f64,
+    /// Snow volume lost to vapour (sublimation; the energy balance only), m³ of snow.
+    pub sublimated_snow_m3: f64,
+    /// Its water equivalent, m³ of water.
+    pub sublimated_water_m3: f64,
+    /// Snow volume gained from vapour (deposition, laid on the compacted layer), m³ of snow.
+    pub deposited_snow_m3: f64,
+    /// Its water equivalent, m³ of water.
+    pub deposited_water_m3: f64,
 }
 
 /// Per-cell partial sums of one row.
@@ -331,47 +363,9 @@ fn step_and_surface(
     surface: Option<&mut Vec<f32>>,
 ) -> Result<MeltReport, PhenomenonError> {
     params.validate()?;
+    check_inputs("melt.enhanced", terrain, pack, forcing)?;
     let geometry = terrain.geometry().clone();
     let n = geometry.len();
-    for (name, v) in [
-        ("lapse offset", forcing.lapse_offset_c.len()),
-        ("sky view factor", forcing.sky_view_factor.len()),
-        ("surface age", pack.surface_age_days.len()),
-        ("cold content", pack.cold_content_m.len()),
-        ("liquid water", pack.liquid_water_m.len()),
-        ("melting", pack.melting.len()),
-    ] {
-        if v != n {
-            return Err(PhenomenonError::MapLength {
-                map: name,
-                width: geometry.width(),
-                height: geometry.height(),
-                expected: n,
-                actual: v,
-            });
-        }
-    }
-    if !forcing.rain_m.is_empty() && forcing.rain_m.len() != n {
-        return Err(PhenomenonError::MapLength {
-            map: "rain",
-            width: geometry.width(),
-            height: geometry.height(),
-            expected: n,
-            actual: forcing.rain_m.len(),
-        });
-    }
-    if let Some(h) = forcing.hours.iter().find(|h| {
-        h.beam.is_some_and(|b| {
-            b.len() != n || forcing.reflected.get(h.month).is_none_or(|r| r.len() != n)
-        })
-    }) {
-        return Err(PhenomenonError::InvalidParameter {
-            phenomenon: "melt.enhanced",
-            name: "hour.month",
-            value: h.month as f64,
-            reason: "no sun maps for this month or beam map of the wrong size",
-        });
-    }
     let w = geometry.width();
     let mask = terrain.mask().clone();
     let invalid = mask.invalid_cells();
@@ -448,6 +442,58 @@ fn step_and_surface(
         r.runoff_m3 += s.runoff * a;
     }
     Ok(r)
+}
+
+/// Checks that every per-cell input of a melt window has the terrain's length and every sunny
+/// hour's maps exist (`phenomenon` names the model in the error).
+pub(super) fn check_inputs(
+    phenomenon: &'static str,
+    terrain: &LayeredTerrain,
+    pack: &SnowpackState,
+    forcing: &MeltForcing,
+) -> Result<(), PhenomenonError> {
+    let geometry = terrain.geometry();
+    let n = geometry.len();
+    for (name, v) in [
+        ("lapse offset", forcing.lapse_offset_c.len()),
+        ("sky view factor", forcing.sky_view_factor.len()),
+        ("surface age", pack.surface_age_days.len()),
+        ("cold content", pack.cold_content_m.len()),
+        ("liquid water", pack.liquid_water_m.len()),
+        ("melting", pack.melting.len()),
+    ] {
+        if v != n {
+            return Err(PhenomenonError::MapLength {
+                map: name,
+                width: geometry.width(),
+                height: geometry.height(),
+                expected: n,
+                actual: v,
+            });
+        }
+    }
+    if !forcing.rain_m.is_empty() && forcing.rain_m.len() != n {
+        return Err(PhenomenonError::MapLength {
+            map: "rain",
+            width: geometry.width(),
+            height: geometry.height(),
+            expected: n,
+            actual: forcing.rain_m.len(),
+        });
+    }
+    if let Some(h) = forcing.hours.iter().find(|h| {
+        h.beam.is_some_and(|b| {
+            b.len() != n || forcing.reflected.get(h.month).is_none_or(|r| r.len() != n)
+        })
+    }) {
+        return Err(PhenomenonError::InvalidParameter {
+            phenomenon,
+            name: "hour.month",
+            value: h.month as f64,
+            reason: "no sun maps for this month or beam map of the wrong size",
+        });
+    }
+    Ok(())
 }
 
 /// Per-row buffers: the melting hours' shortwave, the table lookups, and each cell's
@@ -555,6 +601,30 @@ impl DegreeHours {
     }
 }
 
+/// The albedo by surface age in steps of [`ALBEDO_STEP_DAYS`]: the cold curve's
+/// [`ALBEDO_ENTRIES`], then the melting curve's.
+pub(super) fn albedo_table(p: &EnhancedMeltParams) -> Vec<f32> {
+    [false, true]
+        .iter()
+        .flat_map(|&melting| {
+            (0..ALBEDO_ENTRIES).map(move |k| p.albedo(k as f32 * ALBEDO_STEP_DAYS, melting))
+        })
+        .collect()
+}
+
+/// [`EnhancedMeltParams::albedo`] from [`albedo_table`]'s `table` (linear between entries).
+/// Indices as in [`DegreeHours::at`].
+#[inline(always)]
+pub(super) fn albedo_from_table(table: &[f32], age_days: f32, melting: bool) -> f32 {
+    const N: usize = ALBEDO_ENTRIES;
+    let t = &table[..2 * N];
+    let x = (age_days.max(0.0) * (1.0 / ALBEDO_STEP_DAYS)).min((N - 1) as f32);
+    let k = (x as u32).min(N as u32 - 2) as usize;
+    let f = x - k as f32;
+    let k = k + if melting { N } else { 0 };
+    t[k] + f * (t[k + 1] - t[k])
+}
+
 /// Age step of the albedo table, days.
 const ALBEDO_STEP_DAYS: f32 = 0.05;
 /// Ages beyond this use the last entry, days (both curves reach α_min well before).
@@ -598,26 +668,14 @@ impl Coefficients {
             scalars,
             degree_hours: DegreeHours::new(f.hours, p.threshold_c as f32, f.lapse_offset_c),
             threshold: p.threshold_c as f32,
-            albedo: [false, true]
-                .iter()
-                .flat_map(|&melting| {
-                    (0..ALBEDO_ENTRIES).map(move |k| p.albedo(k as f32 * ALBEDO_STEP_DAYS, melting))
-                })
-                .collect(),
+            albedo: albedo_table(p),
         }
     }
 
     /// [`EnhancedMeltParams::albedo`] from the table (linear between entries).
-    /// Indices as in [`DegreeHours::at`].
     #[inline(always)]
     fn albedo_at(&self, age_days: f32, melting: bool) -> f32 {
-        const N: usize = ALBEDO_ENTRIES;
-        let t = &self.albedo[..2 * N];
-        let x = (age_days.max(0.0) * (1.0 / ALBEDO_STEP_DAYS)).min((N - 1) as f32);
-        let k = (x as u32).min(N as u32 - 2) as usize;
-        let f = x - k as f32;
-        let k = k + if melting { N } else { 0 };
-        t[k] + f * (t[k + 1] - t[k])
+        albedo_from_table(&self.albedo, age_days, melting)
     }
 
     /// Per cell of a row with lapse offsets `off`: the absorbed share `1 − α` of its surface
@@ -766,7 +824,7 @@ fn row_shortwave(threshold: f32, f: &MeltForcing, base: usize, out: &mut [f32]) 
     }
 }
 
-mod columns;
+pub(super) mod columns;
 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 mod gathers;
 use columns::{Columns, RowState, Scalars, column_updates};

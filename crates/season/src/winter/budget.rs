@@ -31,6 +31,18 @@ pub struct SeasonBudget {
     /// Liquid water refrozen into the pack (a source of snow volume).
     #[serde(default)]
     pub refreeze: f64,
+    /// Snow lost to vapour at the surface (sublimation; the energy-balance melt).
+    #[serde(default)]
+    pub sublimation: f64,
+    /// Snow gained from vapour at the surface (deposition; the energy-balance melt).
+    #[serde(default)]
+    pub deposition: f64,
+    /// The water equivalent of `sublimation`, m³ of water.
+    #[serde(default)]
+    pub sublimation_water: f64,
+    /// The water equivalent of `deposition`, m³ of water.
+    #[serde(default)]
+    pub deposition_water: f64,
     /// Snow shed off steep slopes across the grid border.
     #[serde(default)]
     pub shedding_outflow: f64,
@@ -81,6 +93,8 @@ impl SeasonBudget {
             - self.wind_sublimation
             - self.avalanche_outflow
             - self.shedding_outflow
+            - self.sublimation
             + self.refreeze
+            + self.deposition
     }
 }

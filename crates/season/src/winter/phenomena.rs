@@ -7,7 +7,7 @@
 
 use super::{STREAM_AVALANCHE_CELL, STREAM_PAINTED_TRIGGER, SeasonError, Winter};
 use crate::avalanches::Trigger;
-use crate::melt::{self, MeltModel};
+use crate::melt;
 use crate::phenomenon::PhenomenonError;
 use crate::powder_diffusion;
 use crate::scheduler::{Event, EventKind};
@@ -79,7 +79,8 @@ fn snowfall_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
     Ok(())
 }
 
-/// Melt (the enhanced temperature index by default, or the paper's), then stability.
+/// Melt (the energy balance by default, the enhanced temperature index, or the paper's),
+/// then stability.
 fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
     let (day, err) = (
         event.time_days,
@@ -89,8 +90,8 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     w.deliver_storms(day, true).map_err(&err)?;
     // Whether the melt left the snow surface for the stability step.
     let mut surface_filled = false;
-    if w.scenario.parameters.melt.model == MeltModel::EnhancedTi {
-        surface_filled = w.enhanced_melt(day).map_err(&err)?;
+    if w.scenario.parameters.melt.model.hourly() {
+        surface_filled = w.snowpack_melt(day).map_err(&err)?;
     } else {
         let v = melt::step(
             &w.scenario.parameters.melt,
@@ -102,8 +103,8 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         w.state.budget.melt += v.removed;
     }
     // The next melt window reads the storms from its start (the paper's melt: none).
-    let enhanced = w.scenario.parameters.melt.model == MeltModel::EnhancedTi;
-    w.forget_storms(if enhanced {
+    let hourly = w.scenario.parameters.melt.model.hourly();
+    w.forget_storms(if hourly {
         w.state.melt_clock_days
     } else {
         day

@@ -57,11 +57,11 @@ impl Winter {
         Ok(())
     }
 
-    /// Under the enhanced melt, the temperature map the phenomena read (snowfall split,
+    /// Under the hourly melts, the temperature map the phenomena read (snowfall split,
     /// stability, avalanche α) is the daily-mean air temperature at the end of the last melt
-    /// window (the paper's map carries the sun as `ki·I`, which the new melt counts itself).
+    /// window (the paper's map carries the sun as `ki·I`, which these melts count themselves).
     pub(super) fn refresh_air_temperature(&mut self) {
-        if self.scenario.parameters.melt.model == MeltModel::EnhancedTi {
+        if self.scenario.parameters.melt.model.hourly() {
             self.air.daily_temperature_map(
                 self.state.melt_clock_days,
                 self.terrain.mask(),
@@ -174,10 +174,10 @@ impl Winter {
         Ok(())
     }
 
-    /// One window of the enhanced melt, from the last melt event to `day`. Returns whether it
-    /// ran, leaving the snow surface in the stability scratch
-    /// ([`crate::stability::step_on_filled_surface`]).
-    pub(super) fn enhanced_melt(&mut self, day: f64) -> Result<bool, PhenomenonError> {
+    /// One window of the hourly melt (the energy balance or the enhanced temperature index),
+    /// from the last melt event to `day`. Returns whether it ran, leaving the snow surface in
+    /// the stability scratch ([`crate::stability::step_on_filled_surface`]).
+    pub(super) fn snowpack_melt(&mut self, day: f64) -> Result<bool, PhenomenonError> {
         let t0 = self.state.melt_clock_days;
         let min_window = self.scenario.parameters.melt.enhanced.min_window_hours / 24.0;
         if day - t0 < min_window && day < self.scenario.days {
@@ -209,18 +209,35 @@ impl Winter {
             rain_m: &self.pending_rain,
             window_days: (day - t0) as f32,
         };
-        let r = melt::enhanced::step_filling_surface(
-            &self.scenario.parameters.melt.enhanced,
-            &mut self.terrain,
-            &mut self.pack,
-            &forcing,
-            self.stability_scratch.surface_to_fill(),
-        )?;
+        let p = &self.scenario.parameters.melt;
+        let surface = self.stability_scratch.surface_to_fill();
+        let r = if p.model == MeltModel::EnergyBalance {
+            melt::energy_balance::step_filling_surface(
+                &p.energy_balance,
+                &p.enhanced,
+                &mut self.terrain,
+                &mut self.pack,
+                &forcing,
+                surface,
+            )?
+        } else {
+            melt::enhanced::step_filling_surface(
+                &p.enhanced,
+                &mut self.terrain,
+                &mut self.pack,
+                &forcing,
+                surface,
+            )?
+        };
         self.pending_rain.fill(0.0);
         let a = self.terrain.geometry().cell_area();
         let b = &mut self.state.budget;
         b.melt += r.melted_snow_m3;
         b.refreeze += r.refrozen_snow_m3;
+        b.sublimation += r.sublimated_snow_m3;
+        b.deposition += r.deposited_snow_m3;
+        b.sublimation_water += r.sublimated_water_m3;
+        b.deposition_water += r.deposited_water_m3;
         b.water.melt += r.melt_water_m3;
         b.water.refrozen += r.refrozen_water_m3;
         b.water.runoff += r.runoff_m3;

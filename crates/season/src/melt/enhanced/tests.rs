@@ -25,6 +25,7 @@ fn day_of_sun(age_days: f32) -> (MeltReport, LayeredTerrain, SnowpackState, Vec<
                 reflected_w_m2: 0.0,
                 month: 0,
                 longwave_balance_w_m2: 0.0,
+                air: HourAir::default(),
             }
         })
         .collect();
@@ -144,6 +145,7 @@ fn the_surface_filled_by_the_melt_is_the_surface_of_the_snow_it_leaves() {
             reflected_w_m2: 0.0,
             month: 0,
             longwave_balance_w_m2: 0.0,
+            air: HourAir::default(),
         })
         .collect();
     let offset: Vec<f32> = (0..n).map(|i| -0.002 * i as f32).collect();
@@ -255,5 +257,6 @@ fn dark_hour(weight: f32, sea_level_c: f32) -> MeltHour<'static> {
         reflected_w_m2: 0.0,
         month: 0,
         longwave_balance_w_m2: 0.0,
+        air: HourAir::default(),
     }
 }
