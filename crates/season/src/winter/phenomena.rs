@@ -104,11 +104,7 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     }
     // The next melt window reads the storms from its start (the paper's melt: none).
     let hourly = w.scenario.parameters.melt.model.hourly();
-    w.forget_storms(if hourly {
-        w.state.melt_clock_days
-    } else {
-        day
-    });
+    w.forget_storms(if hourly { w.state.melt_clock_days } else { day });
     let stability_step = if surface_filled {
         stability::step_on_filled_surface
     } else {
