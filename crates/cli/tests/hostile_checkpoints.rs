@@ -114,7 +114,12 @@ fn an_output_folder_keeps_nothing_of_an_earlier_run() {
     let out = d.path().join("out");
     let o_str = out.to_str().unwrap();
     let sc = d.path().join("many_frames.toml");
-    std::fs::write(&sc, "snapshot_every_days = 1\n").unwrap();
+    // Storms heavy enough for the skiers' 0.3 m of skiable snow within the four days.
+    std::fs::write(
+        &sc,
+        "snapshot_every_days = 1\n[parameters.climate]\nprecipitation_mm_per_day = 40\n",
+    )
+    .unwrap();
     let o = snowscape(&[
         "--quiet",
         "run",
