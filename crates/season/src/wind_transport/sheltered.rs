@@ -64,7 +64,7 @@ use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 pub mod blowing_snow;
 mod drift_row;
 pub use blowing_snow::DriftSublimationParams;
-use blowing_snow::{StableErodibility, SublimationTable, table_at};
+use blowing_snow::{KelvinTable, StableErodibility, SublimationTable};
 use drift_row::{DriftRow, Exits, NEGLIGIBLE_LOAD, NEGLIGIBLE_SHARE, RowTotals, share_out};
 
 /// Parameters of the Sx-driven redistribution.
@@ -337,12 +337,11 @@ type RowSnow<'a> = (&'a [f32], Option<&'a [f32]>, &'a [f32]);
 
 /// What sublimates of the load reaching each cell ([`blowing_snow`]).
 struct DriftLoss<'a> {
-    /// `λ` by air temperature, m⁻¹.
-    table: &'a [f32],
+    /// The share `λℓ / (1 + λℓ)` that sublimates per hop, by air temperature (the kelvins of
+    /// the `λ` table; `ℓ` the sweep's advance along the wind per hop).
+    share: KelvinTable,
     /// Air temperature of every cell, °C.
     temperature: &'a [f32],
-    /// The sweep's advance along the wind per hop `ℓ`, m.
-    hop: f32,
 }
 
 impl CellTerms<'_> {
@@ -580,9 +579,13 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
             .air_temperature
             .filter(|_| air.enabled && air.relative_humidity_pct < 100.0)
             .map(|temperature| DriftLoss {
-                table: table.for_air(air.relative_humidity_pct, params.reference_speed_m_s),
+                share: table
+                    .for_air(air.relative_humidity_pct, params.reference_speed_m_s)
+                    .map(|lambda| {
+                        let x = f64::from(lambda) * hop;
+                        (x / (1.0 + x)) as f32
+                    }),
                 temperature,
-                hop: hop as f32,
             });
         Self {
             ctx,
@@ -638,8 +641,7 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
         match &self.loss {
             Some(loss) => {
                 for (s, &t) in sublimated.iter_mut().zip(&loss.temperature[r.clone()]) {
-                    let x = table_at(loss.table, t) * loss.hop;
-                    *s = x / (1.0 + x);
+                    *s = loss.share.at(t);
                 }
             }
             None => sublimated.fill(0.0),

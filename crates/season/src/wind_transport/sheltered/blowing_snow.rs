@@ -42,12 +42,13 @@
 //! three quarters of itself, and as only part of the snowfall drifts that far, this is of the
 //! order of the 15-41 % of the seasonal snowfall that Pomeroy & Gray 1995 (NHRI Sci. Rep. 7)
 //! find sublimated over 1 km fetches. The radiation the particles absorb (Eq. I.19) is left out,
-//! so saturated air sublimates nothing. Each step tabulates `λ` from −40 to 0 °C by 1 K
-//! (linear between; colder air takes −40 °C, air above freezing 0 °C) and each cell reads it
-//! at its air temperature: of the load reaching a cell, the share `x / (1 + x)`,
+//! so saturated air sublimates nothing. Of the load reaching a cell, the share `x / (1 + x)`,
 //! `x = λ ℓ` with `ℓ` the sweep's advance along the wind per hop, sublimates (the
 //! implicit-Euler share of `dQ/ds = −λ Q`, as the stability module: no exponential per
-//! cell), before the cell keeps its share and passes on the rest. Still air moves no snow
+//! cell), before the cell keeps its share and passes on the rest. `λ` is tabulated from −40
+//! to 0 °C by 1 K (once per humidity and wind speed), each step turns the table into shares
+//! per hop, and each cell reads it at its air temperature, linearly between the kelvins
+//! (colder air takes −40 °C, air above freezing 0 °C). Still air moves no snow
 //! and sublimates none. The humidity is a parameter until the climate's hourly humidity is
 //! connected (issue 47).
 
@@ -98,44 +99,61 @@ impl DriftSublimationParams {
     }
 }
 
-/// Coldest and warmest air of the `λ` table, °C.
+/// Coldest air of the `λ` table, °C; it runs by 1 K to 0 °C.
 const TABLE_FROM_C: f32 = -40.0;
-const TABLE_TO_C: f32 = 0.0;
+/// Entries of the table (−40 to 0 °C).
+const KELVINS: usize = 41;
 
-/// `λ(T)`, m⁻¹, by 1 K from [`TABLE_FROM_C`] to [`TABLE_TO_C`] (module docs), kept while the
-/// humidity and the wind speed stay the same.
+/// A value per kelvin from [`TABLE_FROM_C`] to 0 °C, read linearly between the kelvins.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct KelvinTable(pub(super) [f32; KELVINS]);
+
+impl KelvinTable {
+    /// The table of `f` at each kelvin.
+    pub(super) fn new(f: impl Fn(f64) -> f64) -> Self {
+        Self(std::array::from_fn(|k| {
+            f(f64::from(TABLE_FROM_C) + k as f64) as f32
+        }))
+    }
+
+    /// The table with `f` applied to every entry.
+    pub(super) fn map(&self, f: impl Fn(f32) -> f32) -> Self {
+        Self(self.0.map(f))
+    }
+
+    /// The value at the air temperature `t_c` (°C): linear between the kelvins, clamped to
+    /// the table's range (NaN reads the coldest entry). Branch-free and bounds-check-free, for
+    /// the per-cell loop.
+    #[inline]
+    pub(super) fn at(&self, t_c: f32) -> f32 {
+        let x = (t_c - TABLE_FROM_C).max(0.0).min((KELVINS - 1) as f32);
+        let i = (x as i32).min(KELVINS as i32 - 2) as usize;
+        let f = x - i as f32;
+        let (a, b) = (self.0[i], self.0[i + 1]);
+        a + f * (b - a)
+    }
+}
+
+/// `λ(T)`, m⁻¹ (module docs), kept while the humidity and the wind speed stay the same.
 #[derive(Debug, Clone, Default)]
 pub(super) struct SublimationTable {
-    key: Option<[u64; 2]>,
-    per_kelvin: Vec<f32>,
+    cached: Option<([u64; 2], KelvinTable)>,
 }
 
 impl SublimationTable {
     /// The table for `rh_pct` and a wind of `speed_m_s` at the reference height.
-    pub(super) fn for_air(&mut self, rh_pct: f64, speed_m_s: f64) -> &[f32] {
+    pub(super) fn for_air(&mut self, rh_pct: f64, speed_m_s: f64) -> KelvinTable {
         let key = [rh_pct.to_bits(), speed_m_s.to_bits()];
-        if self.key != Some(key) {
-            let n = (TABLE_TO_C - TABLE_FROM_C) as usize + 1;
-            self.per_kelvin = (0..n)
-                .map(|k| {
-                    let t_c = f64::from(TABLE_FROM_C) + k as f64;
-                    sublimation_per_metre(t_c, rh_pct / 100.0, speed_m_s) as f32
-                })
-                .collect();
-            self.key = Some(key);
+        match self.cached {
+            Some((k, table)) if k == key => table,
+            _ => {
+                let table =
+                    KelvinTable::new(|t_c| sublimation_per_metre(t_c, rh_pct / 100.0, speed_m_s));
+                self.cached = Some((key, table));
+                table
+            }
         }
-        &self.per_kelvin
     }
-}
-
-/// `λ` of a table at the air temperature `t_c` (°C): linear between the kelvins, clamped to
-/// the table's range.
-#[inline]
-pub(super) fn table_at(table: &[f32], t_c: f32) -> f32 {
-    let x = (t_c.clamp(TABLE_FROM_C, TABLE_TO_C) - TABLE_FROM_C).max(0.0);
-    let i = (x as usize).min(table.len() - 2);
-    let f = x - i as f32;
-    table[i] + f * (table[i + 1] - table[i])
 }
 
 /// `λ = −Q_subl / (Q_salt + Q_susp)`, m⁻¹ (module docs), in air at `t_c` °C and relative
@@ -245,15 +263,16 @@ mod tests {
     #[test]
     fn the_table_interpolates_and_clamps() {
         let mut t = SublimationTable::default();
-        let table = t.for_air(70.0, 10.0).to_vec();
-        assert_eq!(table.len(), 41);
+        let table = t.for_air(70.0, 10.0);
+        assert_eq!(t.for_air(70.0, 10.0), table);
         let exact = sublimation_per_metre(-10.0, 0.7, 10.0) as f32;
-        assert!((table_at(&table, -10.0) - exact).abs() <= 1e-6 * exact);
-        let mid = table_at(&table, -10.5);
-        assert!(mid > table_at(&table, -11.0) && mid < table_at(&table, -10.0));
-        assert_eq!(table_at(&table, 12.0), table[40]);
-        assert_eq!(table_at(&table, -80.0), table[0]);
-        assert_eq!(table_at(&table, f32::NAN), table[0]);
+        assert!((table.at(-10.0) - exact).abs() <= 1e-6 * exact);
+        let mid = table.at(-10.5);
+        assert!(mid > table.at(-11.0) && mid < table.at(-10.0));
+        assert_eq!(table.at(0.0), table.0[40]);
+        assert_eq!(table.at(12.0), table.0[40]);
+        assert_eq!(table.at(-80.0), table.0[0]);
+        assert_eq!(table.at(f32::NAN), table.0[0]);
     }
 
     #[test]
