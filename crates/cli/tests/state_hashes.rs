@@ -111,13 +111,13 @@ fn job(out: &Path, args: &[&str]) {
 /// with the slope-projected gravity and the bed's curvature (its maps changed); the energy-balance
 /// melt and the two-scale wind (the seasons' layers, avalanche and temperature maps).
 const RECORDED: &[(&str, &str, u64)] = &[
-    ("demo", "depth.tif", 0xe9ce4e77cdd645c0),
-    ("demo", "layers_compacted.tif", 0x80b88a84cb7cce7b),
-    ("demo", "layers_stable.tif", 0x3c4450604daf1c7b),
-    ("demo", "layers_unstable.tif", 0x4a07fe22e711b0d2),
-    ("demo", "layers_powder.tif", 0x3f02d0c43056dec6),
-    ("demo", "avalanche_deposit.tif", 0x69a62b4c2d96c66e),
-    ("demo", "avalanche_scour.tif", 0x9b59627c237ca2f1),
+    ("demo", "depth.tif", 0xf87cc5b6f1268069),
+    ("demo", "layers_compacted.tif", 0x71f84807018790d3),
+    ("demo", "layers_stable.tif", 0xb81d2c2ef628fe62),
+    ("demo", "layers_unstable.tif", 0xf8cf650422f2da03),
+    ("demo", "layers_powder.tif", 0xfbd2eee3d4bdf1f0),
+    ("demo", "avalanche_deposit.tif", 0x9b5952b0795708c9),
+    ("demo", "avalanche_scour.tif", 0xd3dbd1254178dd60),
     ("demo", "sun.tif", 0xfcb39c4ed645fea0),
     ("demo", "temperature.tif", 0xe1b5a9f2ba04ca8b),
     ("demo", "wind.tif", 0x3b9f07eae1d5ecd2),
