@@ -534,6 +534,8 @@ pub(super) fn surface(k: &Kernel, h: &Step, c: &Cells, a: &Air, pack: &Pack, t0:
     let inv_d = lanes(|l| 1.0 / (capacity[l] + h.seconds * c.conductance[l]));
     let k_eff = lanes(|l| c.conductance[l] * capacity[l] * inv_d[l]);
     let k_tp = lanes(|l| -c.conductance[l] * pack.cold[l] * k.fusion_per_m * inv_d[l]);
+    // min then max (not clamp): a NaN lane reads 0 °C instead of staying NaN.
+    #[allow(clippy::manual_clamp)]
     let surface_c = lanes(|l| {
         ((q0[l] + slope[l] * t0[l] + k_tp[l]) / (k_eff[l] + slope[l]))
             .min(0.0)

@@ -235,8 +235,9 @@ pub(super) fn fit<const N: usize>(f: impl Fn(f64) -> f64) -> [f32; N] {
         b.swap(col, pivot);
         for r in col + 1..N {
             let m = a[r][col] / a[col][col];
-            for k in col..N {
-                a[r][k] -= m * a[col][k];
+            let pivot_row = a[col];
+            for (x, p) in a[r][col..].iter_mut().zip(&pivot_row[col..]) {
+                *x -= m * p;
             }
             b[r] -= m * b[col];
         }
