@@ -131,7 +131,9 @@ pub struct WeatherPeriod {
     /// Mean number of snowfall periods starting per week. Cordonnier 2018 §5.1: 1.
     pub snowfall_per_week: f64,
     /// Precipitation during this period's snowfall periods at the climate's reference
-    /// altitude, mm of water per day; `None`: `[parameters.climate] precipitation_mm_per_day`.
+    /// altitude, mm of water per day, within [0, 500]; `None`: the climate's storm rate
+    /// ([`crate::storms`]). Not with a season total (`annual_precipitation_mm`,
+    /// `monthly_precipitation_mm`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub precipitation_mm_per_day: Option<f64>,
 }
