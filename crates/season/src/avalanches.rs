@@ -88,8 +88,9 @@ pub struct AvalancheParameters {
     pub skier_gain: f64,
     /// Set the flow's dry/wet mix α from the snow temperature of the release (§6.1: "α is
     /// proportional to snow temperature"); false keeps `flow.alpha`. Default true. α is the
-    /// Coulomb law's (`flow.friction = "coulomb"`, the paper's): the default samosAT law and
-    /// Voellmy have no dry/wet mix, and with them the release temperature sets nothing.
+    /// Coulomb law's (`flow.friction = "coulomb"`, the paper's and the season's default): the
+    /// samosAT and Voellmy laws have no dry/wet mix, and with them the release temperature
+    /// sets nothing.
     pub alpha_from_temperature: bool,
     /// Release temperature at and below which the snow is dry (α = 1), °C. Default −10
     /// (Table 2's powdery-snow temperature T0powdery).
@@ -103,7 +104,13 @@ pub struct AvalancheParameters {
     pub wet_alpha: f64,
     /// The rupture at the start cell (reach per metre of unstable snow, ...).
     pub rupture: RuptureParams,
-    /// The flow (rest angle, viscosity, dry/wet mix, ...).
+    /// The flow (rest angle, viscosity, dry/wet mix, ...). Default: the paper's Coulomb law
+    /// with the shallow-slope gravity ([`AvalancheParams::paper`]), not the `avalanche` job's
+    /// samosATSmall default: on the 512² demo the samosAT law with the projected gravity and
+    /// curvature ran 3 times the avalanche work (23.9 k → 71.0 k flow events, the season's
+    /// avalanche phase 15 → 54 s on the loaded 2-core VM, 2026-12-07), past issue 47's cost
+    /// bound. `flow.friction = "samosat"` (with `samos_at`, `slope_gravity = "projected"`)
+    /// selects it for a season.
     pub flow: AvalancheParams,
     /// Run length and stop criterion of each avalanche.
     pub run: RunOptions,
@@ -126,7 +133,7 @@ impl Default for AvalancheParameters {
             wet_temperature_c: 0.0,
             wet_alpha: 0.6,
             rupture: RuptureParams::default(),
-            flow: AvalancheParams::default(),
+            flow: AvalancheParams::paper(),
             run: RunOptions {
                 duration_s: 300.0,
                 ..RunOptions::default()
