@@ -17,8 +17,8 @@
 //! one-dimensional.
 
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, Border, FrictionLaw,
-    RunOptions, SlopeGravity, flow::G,
+    AvalancheError, AvalancheParams, AvalancheRun, AvalancheState, Border, FrictionLaw, RunOptions,
+    SlopeGravity, flow::G,
 };
 use snowscape_terrain::{GridGeometry, NodataMask};
 
@@ -59,7 +59,11 @@ fn channel(depth: f64) -> AvalancheState {
     let h: Vec<f64> = (0..g.len())
         .map(|i| {
             let y = y_of(i);
-            if (20.0..40.0).contains(&y) { depth } else { 0.0 }
+            if (20.0..40.0).contains(&y) {
+                depth
+            } else {
+                0.0
+            }
         })
         .collect();
     s.set_thickness(&h).unwrap();
@@ -144,7 +148,10 @@ fn frictionless_flow_keeps_its_speed_along_the_bed_through_a_bend() {
     assert!((on_slope - plane).abs() < 0.005, "{on_slope} vs {plane}");
     let with = frictionless_energy_ratio(true, SLOPE_M + 150.0);
     let without = frictionless_energy_ratio(false, SLOPE_M + 150.0);
-    assert!(with > 0.93 * on_slope, "with the curvature: {with} ({on_slope} on the slope)");
+    assert!(
+        with > 0.93 * on_slope,
+        "with the curvature: {with} ({on_slope} on the slope)"
+    );
     assert!(
         without < 0.75 * on_slope,
         "without the curvature: {without} ({on_slope} on the slope)"

@@ -258,7 +258,10 @@ fn avakot_footprints_under_each_friction_law_against_avaframe() {
     }
     assert!(default.jaccard >= 0.65, "{default:?}");
     assert!(default.recall >= 0.85, "{default:?}");
-    assert!(default.jaccard > coulomb.jaccard, "{default:?} vs {coulomb:?}");
+    assert!(
+        default.jaccard > coulomb.jaccard,
+        "{default:?} vs {coulomb:?}"
+    );
     assert!(
         voellmy.jaccard > coulomb.jaccard,
         "{voellmy:?} vs {coulomb:?}"

@@ -332,9 +332,16 @@ fn avakot_with_the_defaults_meets_avaframe() {
     assert_eq!(r["parameters"]["flow"]["friction"], "coulomb");
     assert_eq!(r["parameters"]["flow"]["slope_gravity"], "shallow");
     assert_eq!(r["parameters"]["thickness_measured"], "vertical");
-    assert!(r["comparison"]["jaccard"].as_f64().unwrap() < 0.5, "{}", r["comparison"]);
+    assert!(
+        r["comparison"]["jaccard"].as_f64().unwrap() < 0.5,
+        "{}",
+        r["comparison"]
+    );
     // AvaFrame's standard samosAT set by name.
-    let (_, r) = run_kot("standard", &["--friction-model", "samosat", "--duration", "5"]);
+    let (_, r) = run_kot(
+        "standard",
+        &["--friction-model", "samosat", "--duration", "5"],
+    );
     assert_eq!(r["parameters"]["flow"]["samosat"]["mu"], 0.155);
     let o = snowscape(&[
         "avalanche",

@@ -197,9 +197,8 @@ pub(super) fn cell_flow_border(
                 bed_gradient(pg, inp.bed, cells, kk).expect("defined where the surface's is");
             // The curvature where the 3x3 stencil holds only valid cells (next to the ghost
             // ring and nodata cells the bed is a copy: its curvature is not the terrain's).
-            let inner = (2..=k.pw - 3).contains(&c)
-                && (2..=k.ph - 3).contains(&r)
-                && !inp.near_wall[kk];
+            let inner =
+                (2..=k.pw - 3).contains(&c) && (2..=k.ph - 3).contains(&r) && !inp.near_wall[kk];
             let cf = if k.curvature && inner {
                 // SAFETY: `inner`: the 3x3 stencil lies in the padded bed.
                 unsafe { curvature_load::<f64>(k, inp.bed, kk, vx, vy) }

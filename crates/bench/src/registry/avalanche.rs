@@ -54,7 +54,11 @@ pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
             },
             size,
         )?,
-        substep_kernel("avalanche/substep_default", AvalancheParams::default(), size)?,
+        substep_kernel(
+            "avalanche/substep_default",
+            AvalancheParams::default(),
+            size,
+        )?,
         substep_kernel(
             "avalanche/substep_voellmy",
             AvalancheParams {

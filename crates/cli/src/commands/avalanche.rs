@@ -76,7 +76,9 @@ fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
     };
     p.curvature = !args.no_curvature;
     if args.no_curvature && p.slope_gravity != SlopeGravity::Projected {
-        bail!("--no-curvature acts on --slope-gravity projected only (the shallow form has no curvature term)");
+        bail!(
+            "--no-curvature acts on --slope-gravity projected only (the shallow form has no curvature term)"
+        );
     }
     if p.friction == FrictionLaw::Coulomb && (args.mu.is_some() || args.xi.is_some()) {
         bail!("--mu and --xi are the Voellmy law's: add --friction-model voellmy");
