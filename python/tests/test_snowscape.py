@@ -136,7 +136,11 @@ def test_avalanche_on_avawog_and_its_release_forms():
     m = np.zeros(dem.shape, dtype=bool)
     m[rows[0] : rows[0] + 20, cols[0] : cols[0] + 20] = True
     m &= ~np.isnan(dem.values)
-    q = snowscape.avalanche(dem, m, thickness=1.0, duration=10, friction="voellmy", voellmy_mu=0.2)
+    # (Vertical thickness: the released volume is the mask's cells times 1 m; the default,
+    # slope-normal as AvaFrame's, releases d/cosθ.)
+    q = snowscape.avalanche(
+        dem, m, thickness=1.0, slope_normal=False, duration=10, friction="voellmy", voellmy_mu=0.2
+    )
     cell_area = dem.cell_size**2
     assert q["summary"]["released_volume_m3"] == pytest.approx(m.sum() * cell_area, rel=1e-5)
     assert q["summary"]["parameters"]["friction"] == "voellmy"
@@ -287,6 +291,15 @@ def test_friction_names_are_the_command_lines():
         assert p["friction"] == "samosat", (kwargs, p)
         used[len(used)] = p["samosat"]["mu"]
     assert used == {0: 0.155, 1: 0.22, 2: 0.3, 3: 0.2}
+    # Issue 47: the defaults are the command line's (AvaFrame's samosATSmall, the projected
+    # gravity with the bed's curvature).
+    p = snowscape.avalanche(dem, (x, y), thickness=0.5, duration=1)["summary"]["parameters"]
+    assert (p["friction"], p["samosat"]["mu"], p["slope_gravity"], p["curvature"]) == (
+        "samosat",
+        0.22,
+        "projected",
+        True,
+    ), p
     with pytest.raises(ValueError, match="samosat-small"):
         snowscape.avalanche(dem, (x, y), friction="samosat_tiny")
 

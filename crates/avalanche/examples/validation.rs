@@ -60,7 +60,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         alpha: 0.0,
         k_viscous: 0.0,
         border: Border::Closed,
-        ..AvalancheParams::default()
+        ..AvalancheParams::paper()
     };
     if want("ritter") {
         let d = dam_break(&frictionless)?;
@@ -102,7 +102,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // Poured pile.
     if want("pile") {
-        let p = poured_pile(&AvalancheParams::default())?;
+        let p = poured_pile(&AvalancheParams::paper())?;
         let case = "Poured pile (150 m³, θc=30°)";
         t.row(
             case,
@@ -122,7 +122,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (theta, cell, stop) in [(30.0, 2.0, 0.0), (30.0, 1.0, 0.0), (25.0, 2.0, 0.01)] {
         let params = AvalancheParams {
             rest_angle_deg: theta,
-            ..AvalancheParams::default()
+            ..AvalancheParams::paper()
         };
         let options = RunOptions {
             stop_energy_fraction: stop,
@@ -168,7 +168,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &wog[1],
             1.0,
             ThicknessConvention::Vertical,
-            &AvalancheParams::default(),
+            &AvalancheParams::paper(),
             &RunOptions::default(),
         )?;
         let line = read_polyline(&wog[2])?;
@@ -247,7 +247,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &kot[1],
             1.0,
             ThicknessConvention::SlopeNormal,
-            &AvalancheParams::default(),
+            &AvalancheParams::paper(),
             &RunOptions::default(),
         )?;
         let reference = read_dem(&kot[2], &ReadOptions::default())?;

@@ -227,9 +227,9 @@ fn avakot_overlap(
 
 /// Issue 20 and 47: the friction laws on avaKot against AvaFrame's reference run (com1DFA,
 /// samosATSmall). Measured (2026-12-07; footprint Jaccard over the whole grid, recall,
-/// precision): the defaults (samosATSmall, projected gravity with the curvature) 0.715, 0.893,
-/// 0.782; the same without the curvature 0.729, 0.890, 0.801 (on this path the curvature
-/// changes little: 3,600 m² more footprint); the paper's Coulomb law (shallow gravity) 0.258,
+/// precision): the defaults (samosATSmall, projected gravity with the curvature) 0.725, 0.895,
+/// 0.793; the same without the curvature 0.729, 0.890, 0.801 (on this path the curvature
+/// changes little: 2,100 m² more footprint); the paper's Coulomb law (shallow gravity) 0.258,
 /// 0.963, 0.260; Voellmy with AvaFrame's defaults and the shallow gravity 0.364, 0.997, 0.364.
 /// Asserted: the defaults reach Jaccard ≥ 0.65 (issue 47) and recall ≥ 0.85 and come closer
 /// than the paper's law; Voellmy comes closer than the paper's Coulomb law.
@@ -275,8 +275,8 @@ fn avakot_footprints_under_each_friction_law_against_avaframe() {
 /// reference cells looked up in our grid at their centres).
 ///
 /// Measured (2026-12-07): released 21,681 m³ (AvaFrame: 4,328,073.7 kg at 200 kg/m³ =
-/// 21,640 m³); footprint (peak > 1 cm) 130,175 m² against the reference's 114,050 m², both
-/// 101,850 m²: Jaccard 0.715, recall 0.893, precision 0.782 (the paper's Coulomb law: 422,150
+/// 21,640 m³); footprint (peak > 1 cm) 128,725 m² against the reference's 114,050 m², both
+/// 102,075 m²: Jaccard 0.725, recall 0.895, precision 0.793 (the paper's Coulomb law: 422,150
 /// m², Jaccard 0.258, its thin fast sheet fanning over the open slope north-west of the gully).
 /// Asserted: volume within 1 % of AvaFrame's, the reference footprint within 0.5 % of its
 /// documented 114,000 m², Jaccard ≥ 0.65, recall ≥ 0.85 and our footprint within 25 % of the

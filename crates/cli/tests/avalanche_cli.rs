@@ -242,9 +242,9 @@ fn run_with_skiers_writes_tracks() {
 /// released volume is AvaFrame's (its 4 328 073.7 kg at 200 kg/m³) within 1 %, the report
 /// names the law and the conventions, `--compare` (an output: it changes nothing in the run)
 /// measures the run against AvaFrame's along its AIMEC path: Jaccard ≥ 0.65 (measured
-/// 2026-12-07: 0.725, recall 0.891, precision 0.796, runout −34 m of 1583 m). The paper's
+/// 2026-12-07: 0.725, recall 0.895, precision 0.793, runout −35 m of 1583 m). The paper's
 /// model stays by name (`--friction-model coulomb --thickness-measured vertical
-/// --slope-gravity shallow`: measured Jaccard 0.36), and the law flags refuse what does not
+/// --slope-gravity shallow`: measured Jaccard 0.37), and the law flags refuse what does not
 /// belong to them.
 #[test]
 fn avakot_with_the_defaults_meets_avaframe() {

@@ -137,10 +137,10 @@ const RECORDED: &[(&str, &str, u64)] = &[
     ("transport", "density.tif", 0x6abfe3f33142848f),
     ("transport", "q_salt.tif", 0x3657c6dcd74952ac),
     ("transport", "wind3d.bin", 0x06360c31bb2aa121),
-    ("avalanche", "peak_thickness.tif", 0x8a2a19e378e03287),
-    ("avalanche", "peak_velocity.tif", 0xe15d3a05cb691306),
-    ("avalanche", "thickness.tif", 0x3f157688b25ae1ad),
-    ("avalanche", "footprint.tif", 0x3f6e3dbdf74b4b73),
+    ("avalanche", "peak_thickness.tif", 0xe66e39a4a1f0a00d),
+    ("avalanche", "peak_velocity.tif", 0x63089f6d71670767),
+    ("avalanche", "thickness.tif", 0x10f981307ce34a4f),
+    ("avalanche", "footprint.tif", 0xf5cc94245f1e5ac3),
 ];
 
 #[test]

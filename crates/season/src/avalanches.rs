@@ -88,8 +88,9 @@ pub struct AvalancheParameters {
     pub skier_gain: f64,
     /// Set the flow's dry/wet mix α from the snow temperature of the release (§6.1: "α is
     /// proportional to snow temperature"); false keeps `flow.alpha`. Default true. α is the
-    /// Coulomb law's (`flow.friction = "coulomb"`, the paper's): the default samosAT law and
-    /// Voellmy have no dry/wet mix, and with them the release temperature sets nothing.
+    /// Coulomb law's (`flow.friction = "coulomb"`, the paper's and the season's default): the
+    /// samosAT and Voellmy laws have no dry/wet mix, and with them the release temperature
+    /// sets nothing.
     pub alpha_from_temperature: bool,
     /// Release temperature at and below which the snow is dry (α = 1), °C. Default −10
     /// (Table 2's powdery-snow temperature T0powdery).

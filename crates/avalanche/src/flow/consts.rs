@@ -56,7 +56,7 @@ pub(super) struct Consts {
     /// carries the centrifugal term (`pipes::curvature_load`) and momentum is advected along
     /// the bed (`update::advection`).
     pub(super) curvature: bool,
-    /// `1/dx²`, `1/dy²`, `1/(4·dx·dy)`: the bed Hessian's divisors, as factors.
+    /// `1/(3·dx²)`, `1/(3·dy²)`, `1/(4·dx·dy)`: the bed Hessian's divisors, as factors.
     pub(super) inv_dx2: f64,
     pub(super) inv_dy2: f64,
     pub(super) inv_four_dxdy: f64,
@@ -125,8 +125,8 @@ impl Consts {
             adv: params.momentum_advection,
             projected: params.slope_gravity == SlopeGravity::Projected,
             curvature: params.slope_gravity == SlopeGravity::Projected && params.curvature,
-            inv_dx2: 1.0 / (pg.dx * pg.dx),
-            inv_dy2: 1.0 / (pg.dy * pg.dy),
+            inv_dx2: 1.0 / (3.0 * pg.dx * pg.dx),
+            inv_dy2: 1.0 / (3.0 * pg.dy * pg.dy),
             inv_four_dxdy: 1.0 / (4.0 * pg.dx * pg.dy),
             closed: params.border == Border::Closed,
             alpha,

@@ -3,7 +3,7 @@
 //! Whole avalanches, as users run them (each call releases, runs to rest and deposits through
 //! [`AvalancheWorkspace::run_to_rest`], the path of the season, on a terrain restored before
 //! each call; cells = the footprint, peak thickness > 1 cm, of a probe run; no bandwidth
-//! model, the cost follows the flow):
+//! model, the cost follows the flow; the paper's law, the seasons'):
 //! - `avalanche/slope_run_to_rest`: a 1 m release 60 m long across the whole width of a 35°
 //!   slope of 5 m cells running out onto flat ground (`size` × `0.3 size` cells; 1000 × 300 at
 //!   the size).
@@ -11,8 +11,10 @@
 //!   polygons `REL/relKot.shp` and their thickness, from `../shared/data` (the benchmark
 //!   fails when the data is missing).
 //!
-//! `avalanche/substep` (`_projected`: with Savage-Hutter's projected gravity; `_voellmy`,
-//! `_samosat`: under those laws): one CFL sub-step of a release of `size/5` square cells (200x200 at
+//! `avalanche/substep` (the paper's model; `_projected`: with Savage-Hutter's projected gravity
+//! and the bed's curvature, `_projected_no_curvature` without it; `_default`: the defaults,
+//! samosATSmall with the projected gravity and curvature; `_voellmy`, `_samosat`: under those
+//! laws): one CFL sub-step of a release of `size/5` square cells (200x200 at
 //! 1024², the footprint) sliding down a 35° plane of 2 m cells, two seconds after the
 //! release. The state keeps flowing from call to call (a real avalanche's successive
 //! sub-steps); cells = the active box after the warm-up. 560 B per active cell: the five passes of a sub-step
@@ -22,7 +24,7 @@
 use crate::kernel::{Kernel, KernelError};
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheScratch, AvalancheState, AvalancheWorkspace,
-    FrictionLaw, FrictionMaps, ReleasedCells, RunOptions, SlopeGravity, cfl_dt,
+    FrictionLaw, FrictionMaps, ReleasedCells, RunOptions, SamosAtParams, SlopeGravity, cfl_dt,
     release_from_shapefile, step,
 };
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
@@ -30,21 +32,38 @@ use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLaye
 /// The avalanche flow kernels on a `size`² grid: one sub-step under each friction law (the
 /// Voellmy law's cost next to the paper's Coulomb law), and whole runs to rest.
 pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
+    // The sub-step kernels keep the paper's model (Coulomb, shallow gravity) but for what
+    // each one names, so that their figures compare across versions.
+    let paper = AvalancheParams::paper;
     let mut kernels = vec![
-        substep_kernel("avalanche/substep", AvalancheParams::default(), size)?,
+        substep_kernel("avalanche/substep", paper(), size)?,
         substep_kernel(
             "avalanche/substep_projected",
             AvalancheParams {
                 slope_gravity: SlopeGravity::Projected,
-                ..AvalancheParams::default()
+                ..paper()
             },
+            size,
+        )?,
+        substep_kernel(
+            "avalanche/substep_projected_no_curvature",
+            AvalancheParams {
+                slope_gravity: SlopeGravity::Projected,
+                curvature: false,
+                ..paper()
+            },
+            size,
+        )?,
+        substep_kernel(
+            "avalanche/substep_default",
+            AvalancheParams::default(),
             size,
         )?,
         substep_kernel(
             "avalanche/substep_voellmy",
             AvalancheParams {
                 friction: FrictionLaw::Voellmy,
-                ..AvalancheParams::default()
+                ..paper()
             },
             size,
         )?,
@@ -52,7 +71,7 @@ pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
             "avalanche/substep_voellmy_maps",
             AvalancheParams {
                 friction: FrictionLaw::Voellmy,
-                ..AvalancheParams::default()
+                ..paper()
             },
             size,
             true,
@@ -61,7 +80,8 @@ pub fn avalanche_kernels(size: usize) -> Result<Vec<Kernel>, KernelError> {
             "avalanche/substep_samosat",
             AvalancheParams {
                 friction: FrictionLaw::SamosAt,
-                ..AvalancheParams::default()
+                samos_at: SamosAtParams::standard(),
+                ..paper()
             },
             size,
         )?,
@@ -138,7 +158,8 @@ struct Release {
 
 /// A kernel that runs the release to rest from the same terrain at every call.
 fn run_to_rest_kernel(name: &str, release: Release) -> Result<Kernel, KernelError> {
-    let (params, options) = (AvalancheParams::default(), RunOptions::default());
+    // The paper's law, the seasons' (`season::avalanches`).
+    let (params, options) = (AvalancheParams::paper(), RunOptions::default());
     let run = move |ws: &mut AvalancheWorkspace, t: &mut LayeredTerrain, cells: &[usize]| {
         ws.run_to_rest::<AvalancheError>(
             t,
