@@ -103,22 +103,24 @@ fn job(out: &Path, args: &[&str]) {
 /// instead of 9.80665 (its depth, density and saltation maps; `terrain::materials`), and the
 /// Sx drift sweep's carries along a row regrouped into a segmented scan (2026-12-05: the
 /// demo's layers and avalanche maps, to f32 round-off in each wind step;
-/// `wind_transport::sheltered::drift_row`).
+/// `wind_transport::sheltered::drift_row`). Issue 47: the surface energy balance became the
+/// default melt (`melt::energy_balance`): the demo's and the run's snow maps and the demo's
+/// avalanche and temperature maps (2026-12-07; the merge recomputes them).
 const RECORDED: &[(&str, &str, u64)] = &[
-    ("demo", "depth.tif", 0x2f4be3437c6b97ce),
-    ("demo", "layers_compacted.tif", 0x96d14ca472dc74e3),
-    ("demo", "layers_stable.tif", 0xaa96ffbd39dccee9),
-    ("demo", "layers_unstable.tif", 0xa3d54e394dee9a10),
-    ("demo", "layers_powder.tif", 0xbb3ecb46ff9bafd4),
-    ("demo", "avalanche_deposit.tif", 0x88bc00903cfe56a9),
-    ("demo", "avalanche_scour.tif", 0x10929fd8e3cc5b42),
+    ("demo", "depth.tif", 0x5e0db217681f40d3),
+    ("demo", "layers_compacted.tif", 0xebdce4b68e50ab8d),
+    ("demo", "layers_stable.tif", 0x70ccbed9d9f450f3),
+    ("demo", "layers_unstable.tif", 0x2d2476cb822c1d89),
+    ("demo", "layers_powder.tif", 0xcc2b618ef1064db6),
+    ("demo", "avalanche_deposit.tif", 0x2c87b11e6e3678a0),
+    ("demo", "avalanche_scour.tif", 0xa4a389d70c520433),
     ("demo", "sun.tif", 0xfcb39c4ed645fea0),
-    ("demo", "temperature.tif", 0x1c5b58a7cc1777cf),
+    ("demo", "temperature.tif", 0x0313b0a7609d3c96),
     ("demo", "wind.tif", 0x3b9f07eae1d5ecd2),
-    ("run", "depth.tif", 0xf88dbae4e7cdf17a),
-    ("run", "layers_compacted.tif", 0x7d7de715fb80c60c),
-    ("run", "layers_stable.tif", 0xdc37f849625f2126),
-    ("run", "layers_unstable.tif", 0x79e8b8fac5ed8808),
+    ("run", "depth.tif", 0x51c56cd8222f4498),
+    ("run", "layers_compacted.tif", 0x6966613425ddd6b0),
+    ("run", "layers_stable.tif", 0xa3502eb262674cf9),
+    ("run", "layers_unstable.tif", 0x8ec1354c83670302),
     ("run", "layers_powder.tif", 0xfb2b2338cac91475),
     ("run", "avalanche_deposit.tif", 0xfb2b2338cac91475),
     ("run", "avalanche_scour.tif", 0xfb2b2338cac91475),
