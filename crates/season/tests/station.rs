@@ -2,7 +2,7 @@
 //! hourly record of the snobal test data (`../shared/data/reference/pysnobal_rme_point`),
 //! on the basin's 50 m DEM, against the depth the snobal energy-balance model computes from
 //! the same forcing (a careful model, not a measurement). Nothing here is tuned to it: the
-//! defaults of the enhanced temperature-index melt and the climate are the cited ones.
+//! defaults of the energy-balance melt and the climate are the cited ones.
 
 mod support;
 
@@ -35,6 +35,21 @@ fn snobal_daily_depth() -> Vec<f64> {
         .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
         .collect();
     hourly.chunks(24).map(|d| *d.last().unwrap()).collect()
+}
+
+/// snobal's vapour exchange over the year, mm w.e.: (evaporation and sublimation,
+/// condensation and deposition), from the hourly `E_s` of `gold.pysnobal.csv` (kg/m² per hour,
+/// positive into the snow: its sign follows the latent heat flux `L_v_E`).
+fn snobal_vapour_mm() -> (f64, f64) {
+    let text = std::fs::read_to_string(reference("gold.pysnobal.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "E_s").unwrap();
+    lines
+        .map(|l| l.split(',').nth(col).unwrap().parse::<f64>().unwrap())
+        .fold((0.0, 0.0), |(out, into), e| {
+            (out + (-e).max(0.0), into + e.max(0.0))
+        })
 }
 
 /// (peak depth, peak day, melt-out day: the first day after the peak below 5 cm).
@@ -80,7 +95,21 @@ fn reynolds_mountain_east_1984_follows_an_energy_balance_model() {
             / cells.len() as f64;
         simulated.push(d);
     }
-    let b = w.budget();
+    let b = w.budget().clone();
+    let valid_area = (0..w.terrain.geometry().len())
+        .filter(|&i| w.terrain.mask().is_valid(i))
+        .count() as f64
+        * w.terrain.geometry().cell_area();
+    let (sublimated, deposited) = (
+        b.sublimation_water / valid_area * 1e3,
+        b.deposition_water / valid_area * 1e3,
+    );
+    let (r_sublimated, r_deposited) = snobal_vapour_mm();
+    eprintln!(
+        "vapour exchange, mm w.e.: snowscape (basin mean) sublimation {sublimated:.1}, \
+         deposition {deposited:.1}; snobal (station) evaporation/sublimation {r_sublimated:.1}, \
+         condensation/deposition {r_deposited:.1}"
+    );
     let store = w.terrain.snow_volume();
     assert!((store - b.expected_store()).abs() <= 1e-5 * (b.snowfall + b.refreeze));
     assert!(
@@ -107,13 +136,24 @@ fn reynolds_mountain_east_1984_follows_an_energy_balance_model() {
         (r_peak - 2.28).abs() < 0.02 && r_day.abs_diff(180) <= 1,
         "{r_peak} {r_day}"
     );
+    // The energy balance (default): peak 2.61 m on day 192, melt-out day 245 (the enhanced
+    // temperature index gave 2.47 m on day 194 and day 242). The peak depth also carries the
+    // layers' settling, which snobal models otherwise.
     assert!(
-        (s_peak / r_peak - 1.0).abs() <= 0.25,
+        (s_peak / r_peak - 1.0).abs() <= 0.15,
         "peak {s_peak} vs {r_peak}"
     );
-    assert!(s_day.abs_diff(r_day) <= 15, "peak day {s_day} vs {r_day}");
+    assert!(s_day.abs_diff(r_day) <= 13, "peak day {s_day} vs {r_day}");
     assert!(
-        s_out.abs_diff(r_out) <= 10,
+        s_out.abs_diff(r_out) <= 7,
         "melt-out day {s_out} vs {r_out}"
+    );
+    // Sublimation and deposition are reported. snobal's 26.6 mm out and 34.9 mm in at the
+    // station are larger than the basin's here (about 2 and 4 mm): Louis's stability
+    // correction at the default 10 m wind and 2 m temperature heights all but stops the
+    // exchange under the nights' inversions (5 m heights give 8 and 26 mm).
+    assert!(
+        sublimated > 0.5 && deposited > 0.5,
+        "{sublimated} {deposited}"
     );
 }

@@ -2,8 +2,9 @@
 //! "energy_balance"`; beyond Cordonnier 2018), after the energy balance of FSM (Essery 2015,
 //! Geosci. Model Dev. 8, 3867-3876) with a bulk pack as in UEB (Tarboton & Luce 1996).
 //!
-//! Per cell and hour `h` of the window (the hours since the previous melt event, as the
-//! enhanced melt integrates them), on cells with snow, the energy into the pack is
+//! Per cell and hour of the window (the hours since the previous melt event, as the enhanced
+//! melt integrates them; dark hours in steps of several, below), on cells with snow, the
+//! energy into the pack is
 //!
 //! `Q = (1 − α) S + L↓ − ε σ T_s⁴ + H + LE + G`, W/m², with
 //!
@@ -39,12 +40,12 @@
 //! `K (T_s − T_p)`, with `K = k_s / d` (`d` half the depth, at most the diurnal damping depth
 //! `(κ_s P/π)^½` ≈ 0.1 m of snow of `k_s` = 0.24 W m⁻¹ K⁻¹) and the pack's bulk temperature
 //! `T_p = −H_cc L_f / (c_i SWE)` from its cold content `H_cc`. `Q` is linearised around the
-//! previous hour's `T_s` (FSM's `SURF_EBAL`: one Newton step an hour, two in the first hour of
-//! a window, which starts from `min(T_a, 0)`), and the pack's temperature is taken at the end
-//! of the hour (implicit: `K` in series with the pack's heat capacity `c_i ρ_w SWE / Δt`, so a
-//! thin pack follows its surface without overshoot). `T_s` is capped at 0 °C; the energy of
-//! the hour `Q(T_s) Δt` (all terms at the solved `T_s`, so they sum to it exactly) goes into
-//! the pack.
+//! previous step's `T_s` (FSM's `SURF_EBAL`: one Newton step a step, the exchange coefficient
+//! at the previous `T_s`; two in the first step of a window, which starts from `min(T_a, 0)`),
+//! and the pack's temperature is taken at the end of the step (implicit: `K` in series with the
+//! pack's heat capacity `c_i ρ_w SWE / Δt`, so a thin pack follows its surface without
+//! overshoot). `T_s` is capped at 0 °C; the energy of the step `Q(T_s) Δt` (every term at the
+//! solved `T_s` in the linearisation, so they sum to it exactly) goes into the pack.
 //!
 //! **The pack** per hour, in m of water equivalent: the energy pays the cold content first
 //! and what is left melts snow (a negative energy adds to the cold content); liquid water
@@ -56,13 +57,16 @@
 //! and window length (`[parameters.melt.enhanced]`) this model shares. Rain joins the liquid
 //! water with its heat `P c_w max(0, T̄)` at the start of the window.
 //!
-//! **Numerics.** The hours' air-side terms that depend on the air temperature alone (`e_a`,
-//! `L_sky`) are interpolated per hour by a degree-5 polynomial in the cell's lapse offset
-//! (Chebyshev nodes over the terrain's range), so the per-cell hour loop has no transcendental
-//! function but the saturation vapour pressure at the surface, an exponential evaluated by a
-//! polynomial (relative error < 2·10⁻⁷). Cells go through the hours in lanes of eight, without
-//! data-dependent branches (groups without snow skip the hours); every sum is per cell in a
-//! fixed order and rows run in parallel, so results are identical for any thread count.
+//! **Steps and numerics.** Consecutive hours without sun are integrated together, up to
+//! `dark_step_hours` (4 h: the night's forcing varies slowly), hours with sun one by one
+//! (`sun_step_hours` = 1: two-hour steps lag the surface behind the sun, −7 % of a sunny
+//! slope's loss in the slope test). The air-side terms that depend on a cell only through its
+//! air temperature (`e_a`, `L_sky`) are interpolated per step by a degree-5 polynomial in the
+//! cell's lapse offset (Chebyshev nodes over the terrain's range) and `e_i` by a degree-7
+//! polynomial over [−60, 0] °C, so the per-cell loop has no transcendental function. Cells go
+//! through the steps in groups of sixteen without data-dependent branches, step after step
+//! over every group of a row that has snow; every sum is per cell in a fixed order and rows run
+//! in parallel, so results are identical for any thread count and vector width.
 
 use super::enhanced::{
     self, EnhancedMeltParams, MeltForcing, MeltReport, SnowpackState, albedo_table,

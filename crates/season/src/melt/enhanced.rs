@@ -824,7 +824,7 @@ fn row_shortwave(threshold: f32, f: &MeltForcing, base: usize, out: &mut [f32]) 
     }
 }
 
-pub(super) mod columns;
+mod columns;
 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 mod gathers;
 use columns::{Columns, RowState, Scalars, column_updates};

@@ -1,8 +1,8 @@
-//! The per-cell hour loop of the energy balance (parent module's docs) in lanes of
-//! [`LANES`] cells: each group of cells keeps its surface temperature and pack in registers
-//! through the window's hours, every operation lane by lane over fixed-size arrays without
-//! data-dependent branches (one vector instruction each; AVX2 where the CPU has it, the same
-//! bits as SSE since Rust does not fuse multiply-adds).
+//! The per-cell step loop of the energy balance (parent module's docs) in groups of
+//! [`LANES`] cells: every operation lane by lane over fixed-size arrays without
+//! data-dependent branches (vector instructions: AVX-512 or AVX2 where the CPU has them, the
+//! same bits as SSE since Rust does not fuse multiply-adds and division and square root are
+//! exact), each step over every group of a row with snow before the next step.
 
 use super::super::enhanced::{EnhancedMeltParams, MeltForcing, albedo_from_table};
 use super::EnergyBalanceParams;

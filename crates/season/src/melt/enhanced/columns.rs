@@ -230,18 +230,18 @@ pub(super) fn column_updates<'s>(
 }
 
 /// Cells per group of [`column_updates`] (one AVX2 register of f32).
-pub(in crate::melt) const LANES: usize = 8;
+const LANES: usize = 8;
 
 /// `f` of every lane.
 #[inline(always)]
-pub(in crate::melt) fn lanes(f: impl Fn(usize) -> f32) -> [f32; LANES] {
+fn lanes(f: impl Fn(usize) -> f32) -> [f32; LANES] {
     std::array::from_fn(f)
 }
 
 /// Up to [`LANES`] values, the rest 0 (an empty cell). A full group is one fixed-size copy
 /// (one vector load): a copy of a slice's length went through a call to `memmove` per load.
 #[inline(always)]
-pub(in crate::melt) fn load(v: &[f32]) -> [f32; LANES] {
+fn load(v: &[f32]) -> [f32; LANES] {
     if let Ok(full) = <[f32; LANES]>::try_from(v) {
         return full;
     }
@@ -252,7 +252,7 @@ pub(in crate::melt) fn load(v: &[f32]) -> [f32; LANES] {
 
 /// The first `out.len()` lanes of `a` (a full group in one fixed-size store).
 #[inline(always)]
-pub(in crate::melt) fn store(out: &mut [f32], a: [f32; LANES]) {
+fn store(out: &mut [f32], a: [f32; LANES]) {
     if let Ok(full) = <&mut [f32; LANES]>::try_from(&mut *out) {
         *full = a;
         return;
