@@ -95,9 +95,9 @@ pub struct ShelteringParams {
     /// basin follow `Sx` over about 1000 m better than over 100 m, issue 47).
     pub long_range_dmax_m: f64,
     /// Cell size of the coarse grid the long-range search runs on, metres (> 0): the grid's
-    /// cells are averaged in blocks of `max(1, ⌊long_range_cell_m / min(dx, dy)⌋)` cells a
-    /// side. Default 50 m: chosen here, half the short search, so the long search takes
-    /// `long_range_dmax_m / 50 m` = 20 samples per ray whatever the grid's cells.
+    /// cells are averaged in blocks of `max(1, ⌈long_range_cell_m / min(dx, dy)⌉)` cells a
+    /// side. Default 50 m: chosen here, half the short search, so the long search takes at
+    /// most `long_range_dmax_m / 50 m` = 20 samples per ray whatever the grid's cells.
     pub long_range_cell_m: f64,
     /// Weight `w_long` of the long-range `Sx` in the sheltering index (module docs), in
     /// [0, 10]. Default 1: chosen here (both scales count alike).

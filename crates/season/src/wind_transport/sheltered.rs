@@ -639,11 +639,7 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
         );
         keep_row(&self.share[r.clone()], gradient, ctx.slab_gradient, keep);
         match &self.loss {
-            Some(loss) => {
-                for (s, &t) in sublimated.iter_mut().zip(&loss.temperature[r.clone()]) {
-                    *s = loss.share.at(t);
-                }
-            }
+            Some(loss) => loss.share.read(&loss.temperature[r.clone()], sublimated),
             None => sublimated.fill(0.0),
         }
         for (k, i) in r.enumerate() {

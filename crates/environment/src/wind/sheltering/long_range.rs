@@ -4,7 +4,7 @@
 //! **Coarse grid.** A search of `long_range_dmax_m` (1000 m) sampled every cell would take
 //! 200 samples per ray on 5 m cells and 100 000 on 1 cm cells. The long search therefore runs
 //! on a coarse grid: the surface averaged over blocks of `k × k` cells,
-//! `k = max(1, ⌊long_range_cell_m / min(dx, dy)⌋)` (a block holding at least one valid cell
+//! `k = max(1, ⌈long_range_cell_m / min(dx, dy)⌉)` (a block holding at least one valid cell
 //! is valid and takes the mean of its valid cells; partial blocks at the east and south edges
 //! are kept), searched by [`max_upwind_slope`] with `dmax = long_range_dmax_m` on cells of
 //! `k·dx × k·dy`, and interpolated back to the grid's cells bilinearly between the centres of
@@ -16,13 +16,13 @@
 //! is seen at the altitude of the terrain around it, which is the scale this search is for;
 //! the crest's own relief is the short search's.
 //!
-//! **Bounded by cells.** The coarse cells are at least `long_range_cell_m / 2` a side when the
-//! grid's cells are smaller (and the grid's own cells otherwise), so a ray takes at most
-//! `⌈2 · long_range_dmax_m / long_range_cell_m⌉` samples (40 for the defaults, 20 on 5 m or
-//! 50 m cells), and never more than [`MAX_SX_STEPS`](super::MAX_SX_STEPS); there are `⌈w/k⌉·⌈h/k⌉ ≤ cells`
-//! coarse cells. The work is `O(cells)` for the averaging and the interpolation plus
+//! **Bounded by cells.** The coarse cells are at least `long_range_cell_m` a side (or the
+//! grid's own cells where those are larger), so a ray takes at most
+//! `⌊long_range_dmax_m / long_range_cell_m⌋` samples (20 for the defaults), and never more
+//! than [`MAX_SX_STEPS`](super::MAX_SX_STEPS); there are `⌈w/k⌉·⌈h/k⌉ ≤ cells` coarse cells.
+//! The work is `O(cells)` for the averaging and the interpolation plus
 //! `O(cells / k² · rays · steps)` for the search: 0.2 samples per cell and ray on 5 m cells
-//! against 20 for the 100 m short search ([`LongRangePlan`], tested).
+//! (20 for the 100 m short search), 1.8 on 20 m cells (5) ([`LongRangePlan`], tested).
 //!
 //! **Determinism.** Block sums run in a fixed order within each block, rows in parallel; every
 //! value is a pure function of the surface, so the maps are bit-identical for any thread count.
@@ -54,7 +54,7 @@ impl LongRangePlan {
         }
         let (dx, dy) = (geometry.cell_size_x(), geometry.cell_size_y());
         // `as usize` saturates, then the factor is bounded by the grid's size.
-        let wanted = (params.long_range_cell_m / dx.min(dy) + 1e-9).floor() as usize;
+        let wanted = (params.long_range_cell_m / dx.min(dy) - 1e-9).ceil() as usize;
         let factor = wanted.clamp(1, geometry.width().max(geometry.height()));
         let coarse = GridGeometry::new(
             geometry.width().div_ceil(factor),

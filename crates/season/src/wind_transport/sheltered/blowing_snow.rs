@@ -122,15 +122,27 @@ impl KelvinTable {
     }
 
     /// The value at the air temperature `t_c` (°C): linear between the kelvins, clamped to
-    /// the table's range (NaN reads the coldest entry). Branch-free and bounds-check-free, for
-    /// the per-cell loop.
-    #[inline]
+    /// the table's range (NaN reads the coldest entry).
+    #[cfg(test)]
     pub(super) fn at(&self, t_c: f32) -> f32 {
-        let x = (t_c - TABLE_FROM_C).max(0.0).min((KELVINS - 1) as f32);
-        let i = (x as i32).min(KELVINS as i32 - 2) as usize;
-        let f = x - i as f32;
-        let (a, b) = (self.0[i], self.0[i + 1]);
-        a + f * (b - a)
+        let mut out = [0.0];
+        self.read(&[t_c], &mut out);
+        out[0]
+    }
+
+    /// [`KelvinTable::at`] of every temperature of `t_c` into `out`: the positions in the
+    /// table in one straight loop (it vectorises), then the reads.
+    pub(super) fn read(&self, t_c: &[f32], out: &mut [f32]) {
+        let last = (KELVINS - 1) as f32;
+        for (o, &t) in out.iter_mut().zip(t_c) {
+            *o = (t - TABLE_FROM_C).max(0.0).min(last);
+        }
+        let slope: [f32; KELVINS - 1] = std::array::from_fn(|k| self.0[k + 1] - self.0[k]);
+        for o in out.iter_mut() {
+            let x = *o;
+            let i = (x as usize).min(KELVINS - 2);
+            *o = self.0[i] + (x - i as f32) * slope[i];
+        }
     }
 }
 

@@ -105,11 +105,11 @@ fn the_sheltering_index_adds_the_weighted_long_range() {
 
 #[test]
 fn the_long_search_is_bounded_by_the_cells() {
-    // Whatever the cell size, a ray takes at most ⌈2 · 1000 / 50⌉ = 40 samples on the coarse
-    // grid (20 where the cells divide 50 m), never more than MAX_SX_STEPS, and the search
-    // reads at most 40 samples per grid cell and ray; on 5 m cells 0.2.
+    // Whatever the cell size, a ray takes at most 1000 / 50 = 20 samples on the coarse grid,
+    // never more than MAX_SX_STEPS, and the search reads at most 20 samples per grid cell and
+    // ray; on 5 m cells 0.2.
     let p = ShelteringParams::default();
-    let bound = (2.0 * p.long_range_dmax_m / p.long_range_cell_m).ceil() as usize;
+    let bound = (p.long_range_dmax_m / p.long_range_cell_m).floor() as usize;
     for cell in [
         1e-6, 0.01, 0.5, 1.0, 2.0, 3.0, 5.0, 26.0, 30.0, 49.0, 50.0, 100.0, 500.0,
     ] {
@@ -135,6 +135,11 @@ fn the_long_search_is_bounded_by_the_cells() {
     let g50 = GridGeometry::square(56, 78, 50.0).unwrap();
     let plan = LongRangePlan::new(&p, &g50).unwrap();
     assert_eq!((plan.factor, plan.steps), (1, 20));
+    // 20 m cells: blocks of 3 (60 m), 16 samples, 1.8 per cell.
+    let g20 = GridGeometry::square(1024, 1024, 20.0).unwrap();
+    let plan = LongRangePlan::new(&p, &g20).unwrap();
+    assert_eq!((plan.factor, plan.steps), (3, 16));
+    assert!(plan.samples_per_cell(&g20) < 1.8);
     // Even a 5 km search on 1 cm cells: the cap.
     let far = ShelteringParams {
         long_range_dmax_m: 5000.0,
