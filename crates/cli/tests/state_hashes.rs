@@ -109,17 +109,18 @@ fn job(out: &Path, args: &[&str]) {
 /// demo's temperature map (the daily mean at the last melt window, whose day moved with the
 /// events). Issue 47 (avalanches): the avalanche job's defaults are AvaFrame's samosATSmall law
 /// with the slope-projected gravity and the bed's curvature (its maps changed); the energy-balance
-/// melt and the two-scale wind (the seasons' layers, avalanche and temperature maps).
+/// melt and the two-scale wind (the seasons' layers, avalanche and temperature maps); the
+/// energy balance's 4-hour dark steps and the wind's coarser long-range blocks (2026-12-07 merge).
 const RECORDED: &[(&str, &str, u64)] = &[
-    ("demo", "depth.tif", 0xf87cc5b6f1268069),
-    ("demo", "layers_compacted.tif", 0x71f84807018790d3),
-    ("demo", "layers_stable.tif", 0xb81d2c2ef628fe62),
-    ("demo", "layers_unstable.tif", 0xf8cf650422f2da03),
-    ("demo", "layers_powder.tif", 0xfbd2eee3d4bdf1f0),
-    ("demo", "avalanche_deposit.tif", 0x9b5952b0795708c9),
-    ("demo", "avalanche_scour.tif", 0xd3dbd1254178dd60),
+    ("demo", "depth.tif", 0xb302444279c3b009),
+    ("demo", "layers_compacted.tif", 0xc85cac6a84f967e4),
+    ("demo", "layers_stable.tif", 0x364dbaf59185772b),
+    ("demo", "layers_unstable.tif", 0xe8d4550177f73dcd),
+    ("demo", "layers_powder.tif", 0x114a89e2479ef53c),
+    ("demo", "avalanche_deposit.tif", 0xebd790c614b94dca),
+    ("demo", "avalanche_scour.tif", 0x3fedcbe55b126bd1),
     ("demo", "sun.tif", 0xfcb39c4ed645fea0),
-    ("demo", "temperature.tif", 0xe1b5a9f2ba04ca8b),
+    ("demo", "temperature.tif", 0x715209724782a4b5),
     ("demo", "wind.tif", 0x3b9f07eae1d5ecd2),
     ("run", "depth.tif", 0xb7c1f72ab4953b2a),
     ("run", "layers_compacted.tif", 0xc3d59785c4ff76b8),
