@@ -9,7 +9,8 @@ degrees of north or of south, from the bedrock by central differences, raster ro
 north to south) and their ratio, then two summaries over the bands with at least
 `--min-cells` cells of each: the sum of the bands' north means over the sum of their south
 means (robust where south-facing snow is nearly gone), and the mean of the band ratios
-weighted by min(north cells, south cells). Issue 47's figure: `python3 scripts/aspect_ratio.py OUT` after
+weighted by min(north cells, south cells). `--pair east-west` compares east-facing
+with west-facing slopes the same way (the lee of a westerly over its windward side). Issue 47's figure: `python3 scripts/aspect_ratio.py OUT` after
 `snowscape run --dem avaMal.asc --latitude 37.6 --out OUT`.
 
 Also prints the Spearman rank correlation of depth with altitude over snow-covered cells.
@@ -80,6 +81,9 @@ def main():
     parser.add_argument("--band", type=float, default=200.0, help="band height, m")
     parser.add_argument("--min-slope", type=float, default=15.0, help="degrees")
     parser.add_argument("--min-cells", type=int, default=50)
+    parser.add_argument("--pair", choices=["north-south", "east-west"], default="north-south",
+                        help="which two aspects to compare (east-west: the lee of a westerly "
+                             "over its windward side)")
     args = parser.parse_args()
     depth, _, _ = read_geotiff(f"{args.out}/depth.tif")
     bedrock, dx, dy = read_geotiff(f"{args.out}/bedrock.tif")
@@ -92,11 +96,17 @@ def main():
     # Aspect: the downslope direction, clockwise from north.
     aspect = np.degrees(np.arctan2(-dz_east, -dz_north)) % 360.0
     valid = np.isfinite(slope) & np.isfinite(depth) & (slope > args.min_slope)
-    north = valid & ((aspect >= 315.0) | (aspect < 45.0))
-    south = valid & (aspect >= 135.0) & (aspect < 225.0)
+    if args.pair == "north-south":
+        north = valid & ((aspect >= 315.0) | (aspect < 45.0))
+        south = valid & (aspect >= 135.0) & (aspect < 225.0)
+    else:
+        # The same arithmetic with east in the first place and west in the second.
+        north = valid & (aspect >= 45.0) & (aspect < 135.0)
+        south = valid & (aspect >= 225.0) & (aspect < 315.0)
+    first, second = ("north", "south") if args.pair == "north-south" else ("east", "west")
     band = np.floor(bedrock / args.band)
-    print(f"{'band, m':>13} {'north cells':>11} {'south cells':>11} "
-          f"{'north m':>8} {'south m':>8} {'N/S':>6}")
+    print(f"{'band, m':>13} {first + ' cells':>11} {second + ' cells':>11} "
+          f"{first + ' m':>8} {second + ' m':>8} {first[0].upper() + '/' + second[0].upper():>6}")
     weights, ratios, sums = [], [], [0.0, 0.0]
     for b in np.unique(band[valid]):
         n = north & (band == b)
@@ -115,12 +125,12 @@ def main():
                 weights.append(min(n.sum(), s.sum()))
                 ratios.append(ratio)
     if sums[1] > 0:
-        print(f"north/south ratio of the band means, summed over the bands with >= "
+        print(f"{first}/{second} ratio of the band means, summed over the bands with >= "
               f"{args.min_cells} cells of each: {sums[0] / sums[1]:.3f}")
     if ratios:
         pooled = float(np.average(ratios, weights=weights))
         print(f"band ratios weighted by the smaller count: {pooled:.3f} over {len(ratios)} "
-              f"bands (unstable where south-facing snow is nearly gone)")
+              f"bands (unstable where {second}-facing snow is nearly gone)")
     snowy = np.isfinite(depth) & np.isfinite(bedrock) & (depth > 0)
     if snowy.sum() > 2:
         rho = np.corrcoef(rank(depth[snowy]), rank(bedrock[snowy]))[0, 1]

@@ -110,22 +110,24 @@ fn job(out: &Path, args: &[&str]) {
 /// events). Issue 47 (avalanches): the avalanche job's defaults are AvaFrame's samosATSmall law
 /// with the slope-projected gravity and the bed's curvature (its maps changed); the energy-balance
 /// melt and the two-scale wind (the seasons' layers, avalanche and temperature maps); the
-/// energy balance's 4-hour dark steps and the wind's coarser long-range blocks (2026-12-07 merge).
+/// energy balance's 4-hour dark steps and the wind's coarser long-range blocks (2026-12-07 merge);
+/// the drifting snow's sublimation in the climate's humidity and the energy balance's two-hour
+/// sun steps from a predicted surface temperature (the demo's and the run's layers).
 const RECORDED: &[(&str, &str, u64)] = &[
-    ("demo", "depth.tif", 0xb302444279c3b009),
-    ("demo", "layers_compacted.tif", 0xc85cac6a84f967e4),
-    ("demo", "layers_stable.tif", 0x364dbaf59185772b),
-    ("demo", "layers_unstable.tif", 0xe8d4550177f73dcd),
-    ("demo", "layers_powder.tif", 0x114a89e2479ef53c),
-    ("demo", "avalanche_deposit.tif", 0xebd790c614b94dca),
-    ("demo", "avalanche_scour.tif", 0x3fedcbe55b126bd1),
+    ("demo", "depth.tif", 0xa452df6ccd7d94cf),
+    ("demo", "layers_compacted.tif", 0xd68b9231e3e8410a),
+    ("demo", "layers_stable.tif", 0xc838f60c42ff220c),
+    ("demo", "layers_unstable.tif", 0x573838ea55d5bfa9),
+    ("demo", "layers_powder.tif", 0x2cb557c3a2d3cf49),
+    ("demo", "avalanche_deposit.tif", 0x776da0df4d3d7621),
+    ("demo", "avalanche_scour.tif", 0x5d7849980bacba4d),
     ("demo", "sun.tif", 0xfcb39c4ed645fea0),
-    ("demo", "temperature.tif", 0x715209724782a4b5),
+    ("demo", "temperature.tif", 0x087f7d39f09d1ff8),
     ("demo", "wind.tif", 0x3b9f07eae1d5ecd2),
-    ("run", "depth.tif", 0xb7c1f72ab4953b2a),
-    ("run", "layers_compacted.tif", 0xc3d59785c4ff76b8),
-    ("run", "layers_stable.tif", 0xac0b651d08c6b3fa),
-    ("run", "layers_unstable.tif", 0x9df37daf4602e320),
+    ("run", "depth.tif", 0x63030feae503ae95),
+    ("run", "layers_compacted.tif", 0xa637ba08c7779599),
+    ("run", "layers_stable.tif", 0xbcac3cc7fd2acda6),
+    ("run", "layers_unstable.tif", 0x1cae586f8241362c),
     ("run", "layers_powder.tif", 0xfb2b2338cac91475),
     ("run", "avalanche_deposit.tif", 0xfb2b2338cac91475),
     ("run", "avalanche_scour.tif", 0xfb2b2338cac91475),

@@ -273,6 +273,28 @@ impl Air {
         out
     }
 
+    /// The hour-weighted mean relative humidity (0..1, with respect to water) of `[t0, t1]`
+    /// (season days): the climate's storm humidity in the hours inside the snowfall periods
+    /// `storms`, its fair humidity outside them, a station's recorded humidity where it has
+    /// one. An empty interval reads the humidity at `t0`.
+    pub fn mean_relative_humidity(&self, t0: f64, t1: f64, storms: &[(f64, f64)]) -> f64 {
+        let at = |day: f64| {
+            let climate = self
+                .climate
+                .hour_air(in_storm(storms, day))
+                .relative_humidity;
+            let recorded = self.station_record(day).and_then(|r| r.relative_humidity);
+            f64::from(recorded.unwrap_or(climate))
+        };
+        let (mut sum, mut hours) = (0.0, 0.0);
+        for (t, weight) in Self::slots(t0, t1) {
+            let w = f64::from(weight);
+            sum += w * at(t + 0.5 * w / 24.0);
+            hours += w;
+        }
+        if hours > 0.0 { sum / hours } else { at(t0) }
+    }
+
     /// The hours of the melt window `[t0, t1]`: sea-level temperature, sun and clouds, of a
     /// storm in the hours inside the snowfall periods `storms` (start, end), days (station
     /// shortwave, when recorded, sets the clouds instead).

@@ -149,7 +149,7 @@ fn reynolds_mountain_east_1984_follows_an_energy_balance_model() {
         "melt-out day {s_out} vs {r_out}"
     );
     // Sublimation and deposition are reported. snobal's 26.6 mm out and 34.9 mm in at the
-    // station are larger than the basin's here (about 2 and 4 mm): Louis's stability
+    // station are larger than the basin's here (about 2 and 4.5 mm): Louis's stability
     // correction at the default 10 m wind and 2 m temperature heights all but stops the
     // exchange under the nights' inversions (5 m heights give 8 and 26 mm).
     assert!(

@@ -143,7 +143,7 @@ fn the_exposed_crest_ends_with_less_snow_than_its_lee_and_than_before() {
 fn saturated_air_sublimates_nothing_and_the_same_on_one_and_two_threads() {
     let wet = SxParams {
         sublimation: DriftSublimationParams {
-            relative_humidity_pct: 100.0,
+            relative_humidity_pct: Some(100.0),
             ..Default::default()
         },
         ..Default::default()

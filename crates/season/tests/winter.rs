@@ -70,6 +70,32 @@ fn budget_closes_and_snow_follows_altitude() {
     assert!(high > 2.0 * low + 0.05, "high {high} low {low}");
 }
 
+/// The drifting snow sublimates in the climate's air (issue 47): saturated fair and storm
+/// air sublimates none of it, drier fair air more, and a set humidity overrides the climate.
+#[test]
+fn drifting_snow_sublimates_in_the_climates_air() {
+    let with = |fair: f64, storm: f64, set: Option<f64>| {
+        let mut s = scenario(30.0);
+        s.parameters.climate.fair_relative_humidity = fair;
+        s.parameters.climate.storm_relative_humidity = storm;
+        s.parameters
+            .wind_transport
+            .sx_redistribution
+            .sublimation
+            .relative_humidity_pct = set;
+        let mut w = Winter::new(s, mountain()).unwrap();
+        w.run_until(30.0).unwrap();
+        w.budget().wind_sublimation
+    };
+    let saturated = with(1.0, 1.0, None);
+    let (moist, dry) = (with(0.8, 0.9, None), with(0.4, 0.9, None));
+    assert!(saturated == 0.0, "saturated air sublimated {saturated}");
+    assert!(dry > 1.2 * moist && moist > 0.0, "dry {dry} moist {moist}");
+    // A humidity set for the drift replaces the climate's saturated air.
+    let set = with(1.0, 1.0, Some(40.0));
+    assert!(set > 0.0, "a set 40 % sublimated {set}");
+}
+
 #[test]
 fn bit_identical_for_any_thread_count() {
     let a = run(20.0, 1);

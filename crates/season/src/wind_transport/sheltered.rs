@@ -577,10 +577,10 @@ impl<'a, V: Validity> SweepMaps<'a, V> {
         let loss = ctx
             .wind
             .air_temperature
-            .filter(|_| air.enabled && air.relative_humidity_pct < 100.0)
+            .filter(|_| air.enabled && air.relative_humidity_pct() < 100.0)
             .map(|temperature| DriftLoss {
                 share: table
-                    .for_air(air.relative_humidity_pct, params.reference_speed_m_s)
+                    .for_air(air.relative_humidity_pct(), params.reference_speed_m_s)
                     .map(|lambda| {
                         let x = f64::from(lambda) * hop;
                         (x / (1.0 + x)) as f32

@@ -545,7 +545,7 @@ fn drifting_snow_sublimates_in_dry_wind_only() {
             k_tamping: 0.0,
             ..Default::default()
         };
-        p.sx_redistribution.sublimation.relative_humidity_pct = rh;
+        p.sx_redistribution.sublimation.relative_humidity_pct = Some(rh);
         let maps = WindMaps {
             sx: Some(&sx),
             air_temperature: Some(&air),

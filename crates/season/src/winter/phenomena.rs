@@ -189,8 +189,18 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         return Ok(());
     }
     let maps = super::snowpack::wind_maps(&w.environment, &w.sx, w.wind_terms.as_ref());
+    // The drifting snow sublimates in the climate's air of the step, unless a humidity is set.
+    let mut params = p.wind_transport.clone();
+    let drift = &mut params.sx_redistribution.sublimation;
+    if drift.relative_humidity_pct.is_none() {
+        let storms: Vec<(f64, f64)> = w.state.storms.iter().map(|s| (s.since, s.until)).collect();
+        let rh = w
+            .air
+            .mean_relative_humidity(day - event.dt_days, day, &storms);
+        drift.relative_humidity_pct = Some(100.0 * rh);
+    }
     let r = wind_transport::step(
-        &p.wind_transport,
+        &params,
         &mut w.terrain,
         &maps,
         &mut w.wind_scratch,

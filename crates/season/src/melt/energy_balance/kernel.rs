@@ -72,7 +72,7 @@ pub(super) struct Kernel {
     /// The terrain's offsets (the steps' polynomials' variable).
     offsets: OffsetRange,
     /// Saturation vapour pressure over ice and its slope, polynomials in `(T + 30) / 30`.
-    ice_saturation: ([f32; 8], [f32; 7]),
+    ice_saturation: ([f32; 7], [f32; 6]),
 }
 
 impl Kernel {
@@ -213,6 +213,9 @@ pub(super) struct Cells {
 #[derive(Clone, Copy, Default)]
 pub(super) struct Pack {
     pub(super) surface_c: Lanes,
+    /// The previous step's radiative and ground gains, W/m², and its compliance.
+    pub(super) gains: Lanes,
+    pub(super) compliance: Lanes,
     pub(super) swe: Lanes,
     pub(super) cold: Lanes,
     pub(super) liquid: Lanes,
@@ -398,12 +401,25 @@ pub(super) fn group_cells(
 /// One step of the group (`at`: the index of its first cell and the number of cells):
 /// the surface temperature, the energy into the pack and the vapour flux, then the pack.
 #[inline(always)]
+#[allow(clippy::manual_clamp)]
 fn step(k: &Kernel, h: &Step, c: &Cells, at: (usize, usize), pack: &mut Pack, first: bool) {
     let air = air(k, h, c, at);
-    let mut flux = surface(k, h, c, &air, pack, pack.surface_c);
-    if first {
-        flux = surface(k, h, c, &air, pack, flux.surface_c);
-    }
+    // Where to linearise: the previous surface moved by the change of the radiation since
+    // the previous step over the balance's stiffness there (a predictor: a surface that lags
+    // behind the sun misjudges its fluxes), or twice in a window's first step.
+    let start = if first {
+        surface(k, h, c, &air, pack, pack.surface_c).surface_c
+    } else {
+        // min then max (not clamp): a NaN lane reads 0 °C instead of staying NaN.
+        lanes(|l| {
+            (pack.surface_c[l] + (air.gains[l] - pack.gains[l]) * pack.compliance[l])
+                .min(0.0)
+                .max(COLDEST_SURFACE_C)
+        })
+    };
+    let flux = surface(k, h, c, &air, pack, start);
+    pack.gains = air.gains;
+    pack.compliance = flux.compliance;
     pack.surface_c = lanes(|l| {
         if c.snow[l] > 0.0 && pack.swe[l] > 0.0 {
             flux.surface_c[l]
@@ -472,6 +488,8 @@ pub(super) struct Air {
 pub(super) struct Flux {
     /// Surface temperature, °C.
     pub(super) surface_c: Lanes,
+    /// `1 / (−dQ/dT_s + K_eff)`, K m² W⁻¹: how far the surface moves per W/m² of gain.
+    pub(super) compliance: Lanes,
     /// Energy into the pack `Q(T_s)`, W/m².
     pub(super) energy: Lanes,
     /// Vapour flux, kg m⁻² s⁻¹ (> 0: sublimation).
@@ -534,10 +552,11 @@ pub(super) fn surface(k: &Kernel, h: &Step, c: &Cells, a: &Air, pack: &Pack, t0:
     let inv_d = lanes(|l| 1.0 / (capacity[l] + h.seconds * c.conductance[l]));
     let k_eff = lanes(|l| c.conductance[l] * capacity[l] * inv_d[l]);
     let k_tp = lanes(|l| -c.conductance[l] * pack.cold[l] * k.fusion_per_m * inv_d[l]);
+    let compliance = lanes(|l| 1.0 / (k_eff[l] + slope[l]));
     // min then max (not clamp): a NaN lane reads 0 °C instead of staying NaN.
     #[allow(clippy::manual_clamp)]
     let surface_c = lanes(|l| {
-        ((q0[l] + slope[l] * t0[l] + k_tp[l]) / (k_eff[l] + slope[l]))
+        ((q0[l] + slope[l] * t0[l] + k_tp[l]) * compliance[l])
             .min(0.0)
             .max(COLDEST_SURFACE_C)
     });
@@ -546,6 +565,7 @@ pub(super) fn surface(k: &Kernel, h: &Step, c: &Cells, a: &Air, pack: &Pack, t0:
         lanes(|l| vapour_k[l] * (saturated[l] + saturated_slope[l] * step[l] - a.vapour[l]));
     Flux {
         surface_c,
+        compliance,
         energy: lanes(|l| q0[l] - slope[l] * step[l]),
         vapour,
         emitted: lanes(|l| emitted[l] + emitted_slope[l] * step[l]),

@@ -162,8 +162,8 @@ fn a_sunny_slope_loses_snow_below_freezing_and_a_shaded_one_does_not() {
     assert!(south[1] > 0.0 || south[2] > 0.002, "south {south:?}");
     assert!(north[1] == 0.0, "north melted {north:?}");
     assert!(north[0] < 0.2 * south[0], "north {north:?} south {south:?}");
-    // The default steps (every hour with sun, four hours at a time without) lose what hourly
-    // steps lose within a few per cent.
+    // The default steps (two hours at a time with sun, from a predicted surface temperature;
+    // up to eight hours without) lose what hourly steps lose within a few per cent.
     let hourly = EnergyBalanceParams {
         sun_step_hours: 1.0,
         dark_step_hours: 1.0,
@@ -450,6 +450,8 @@ fn each_cell_hour_conserves_energy_with_the_surface_at_or_below_zero() {
                 let a = air(&k, h, &c, (0, 16));
                 let mut pack = Pack {
                     surface_c: [t0; 16],
+                    gains: [0.0; 16],
+                    compliance: [0.0; 16],
                     swe: [swe; 16],
                     cold: [cold; 16],
                     liquid: [0.0; 16],

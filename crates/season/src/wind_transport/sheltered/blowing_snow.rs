@@ -49,8 +49,9 @@
 //! to 0 °C by 1 K (once per humidity and wind speed), each step turns the table into shares
 //! per hop, and each cell reads it at its air temperature, linearly between the kelvins
 //! (colder air takes −40 °C, air above freezing 0 °C). Still air moves no snow
-//! and sublimates none. The humidity is a parameter until the climate's hourly humidity is
-//! connected (issue 47).
+//! and sublimates none. A season gives the step the hour-weighted mean of its climate's
+//! humidity over the step (the storm humidity inside snowfall periods, the fair one outside,
+//! a station's record where it has one) unless `relative_humidity_pct` is set.
 
 use crate::phenomenon::{PhenomenonError, check_range};
 use serde::{Deserialize, Serialize};
@@ -71,31 +72,47 @@ pub struct DriftSublimationParams {
     /// Whether the drifting snow sublimates (where the step is given the air temperature).
     /// Default true.
     pub enabled: bool,
-    /// Relative humidity of the air at 2 m during wind events, % in [0, 100]. Default 70 %:
-    /// chosen here, as `[parameters.snowtran]` (a winter mean in the Alps), until the
-    /// climate's hourly humidity drives it.
-    pub relative_humidity_pct: f64,
+    /// Relative humidity of the air at 2 m during wind events, % in [0, 100]. Default none:
+    /// a season takes, for each wind step, the hour-weighted mean of its climate's humidity
+    /// over the step (`[parameters.climate]` `storm_relative_humidity` in the hours of
+    /// snowfall periods, `fair_relative_humidity` outside them, a station forcing's recorded
+    /// humidity where it has one); a direct call of the step without one takes
+    /// [`FALLBACK_RELATIVE_HUMIDITY_PCT`]. A value here overrides both.
+    pub relative_humidity_pct: Option<f64>,
 }
+
+/// The humidity of a step called without one and outside a season, %: 70, as
+/// `[parameters.snowtran]` (chosen there: a winter mean in the Alps).
+pub const FALLBACK_RELATIVE_HUMIDITY_PCT: f64 = 70.0;
 
 impl Default for DriftSublimationParams {
     fn default() -> Self {
         Self {
             enabled: true,
-            relative_humidity_pct: 70.0,
+            relative_humidity_pct: None,
         }
     }
 }
 
 impl DriftSublimationParams {
-    /// Checks the humidity is a percentage.
+    /// Checks the humidity, where given, is a percentage.
     pub fn validate(&self) -> Result<(), PhenomenonError> {
-        check_range(
-            "wind transport sx_redistribution sublimation",
-            "relative_humidity_pct",
-            self.relative_humidity_pct,
-            [0.0, 100.0],
-            " %",
-        )
+        match self.relative_humidity_pct {
+            Some(rh) => check_range(
+                "wind transport sx_redistribution sublimation",
+                "relative_humidity_pct",
+                rh,
+                [0.0, 100.0],
+                " %",
+            ),
+            None => Ok(()),
+        }
+    }
+
+    /// The humidity the step uses, %: the one given, else [`FALLBACK_RELATIVE_HUMIDITY_PCT`].
+    pub fn relative_humidity_pct(&self) -> f64 {
+        self.relative_humidity_pct
+            .unwrap_or(FALLBACK_RELATIVE_HUMIDITY_PCT)
     }
 }
 

@@ -168,7 +168,7 @@ fn compare_with_recurrence(w: usize, h: usize, coverage: bool) {
     let sx_params = SxParams {
         k_exposed: 0.05,
         sublimation: DriftSublimationParams {
-            relative_humidity_pct: 40.0,
+            relative_humidity_pct: Some(40.0),
             ..Default::default()
         },
         ..Default::default()
