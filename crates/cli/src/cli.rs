@@ -238,6 +238,16 @@ pub struct RunArgs {
     /// refused before any work (exit 2).
     #[arg(long, value_name = "GIB", value_parser = crate::bounds::memory_budget)]
     pub memory_budget: Option<u64>,
+    /// Per-cell dry-friction μ of the season's avalanches, as `snowscape avalanche
+    /// --mu-raster` (a raster matched by map coordinates, any cell size, in [0, 2]): replaces
+    /// the law's tanθc (the season's Coulomb default), --mu or samosAT μ cell by cell; cells
+    /// it does not cover keep the scalar. Give it again with --resume.
+    #[arg(long, value_name = "FILE")]
+    pub mu_raster: Option<PathBuf>,
+    /// Per-cell Voellmy ξ of the season's avalanches, m/s², in [10, 100000] (as --mu-raster;
+    /// `[parameters.avalanche.flow] friction = "voellmy"` only).
+    #[arg(long, value_name = "FILE")]
+    pub xi_raster: Option<PathBuf>,
     #[command(flatten)]
     pub skiers: SkierArgs,
     #[command(flatten)]

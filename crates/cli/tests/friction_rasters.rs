@@ -1,7 +1,8 @@
 //! `snowscape avalanche --mu-raster/--xi-raster` on the real avaWog path: rasters of another
 //! cell size matched by map coordinates, a raster of the law's own values giving the same bytes
 //! as none, a rougher raster shortening the runout, and bad rasters refused (exit code 2,
-//! nothing written) with the value or the flag named.
+//! nothing written) with the value or the flag named; a season's avalanches take the same rasters
+//! (`run --mu-raster/--xi-raster`).
 
 mod common;
 
@@ -156,4 +157,105 @@ fn bad_friction_rasters_exit_2_and_write_nothing() {
         assert!(err.contains(needle), "{a:?}: {err}");
         assert!(!dir.exists(), "{a:?} wrote {}", dir.display());
     }
+}
+
+/// A 40-day season on avaWog (three natural avalanches by day 40) under the Voellmy law of
+/// `run` above, with `extra` flags; the bytes of its depth and avalanche deposit.
+fn season(dir: &Path, extra: &[&str]) -> (Vec<u8>, Vec<u8>) {
+    let (dem, _) = wog();
+    let scenario = dir.with_extension("toml");
+    std::fs::write(
+        &scenario,
+        "days = 40\n[parameters.avalanche.flow]\nfriction = \"voellmy\"\nvoellmy_mu = 0.25\nvoellmy_xi_m_s2 = 4096\n",
+    )
+    .unwrap();
+    let mut a = vec![
+        "run",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--scenario",
+        scenario.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "-q",
+    ];
+    a.extend(extra);
+    let o = snowscape(&a);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let named = |flag: &str, key: &str| {
+        let given = extra.iter().position(|a| *a == flag).map(|k| extra[k + 1]);
+        assert_eq!(report["parameters"]["extra"][key].as_str(), given, "{key}");
+    };
+    named("--mu-raster", "mu_raster");
+    named("--xi-raster", "xi_raster");
+    assert!(
+        report["event_counts"]["avalanche_start"].as_u64().unwrap() > 0,
+        "no avalanche: {}",
+        report["event_counts"]
+    );
+    (
+        std::fs::read(dir.join("depth.tif")).unwrap(),
+        std::fs::read(dir.join("avalanche_deposit.tif")).unwrap(),
+    )
+}
+
+/// Issue 47: a season's avalanches take the μ and ξ rasters as `snowscape avalanche` does:
+/// rasters of the law's own values give the same bytes as none, a rougher μ changes where the
+/// avalanches stop, and a ξ raster under the season's default Coulomb law is refused.
+#[test]
+fn a_seasons_avalanches_take_the_friction_rasters() {
+    let d = tempfile::tempdir().unwrap();
+    let (mu_same, xi_same, mu_rough) = (
+        d.path().join("mu_same.asc"),
+        d.path().join("xi_same.asc"),
+        d.path().join("mu_rough.asc"),
+    );
+    write_asc(&mu_same, 167400.0, 361900.0, |_, _| 0.25);
+    write_asc(&xi_same, 167400.0, 361900.0, |_, _| 4096.0);
+    write_asc(&mu_rough, 167400.0, 361900.0, |_, _| 1.0);
+    let plain = season(&d.path().join("plain"), &[]);
+    let same = season(
+        &d.path().join("same"),
+        &[
+            "--mu-raster",
+            mu_same.to_str().unwrap(),
+            "--xi-raster",
+            xi_same.to_str().unwrap(),
+        ],
+    );
+    assert!(
+        plain == same,
+        "rasters of the law's values changed the season"
+    );
+    let rough = season(
+        &d.path().join("rough"),
+        &["--mu-raster", mu_rough.to_str().unwrap()],
+    );
+    assert!(
+        rough.1 != plain.1,
+        "a μ of 1 left the deposits as they were"
+    );
+    // Under the default (Coulomb) law no term reads ξ: refused before any work.
+    let (dem, _) = wog();
+    let out = d.path().join("refused");
+    let o = snowscape(&[
+        "run",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--days",
+        "5",
+        "--xi-raster",
+        xi_same.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--xi-raster") && err.contains("xi map"),
+        "{err}"
+    );
+    assert!(!out.join("report.json").exists());
 }

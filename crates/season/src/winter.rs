@@ -561,6 +561,32 @@ impl Winter {
             .map_or(0.0, |p| f64::from(p[cell]))
     }
 
+    /// Per-cell friction of the season's avalanches (μ and, under the Voellmy law, ξ;
+    /// [`snowscape_avalanche::FrictionMaps::from_rasters`] matches rasters onto the grid):
+    /// every later avalanche runs with it. Not checkpointed (a resumed season is given it
+    /// again). An error names the mismatch: maps of another grid, or a ξ map under a law
+    /// that reads none.
+    pub fn set_friction_maps(
+        &mut self,
+        maps: snowscape_avalanche::FrictionMaps,
+    ) -> Result<(), SeasonError> {
+        maps.check_for(
+            self.terrain.geometry(),
+            &self.scenario.parameters.avalanche.flow,
+        )
+        .map_err(|source| SeasonError::Avalanche {
+            day: self.day(),
+            source,
+        })?;
+        self.avalanche_workspace.set_friction_maps(maps);
+        Ok(())
+    }
+
+    /// The per-cell friction of the season's avalanches ([`Winter::set_friction_maps`]).
+    pub fn friction_maps(&self) -> &snowscape_avalanche::FrictionMaps {
+        self.avalanche_workspace.friction_maps()
+    }
+
     /// Paints where avalanches start (the editor's avalanche brush): `probability_per_day`
     /// per cell, in [0, 1], the chance that a release zone of `site_spacing_m` × `site_spacing_m`
     /// around the cell releases on a given day. Each cell becomes a release rate of

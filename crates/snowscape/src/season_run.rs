@@ -49,6 +49,12 @@ pub enum ExtraParameters {
     Run {
         /// Its path as given.
         scenario_file: Option<String>,
+        /// The avalanches' μ raster (`--mu-raster`), as given.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        mu_raster: Option<String>,
+        /// The avalanches' ξ raster (`--xi-raster`), as given.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        xi_raster: Option<String>,
     },
 }
 
@@ -114,6 +120,9 @@ pub struct SeasonJob {
     /// The memory the season may take, bytes (`--memory-budget`); `None`: what the machine
     /// has available ([`crate::memory`]).
     pub memory_budget: Option<u64>,
+    /// Per-cell friction of the season's avalanches (`run --mu-raster/--xi-raster`; empty:
+    /// the law's scalars), set on a fresh or a resumed season alike.
+    pub friction_maps: snowscape_avalanche::FrictionMaps,
 }
 
 /// What a front end hears while a season runs (all optional).
@@ -348,6 +357,7 @@ pub fn run_season(
             }
         }
     })?;
+    winter.set_friction_maps(job.friction_maps)?;
     for w in season_warnings(&winter) {
         tracing::warn!("{w}");
     }

@@ -207,19 +207,20 @@ struct FrictionRasterReport {
 
 /// The friction rasters of a run (`null` in report.json without either).
 #[derive(Debug, Serialize)]
-struct FrictionReport {
+pub(crate) struct FrictionReport {
     mu: Option<FrictionRasterReport>,
     xi: Option<FrictionRasterReport>,
 }
 
 /// The μ and ξ rasters of `--mu-raster` and `--xi-raster` matched onto the DEM's cells, and
 /// what report.json says of them (`None` without either).
-fn friction_maps(
-    args: &AvalancheArgs,
+pub(crate) fn friction_maps(
+    mu_raster: &Option<std::path::PathBuf>,
+    xi_raster: &Option<std::path::PathBuf>,
     dem: &Grid,
     params: &AvalancheParams,
 ) -> anyhow::Result<(FrictionMaps, Option<FrictionReport>)> {
-    if args.mu_raster.is_none() && args.xi_raster.is_none() {
+    if mu_raster.is_none() && xi_raster.is_none() {
         return Ok((FrictionMaps::default(), None));
     }
     let read = |flag: &str, path: &Option<std::path::PathBuf>| {
@@ -230,12 +231,12 @@ fn friction_maps(
             })
             .transpose()
     };
-    let mu = read("--mu-raster", &args.mu_raster)?;
-    let xi = read("--xi-raster", &args.xi_raster)?;
+    let mu = read("--mu-raster", mu_raster)?;
+    let xi = read("--xi-raster", xi_raster)?;
     let (maps, mu_match, xi_match) =
         FrictionMaps::from_rasters(dem.geometry(), dem.mask(), params, mu.as_ref(), xi.as_ref())
             .map_err(|e| {
-                let flags = match (&args.mu_raster, &args.xi_raster) {
+                let flags = match (mu_raster, xi_raster) {
                     (Some(m), Some(x)) => {
                         format!("--mu-raster {}, --xi-raster {}", m.display(), x.display())
                     }
@@ -262,8 +263,8 @@ fn friction_maps(
         })
     };
     let report = FrictionReport {
-        mu: entry(&args.mu_raster, mu_match),
-        xi: entry(&args.xi_raster, xi_match),
+        mu: entry(mu_raster, mu_match),
+        xi: entry(xi_raster, xi_match),
     };
     Ok((maps, Some(report)))
 }
@@ -307,7 +308,8 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     )
     .with_context(|| format!("--release {}", args.release))
     .bad_input()?;
-    let (friction_maps, friction_report) = friction_maps(args, &dem, &params).bad_input()?;
+    let (friction_maps, friction_report) =
+        friction_maps(&args.mu_raster, &args.xi_raster, &dem, &params).bad_input()?;
     let compare = args
         .compare
         .as_deref()

@@ -87,6 +87,7 @@ pub fn run(args: &DemoArgs, global: &GlobalArgs) -> Result<(), Failure> {
             stop_at: None,
             view,
             cog: args.cog,
+            friction_maps: Default::default(),
         },
         global.quiet,
     )

@@ -116,6 +116,13 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
         .with_context(|| format!("on the terrain {}", args.dem.display()))
         .bad_input()?;
     let view = preview_options(&args.view, ColourMode::Snow).bad_input()?;
+    let (friction_maps, _) = super::avalanche::friction_maps(
+        &args.mu_raster,
+        &args.xi_raster,
+        &bedrock,
+        &scenario.parameters.avalanche.flow,
+    )
+    .bad_input()?;
     run_season(
         SeasonJob {
             command: "run".into(),
@@ -124,6 +131,8 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
             scenario,
             extra_parameters: ExtraParameters::Run {
                 scenario_file: scenario_path.map(|p| p.display().to_string()),
+                mu_raster: args.mu_raster.as_ref().map(|p| p.display().to_string()),
+                xi_raster: args.xi_raster.as_ref().map(|p| p.display().to_string()),
             },
             out,
             resume: args.resume.clone(),
@@ -133,6 +142,7 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
             cog: args.cog,
             write_scenario: true,
             memory_budget: args.memory_budget,
+            friction_maps,
         },
         global.quiet,
     )
