@@ -10,7 +10,7 @@ use pyo3::types::PyBytes;
 use snowscape::io::{RasterFormat, ReadOptions, read_dem, write_raster};
 use snowscape::season::scenario::Scenario;
 use snowscape::season::winter::Winter;
-use snowscape::season_run::{CHECKPOINT, CHUNK_DAYS, write_checkpoint};
+use snowscape::season_run::{CHECKPOINT, CHUNK_DAYS, RESOLVED_SCENARIO, write_checkpoint};
 use snowscape::terrain::{
     Crs, GeoTransform, Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer,
 };
@@ -296,7 +296,7 @@ impl PyWinter {
     fn resume(py: Python<'_>, dir: PathBuf, dem: GridIn, threads: Option<i64>) -> PyResult<Self> {
         let bedrock = grid_in(dem)?;
         bedrock.check_terrain().map_err(py_err)?;
-        let scenario_path = dir.join("scenario.toml");
+        let scenario_path = dir.join(RESOLVED_SCENARIO);
         // Both read as regular files of bounded size (a link to /dev/zero or a FIFO is refused
         // before any read), as `snowscape run --resume` reads them.
         let text = snowscape::io::input::read_regular_text(&scenario_path)
@@ -419,7 +419,7 @@ impl PyWinter {
         let text = self.scenario_toml()?;
         py.detach(|| write_checkpoint(&dir, &self.winter))
             .map_err(py_err)?;
-        snowscape::io::write_bytes_atomic(&dir.join("scenario.toml"), text.as_bytes())
+        snowscape::io::write_bytes_atomic(&dir.join(RESOLVED_SCENARIO), text.as_bytes())
             .map_err(py_err)
     }
 }

@@ -14,6 +14,7 @@
 use crate::brush::PaintMaps;
 use crate::history::{Action, ProjectHistory};
 use crate::session::Session;
+use snowscape::season_run::{CHECKPOINT, RESOLVED_SCENARIO};
 use snowscape_io::{ReadOptions, read_dem, read_terrain, write_bytes_atomic, write_geotiff};
 use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::Winter;
@@ -181,7 +182,7 @@ impl ProjectDir {
                 let name = e.file_name().into_string().ok()?;
                 crate::protocol::check_name(&name).ok()?;
                 let path = e.path();
-                path.join("checkpoint.bin").is_file().then(|| {
+                path.join(CHECKPOINT).is_file().then(|| {
                     let day = self
                         .read(&format!("projects/{name}/history.json"), 1 << 24)
                         .ok()
@@ -330,12 +331,12 @@ impl ProjectDir {
             write_geotiff(&p, &grid).map_err(|e| content("map", &p)(e.to_string()))?;
         }
         crate::page_scenario::check_scenario_paths(w.scenario(), Some((self, &dir_rel)))?;
-        let p = put("scenario.toml");
+        let p = put(RESOLVED_SCENARIO);
         let text =
             toml::to_string(w.scenario()).map_err(|e| content("scenario", &p)(e.to_string()))?;
         write_bytes_atomic(&p, text.as_bytes())
             .map_err(|e| content("scenario", &p)(e.to_string()))?;
-        let p = put("checkpoint.bin");
+        let p = put(CHECKPOINT);
         let mut bytes = Vec::new();
         w.write_checkpoint(&mut bytes)
             .map_err(|e| content("checkpoint", &p)(e.to_string()))?;
@@ -357,7 +358,7 @@ impl ProjectDir {
     pub fn load(&self, name: &str) -> Result<Session, ProjectError> {
         crate::protocol::check_name(name).map_err(|e| ProjectError::BadPath(e.to_string()))?;
         let dir = self.resolve(&format!("projects/{name}"))?;
-        if !dir.join("checkpoint.bin").is_file() {
+        if !dir.join(CHECKPOINT).is_file() {
             return Err(ProjectError::NotFound(name.into()));
         }
         let file = |f: &str| self.resolve(&format!("projects/{name}/{f}"));
@@ -369,7 +370,7 @@ impl ProjectDir {
         let p = file("bedrock.tif")?;
         let bedrock = read_terrain(&p, &ReadOptions::default())
             .map_err(|e| bad("terrain", &p, e.to_string()))?;
-        let p = file("scenario.toml")?;
+        let p = file(RESOLVED_SCENARIO)?;
         let text = std::fs::read_to_string(&p).map_err(io_err(&p))?;
         let scenario = Scenario::from_toml(&text, &p.display().to_string())
             .map_err(|e| bad("scenario", &p, e.to_string()))?;
@@ -377,7 +378,7 @@ impl ProjectDir {
             &scenario,
             Some((self, &format!("projects/{name}"))),
         )?;
-        let p = file("checkpoint.bin")?;
+        let p = file(CHECKPOINT)?;
         let terrain = LayeredTerrain::from_bedrock(bedrock);
         let n = terrain.geometry().len();
         // Only a regular file of at most the terrain's largest checkpoint is read.

@@ -452,7 +452,7 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
         })
         .transpose()
         .job_failed()?;
-    out.files.push("report.json".into());
+    out.files.push(snowscape::output_folder::REPORT.into());
     let report = AvalancheReport {
         snowscape_version: env!("CARGO_PKG_VERSION"),
         command: "avalanche",

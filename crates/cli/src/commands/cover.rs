@@ -379,7 +379,7 @@ fn cover_diffusion(
             run: g,
         });
     }
-    files.push("report.json".into());
+    files.push(snowscape::output_folder::REPORT.into());
     let report = DiffusionCoverReport::new(
         input.summary.clone(),
         &c,
@@ -389,7 +389,7 @@ fn cover_diffusion(
         files,
     );
     let report = serde_json::to_value(&report)
-        .context("report.json")
+        .context(snowscape::output_folder::REPORT)
         .job_failed()?;
     write_report(folder, report).job_failed()?;
     if !global.quiet {
@@ -472,7 +472,7 @@ fn cover_fearing(
         }),
     };
     let summary = serde_json::to_value(&summary)
-        .context("report.json")
+        .context(snowscape::output_folder::REPORT)
         .job_failed()?;
     // Nothing to write (no snow settled) or a file that cannot be written: the job failed.
     let written =

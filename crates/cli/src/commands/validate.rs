@@ -69,7 +69,7 @@ fn wind_from(args: &ValidateArgs) -> Result<(f64, String), ValidationError> {
     if let Some(w) = args.wind_from {
         return Ok((w, "--wind-from".into()));
     }
-    let path = args.run.join("report.json");
+    let path = args.run.join(snowscape::output_folder::REPORT);
     if !path.is_file() {
         return Ok((
             DEFAULT_WIND_FROM_DEG,

@@ -44,7 +44,7 @@ pub fn write_fearing_outputs(
         &meshes[..1],
         &preview::PreviewOptions::default(),
     )?;
-    let json = dir.join("report.json");
+    let json = dir.join(crate::output_folder::REPORT);
     let report = fearing_report(cover, input).map_err(OutputError::Report)?;
     let text = serde_json::to_string_pretty(&report).map_err(OutputError::Report)?;
     snowscape_io::write_bytes_atomic(&json, text.as_bytes())?;

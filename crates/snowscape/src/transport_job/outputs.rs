@@ -85,7 +85,7 @@ pub fn write_outputs(
     let png = encode_png(&image).map_err(|e| fail(&path, e))?;
     write_bytes_atomic(&path, &png).map_err(|e| fail(&path, e))?;
     written.push(path);
-    let path = dir.join("report.json");
+    let path = dir.join(crate::output_folder::REPORT);
     let report = TransportReport::new(scenario, out, context.input.clone(), context.wall_s);
     let text = serde_json::to_string_pretty(&report).map_err(|e| fail(&path, e))?;
     write_bytes_atomic(&path, text.as_bytes()).map_err(|e| fail(&path, e))?;
