@@ -1,69 +1,12 @@
-//! Solar position: declination, hour angle, and the unit vector towards the sun.
-//!
-//! - Declination δ from the day of year `d` (1 = 1 January):
-//!   Spencer 1971 (default), the Fourier series
-//!   `δ = 0.006918 − 0.399912 cos Γ + 0.070257 sin Γ − 0.006758 cos 2Γ + 0.000907 sin 2Γ
-//!        − 0.002697 cos 3Γ + 0.00148 sin 3Γ`, `Γ = 2π(d − 1)/365`
-//!   (J. W. Spencer, "Fourier series representation of the position of the sun", Search 2(5),
-//!   1971), or Cooper 1969, `δ = 23.45° · sin(2π(284 + d)/365)` (P. I. Cooper, "The absorption
-//!   of radiation in solar stills", Solar Energy 12(3), 1969).
-//! - Hour angle from local *solar* time `t` (hours): `ω = 15°·(t − 12)` (no equation of time:
-//!   the day's sun path is sampled in solar time, so it is not needed).
-//! - Sun vector in local east/north/up coordinates at latitude φ:
-//!   `e = −cos δ sin ω`, `n = sin δ cos φ − cos δ sin φ cos ω`, `u = sin δ sin φ + cos δ cos φ cos ω`,
-//!   so the elevation is `asin(u)` (the classic `sin α = sin φ sin δ + cos φ cos δ cos ω`) and the
-//!   azimuth, clockwise from north, `atan2(e, n)` (Iqbal 1983, "An Introduction to Solar
-//!   Radiation", ch. 1).
+//! Solar position for the precompute: the sampling schedule of a range of days. The
+//! declination, hour angle and sun vector are [`snowscape_terrain::solar`]'s (re-exported here),
+//! the one solar geometry of every crate.
 //!
 //! The sampling schedule covers a range of days (every `day_step`-th day) and, per day,
 //! `samples_per_hour` instants per hour at the centre of each sub-interval of solar time; the
 //! samples with the sun above the horizon are kept, each weighted by its duration in hours.
 
-use serde::{Deserialize, Serialize};
-
-/// Which declination formula to use.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum DeclinationModel {
-    /// Spencer 1971 Fourier series (error < 0.0006 rad).
-    #[default]
-    Spencer,
-    /// Cooper 1969 sine approximation (error up to ~1°).
-    Cooper,
-}
-
-/// Solar declination in radians on day `day_of_year` (1..=366).
-pub fn declination(day_of_year: u32, model: DeclinationModel) -> f64 {
-    let d = day_of_year as f64;
-    match model {
-        DeclinationModel::Spencer => {
-            let g = std::f64::consts::TAU * (d - 1.0) / 365.0;
-            0.006918 - 0.399912 * g.cos() + 0.070257 * g.sin() - 0.006758 * (2.0 * g).cos()
-                + 0.000907 * (2.0 * g).sin()
-                - 0.002697 * (3.0 * g).cos()
-                + 0.00148 * (3.0 * g).sin()
-        }
-        DeclinationModel::Cooper => {
-            23.45f64.to_radians() * (std::f64::consts::TAU * (284.0 + d) / 365.0).sin()
-        }
-    }
-}
-
-/// Hour angle in radians at local solar time `solar_hour` (0..24; noon = 0, morning < 0).
-pub fn hour_angle(solar_hour: f64) -> f64 {
-    (15.0 * (solar_hour - 12.0)).to_radians()
-}
-
-/// Unit vector towards the sun, `[east, north, up]`, at `latitude_deg` for declination
-/// `declination` and hour angle `hour_angle` (radians).
-pub fn sun_vector(latitude_deg: f64, declination: f64, hour_angle: f64) -> [f64; 3] {
-    let (sp, cp) = latitude_deg.to_radians().sin_cos();
-    let (sd, cd) = declination.sin_cos();
-    let (sw, cw) = hour_angle.sin_cos();
-    [-cd * sw, sd * cp - cd * sp * cw, sd * sp + cd * cp * cw]
-}
+pub use snowscape_terrain::solar::{DeclinationModel, declination, hour_angle, sun_vector};
 
 /// One sun position of the sampling schedule.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -31,7 +31,7 @@ fn bench(c: &mut Criterion) {
                 flakes_per_site: 4,
                 passes: 1,
                 // Stability on the fine bunny drains its steep flanks slowly: bound its work.
-                stability: snowscape_fearing::StabilityParams {
+                stability: snowscape_fearing::StabilityPhaseParams {
                     max_tests_per_site: 20,
                     ..Default::default()
                 },

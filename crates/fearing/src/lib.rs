@@ -44,7 +44,7 @@ pub mod wind_transport;
 pub use edge_groups::Topology;
 pub use error::FearingError;
 pub use launch_sites::LaunchSites;
-pub use params::{FearingParams, Material, SkyWeight, StabilityParams};
+pub use params::{FearingParams, Material, SkyWeight, StabilityPhaseParams};
 pub use report::FearingReport;
 pub use surface::SnowSurface;
 

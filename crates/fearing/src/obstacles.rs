@@ -12,7 +12,7 @@
 
 use crate::edge_groups::BorderEdge;
 use crate::edge_transit::{Flight, Landing, fly};
-use crate::params::StabilityParams;
+use crate::params::StabilityPhaseParams;
 use crate::stability::StabilityReport;
 use crate::tracer::{Tag, Tracer};
 
@@ -87,7 +87,7 @@ pub fn over_edge(
     site: &EdgeSite,
     e: &BorderEdge,
     spacing: f64,
-    sp: &StabilityParams,
+    sp: &StabilityPhaseParams,
     rep: &mut StabilityReport,
 ) -> EdgeObs {
     let EdgeSite {

@@ -122,7 +122,7 @@ impl SkyWeight {
 /// Stability phase settings (Section 4).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct StabilityParams {
+pub struct StabilityPhaseParams {
     /// Most passes through the unresolved list per stability phase (Section 4.4); the cap in
     /// use is the smaller of this and the number of sites + 16, so it is bounded by the sites
     /// (ours: 100,000, so the sites set it). A phase normally ends earlier, when quiet (see
@@ -159,7 +159,7 @@ pub struct StabilityParams {
     pub obstacle_refresh_passes: u32,
 }
 
-impl Default for StabilityParams {
+impl Default for StabilityPhaseParams {
     fn default() -> Self {
         Self {
             max_passes: 100_000,
@@ -234,7 +234,7 @@ pub struct FearingParams {
     /// Objects tagged "boring" (Section 3.2, "User"): their sites get a tenth of the importance.
     pub boring_objects: Vec<String>,
     /// Stability phase settings.
-    pub stability: StabilityParams,
+    pub stability: StabilityPhaseParams,
     /// Iterations of mass-conserving depth smoothing between neighbours before meshing (the
     /// "simpler documented method" standing in for Section 5's implicit functions); 0 = off.
     pub smoothing_iterations: u32,
@@ -271,7 +271,7 @@ impl Default for FearingParams {
             sky_weight: None,
             camera: None,
             boring_objects: Vec::new(),
-            stability: StabilityParams::default(),
+            stability: StabilityPhaseParams::default(),
             smoothing_iterations: 2,
             surface_smoothing: 4,
             min_surface_depth_m: 1e-3,

@@ -247,7 +247,7 @@ fn basin_water(depth: f64) -> (Scene, FearingCover) {
         target_sites: 1000,
         sky_bucket_m: Some(0.25),
         // Overflowing takes long phases: a higher work cap than the default.
-        stability: snowscape_fearing::StabilityParams {
+        stability: snowscape_fearing::StabilityPhaseParams {
             max_passes: 3000,
             max_tests_per_site: 5000,
             ..Default::default()

@@ -27,6 +27,7 @@ pub mod layers;
 pub mod materials;
 pub mod procedural;
 pub mod random;
+pub mod solar;
 pub mod surface;
 pub mod timeline;
 

@@ -18,7 +18,7 @@ use snowscape_transport::precipitation::{FlakeParams, precipitation_map};
 use snowscape_transport::step::{SceneMaps, SnowState, StepScratch, step};
 use snowscape_transport::terrain_wind::modify_wind;
 use snowscape_transport::wind3d::voxel::{VoxelGrid, castle_heights};
-use snowscape_transport::wind3d::{WindParams, WindSolver};
+use snowscape_transport::wind3d::{Wind3dParams, WindSolver};
 use snowscape_transport::{TransportParams, Weather};
 use std::hint::black_box;
 
@@ -76,7 +76,7 @@ fn wind(c: &mut Criterion) {
     let g = GridGeometry::square(n, n, cell).unwrap();
     let z = castle_heights(n, cell);
     let vox = VoxelGrid::from_heights(&g, &z, cell, n, -cell).unwrap();
-    let mut solver = WindSolver::new(vox, WindParams::default()).unwrap();
+    let mut solver = WindSolver::new(vox, Wind3dParams::default()).unwrap();
     for _ in 0..3 {
         solver.iterate();
     }
@@ -101,12 +101,12 @@ fn flakes(c: &mut Criterion) {
     let g = GridGeometry::square(n, n, cell).unwrap();
     let z = castle_heights(n, cell);
     let vox = VoxelGrid::from_heights(&g, &z, cell, 24, -cell).unwrap();
-    let mut solver = WindSolver::new(vox.clone(), WindParams::default()).unwrap();
+    let mut solver = WindSolver::new(vox.clone(), Wind3dParams::default()).unwrap();
     for _ in 0..5 {
         solver.iterate();
     }
     let wind = solver.mean_velocity();
-    let inflow = WindParams::default().inflow();
+    let inflow = Wind3dParams::default().inflow();
     let params = FlakeParams {
         count,
         ..Default::default()

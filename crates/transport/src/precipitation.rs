@@ -278,7 +278,7 @@ fn fly(sky: &Sky, launch: Launch) -> Fate {
 
 /// Simulates the flakes through the mean wind `wind` over `grid` and builds the map;
 /// `inflow` is the wind (east, north, m s⁻¹) the wind simulation held on its upwind sides
-/// ([`crate::wind3d::WindParams::inflow`]): snow enters across those sides.
+/// ([`crate::wind3d::Wind3dParams::inflow`]): snow enters across those sides.
 pub fn precipitation_map(
     grid: &VoxelGrid,
     wind: &Velocity,

@@ -20,7 +20,7 @@ use crate::step::{MassBudget, SceneMaps, SnowState, StepScratch, step};
 use crate::terrain_wind::{check_len, modify_wind};
 use crate::wind3d::field::Velocity;
 use crate::wind3d::voxel::{VoxelGrid, castle_heights};
-use crate::wind3d::{IterationReport, WindParams, WindSolver};
+use crate::wind3d::{IterationReport, Wind3dParams, WindSolver};
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::procedural::{AlpineParams, alpine};
 use snowscape_terrain::{Grid, GridGeometry, NodataMask};
@@ -73,7 +73,7 @@ pub struct Scenario {
     /// Transport parameters (Table 6.I).
     pub transport: TransportParams,
     /// The 3D wind.
-    pub wind: WindParams,
+    pub wind: Wind3dParams,
     /// The flakes of the precipitation map.
     pub flakes: FlakeParams,
     /// Initial snow depth, m, and its density, kg m⁻³.
@@ -95,7 +95,7 @@ impl Default for Scenario {
             wind_iterations: 20,
             uniform_precipitation: false,
             transport: TransportParams::default(),
-            wind: WindParams::default(),
+            wind: Wind3dParams::default(),
             flakes: FlakeParams::default(),
             initial_depth_m: 0.0,
             initial_density: snowscape_terrain::SnowLayer::Powder.default_density_kg_m3(),

@@ -21,7 +21,7 @@ use snowscape_transport::precipitation::{FlakeParams, precipitation_map};
 use snowscape_transport::step::{SceneMaps, SnowState, StepScratch, step};
 use snowscape_transport::terrain_wind::modify_wind;
 use snowscape_transport::wind3d::voxel::{VoxelGrid, castle_heights};
-use snowscape_transport::wind3d::{WindParams, WindSolver};
+use snowscape_transport::wind3d::{Wind3dParams, WindSolver};
 use snowscape_transport::{TransportError, TransportParams, Weather};
 use std::hint::black_box;
 
@@ -77,7 +77,7 @@ pub fn transport_kernels(terrain: &Grid, size: usize) -> Result<Vec<Kernel>, Ker
     });
 
     let n = (size / 8).max(8);
-    let mut solver = WindSolver::new(castle(n, n)?, WindParams::default())?;
+    let mut solver = WindSolver::new(castle(n, n)?, Wind3dParams::default())?;
     for _ in 0..3 {
         solver.iterate();
     }
@@ -87,13 +87,13 @@ pub fn transport_kernels(terrain: &Grid, size: usize) -> Result<Vec<Kernel>, Ker
     });
 
     let voxels = castle(48, 24)?;
-    let mut flake_wind = WindSolver::new(voxels.clone(), WindParams::default())?;
+    let mut flake_wind = WindSolver::new(voxels.clone(), Wind3dParams::default())?;
     for _ in 0..5 {
         flake_wind.iterate();
     }
     flake_wind.project_mean();
     let mean = flake_wind.mean_velocity();
-    let inflow = WindParams::default().inflow();
+    let inflow = Wind3dParams::default().inflow();
     let flakes = FlakeParams {
         count: (size * size).max(20_000),
         ..Default::default()

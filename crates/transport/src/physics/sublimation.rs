@@ -24,6 +24,7 @@
 //!   is `+` here. At night (`sin ω ≤ 0`) `S_i = 0`.
 
 use super::ICE_DENSITY;
+use snowscape_terrain::solar;
 use std::f64::consts::PI;
 
 /// Molecular weight of water `M`, kg kmol⁻¹ (Eq. I.6).
@@ -44,12 +45,6 @@ const PARTICLE_ALBEDO: f64 = 0.5;
 const SURFACE_ALBEDO: f64 = 0.8;
 /// Solar constant `S*`, W m⁻² (Eq. I.20).
 const SOLAR_CONSTANT: f64 = 1370.0;
-/// Latitude of the Tropic of Cancer `η_T`, degrees (Eq. I.22).
-const TROPIC_DEG: f64 = 23.45;
-/// Day of the summer solstice `d_r` (Eq. I.22).
-const SOLSTICE_DAY: f64 = 173.0;
-/// Mean length of a year `d_y`, days (Eq. I.22).
-const YEAR_DAYS: f64 = 365.25;
 
 /// Saturation vapour pressure over ice `e_s`, Pa, at `t_k` K (Eq. I.9).
 pub fn saturation_vapour_pressure(t_k: f64) -> f64 {
@@ -73,16 +68,12 @@ pub fn undersaturation(z: f64, rh: f64, z_rh: f64) -> f64 {
     ((rh - 1.0) * (gamma + 0.027 * z.ln())).clamp(-1.0, 0.0)
 }
 
-/// Solar declination `δ`, radians, on day `day` of the year (Eq. I.22).
-pub fn solar_declination(day: f64) -> f64 {
-    TROPIC_DEG.to_radians() * (2.0 * PI * (day - SOLSTICE_DAY) / YEAR_DAYS).cos()
-}
-
-/// Sine of the solar elevation `sin ω` (Eq. I.21), latitude and hour angle in degrees.
+/// Sine of the solar elevation `sin ω` (Eq. I.21) on day `day` of the year, latitude and hour
+/// angle in degrees, with the declination of Eq. I.22 (the cosine about the June solstice:
+/// [`snowscape_terrain::solar`], the one solar geometry of every crate).
 pub fn sin_solar_elevation(latitude_deg: f64, day: f64, hour_angle_deg: f64) -> f64 {
-    let d = solar_declination(day);
-    let phi = latitude_deg.to_radians();
-    d.sin() * phi.sin() + d.cos() * phi.cos() * hour_angle_deg.to_radians().cos()
+    let d = solar::declination_at(day, solar::DeclinationModel::Cosine);
+    solar::sin_elevation(latitude_deg, d, hour_angle_deg.to_radians())
 }
 
 /// Solar radiation reaching the surface `S_i`, W m⁻² (Eqs. I.20, I.23), for a sun at
@@ -181,7 +172,7 @@ mod tests {
         // sin ω = sin δ sin φ + cos δ cos φ cos τ = −0.279370 + 0.528276 = 0.248907;
         // Υ = (0.6 + 0.2 · 0.248907)(1 − 0.075) = 0.601048;
         // S_i = 1370 · 0.601048 · 0.248907 = 204.959 W/m².
-        let d = solar_declination(1.0).to_degrees();
+        let d = solar::declination_at(1.0, solar::DeclinationModel::Cosine).to_degrees();
         assert!((d + 23.0594).abs() < 1e-3, "{d}");
         let s = sin_solar_elevation(45.5, 1.0, -35.0);
         assert!((s - 0.248_907).abs() < 1e-5, "{s}");

@@ -1,5 +1,5 @@
 use super::*;
-use crate::wind3d::{WindParams, WindSolver};
+use crate::wind3d::{Wind3dParams, WindSolver};
 use snowscape_terrain::GridGeometry;
 
 fn flat_grid(n: usize, nz: usize, cell: f64) -> VoxelGrid {
@@ -115,7 +115,7 @@ fn the_lee_of_a_wall_gets_little_snow() {
     let grid = VoxelGrid::from_heights(&g, &z, cell, 16, -cell).unwrap();
     let mut solver = WindSolver::new(
         grid.clone(),
-        WindParams {
+        Wind3dParams {
             speed_m_s: 6.0,
             ..Default::default()
         },

@@ -45,7 +45,7 @@ use voxel::VoxelGrid;
 /// Parameters of the wind simulation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct WindParams {
+pub struct Wind3dParams {
     /// Inflow wind speed at `reference_height_m` above the ground, m s⁻¹. Table 7.I: 11.
     pub speed_m_s: f64,
     /// Direction the wind blows from, degrees clockwise from north. Table 7.I: 270 (west).
@@ -70,7 +70,7 @@ pub struct WindParams {
     pub max_solver_iterations: usize,
 }
 
-impl Default for WindParams {
+impl Default for Wind3dParams {
     fn default() -> Self {
         Self {
             speed_m_s: 11.0,
@@ -86,7 +86,7 @@ impl Default for WindParams {
     }
 }
 
-impl WindParams {
+impl Wind3dParams {
     /// Checks the parameters.
     pub fn validate(&self) -> Result<(), TransportError> {
         check_range("speed_m_s", self.speed_m_s, 0.0, 100.0)?;
@@ -152,7 +152,7 @@ pub struct IterationReport {
 #[derive(Debug, Clone)]
 pub struct WindSolver {
     grid: VoxelGrid,
-    params: WindParams,
+    params: Wind3dParams,
     kinds: [Vec<Face>; 3],
     /// Outflow faces and the inner face each copies, per component.
     outflow: [Vec<(usize, usize)>; 3],
@@ -177,7 +177,7 @@ mod steps;
 
 impl WindSolver {
     /// Sets up the faces, the inflow and a projected initial field.
-    pub fn new(grid: VoxelGrid, params: WindParams) -> Result<Self, TransportError> {
+    pub fn new(grid: VoxelGrid, params: Wind3dParams) -> Result<Self, TransportError> {
         params.validate()?;
         check_positive("voxel_layers", grid.len() as f64)?;
         let velocity = Velocity::zeros(grid.nx, grid.ny, grid.nz);

@@ -5,11 +5,11 @@ use super::field::{Centred, Component, Lattice, Velocity};
 use super::project::Poisson;
 use super::stencil::{apply_row, rows};
 use super::voxel::VoxelGrid;
-use super::{Face, WindParams, WindSolver};
+use super::{Face, Wind3dParams, WindSolver};
 use rayon::prelude::*;
 
 /// Face kinds of the three components.
-pub(super) fn face_kinds(g: &VoxelGrid, p: &WindParams) -> [Vec<Face>; 3] {
+pub(super) fn face_kinds(g: &VoxelGrid, p: &Wind3dParams) -> [Vec<Face>; 3] {
     let [ux, uy] = p.inflow();
     let v = Velocity::zeros(g.nx, g.ny, g.nz);
     // A side's faces by the inflow's component into the domain across it: closed where

@@ -10,7 +10,7 @@ fn flat(nx: usize, ny: usize, nz: usize, cell: f64) -> VoxelGrid {
 
 #[test]
 fn uniform_flow_over_a_flat_plate_keeps_its_inflow_speed() {
-    let params = WindParams {
+    let params = Wind3dParams {
         speed_m_s: 8.0,
         from_deg: 250.0, // oblique: enters through the west and south sides
         inflow_roughness_m: 0.0,
@@ -45,7 +45,7 @@ fn uniform_flow_over_a_flat_plate_keeps_its_inflow_speed() {
 
 #[test]
 fn log_profile_over_a_flat_plate_keeps_its_speed_with_viscosity() {
-    let params = WindParams::default(); // 11 m/s from the west at 5 m, z0 = 0.1 m
+    let params = Wind3dParams::default(); // 11 m/s from the west at 5 m, z0 = 0.1 m
     let mut s = WindSolver::new(flat(24, 6, 12, 1.0), params).unwrap();
     for _ in 0..10 {
         s.iterate();
@@ -71,7 +71,7 @@ fn sides_parallel_to_the_wind_are_closed() {
         })
         .collect();
     let grid = VoxelGrid::from_heights(&g, &z, cell, 12, 0.0).unwrap();
-    let params = WindParams {
+    let params = Wind3dParams {
         speed_m_s: 10.0,
         from_deg: 0.0,
         ..Default::default()
@@ -101,7 +101,7 @@ fn castle_solver() -> WindSolver {
     let g = GridGeometry::square(n, n, cell).unwrap();
     let z = castle_heights(n, cell);
     let vox = VoxelGrid::from_heights(&g, &z, cell, 12, -4.0).unwrap();
-    WindSolver::new(vox, WindParams::default()).unwrap()
+    WindSolver::new(vox, Wind3dParams::default()).unwrap()
 }
 
 #[test]
@@ -193,7 +193,7 @@ fn wind_does_not_depend_on_the_thread_count() {
 
 #[test]
 fn mean_wind_file_has_its_header_and_three_fields() {
-    let mut s = WindSolver::new(flat(6, 5, 4, 2.0), WindParams::default()).unwrap();
+    let mut s = WindSolver::new(flat(6, 5, 4, 2.0), Wind3dParams::default()).unwrap();
     s.iterate();
     let bytes = s.mean_wind_bytes();
     assert_eq!(&bytes[..8], b"SNOWWIND");
