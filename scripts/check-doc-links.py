@@ -36,20 +36,38 @@ SCHEME = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*:")
 
 
 def prose_lines(text):
-    """(line number, line) outside fenced code blocks, with code spans blanked."""
-    fence = None
+    """(line number, line) outside fenced code blocks: each paragraph joined into one line (a
+    link's text may break across lines), numbered by its first line, with code spans blanked;
+    reference definitions and includes stay lines of their own."""
+    fence, block, start = None, [], 0
+
+    def flush():
+        if block:
+            joined = " ".join(block)
+            yield start, CODE_SPAN.sub(lambda c: " " * len(c.group(0)), joined)
+        block.clear()
+
     for number, line in enumerate(text.splitlines(), 1):
         m = FENCE.match(line)
         if m:
             mark = m.group(1)[0] * 3
             if fence is None:
+                yield from flush()
                 fence = mark
-                continue
-            if mark == fence:
+            elif mark == fence:
                 fence = None
-                continue
-        if fence is None:
-            yield number, CODE_SPAN.sub(lambda c: " " * len(c.group(0)), line)
+            continue
+        if fence is not None:
+            continue
+        if not line.strip() or REFERENCE.match(line) or INCLUDE.search(line):
+            yield from flush()
+            if line.strip():
+                yield number, line
+            continue
+        if not block:
+            start = number
+        block.append(line.strip())
+    yield from flush()
 
 
 def heading_id(text):

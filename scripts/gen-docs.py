@@ -70,7 +70,7 @@ MODEL_MAY_USE = {"snowscape-mesh"}
 
 def run(cmd):
     env = dict(os.environ, COLUMNS="100", LINES="50", NO_COLOR="1", LC_ALL="C.UTF-8")
-    out = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
+    out = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, encoding="utf-8")
     if out.returncode != 0:
         sys.exit(f"gen-docs: `{' '.join(map(str, cmd))}` failed ({out.returncode}):\n{out.stderr}")
     return out.stdout
