@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The project's test command (README "Run the tests"; .ci/run calls exactly this).
-# Builds everything, runs every unit, integration, property and real-data test, runs each
-# criterion benchmark once in test mode (so none rots), then the `bench` subcommand and the
-# demo at a reduced size.
+# The project's test command (docs/src/getting-started.md, "Run the tests"; .ci/run calls
+# exactly this). Builds everything, runs every unit, integration, property and real-data test,
+# runs each criterion benchmark once in test mode (so none rots), then the `bench` subcommand
+# and the demo at a reduced size, the Python package's and the editor's tests, and last checks
+# and builds the book (docs/).
 set -euo pipefail
 shopt -s inherit_errexit 2>/dev/null || true
 cd "$(dirname "$0")/.."
@@ -56,7 +57,14 @@ CARGO_TARGET_DIR="$PWD/target" "$scratch/venv/bin/pip" install --quiet "./python
 "$scratch/venv/bin/python" examples/python/season.py "" 3 "$scratch/py_season" > /dev/null
 test -s "$scratch/py_season/depth.tif"
 bash scripts/browser-tests.sh 2>&1 | tee -a "$log"
+# The book (docs/, mdBook): its generated pages (the parameter catalogue, every command's
+# --help, the crate dependencies from cargo metadata) must match what this build and the
+# Cargo.toml files say, it must build, and no relative link or #anchor in it or in README.md may
+# be broken.
+python3 scripts/gen-docs.py --check --bin "$bin"
+mdbook build docs
+python3 scripts/check-doc-links.py
 passed=$(grep -Eo '^test result: ok\. [0-9]+ passed' "$log" | awk '{s += $4} END {print s + 0}')
 failed=$(grep -Eo '[0-9]+ failed' "$log" | awk '{s += $1} END {print s + 0}')
-echo "scripts/test.sh: all checks passed (unit, integration, property, real-data, doc tests; benchmarks in test mode; bench and demo at reduced size; Python package tests; editor browser tests)"
+echo "scripts/test.sh: all checks passed (unit, integration, property, real-data, doc tests; benchmarks in test mode; bench and demo at reduced size; Python package tests; editor browser tests; the book and its links)"
 echo "$passed passed, $failed failed"

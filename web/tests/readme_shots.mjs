@@ -1,4 +1,4 @@
-// Screenshots of the editor for the README: the page on SNOWSCAPE_URL stepped to day
+// Screenshots of the editor for the book (docs/src/guide/serve.md): the page on SNOWSCAPE_URL stepped to day
 // SNOWSCAPE_DAYS (0: as it opens), its 3D view written to SNOWSCAPE_OUT (PNG).
 import { launchChromium } from './common.mjs';
 

@@ -13,7 +13,7 @@
 //! ```
 //!
 //! The first term is the paper's `ΔP/(ρ·dx)` (ρ cancels: `ΔP = ρ g ΔA`); the second is the
-//! momentum advection the paper omits (needed for Ritter's dam-break front, `docs/model.md#flow-model`): each
+//! momentum advection the paper omits (needed for Ritter's dam-break front, `docs/src/model.md#flow-model`): each
 //! pipe direction forms a regular lattice, `u` is advected by the velocity `v` at the pipe (mean
 //! of the two cells' velocities, reconstructed from their 8 pipes) with first-order upwind
 //! differences on that lattice. The third is the Coulomb yield force of norm `g·tanθc`,
@@ -37,7 +37,7 @@
 //!
 //! **Mass (per cell).** The volume through a pipe in a sub-step is `F = w · h_up · u · δt`, with
 //! `h_up` the depth of the upwind cell: the *face cross-section* is `w·h_up`, not the paper's
-//! constant `dx²`, which makes waves travel at `sqrt(g·h)` instead of `sqrt(g·dx)` (`docs/model.md#flow-model`). The widths `w` make the 8-pipe stencil consistent with `∂h/∂t + ∇·(h v) = 0` and
+//! constant `dx²`, which makes waves travel at `sqrt(g·h)` instead of `sqrt(g·dx)` (`docs/src/model.md#flow-model`). The widths `w` make the 8-pipe stencil consistent with `∂h/∂t + ∇·(h v) = 0` and
 //! isotropic: with `Ld = sqrt(dx² + dy²)`, east pipes have `w = dy·dy²/Ld²`, south pipes
 //! `w = dx·dx²/Ld²`, diagonal pipes `w = dx·dy/(2·Ld)` (square cells: `dx/2` and `dx/(2√2)`;
 //! a pipe velocity is the projection `e·v` of the flow velocity, and the 4 pipe directions then

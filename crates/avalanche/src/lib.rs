@@ -9,7 +9,7 @@
 //! paper's rupture at a point); [`validation`] runs the validation cases that
 //! `examples/validation.rs` tabulates.
 //!
-//! The scheme departs from the paper where it must (`docs/model.md#flow-model`) (a depth-dependent face
+//! The scheme departs from the paper where it must (`docs/src/model.md#flow-model`) (a depth-dependent face
 //! cross-section and momentum advection, so that waves travel at `sqrt(g·h)` and the dam-break
 //! front follows Ritter's `2·sqrt(g·h0)`); [`flow`]'s module documentation states the equations.
 

@@ -42,7 +42,7 @@ fn dam_break_matches_ritter() {
 
 /// Without momentum advection the front lags far behind Ritter's (the scheme is then the
 /// paper's hydrostatic pipe model with a depth cross-section): the analytic test tells the
-/// models apart, as `docs/model.md#flow-model` asks.
+/// models apart, as `docs/src/model.md#flow-model` asks.
 #[test]
 fn dam_break_without_advection_lags() {
     let p = AvalancheParams {

@@ -3,7 +3,7 @@
 //! [`run`] measures the machine's copy bandwidth ([`measure_copy_bandwidth`]), then every
 //! kernel of the [`registry`] on a procedural alpine terrain of `size`² cells: the median time
 //! per call after one warm-up, cells per second, and the memory traffic implied by each
-//! kernel's bytes-per-cell model, in GB/s and as a fraction of the copy bandwidth (`docs/architecture.md#performance-and-benchmarks`:
+//! kernel's bytes-per-cell model, in GB/s and as a fraction of the copy bandwidth (`docs/src/architecture.md#performance-and-benchmarks`:
 //! that fraction says how close to the hardware limit a kernel is). The
 //! [`BenchReport`] serialises to JSON (`snowscape bench` writes it as `bench.json`).
 //!

@@ -2,7 +2,7 @@
 //!
 //! `out = left + right + up + down - 4·centre`. The interior runs without any per-cell index
 //! clamping or branch (row slices zipped together, which the compiler vectorises); the four
-//! borders are done separately with clamp-to-edge neighbours (`docs/architecture.md#performance-and-benchmarks`). It reads 4 and writes 4 bytes per cell: any simple stencil kernel of the
+//! borders are done separately with clamp-to-edge neighbours (`docs/src/architecture.md#performance-and-benchmarks`). It reads 4 and writes 4 bytes per cell: any simple stencil kernel of the
 //! simulation should come close to its throughput.
 
 use rayon::prelude::*;

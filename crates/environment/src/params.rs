@@ -10,7 +10,7 @@
 //! ```
 //!
 //! Cordonnier et al. 2018 Table 2 is misaligned in the text extraction; the values below follow
-//! `docs/model.md#sources-and-the-reading-of-table-2`, which reads it by units. Constants the paper leaves open are marked as our
+//! `docs/src/model.md#sources-and-the-reading-of-table-2`, which reads it by units. Constants the paper leaves open are marked as our
 //! choices, with the reason.
 
 use crate::error::check_param;

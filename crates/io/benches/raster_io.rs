@@ -1,6 +1,6 @@
 //! Raster I/O throughput: GeoTIFF write + read, ESRI ASCII parse, PNG16 write.
-//! The grid side is `SNOWSCAPE_BENCH_SIZE` (default 512, small enough for CI; the README
-//! numbers use 4096).
+//! The grid side is `SNOWSCAPE_BENCH_SIZE` (default 512, small enough for CI; use 4096 for
+//! figures worth quoting).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use snowscape_io::{RasterFormat, ReadOptions, read_dem, write_geotiff, write_png16, write_raster};

@@ -66,7 +66,7 @@ pub enum DiffusionBorder {
 #[serde(default, deny_unknown_fields)]
 pub struct DiffusionParams {
     /// Rest slope `s_d0` (rise over run, dimensionless) below which powder does not move.
-    /// Cordonnier 2018 Table 2 (read by units, `docs/model.md#sources-and-the-reading-of-table-2`): 0.5.
+    /// Cordonnier 2018 Table 2 (read by units, `docs/src/model.md#sources-and-the-reading-of-table-2`): 0.5.
     pub rest_slope: f64,
     /// Shift rate `k_m`, 1/day: share of the excess slope relaxed per day.
     /// Cordonnier 2018 Table 2: 0.5 day⁻¹.

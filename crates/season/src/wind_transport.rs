@@ -5,7 +5,7 @@
 //! shelters its snow) and in the wind shadow (where the wind-effect surface `Wz` floats
 //! above the snow surface). A cell loses `min(P + U, −k_erosion · curvW · δt)`: powder
 //! first, then unstable snow (Figure 10 scours both). The paper prints `max`; the amount
-//! eroded cannot exceed the snow present, so it is a `min` (`docs/model.md#wind-transport`).
+//! eroded cannot exceed the snow present, so it is a `min` (`docs/src/model.md#wind-transport`).
 //!
 //! **Deposit.** The eroded snow goes to the two neighbours downwind, split by the wind
 //! components: the share `|W_x| / (|W_x| + |W_y|)` to the east or west neighbour (sign of

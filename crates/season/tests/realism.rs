@@ -119,7 +119,7 @@ fn check_behaviour(bedrock: Grid, label: &str) {
     );
     let steep_cells: usize = detail.iter().map(|d| d.2).sum();
     eprintln!("{label}: steep/moderate {steep:.3} over {steep_cells} cells > 60° {detail:?}");
-    // On coarse grids a "60°" cell is rare (`docs/model.md#slope-shedding`): the criterion needs enough of them.
+    // On coarse grids a "60°" cell is rare (`docs/src/model.md#slope-shedding`): the criterion needs enough of them.
     if steep_cells >= 50 {
         assert!(
             steep <= 0.3,

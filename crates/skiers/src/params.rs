@@ -1,6 +1,6 @@
 //! [`SkiParams`]: every knob of the ski tracks, with units and the source of each default.
 //!
-//! Table 2 of Cordonnier et al. 2018 gives three ski values (read by units, `docs/model.md#sources-and-the-reading-of-table-2`):
+//! Table 2 of Cordonnier et al. 2018 gives three ski values (read by units, `docs/src/model.md#sources-and-the-reading-of-table-2`):
 //! the target slope `st = 30°`, the turn amplitude `a = 5 m` and a frequency `f = 0.01 /m`.
 //! Everything else is chosen here; each field says why.
 

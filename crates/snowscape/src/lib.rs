@@ -31,8 +31,8 @@
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
 //! parameters a struct whose fields carry units and cite their source, its errors a typed
-//! enum naming the offending value. The equations and their sources are in `docs/model.md`,
-//! the data flow and the crates in `docs/architecture.md`.
+//! enum naming the offending value. The equations and their sources are in `docs/src/model.md`,
+//! the data flow and the crates in `docs/src/architecture.md`.
 //!
 //! ## A winter from code
 //!

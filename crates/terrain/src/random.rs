@@ -2,7 +2,7 @@
 //!
 //! A run draws each random number from a key, never from a shared generator's state, so the
 //! result does not depend on the order in which threads, tiles or machines visit cells
-//! (`docs/architecture.md#conventions`, determinism). The mixing function is SplitMix64's finaliser (Steele, Lea &
+//! (`docs/src/architecture.md#conventions`, determinism). The mixing function is SplitMix64's finaliser (Steele, Lea &
 //! Flood 2014), applied to a combination of the three keys.
 
 /// SplitMix64 finaliser: a bijective 64-bit mix with full avalanche.

@@ -129,7 +129,7 @@ impl SamosAtParams {
     }
 }
 
-/// Parameters of the avalanche flow (Cordonnier et al. 2018, Table 2, read as `docs/model.md#sources-and-the-reading-of-table-2` says).
+/// Parameters of the avalanche flow (Cordonnier et al. 2018, Table 2, read as `docs/src/model.md#sources-and-the-reading-of-table-2` says).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct AvalancheParams {
@@ -139,7 +139,7 @@ pub struct AvalancheParams {
     /// Rest angle θc of the snow, degrees: Coulomb friction `g·tanθc`. Default 30 (Table 2).
     pub rest_angle_deg: f64,
     /// Viscous coefficient kv of the term `−kv·h·u`, 1/(m·s). Default 5e-4 (Table 2, which
-    /// gives no unit; `docs/model.md#sources-and-the-reading-of-table-2` reads /s²).
+    /// gives no unit; `docs/src/model.md#sources-and-the-reading-of-table-2` reads /s²).
     pub k_viscous: f64,
     /// Dry/wet mix α ∈ [0, 1]: weight of the Coulomb term, `1 − α` weighs the viscous term.
     /// The paper makes it proportional to snow temperature; here it is an input. Default 1
@@ -148,7 +148,7 @@ pub struct AvalancheParams {
     /// Courant number C of the automatic sub-step, in (0, 1]. Default 0.4 (chosen here: the
     /// explicit pipe update is stable below ~0.5 on the 8-neighbour stencil).
     pub courant: f64,
-    /// Include momentum advection `(v·∇)u`. Default true (`docs/model.md#flow-model`: needed for Ritter's
+    /// Include momentum advection `(v·∇)u`. Default true (`docs/src/model.md#flow-model`: needed for Ritter's
     /// front); false gives the paper's hydrostatic pipe model with a depth cross-section.
     pub momentum_advection: bool,
     /// Condition at the grid border and the nodata outline. Default open.

@@ -18,7 +18,7 @@
 //!   north/south, steep/moderate, lee/windward, with the per-band table and the cell counts
 //!   per class ([`classes`]);
 //! - ρ of each depth with altitude (measured snow is far less tied to altitude than a
-//!   temperature-driven model: see `docs/model.md#sources-and-the-reading-of-table-2`).
+//!   temperature-driven model: see `docs/src/model.md#sources-and-the-reading-of-table-2`).
 //!
 //! [`figures`] draws the side-by-side maps and the density scatter; [`summary`] prints the
 //! table.
