@@ -231,13 +231,30 @@ def _scenario_text(scenario: Union[None, PathLike, Dict[str, Any]]) -> Tuple[Opt
         return f.read(), False, path
 
 
+def _sets_days(scenario: Any, text: Optional[str]) -> bool:
+    """Whether the scenario sets the season's length (a dict's ``days`` key, a top-level
+    ``days =`` line of a file before its first table)."""
+    if isinstance(scenario, dict):
+        return "days" in scenario
+    for line in (text or "").splitlines():
+        line = line.strip()
+        if line.startswith("["):
+            return False
+        if line.split("=", 1)[0].strip() == "days" and "=" in line:
+            return True
+    return False
+
+
 class Winter:
     """A winter on a terrain: snowfall, melt, sun and wind, shedding, avalanches, day by day.
 
-    ``Winter(dem, scenario=None, seed=0, threads=None)``: ``dem`` a :class:`Raster` (or a
-    path); ``scenario`` a scenario file's path, a dict of its keys (``{"days": 60,
-    "parameters": {...}}``) or ``None`` for the default winter; ``seed`` the random seed (same
-    seed, same bytes, for any ``threads``).
+    ``Winter(dem, scenario=None, seed=0, threads=None, forcing=None, station_altitude=None)``:
+    ``dem`` a :class:`Raster` (or a path); ``scenario`` a scenario file's path, a dict of its
+    keys (``{"days": 60, "parameters": {...}}``) or ``None`` for the default winter; ``seed``
+    the random seed (same seed, same bytes, for any ``threads``); ``forcing`` a station record
+    (as ``snowscape run --forcing``: CSV or a snobal input file) that the season follows from
+    its first hour, for the record's length or the scenario's ``days`` when it sets them, at
+    ``station_altitude`` metres unless the file states it.
     """
 
     def __init__(
@@ -246,6 +263,8 @@ class Winter:
         scenario: Union[None, PathLike, Dict[str, Any]] = None,
         seed: Optional[int] = 0,
         threads: Optional[int] = None,
+        forcing: Optional[PathLike] = None,
+        station_altitude: Optional[float] = None,
         _native: Any = None,
     ) -> None:
         if _native is not None:
@@ -257,7 +276,15 @@ class Winter:
             raise ValueError(f"seed must be a whole number >= 0, got {_clip(seed)}")
         threads = _check_threads(threads)
         self._w = _snowscape._Winter(
-            dem._native(), text, is_json, name, None if seed is None else int(seed), threads
+            dem._native(),
+            text,
+            is_json,
+            name,
+            None if seed is None else int(seed),
+            threads,
+            None if forcing is None else os.fspath(forcing),
+            None if station_altitude is None else float(station_altitude),
+            _sets_days(scenario, text),
         )
 
     @classmethod

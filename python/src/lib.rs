@@ -14,7 +14,7 @@ use snowscape::season_run::{CHECKPOINT, CHUNK_DAYS, RESOLVED_SCENARIO, write_che
 use snowscape::terrain::{
     Crs, GeoTransform, Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer,
 };
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A raster coming in: `f32` bytes, width, height, `(origin_x, origin_y, pixel_width,
 /// pixel_height)` and the CRS (EPSG code as `EPSG:n`, or WKT).
@@ -249,8 +249,14 @@ struct PyWinter {
 impl PyWinter {
     /// `scenario`: TOML text (a file's), JSON text (a dict's, when `is_json`) or `None` (the
     /// default scenario).
+    ///
+    /// `forcing`: a station forcing file (as `snowscape run --forcing`; else the scenario's
+    /// `forcing`, relative to the scenario file), at `station_altitude` m unless the file
+    /// states it: the season follows the record from its first hour, for the record's length
+    /// or the scenario's `days` when it sets them (`days_given`) within the record.
     #[new]
-    #[pyo3(signature = (dem, scenario, is_json, scenario_name, seed, threads))]
+    #[pyo3(signature = (dem, scenario, is_json, scenario_name, seed, threads, forcing=None, station_altitude=None, days_given=false))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         dem: GridIn,
@@ -259,6 +265,9 @@ impl PyWinter {
         scenario_name: String,
         seed: Option<u64>,
         threads: Option<i64>,
+        forcing: Option<PathBuf>,
+        station_altitude: Option<f64>,
+        days_given: bool,
     ) -> PyResult<Self> {
         let bedrock = grid_in(dem)?;
         bedrock.check_terrain().map_err(py_err)?;
@@ -273,7 +282,17 @@ impl PyWinter {
             }
             (text, _) => text,
         };
-        let scenario = scenario_of(text.as_deref(), &scenario_name, seed)?;
+        let mut scenario = scenario_of(text.as_deref(), &scenario_name, seed)?;
+        if station_altitude.is_some() {
+            scenario.station_altitude_m = station_altitude;
+        }
+        let scenario_file = (!is_json && text.is_some()).then(|| Path::new(&scenario_name));
+        let days = days_given.then_some(scenario.days);
+        let forcing =
+            snowscape::station::forcing_path(forcing.as_deref(), &scenario, scenario_file)
+                .map(|p| snowscape::station::adopt_station_forcing(&mut scenario, &p, days))
+                .transpose()
+                .map_err(|e| value_err(e.to_string()))?;
         scenario
             .validate_on(bedrock.geometry(), &scenario_name)
             .map_err(py_err)?;
@@ -282,7 +301,7 @@ impl PyWinter {
         let winter = py
             .detach(|| {
                 on_pool(&pool, || {
-                    Winter::with_forcing(scenario, LayeredTerrain::from_bedrock(bedrock), None)
+                    Winter::with_forcing(scenario, LayeredTerrain::from_bedrock(bedrock), forcing)
                 })
             })
             .map_err(py_err)?;
@@ -304,6 +323,10 @@ impl PyWinter {
         let scenario =
             Scenario::from_toml(&text, &scenario_path.display().to_string()).map_err(py_err)?;
         check_memory(bedrock.geometry().len())?;
+        // A season driven by a station record reads the record again (the resolved scenario
+        // names it).
+        let forcing = snowscape::station::resumed_station_forcing(&scenario)
+            .map_err(|e| value_err(e.to_string()))?;
         let path = dir.join(CHECKPOINT);
         let pool = thread_pool(threads)?;
         let winter = py
@@ -312,7 +335,7 @@ impl PyWinter {
                     Winter::resume_from_file(
                         scenario,
                         LayeredTerrain::from_bedrock(bedrock),
-                        None,
+                        forcing,
                         &path,
                     )
                 })

@@ -341,3 +341,28 @@ def test_threads_values_and_messages_are_bounded(tmp_path):
     f.write_text("days = 2\n" + ".".join(["a"] * 5000) + " = 1\n")
     with pytest.raises(ValueError, match="deep.toml.*line 2"):
         snowscape.Winter(dem, scenario=f)
+
+
+def test_station_forcing_drives_the_season_as_the_command_line(tmp_path):
+    # Issue 48: Python takes the station forcing through the command line's path (the record's
+    # calendar, the station altitude required) and resumes a forced season.
+    rme = DATA / "reference" / "pysnobal_rme_point" / "gold.snobal.data.input.short.csv"
+    dem_path = DATA / "dem" / "rme_idaho_50m" / "dem.asc"
+    assert rme.is_file() and dem_path.is_file(), f"the shared RME data are missing: {rme}, {dem_path}"
+    out = tmp_path / "run"
+    snowscape_cli(
+        "run", "--dem", str(dem_path), "--forcing", str(rme), "--station-altitude", "2061",
+        "--days", "4", "--out", str(out),
+    )
+    cli_depth = snowscape.read_dem(out / "depth.tif").values
+    dem = snowscape.read_dem(dem_path)
+    with pytest.raises(ValueError, match="station altitude is unknown"):
+        snowscape.Winter(dem, forcing=rme)
+    whole = snowscape.Winter(dem, forcing=rme, station_altitude=2061)
+    assert whole.days > 300, "the record's length"
+    w = snowscape.Winter(dem, scenario={"days": 4}, forcing=rme, station_altitude=2061).run()
+    assert same_bytes(w.depth().values, cli_depth)
+    # The command line's forced folder resumes in Python (the record read again).
+    resumed = snowscape.Winter.resume(out, dem)
+    assert resumed.day == w.day
+    assert same_bytes(resumed.depth().values, cli_depth)

@@ -66,6 +66,7 @@ pub mod output_folder;
 pub mod outputs;
 pub mod report;
 pub mod season_run;
+pub mod station;
 pub mod transport_job;
 
 pub use snowscape_avalanche as avalanche;

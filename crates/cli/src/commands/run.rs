@@ -4,7 +4,7 @@ use crate::cli::{GlobalArgs, RunArgs, SkierArgs};
 use crate::commands::render::preview_options;
 use crate::commands::season::{SeasonJob, run_season};
 use crate::failure::{ExitCodeExt, Failure};
-use anyhow::{Context, anyhow, bail};
+use anyhow::{Context, bail};
 use snowscape::season_run::{ExtraParameters, RESOLVED_SCENARIO};
 use snowscape_render::ColourMode;
 use snowscape_season::scenario::Scenario;
@@ -66,43 +66,17 @@ pub fn run(args: &RunArgs, global: &GlobalArgs) -> Result<(), Failure> {
         scenario.station_altitude_m = Some(z);
     }
     // The forcing file: the flag's path, or the scenario's relative to the scenario file.
-    let forcing_path = match (&args.forcing, &scenario.forcing) {
-        (Some(p), _) => Some(p.clone()),
-        (None, Some(p)) if p.is_relative() => Some(
-            scenario_path
-                .as_ref()
-                .and_then(|s| s.parent())
-                .map_or(p.clone(), |d| d.join(p)),
-        ),
-        (None, Some(p)) => Some(p.clone()),
-        (None, None) => None,
-    };
-    let forcing = match &forcing_path {
-        Some(p) => {
-            let f = snowscape_season::forcing::from_path(p, scenario.station_altitude_m)
-                .with_context(|| format!("--forcing {}", p.display()))
-                .bad_input()?;
-            if f.station_altitude_m.is_none() {
-                return Err(anyhow!(
-                    "--forcing {}: the station altitude is unknown; give --station-altitude M (or `# station_altitude_m = M` in the file)",
-                    p.display()
-                ))
-                .bad_input();
-            }
-            // Day 0 is the record's first hour; the season cannot outlast the record.
-            scenario.start_date = format!(
-                "{:04}-{:02}-{:02}",
-                f.start.year, f.start.month, f.start.day
-            );
-            let record_days = f.len_days();
-            if args.days.is_none() || scenario.days > record_days {
-                scenario.days = record_days;
-            }
-            scenario.forcing = Some(std::path::absolute(p).unwrap_or_else(|_| p.clone()));
-            Some(f)
-        }
-        None => None,
-    };
+    let days = args.days.map(|_| scenario.days);
+    let forcing = snowscape::station::forcing_path(
+        args.forcing.as_deref(),
+        &scenario,
+        scenario_path.as_deref(),
+    )
+    .map(|p| {
+        snowscape::station::adopt_station_forcing(&mut scenario, &p, days).context("--forcing")
+    })
+    .transpose()
+    .bad_input()?;
     scenario
         .validate("the command line")
         .context("--days/--seed/--skiers")
