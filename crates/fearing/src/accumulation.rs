@@ -20,7 +20,7 @@ use crate::surface::SnowSurface;
 use crate::tracer::{Tag, Tracer};
 use rayon::prelude::*;
 use serde::Serialize;
-use snowscape_mesh::Scene;
+use snowscape_mesh::{Bounds, Scene};
 use std::time::Instant;
 
 /// What one accumulation pass did.
@@ -41,6 +41,90 @@ pub struct AccumulationReport {
     pub sky_bucket_m: f64,
 }
 
+/// What the flakes of one pass fly through (Section 3.1): the tracer over the scene and the snow
+/// so far, the flutter walk, the ceiling above which a flake sees the sky, and the sky buckets.
+struct Snowfall {
+    tracer: Tracer,
+    walk: Walk,
+    ceiling: Ceiling,
+    sky: SkyGrid,
+}
+
+impl Snowfall {
+    /// Builds the pass's tracer, walk, ceiling and sky for `depth` metres of snowfall over
+    /// `scene` (whose bounds are `bounds`).
+    fn build(
+        scene: &Scene,
+        bounds: &Bounds,
+        sites: &LaunchSites,
+        topo: &Topology,
+        p: &FearingParams,
+        depth: f64,
+    ) -> Self {
+        let snow = SnowSurface::build(sites, topo, p.min_surface_depth_m);
+        let tagged = snow.tagged();
+        let tracer = Tracer::new(scene, &tagged);
+        let snow_top = snow
+            .positions
+            .iter()
+            .map(|q| q[2])
+            .fold(bounds.max[2], f32::max) as f64;
+        let height = (snow_top - bounds.min[2] as f64).max(1e-6);
+        let fr = p.flutter();
+        let dz = p.step_height_m.unwrap_or((2.0 * fr).max(height / 400.0));
+        let fall = p.material.fall_speed_m_s;
+        let walk = Walk {
+            fr,
+            fr_sd: fr * p.flutter_sd_fraction,
+            dz,
+            drift: [-p.wind_m_s[0] / fall, -p.wind_m_s[1] / fall],
+            z_sky: snow_top + (sites.spacing * 1e-2).max(1e-4),
+        };
+        // The sky covers the scene plus the drift and flutter spread over its height.
+        let spread = walk.drift[0].hypot(walk.drift[1]) * height
+            + 3.0 * (fr + walk.fr_sd) * (height / dz.max(1e-9)).sqrt();
+        let lo = [bounds.min[0] as f64 - spread, bounds.min[1] as f64 - spread];
+        let hi = [bounds.max[0] as f64 + spread, bounds.max[1] as f64 + spread];
+        let wbox = (
+            [bounds.min[0] as f64, bounds.min[1] as f64],
+            [bounds.max[0] as f64, bounds.max[1] as f64],
+        );
+        let bucket = p.sky_bucket_m.unwrap_or(4.0 * sites.spacing);
+        let sky = SkyGrid::new(lo, hi, bucket, depth, p.sky_weight.as_ref(), wbox);
+        let scene_tris = scene
+            .objects
+            .iter()
+            .flat_map(|o| (0..o.triangles.len()).map(move |t| o.corners(t)));
+        let ceiling = Ceiling::new(
+            scene_tris.chain(tagged.iter().map(|t| t.0)),
+            lo,
+            hi,
+            walk.reach(),
+        );
+        Snowfall {
+            tracer,
+            walk,
+            ceiling,
+            sky,
+        }
+    }
+}
+
+/// The importance weight of each scene object (Section 3.2): 0.1 for the boring ones, else 1.
+fn object_weights(scene: &Scene, p: &FearingParams) -> Vec<f64> {
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            if p.boring_objects.contains(&o.name) {
+                0.1
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
 /// Runs accumulation pass `pass`, adding `depth` metres of snowfall; returns its report.
 pub fn accumulate(
     scene: &Scene,
@@ -54,63 +138,14 @@ pub fn accumulate(
     let bounds = scene
         .bounds()
         .expect("a scene with launch sites has bounds");
-    let snow = SnowSurface::build(sites, topo, p.min_surface_depth_m);
-    let tagged = snow.tagged();
-    let tracer = Tracer::new(scene, &tagged);
-    let snow_top = snow
-        .positions
-        .iter()
-        .map(|q| q[2])
-        .fold(bounds.max[2], f32::max) as f64;
-    let height = (snow_top - bounds.min[2] as f64).max(1e-6);
-    let fr = p.flutter();
-    let dz = p.step_height_m.unwrap_or((2.0 * fr).max(height / 400.0));
-    let fall = p.material.fall_speed_m_s;
-    let walk = Walk {
-        fr,
-        fr_sd: fr * p.flutter_sd_fraction,
-        dz,
-        drift: [-p.wind_m_s[0] / fall, -p.wind_m_s[1] / fall],
-        z_sky: snow_top + (sites.spacing * 1e-2).max(1e-4),
-    };
-    // The sky covers the scene plus the drift and flutter spread over its height.
-    let spread = walk.drift[0].hypot(walk.drift[1]) * height
-        + 3.0 * (fr + walk.fr_sd) * (height / dz.max(1e-9)).sqrt();
-    let lo = [bounds.min[0] as f64 - spread, bounds.min[1] as f64 - spread];
-    let hi = [bounds.max[0] as f64 + spread, bounds.max[1] as f64 + spread];
-    let wbox = (
-        [bounds.min[0] as f64, bounds.min[1] as f64],
-        [bounds.max[0] as f64, bounds.max[1] as f64],
-    );
-    let bucket = p.sky_bucket_m.unwrap_or(4.0 * sites.spacing);
-    let sky = SkyGrid::new(lo, hi, bucket, depth, p.sky_weight.as_ref(), wbox);
-    let scene_tris = scene
-        .objects
-        .iter()
-        .flat_map(|o| (0..o.triangles.len()).map(move |t| o.corners(t)));
-    let ceiling = Ceiling::new(
-        scene_tris.chain(tagged.iter().map(|t| t.0)),
-        lo,
-        hi,
-        walk.reach(),
-    );
+    let fall = Snowfall::build(scene, &bounds, sites, topo, p, depth);
     let tan_aor = p.material.aor_deg.to_radians().tan();
     let size = bounds.diagonal().max(1e-6) as f64;
-    let object_weight: Vec<f64> = scene
-        .objects
-        .iter()
-        .map(|o| {
-            if p.boring_objects.contains(&o.name) {
-                0.1
-            } else {
-                1.0
-            }
-        })
-        .collect();
+    let object_weight = object_weights(scene, p);
     let mut rep = AccumulationReport {
         sites_start: topo.leaves.len(),
-        step_height_m: dz,
-        sky_bucket_m: sky.size,
+        step_height_m: fall.walk.dz,
+        sky_bucket_m: fall.sky.size,
         ..Default::default()
     };
     let mut refinements = 0;
@@ -125,84 +160,10 @@ pub fn accumulate(
         };
         let imp = importance(sites, topo, &w, pass);
         let chosen = top(&imp, (n / 4).max(256).min(n));
-        let cells = &sites.cells;
-        let batches: Vec<(u32, Batch)> = chosen
-            .par_iter()
-            .with_min_len(8)
-            .map(|&i| {
-                let id = topo.leaves[i as usize];
-                let c = &cells[id as usize];
-                let count =
-                    p.batch_size * ((c.area_xy() / mean_area).sqrt().round() as u32).clamp(1, 4);
-                let first = if c.pass == pass { c.shots as u32 } else { 0 };
-                let centre = c.centroid();
-                let start = [
-                    centre[0],
-                    centre[1],
-                    centre[2] + c.depth() + (sites.spacing * 1e-4).max(1e-6),
-                ];
-                let own = [
-                    Tag::Scene {
-                        object: c.object,
-                        triangle: c.triangle,
-                    },
-                    Tag::SnowTop {
-                        site: i,
-                        group: topo.group[i as usize],
-                    },
-                ];
-                (
-                    id,
-                    shoot(
-                        &walk,
-                        &tracer,
-                        &ceiling,
-                        Volley {
-                            seed: p.seed,
-                            pass,
-                            site: id,
-                            start,
-                            own,
-                            first,
-                            count,
-                        },
-                    ),
-                )
-            })
-            .collect();
-        for (id, b) in batches {
-            let c = &mut sites.cells[id as usize];
-            if c.pass != pass || c.batches == 0 {
-                c.pass = pass;
-                c.shots = 0.0;
-                c.sky_hits = 0.0;
-                c.batches = 0;
-                c.arrivals.clear();
-            }
-            c.shots += b.shot as f64;
-            c.sky_hits += b.arrivals.len() as f64;
-            c.batches += 1;
-            for a in &b.arrivals {
-                add_arrival(&mut c.arrivals, sky.splat(a[0], a[1]));
-            }
-            rep.flakes += b.shot as u64;
-            rep.flakes_to_sky += b.arrivals.len() as u64;
-            rep.rays += b.rays;
-        }
+        let batches = shoot_batches(&fall, sites, topo, p, pass, mean_area, &chosen);
+        record_batches(sites, &fall.sky, pass, batches, &mut rep);
         rep.rounds += 1;
-        let min_batches = topo
-            .leaves
-            .iter()
-            .map(|&c| {
-                if sites.cells[c as usize].pass == pass {
-                    sites.cells[c as usize].batches
-                } else {
-                    0
-                }
-            })
-            .min()
-            .unwrap_or(0);
-        if min_batches >= 2 && refinements < p.max_refinement {
+        if fewest_batches(sites, topo, pass) >= 2 && refinements < p.max_refinement {
             refinements += 1;
             let (s, m) = refine(sites, topo, p, pass);
             rep.splits += s;
@@ -221,8 +182,113 @@ pub fn accumulate(
         }
     }
     rep.sites_end = topo.leaves.len();
-    rep.allocation = allocate(sites, topo, &sky);
+    rep.allocation = allocate(sites, topo, &fall.sky);
     rep
+}
+
+/// One round's shooting (Section 3.2): each chosen site (an index into the leaves) shoots a
+/// batch of flakes from just above its snow, larger for sites larger than `mean_area` (m²), in
+/// parallel; returns each site's cell id with its batch, in the order chosen.
+fn shoot_batches(
+    fall: &Snowfall,
+    sites: &LaunchSites,
+    topo: &Topology,
+    p: &FearingParams,
+    pass: u32,
+    mean_area: f64,
+    chosen: &[u32],
+) -> Vec<(u32, Batch)> {
+    let cells = &sites.cells;
+    chosen
+        .par_iter()
+        .with_min_len(8)
+        .map(|&i| {
+            let id = topo.leaves[i as usize];
+            let c = &cells[id as usize];
+            let count =
+                p.batch_size * ((c.area_xy() / mean_area).sqrt().round() as u32).clamp(1, 4);
+            let first = if c.pass == pass { c.shots as u32 } else { 0 };
+            let centre = c.centroid();
+            let start = [
+                centre[0],
+                centre[1],
+                centre[2] + c.depth() + (sites.spacing * 1e-4).max(1e-6),
+            ];
+            let own = [
+                Tag::Scene {
+                    object: c.object,
+                    triangle: c.triangle,
+                },
+                Tag::SnowTop {
+                    site: i,
+                    group: topo.group[i as usize],
+                },
+            ];
+            (
+                id,
+                shoot(
+                    &fall.walk,
+                    &fall.tracer,
+                    &fall.ceiling,
+                    Volley {
+                        seed: p.seed,
+                        pass,
+                        site: id,
+                        start,
+                        own,
+                        first,
+                        count,
+                    },
+                ),
+            )
+        })
+        .collect()
+}
+
+/// Adds a round's batches to their sites' tallies and sky arrivals (Section 3.4), starting
+/// afresh a site whose tallies belong to an earlier pass; counts the flakes and rays in `rep`.
+fn record_batches(
+    sites: &mut LaunchSites,
+    sky: &SkyGrid,
+    pass: u32,
+    batches: Vec<(u32, Batch)>,
+    rep: &mut AccumulationReport,
+) {
+    for (id, b) in batches {
+        let c = &mut sites.cells[id as usize];
+        if c.pass != pass || c.batches == 0 {
+            c.pass = pass;
+            c.shots = 0.0;
+            c.sky_hits = 0.0;
+            c.batches = 0;
+            c.arrivals.clear();
+        }
+        c.shots += b.shot as f64;
+        c.sky_hits += b.arrivals.len() as f64;
+        c.batches += 1;
+        for a in &b.arrivals {
+            add_arrival(&mut c.arrivals, sky.splat(a[0], a[1]));
+        }
+        rep.flakes += b.shot as u64;
+        rep.flakes_to_sky += b.arrivals.len() as u64;
+        rep.rays += b.rays;
+    }
+}
+
+/// The fewest batches any site has shot in pass `pass` (0 for a site that has not shot in it):
+/// refinement waits until every site has shot twice.
+fn fewest_batches(sites: &LaunchSites, topo: &Topology, pass: u32) -> u32 {
+    topo.leaves
+        .iter()
+        .map(|&c| {
+            if sites.cells[c as usize].pass == pass {
+                sites.cells[c as usize].batches
+            } else {
+                0
+            }
+        })
+        .min()
+        .unwrap_or(0)
 }
 
 /// Turns the sky arrivals of every site into snow volume; returns the summary.

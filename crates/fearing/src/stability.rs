@@ -28,7 +28,7 @@ use crate::edge_groups::Topology;
 use crate::edge_transit::{Flight, Landing, SiteGrid};
 use crate::launch_sites::LaunchSites;
 use crate::obstacles::{self, EdgeObs, Obs};
-use crate::params::FearingParams;
+use crate::params::{FearingParams, StabilityPhaseParams};
 use crate::surface::SnowSurface;
 use crate::tracer::{Tag, Tracer};
 use serde::Serialize;
@@ -86,6 +86,163 @@ enum Target {
     },
 }
 
+/// The sites of one phase as they stand while it runs: centroids, horizontal areas, critical
+/// angles (4.1) and the scene triangles that carry them.
+struct PhaseSites {
+    centroids: Vec<[f64; 3]>,
+    areas: Vec<f64>,
+    crit: Vec<f64>,
+    owner: Vec<(u32, u32)>,
+    site_tris: HashSet<(u32, u32)>,
+    grid: SiteGrid,
+    /// The lift of a ray's ends above the snow tops, m.
+    eps: f64,
+}
+
+impl PhaseSites {
+    /// Gathers the leaves of `topo` from `sites`, drawing each one's critical angle.
+    fn gather(sites: &LaunchSites, topo: &Topology, params: &FearingParams) -> Self {
+        let n = topo.leaves.len();
+        let cell = |i: usize| topo.leaves[i] as usize;
+        let centroids: Vec<[f64; 3]> = (0..n).map(|i| sites.cells[cell(i)].centroid()).collect();
+        let areas: Vec<f64> = (0..n)
+            .map(|i| sites.cells[cell(i)].area_xy().max(1e-300))
+            .collect();
+        let crit: Vec<f64> = (0..n)
+            .map(|i| critical_tan(params, topo.leaves[i]))
+            .collect();
+        let owner: Vec<(u32, u32)> = (0..n)
+            .map(|i| (sites.cells[cell(i)].object, sites.cells[cell(i)].triangle))
+            .collect();
+        let site_tris: HashSet<(u32, u32)> = owner.iter().copied().collect();
+        let grid = SiteGrid::new(centroids.clone(), owner.clone(), sites.spacing.max(1e-6));
+        PhaseSites {
+            centroids,
+            areas,
+            crit,
+            owner,
+            site_tris,
+            grid,
+            eps: sites.spacing * 1e-3,
+        }
+    }
+
+    /// The snow top of site `i`: its base plus its snow height, m.
+    #[inline]
+    fn top(&self, vol: &[f64], i: usize) -> f64 {
+        self.centroids[i][2] + vol[i] / self.areas[i]
+    }
+
+    /// The scene triangle that carries site `i`, as the tracer tags it.
+    fn triangle(&self, i: usize) -> Tag {
+        Tag::Scene {
+            object: self.owner[i].0,
+            triangle: self.owner[i].1,
+        }
+    }
+
+    /// The horizontal distance between sites `a` and `b`, m.
+    fn distance(&self, a: usize, b: usize) -> f64 {
+        (self.centroids[b][0] - self.centroids[a][0])
+            .hypot(self.centroids[b][1] - self.centroids[a][1])
+    }
+}
+
+/// The obstacle tests already made (4.2, step 2), per site: toward each neighbour and over each
+/// border edge. They hold until the snow surfaces are rebuilt.
+struct KnownObstacles {
+    neighbours: Vec<Vec<Obs>>,
+    edges: Vec<Vec<EdgeObs>>,
+}
+
+impl KnownObstacles {
+    /// Nothing known yet.
+    fn unknown(topo: &Topology) -> Self {
+        KnownObstacles {
+            neighbours: topo
+                .neighbours
+                .iter()
+                .map(|v| vec![Obs::Unknown; v.len()])
+                .collect(),
+            edges: topo
+                .borders
+                .iter()
+                .map(|v| vec![EdgeObs::Unknown; v.len()])
+                .collect(),
+        }
+    }
+
+    /// Forgets every test (the snow surfaces they were made against have been rebuilt).
+    fn forget(&mut self) {
+        self.neighbours
+            .iter_mut()
+            .flatten()
+            .for_each(|o| *o = Obs::Unknown);
+        self.edges
+            .iter_mut()
+            .flatten()
+            .for_each(|o| *o = EdgeObs::Unknown);
+    }
+}
+
+/// What a pass reads and never changes.
+struct PassContext<'a> {
+    topo: &'a Topology,
+    sp: &'a StabilityPhaseParams,
+    ps: &'a PhaseSites,
+    flight: &'a Flight<'a>,
+    /// The launch sites' spacing, m.
+    spacing: f64,
+    /// The phase's cap on site tests.
+    max_tests: u64,
+}
+
+/// The work of one pass: the sites still to test in it (a max-heap by snow top), those for the
+/// next pass (u2), and what its shifts moved.
+struct Pass<'a> {
+    heap: BinaryHeap<(u64, Reverse<usize>)>,
+    in_heap: Vec<bool>,
+    u2: Vec<usize>,
+    in_u2: &'a mut [bool],
+    /// Site tests so far, and the number after which sites wait for the next pass.
+    work: usize,
+    cap: usize,
+    /// Snow moved, m³.
+    moved: f64,
+    /// The largest change of a site's snow height by one shift, m.
+    largest_shift: f64,
+}
+
+impl Pass<'_> {
+    /// Queues site `j` in this pass if it is not queued already.
+    fn push(&mut self, ps: &PhaseSites, vol: &[f64], j: usize) {
+        self.in_heap[j] = true;
+        self.heap.push((order_key(ps.top(vol, j)), Reverse(j)));
+    }
+
+    /// A receiver is examined later in this pass (it is lower), or in the next one once the
+    /// pass has done its share of work.
+    fn receive(&mut self, ps: &PhaseSites, vol: &[f64], j: usize) {
+        if self.work < self.cap {
+            if !self.in_heap[j] {
+                self.push(ps, vol, j);
+            }
+        } else {
+            mark(&mut self.u2, self.in_u2, j);
+        }
+    }
+
+    /// Counts a shift of `dv` m³ between sites of areas `area_a` and `area_b`.
+    fn count_shift(&mut self, dv: f64, area_a: f64, area_b: f64) {
+        self.moved += dv;
+        self.largest_shift = self.largest_shift.max(dv / area_a.min(area_b));
+    }
+}
+
+fn total(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>()
+}
+
 /// Runs one stability phase on the current snow.
 pub fn stabilise(
     scene: &Scene,
@@ -96,40 +253,18 @@ pub fn stabilise(
 ) -> StabilityReport {
     let sp = &params.stability;
     let n = topo.leaves.len();
-    let cell = |i: usize| topo.leaves[i] as usize;
-    let centroids: Vec<[f64; 3]> = (0..n).map(|i| sites.cells[cell(i)].centroid()).collect();
-    let areas: Vec<f64> = (0..n)
-        .map(|i| sites.cells[cell(i)].area_xy().max(1e-300))
+    let ps = PhaseSites::gather(sites, topo, params);
+    let mut vol: Vec<f64> = (0..n)
+        .map(|i| sites.cells[topo.leaves[i] as usize].volume)
         .collect();
-    let crit: Vec<f64> = (0..n)
-        .map(|i| critical_tan(params, topo.leaves[i]))
-        .collect();
-    let mut vol: Vec<f64> = (0..n).map(|i| sites.cells[cell(i)].volume).collect();
-    let owner: Vec<(u32, u32)> = (0..n)
-        .map(|i| (sites.cells[cell(i)].object, sites.cells[cell(i)].triangle))
-        .collect();
-    let site_tris: HashSet<(u32, u32)> = owner.iter().copied().collect();
-    let grid = SiteGrid::new(centroids.clone(), owner.clone(), sites.spacing.max(1e-6));
     let bounds = scene
         .bounds()
         .expect("a scene with launch sites has bounds");
-    let eps = sites.spacing * 1e-3;
-    let total = |v: &[f64]| v.iter().sum::<f64>();
     let mut rep = StabilityReport {
         volume_before_m3: total(&vol),
         ..Default::default()
     };
-    let top = |vol: &[f64], i: usize| centroids[i][2] + vol[i] / areas[i];
-    let mut obs: Vec<Vec<Obs>> = topo
-        .neighbours
-        .iter()
-        .map(|v| vec![Obs::Unknown; v.len()])
-        .collect();
-    let mut edges: Vec<Vec<EdgeObs>> = topo
-        .borders
-        .iter()
-        .map(|v| vec![EdgeObs::Unknown; v.len()])
-        .collect();
+    let mut known = KnownObstacles::unknown(topo);
 
     let mut u1: Vec<usize> = (0..n).collect();
     let mut rechecking = false;
@@ -157,240 +292,29 @@ pub fn stabilise(
             sync(sites, topo, &vol);
             let snow = SnowSurface::build(sites, topo, params.min_surface_depth_m);
             tracer = Some(Tracer::new(scene, &snow.tagged()));
-            obs.iter_mut().flatten().for_each(|o| *o = Obs::Unknown);
-            edges
-                .iter_mut()
-                .flatten()
-                .for_each(|o| *o = EdgeObs::Unknown);
+            known.forget();
         }
         let tracer = tracer.as_ref().expect("built above");
-        let has_sites = |o: u32, t: u32| site_tris.contains(&(o, t));
+        let has_sites = |o: u32, t: u32| ps.site_tris.contains(&(o, t));
         let flight = Flight {
             tracer,
-            sites: &grid,
+            sites: &ps.grid,
             has_sites: &has_sites,
             z_floor: bounds.min[2] as f64 - sites.spacing,
             step: (sites.spacing * 0.5).max(1e-4),
             restitution: sp.restitution,
             rings: 8,
         };
-        // The pass examines u1 from the top down; higher neighbours that lose their support
-        // re-enter this pass at once (so a drawdown climbs a slope in one pass), receivers wait
-        // for the next one.
-        let mut heap: BinaryHeap<(u64, Reverse<usize>)> = u1
-            .iter()
-            .map(|&i| (order_key(top(&vol, i)), Reverse(i)))
-            .collect();
-        let mut in_heap = vec![false; n];
-        for &i in &u1 {
-            in_heap[i] = true;
-        }
-        let cap = 4 * u1.len() + 16;
-        let mut work = 0;
-        let mut u2 = Vec::new();
-        let mut moved = 0.0;
-        // The largest change of a site's snow height by one shift in this pass, metres.
-        let mut largest_shift = 0.0f64;
-        // A receiver is examined later in this pass (it is lower), or in the next one once the
-        // pass has done its share of work.
-        macro_rules! receive {
-            ($j:expr) => {{
-                let j = $j;
-                if work < cap {
-                    if !in_heap[j] {
-                        in_heap[j] = true;
-                        heap.push((order_key(top(&vol, j)), Reverse(j)));
-                    }
-                } else {
-                    mark(&mut u2, &mut in_u2, j);
-                }
-            }};
-        }
-        while let Some((_, Reverse(s))) = heap.pop() {
-            if rep.tests >= max_tests {
-                break;
-            }
-            in_heap[s] = false;
-            work += 1;
-            rep.tests += 1;
-            let group = topo.group[s];
-            let own_tri = Tag::Scene {
-                object: owner[s].0,
-                triangle: owner[s].1,
-            };
-            let mut touched = false;
-            // Border edges whose receivers are full for this test.
-            let mut full: Vec<usize> = Vec::new();
-            for _ in 0..(2 * topo.neighbours[s].len() + 2 * topo.borders[s].len() + 4) {
-                if vol[s] <= 0.0 {
-                    break;
-                }
-                let ts = top(&vol, s);
-                let mut targets = Vec::new();
-                for (k, nb) in topo.neighbours[s].iter().enumerate() {
-                    let j = nb.site as usize;
-                    let allowed = nb.distance * crit[s] + sp.level_tolerance_m;
-                    if ts - top(&vol, j) <= allowed {
-                        continue;
-                    }
-                    if obs[s][k] == Obs::Unknown {
-                        let from = [centroids[s][0], centroids[s][1], ts + eps];
-                        let to = [centroids[j][0], centroids[j][1], top(&vol, j) + eps];
-                        let tri_j = Tag::Scene {
-                            object: owner[j].0,
-                            triangle: owner[j].1,
-                        };
-                        obs[s][k] =
-                            obstacles::between(tracer, from, to, [own_tri, tri_j], group, &mut rep);
-                    }
-                    match obs[s][k] {
-                        Obs::Clear => targets.push(Target::Site { site: j, allowed }),
-                        Obs::Redirect(m) => {
-                            let m = m as usize;
-                            let d = (centroids[m][0] - centroids[s][0])
-                                .hypot(centroids[m][1] - centroids[s][1]);
-                            let allowed = d * crit[s] + sp.level_tolerance_m;
-                            if ts - top(&vol, m) > allowed
-                                && !targets
-                                    .iter()
-                                    .any(|t| matches!(t, Target::Site { site, .. } if *site == m))
-                            {
-                                targets.push(Target::Site { site: m, allowed });
-                            }
-                        }
-                        _ => {}
-                    }
-                }
-                for (k, e) in topo.borders[s].iter().enumerate() {
-                    let mid = [0, 1, 2].map(|q| 0.5 * (e.a[q] + e.b[q]));
-                    let (dx, dy) = (mid[0] - centroids[s][0], mid[1] - centroids[s][1]);
-                    let d = dx.hypot(dy);
-                    let allowed = d * crit[s] + sp.level_tolerance_m;
-                    if ts - mid[2] <= allowed
-                        || edges[s][k] == EdgeObs::Blocked
-                        || full.contains(&k)
-                    {
-                        continue;
-                    }
-                    if edges[s][k] == EdgeObs::Unknown {
-                        let centre = [centroids[s][0], centroids[s][1], ts];
-                        let site = obstacles::EdgeSite {
-                            centre,
-                            own_tri,
-                            group,
-                        };
-                        edges[s][k] =
-                            obstacles::over_edge(&flight, &site, e, sites.spacing, sp, &mut rep);
-                    }
-                    if let EdgeObs::Open { height, .. } = edges[s][k]
-                        && ts - height > allowed
-                    {
-                        targets.push(Target::Edge {
-                            slot: k,
-                            height,
-                            allowed,
-                        });
-                    }
-                }
-                if targets.is_empty() {
-                    break;
-                }
-                // Even shift: the same volume to each, the least that makes one stable. A
-                // neighbour counts as unstable beyond its angle plus the level tolerance and is
-                // made stable at the angle itself, so rounding cannot re-trigger it at once.
-                let tol = sp.level_tolerance_m;
-                let kf = targets.len() as f64;
-                let mut dv = vol[s] / kf;
-                for t in &targets {
-                    let need = match *t {
-                        Target::Site { site, allowed } => {
-                            (ts - top(&vol, site) - allowed + tol)
-                                / (kf / areas[s] + 1.0 / areas[site])
-                        }
-                        Target::Edge {
-                            height, allowed, ..
-                        } => (ts - height - allowed + tol) / (kf / areas[s]),
-                    };
-                    dv = dv.min(need.max(0.0));
-                }
-                if dv <= 0.0 {
-                    break;
-                }
-                touched = true;
-                rep.avalanches += 1;
-                for t in &targets {
-                    match *t {
-                        Target::Site { site, .. } => {
-                            vol[s] -= dv;
-                            vol[site] += dv;
-                            moved += dv;
-                            largest_shift = largest_shift.max(dv / areas[s].min(areas[site]));
-                            receive!(site);
-                        }
-                        Target::Edge { slot, .. } => {
-                            rep.edge_transits += 1;
-                            let EdgeObs::Open { landings, .. } = &edges[s][slot] else {
-                                unreachable!()
-                            };
-                            let share = dv / landings.len() as f64;
-                            let mut stuck = false;
-                            for l in landings {
-                                match *l {
-                                    // Never onto snow standing higher than the origin (the
-                                    // landing was found on older snow).
-                                    Landing::Site(m) if top(&vol, m as usize) >= ts => stuck = true,
-                                    Landing::Site(m) => {
-                                        // The receiver may fill to halfway up to the origin,
-                                        // no more (else the snow would flow back up).
-                                        let m = m as usize;
-                                        let give = share.min(0.5 * (ts - top(&vol, m)) * areas[m]);
-                                        if give < share && !full.contains(&slot) {
-                                            full.push(slot);
-                                        }
-                                        vol[s] -= give;
-                                        vol[m] += give;
-                                        moved += give;
-                                        largest_shift =
-                                            largest_shift.max(give / areas[s].min(areas[m]));
-                                        receive!(m);
-                                    }
-                                    Landing::Lost => {
-                                        vol[s] -= share;
-                                        rep.left_scene_m3 += share;
-                                        moved += share;
-                                        largest_shift = largest_shift.max(share / areas[s]);
-                                    }
-                                    Landing::Stuck => stuck = true,
-                                }
-                            }
-                            if stuck {
-                                edges[s][slot] = EdgeObs::Blocked;
-                            }
-                        }
-                    }
-                }
-                vol[s] = vol[s].max(0.0);
-            }
-            if touched {
-                mark(&mut u2, &mut in_u2, s);
-                let ts = top(&vol, s);
-                for nb in &topo.neighbours[s] {
-                    let h = nb.site as usize;
-                    // Only a higher neighbour now unstable towards s needs another look; it
-                    // gets it in this pass when its excess is a real share of its snow (else
-                    // two sites on a chute trade ever smaller amounts), in the next otherwise.
-                    let excess = top(&vol, h) - ts - nb.distance * crit[h];
-                    if excess > sp.level_tolerance_m && !in_heap[h] {
-                        if work < cap && excess > 0.05 * vol[h] / areas[h] {
-                            in_heap[h] = true;
-                            heap.push((order_key(top(&vol, h)), Reverse(h)));
-                        } else {
-                            mark(&mut u2, &mut in_u2, h);
-                        }
-                    }
-                }
-            }
-        }
+        let ctx = PassContext {
+            topo,
+            sp,
+            ps: &ps,
+            flight: &flight,
+            spacing: sites.spacing,
+            max_tests,
+        };
+        let (u2, moved, largest_shift) =
+            run_pass(&ctx, &u1, &mut vol, &mut known, &mut in_u2, &mut rep);
         rep.passes += 1;
         rep.moved_m3 += moved;
         for &i in &u2 {
@@ -426,6 +350,284 @@ pub fn stabilise(
     sync(sites, topo, &vol);
     rep.volume_after_m3 = total(&vol);
     rep
+}
+
+/// One pass (4.2): examines the work list u1 from the top down; higher neighbours that lose
+/// their support re-enter this pass at once (so a drawdown climbs a slope in one pass),
+/// receivers wait for the next one. Returns the next work list u2, the snow moved (m³) and the
+/// largest change of a site's snow height by one shift (m).
+fn run_pass(
+    ctx: &PassContext,
+    u1: &[usize],
+    vol: &mut [f64],
+    known: &mut KnownObstacles,
+    in_u2: &mut [bool],
+    rep: &mut StabilityReport,
+) -> (Vec<usize>, f64, f64) {
+    let ps = ctx.ps;
+    let mut pass = Pass {
+        heap: u1
+            .iter()
+            .map(|&i| (order_key(ps.top(vol, i)), Reverse(i)))
+            .collect(),
+        in_heap: vec![false; vol.len()],
+        u2: Vec::new(),
+        in_u2,
+        work: 0,
+        cap: 4 * u1.len() + 16,
+        moved: 0.0,
+        largest_shift: 0.0,
+    };
+    for &i in u1 {
+        pass.in_heap[i] = true;
+    }
+    while let Some((_, Reverse(s))) = pass.heap.pop() {
+        if rep.tests >= ctx.max_tests {
+            break;
+        }
+        pass.in_heap[s] = false;
+        pass.work += 1;
+        rep.tests += 1;
+        if test_site(ctx, s, vol, known, &mut pass, rep) {
+            requeue_after_drawdown(ctx, s, vol, &mut pass);
+        }
+    }
+    (pass.u2, pass.moved, pass.largest_shift)
+}
+
+/// The test of site `s` (4.2): finds its unstable neighbours and open border edges and shifts
+/// snow evenly to them until none is unstable or `s` is bare. Returns whether snow moved.
+fn test_site(
+    ctx: &PassContext,
+    s: usize,
+    vol: &mut [f64],
+    known: &mut KnownObstacles,
+    pass: &mut Pass,
+    rep: &mut StabilityReport,
+) -> bool {
+    let topo = ctx.topo;
+    let mut touched = false;
+    // Border edges whose receivers are full for this test.
+    let mut full: Vec<usize> = Vec::new();
+    for _ in 0..(2 * topo.neighbours[s].len() + 2 * topo.borders[s].len() + 4) {
+        if vol[s] <= 0.0 {
+            break;
+        }
+        let ts = ctx.ps.top(vol, s);
+        let mut targets = Vec::new();
+        unstable_neighbours(ctx, s, ts, vol, known, rep, &mut targets);
+        unstable_edges(ctx, s, ts, known, &full, rep, &mut targets);
+        if targets.is_empty() {
+            break;
+        }
+        let dv = even_shift(ctx, s, ts, vol, &targets);
+        if dv <= 0.0 {
+            break;
+        }
+        touched = true;
+        rep.avalanches += 1;
+        for t in &targets {
+            match *t {
+                Target::Site { site, .. } => {
+                    vol[s] -= dv;
+                    vol[site] += dv;
+                    pass.count_shift(dv, ctx.ps.areas[s], ctx.ps.areas[site]);
+                    pass.receive(ctx.ps, vol, site);
+                }
+                Target::Edge { slot, .. } => {
+                    rep.edge_transits += 1;
+                    pour_over_edge(ctx, s, slot, ts, dv, vol, known, &mut full, pass, rep);
+                }
+            }
+        }
+        vol[s] = vol[s].max(0.0);
+    }
+    touched
+}
+
+/// Steps 1 and 2 for the neighbours of `s` (snow top `ts`): those lower than `s` beyond its
+/// critical angle and clear of obstacles, or the snow top in the way that receives instead.
+fn unstable_neighbours(
+    ctx: &PassContext,
+    s: usize,
+    ts: f64,
+    vol: &[f64],
+    known: &mut KnownObstacles,
+    rep: &mut StabilityReport,
+    targets: &mut Vec<Target>,
+) {
+    let (ps, sp) = (ctx.ps, ctx.sp);
+    for (k, nb) in ctx.topo.neighbours[s].iter().enumerate() {
+        let j = nb.site as usize;
+        let allowed = nb.distance * ps.crit[s] + sp.level_tolerance_m;
+        if ts - ps.top(vol, j) <= allowed {
+            continue;
+        }
+        let obs = &mut known.neighbours[s][k];
+        if *obs == Obs::Unknown {
+            let from = [ps.centroids[s][0], ps.centroids[s][1], ts + ps.eps];
+            let to = [
+                ps.centroids[j][0],
+                ps.centroids[j][1],
+                ps.top(vol, j) + ps.eps,
+            ];
+            let own = [ps.triangle(s), ps.triangle(j)];
+            *obs = obstacles::between(ctx.flight.tracer, from, to, own, ctx.topo.group[s], rep);
+        }
+        match *obs {
+            Obs::Clear => targets.push(Target::Site { site: j, allowed }),
+            Obs::Redirect(m) => {
+                let m = m as usize;
+                let allowed = ps.distance(s, m) * ps.crit[s] + sp.level_tolerance_m;
+                if ts - ps.top(vol, m) > allowed
+                    && !targets
+                        .iter()
+                        .any(|t| matches!(t, Target::Site { site, .. } if *site == m))
+                {
+                    targets.push(Target::Site { site: m, allowed });
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Steps 1 and 2 for the border edges of `s` (4.3, snow top `ts`): those lower than `s` beyond
+/// its critical angle whose probe finds them open, skipping blocked ones and those whose
+/// receivers are `full`.
+fn unstable_edges(
+    ctx: &PassContext,
+    s: usize,
+    ts: f64,
+    known: &mut KnownObstacles,
+    full: &[usize],
+    rep: &mut StabilityReport,
+    targets: &mut Vec<Target>,
+) {
+    let (ps, sp) = (ctx.ps, ctx.sp);
+    for (k, e) in ctx.topo.borders[s].iter().enumerate() {
+        let mid = [0, 1, 2].map(|q| 0.5 * (e.a[q] + e.b[q]));
+        let (dx, dy) = (mid[0] - ps.centroids[s][0], mid[1] - ps.centroids[s][1]);
+        let d = dx.hypot(dy);
+        let allowed = d * ps.crit[s] + sp.level_tolerance_m;
+        let edge = &mut known.edges[s][k];
+        if ts - mid[2] <= allowed || *edge == EdgeObs::Blocked || full.contains(&k) {
+            continue;
+        }
+        if *edge == EdgeObs::Unknown {
+            let site = obstacles::EdgeSite {
+                centre: [ps.centroids[s][0], ps.centroids[s][1], ts],
+                own_tri: ps.triangle(s),
+                group: ctx.topo.group[s],
+            };
+            *edge = obstacles::over_edge(ctx.flight, &site, e, ctx.spacing, sp, rep);
+        }
+        if let EdgeObs::Open { height, .. } = *edge
+            && ts - height > allowed
+        {
+            targets.push(Target::Edge {
+                slot: k,
+                height,
+                allowed,
+            });
+        }
+    }
+}
+
+/// Step 3's even shift from `s` (snow top `ts`): the same volume to each target, the least that
+/// makes one stable, m³. A neighbour counts as unstable beyond its angle plus the level
+/// tolerance and is made stable at the angle itself, so rounding cannot re-trigger it at once.
+fn even_shift(ctx: &PassContext, s: usize, ts: f64, vol: &[f64], targets: &[Target]) -> f64 {
+    let (ps, tol) = (ctx.ps, ctx.sp.level_tolerance_m);
+    let kf = targets.len() as f64;
+    let mut dv = vol[s] / kf;
+    for t in targets {
+        let need = match *t {
+            Target::Site { site, allowed } => {
+                (ts - ps.top(vol, site) - allowed + tol) / (kf / ps.areas[s] + 1.0 / ps.areas[site])
+            }
+            Target::Edge {
+                height, allowed, ..
+            } => (ts - height - allowed + tol) / (kf / ps.areas[s]),
+        };
+        dv = dv.min(need.max(0.0));
+    }
+    dv
+}
+
+/// Sends `dv` m³ from `s` (snow top `ts`) over its open border edge `slot` (4.3), shared evenly
+/// among the edge's landings: onto the sites they reach (each filled to halfway up to the
+/// origin at most, which marks the edge `full`), out of the scene, or nowhere (which blocks the
+/// edge).
+#[allow(clippy::too_many_arguments)]
+fn pour_over_edge(
+    ctx: &PassContext,
+    s: usize,
+    slot: usize,
+    ts: f64,
+    dv: f64,
+    vol: &mut [f64],
+    known: &mut KnownObstacles,
+    full: &mut Vec<usize>,
+    pass: &mut Pass,
+    rep: &mut StabilityReport,
+) {
+    let ps = ctx.ps;
+    let EdgeObs::Open { landings, .. } = &known.edges[s][slot] else {
+        unreachable!()
+    };
+    let share = dv / landings.len() as f64;
+    let mut stuck = false;
+    for l in landings {
+        match *l {
+            // Never onto snow standing higher than the origin (the landing was found on older
+            // snow).
+            Landing::Site(m) if ps.top(vol, m as usize) >= ts => stuck = true,
+            Landing::Site(m) => {
+                // The receiver may fill to halfway up to the origin, no more (else the snow
+                // would flow back up).
+                let m = m as usize;
+                let give = share.min(0.5 * (ts - ps.top(vol, m)) * ps.areas[m]);
+                if give < share && !full.contains(&slot) {
+                    full.push(slot);
+                }
+                vol[s] -= give;
+                vol[m] += give;
+                pass.count_shift(give, ps.areas[s], ps.areas[m]);
+                pass.receive(ps, vol, m);
+            }
+            Landing::Lost => {
+                vol[s] -= share;
+                rep.left_scene_m3 += share;
+                pass.moved += share;
+                pass.largest_shift = pass.largest_shift.max(share / ps.areas[s]);
+            }
+            Landing::Stuck => stuck = true,
+        }
+    }
+    if stuck {
+        known.edges[s][slot] = EdgeObs::Blocked;
+    }
+}
+
+/// Step 4's follow-up once `s` has shed snow: `s` goes to u2, and a higher neighbour now
+/// unstable towards `s` gets another look, in this pass when its excess is a real share of its
+/// snow (else two sites on a chute trade ever smaller amounts), in the next otherwise.
+fn requeue_after_drawdown(ctx: &PassContext, s: usize, vol: &[f64], pass: &mut Pass) {
+    let ps = ctx.ps;
+    mark(&mut pass.u2, pass.in_u2, s);
+    let ts = ps.top(vol, s);
+    for nb in &ctx.topo.neighbours[s] {
+        let h = nb.site as usize;
+        let excess = ps.top(vol, h) - ts - nb.distance * ps.crit[h];
+        if excess > ctx.sp.level_tolerance_m && !pass.in_heap[h] {
+            if pass.work < pass.cap && excess > 0.05 * vol[h] / ps.areas[h] {
+                pass.push(ps, vol, h);
+            } else {
+                mark(&mut pass.u2, pass.in_u2, h);
+            }
+        }
+    }
 }
 
 /// A u64 that orders like the f64 height (for the max-heap).

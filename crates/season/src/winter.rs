@@ -8,7 +8,7 @@
 //! and a resumed run ends bit-identical to an uninterrupted one.
 
 use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, HazardSources, Trigger};
-use crate::checkpoint::{CheckpointError, bedrock_fingerprint};
+use crate::checkpoint::CheckpointError;
 use crate::forcing::StationForcing;
 use crate::melt::SnowpackState;
 use crate::phenomenon::PhenomenonError;
@@ -19,7 +19,7 @@ use crate::skiing::SkiStats;
 use crate::snowfall::SnowfallScratch;
 use crate::snowtran_transport::SnowTranScratch;
 use crate::stability::StabilityScratch;
-use crate::weather::{Air, AirSource};
+use crate::weather::Air;
 use crate::wind_transport::WindScratch;
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::AvalancheWorkspace;
@@ -28,7 +28,6 @@ use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams
 use snowscape_skiers::{SkiArea, SkiScratch};
 use snowscape_terrain::{LayeredTerrain, TerrainError};
 use std::collections::BTreeMap;
-use std::sync::Arc;
 use std::time::Instant;
 use thiserror::Error;
 
@@ -88,6 +87,7 @@ mod budget;
 mod phenomena;
 use phenomena::PHENOMENA;
 mod resume;
+mod setup;
 mod skier_runs;
 mod snowpack;
 
@@ -227,57 +227,14 @@ impl Winter {
             .geometry()
             .check_terrain_cells()
             .map_err(SeasonError::Terrain)?;
-        let valid: Vec<f32> = terrain
-            .bedrock
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| terrain.mask().is_valid(*i))
-            .map(|(_, &z)| z)
-            .collect();
         let mut env = scenario.parameters.environment.clone();
         let (latitude, latitude_source) =
-            match (scenario.latitude_deg, terrain.geometry().latitude_deg()) {
-                (Some(l), _) => (l, LatitudeSource::Scenario),
-                (None, Some(l)) => (l, LatitudeSource::Georeferencing),
-                (None, None) => (env.sun.latitude_deg, LatitudeSource::Assumed),
-            };
+            setup::resolve_latitude(&scenario, &terrain, env.sun.latitude_deg);
         env.sun.latitude_deg = latitude;
-        let weather = match &forcing {
-            Some(f) => crate::climate::station_winter(f, scenario.days),
-            None => scenario.weather_or_default(&valid, latitude),
-        };
+        let weather = setup::resolve_weather(&scenario, &terrain, forcing.as_ref(), latitude);
         env.sun.start_day = day_of_year(&scenario.start_date).unwrap_or(env.sun.start_day);
         env.sun.num_days = (scenario.days.ceil() as u32).clamp(1, 365);
-        let mut scheduler = Scheduler::new(scenario.seed, &scenario.events);
-        let digest = scenario_digest(&scenario, &weather, forcing.as_ref());
-        let state = RunState {
-            scheduler: {
-                scheduler.set_rate(
-                    EventKind::SnowfallStart,
-                    weather[0].snowfall_per_week / 7.0,
-                    true,
-                );
-                scheduler
-            },
-            budget: SeasonBudget {
-                initial_store: terrain.snow_volume(),
-                ..SeasonBudget::default()
-            },
-            event_counts: BTreeMap::new(),
-            weather_index: 0,
-            forced_index: 0,
-            fingerprint: bedrock_fingerprint(&terrain),
-            scenario_digest: digest,
-            scenario: serde_json::to_value(&scenario).unwrap_or_default(),
-            terrain: resume::terrain_summary(&terrain),
-            avalanches: Vec::new(),
-            user_avalanche_index: 0,
-            ski: SkiStats::default(),
-            melt_clock_days: 0.0,
-            shed_clock_days: None,
-            storms: Vec::new(),
-            bands: crate::bands::BandRecord::default(),
-        };
+        let state = setup::initial_state(&scenario, &terrain, &weather, forcing.as_ref());
         let t = Instant::now();
         let params = weather_params(&env, &weather[0]);
         let environment = precompute(
@@ -286,107 +243,25 @@ impl Winter {
             terrain.mask(),
             &params,
         )?;
-        let mut hourly_sun_s = 0.0;
-        let season_sun = if scenario.parameters.melt.model.hourly() {
-            let t = Instant::now();
-            let sun = snowscape_environment::season_sun(
-                &terrain.bedrock,
-                terrain.geometry(),
-                terrain.mask(),
-                &env,
-                &environment.sky_view_factor,
-            )?;
-            hourly_sun_s = t.elapsed().as_secs_f64();
-            sun
-        } else {
-            snowscape_environment::SeasonSun::default()
-        };
-        let source = match forcing {
-            Some(f) => AirSource::Station(Arc::new(f)),
-            None if scenario.weather.is_empty()
-                && scenario.parameters.climate.default_winter
-                    == crate::climate::DefaultWinter::Climatology =>
-            {
-                AirSource::Climatology
-            }
-            None => AirSource::Periods,
-        };
-        let storm_rates = crate::storms::StormRates::new(
-            &scenario.parameters.climate,
-            &crate::storms::SeasonStorms {
-                weather: &weather,
-                forced: &scenario.snowfall_periods,
-                mean_storm_days: scenario.events.snowfall_mean_days,
-                start_day_of_year: env.sun.start_day,
-                days: scenario.days,
-            },
+        let (season_sun, hourly_sun_s) =
+            setup::hourly_sun(&scenario, &terrain, &env, &environment)?;
+        let air = setup::season_air(
+            &scenario, forcing, &weather, latitude, &env, &terrain, season_sun,
         );
-        let air = Air::new(
-            &scenario.parameters.climate,
-            source,
-            &weather,
-            latitude,
-            env.sun.start_day,
-            &terrain,
-            Arc::new(season_sun),
-        )
-        .with_storm_rates(storm_rates);
-        let n_cells = terrain.geometry().len();
-        let bands = crate::bands::Bands::new(&terrain);
-        let mut w = Self {
-            bands,
-            air,
-            pack: SnowpackState::new(n_cells),
-            pending_rain: vec![0.0; n_cells],
-            latitude_source,
+        let mut w = Self::assemble(setup::SeasonStart {
             scenario,
             weather,
             terrain,
             state,
             environment,
             base_environment: env,
-            wall_seconds: BTreeMap::new(),
-            snowfall_scratch: SnowfallScratch::default(),
-            stability_scratch: StabilityScratch::default(),
-            diffusion_scratch: DiffusionScratch::default(),
-            wind_scratch: WindScratch::default(),
-            snowtran_scratch: SnowTranScratch::default(),
-            shedding_scratch: Default::default(),
-            sx: Vec::new(),
-            wind_terms: None,
-            slope_deg: Vec::new(),
-            hazard: Default::default(),
-            hazard_stale: true,
-            painted_release: None,
-            avalanche_maps: AvalancheMaps::default(),
-            avalanche_workspace: AvalancheWorkspace::default(),
-            ski_area: None,
-            ski_scratch: SkiScratch::default(),
-            terminus_stale: false,
-        };
+            air,
+            latitude_source,
+        });
         w.wall_seconds
             .insert("environment", t.elapsed().as_secs_f64());
         w.wall_seconds.insert("hourly_sun", hourly_sun_s);
-        w.refresh_wind_terms()?;
-        w.refresh_air_temperature();
-        w.environment.store(&mut w.terrain)?;
-        if w.air.from_station() {
-            w.state
-                .scheduler
-                .set_rate(EventKind::SnowfallStart, 0.0, false);
-        }
-        w.state.bands.ensure(w.bands.len());
-        w.slope_deg = avalanches::bedrock_slopes_deg(&w.terrain);
-        let n = w.terrain.geometry().len();
-        w.avalanche_maps = AvalancheMaps {
-            scour: vec![0.0; n],
-            deposit: vec![0.0; n],
-        };
-        w.update_avalanche_rate();
-        let per_day = w.scenario.skiers.per_day;
-        w.state
-            .scheduler
-            .set_rate(EventKind::SkierStart, per_day, per_day > 0.0);
+        w.ready()?;
         Ok(w)
     }
 

@@ -125,156 +125,16 @@ pub fn rupture_at_point(
     params: &RuptureParams,
 ) -> Result<RuptureCells, ReleaseAreaError> {
     params.validate()?;
-    let g = terrain.geometry();
-    let mask = terrain.mask();
-    let (w, h) = (g.width(), g.height());
-    let (dx, dy) = (g.cell_size_x(), g.cell_size_y());
-    let (fc, fr) = g
-        .map_to_cell(x, y)
-        .filter(|_| x.is_finite() && y.is_finite())
-        .ok_or(ReleaseAreaError::PointOutsideDem {
-            x,
-            y,
-            dem: MapExtent::of_grid(g),
-        })?;
-    let col = (fc.round().max(0.0) as usize).min(w - 1);
-    let row = (fr.round().max(0.0) as usize).min(h - 1);
-    let i0 = row * w + col;
-    if !mask.is_valid(i0) {
-        return Err(ReleaseAreaError::PointOnNodata { x, y, col, row });
-    }
-    let unstable = terrain.layer(SnowLayer::Unstable);
-    let u0 = unstable[i0] as f64;
-    if u0.is_nan() || u0 < params.min_unstable_m {
-        return Err(ReleaseAreaError::NoUnstableSnow {
-            x,
-            y,
-            col,
-            row,
-            unstable_m: u0,
-            min_unstable_m: params.min_unstable_m,
-        });
-    }
-    let has_unstable = |i: usize| mask.is_valid(i) && unstable[i] as f64 >= params.min_unstable_m;
+    let slab = Slab::new(terrain, params);
+    let (col, row, fc, fr) = slab.rupture_cell(x, y)?;
+    let i0 = row * slab.w + col;
+    let u0 = slab.unstable[i0] as f64;
     let reach = params.reach_per_unstable_m * u0;
     // Point in local metres (east, south of the north-west corner).
-    let (px, py) = ((fc + 0.5) * dx, (fr + 0.5) * dy);
-
-    // 3. Rupture zone: flood fill through unstable snow within the reach.
-    let mut cells = vec![false; w * h];
-    let mut zone = Vec::new();
-    let mut queue = VecDeque::from([i0]);
-    cells[i0] = true;
-    while let Some(i) = queue.pop_front() {
-        zone.push(i);
-        let (c, r) = (i % w, i / w);
-        for dr in -1isize..=1 {
-            for dc in -1isize..=1 {
-                let Some(j) = g.neighbour(c, r, dc, dr) else {
-                    continue;
-                };
-                if cells[j] || !has_unstable(j) {
-                    continue;
-                }
-                let (jx, jy) = g.local_metres(j % w, j / w);
-                if (jx - px).hypot(jy - py) <= reach {
-                    cells[j] = true;
-                    queue.push_back(j);
-                }
-            }
-        }
-    }
+    let (px, py) = ((fc + 0.5) * slab.dx, (fr + 0.5) * slab.dy);
+    let (mut cells, mut zone) = slab.rupture_zone(i0, (px, py), reach);
     let zone_cells = zone.len();
-
-    // 4. Downslope reach: fall lines from every rupture-zone cell.
-    // The snow surface of a cell (the sums of `LayeredTerrain::surface`).
-    let surface = |i: usize| (terrain.bedrock[i] + terrain.depth_at(i)) as f64;
-    let tan_min = params.min_slope_deg.to_radians().tan();
-    // Per-cell gradient (x east, y south), central differences, one-sided next to nodata.
-    let grad = |c: usize, r: usize| -> [f64; 2] {
-        let i = r * w + c;
-        let at = |dc: isize, dr: isize| match g.neighbour(c, r, dc, dr) {
-            Some(j) if mask.is_valid(j) => (surface(j), 1.0),
-            _ => (surface(i), 0.0),
-        };
-        let ((zw, ww), (ze, we)) = (at(-1, 0), at(1, 0));
-        let ((zn, wn), (zs, ws)) = (at(0, -1), at(0, 1));
-        let gx = if ww + we > 0.0 {
-            (ze - zw) / ((ww + we) * dx)
-        } else {
-            0.0
-        };
-        let gy = if wn + ws > 0.0 {
-            (zs - zn) / ((wn + ws) * dy)
-        } else {
-            0.0
-        };
-        [gx, gy]
-    };
-    // Bilinear gradient at local position (metres); nearest cell's when a corner is nodata.
-    let grad_at = |x: f64, y: f64| -> [f64; 2] {
-        let (fcx, fry) = (x / dx - 0.5, y / dy - 0.5);
-        let c0 = fcx.floor().clamp(0.0, (w - 1) as f64) as usize;
-        let r0 = fry.floor().clamp(0.0, (h - 1) as f64) as usize;
-        let (c1, r1) = ((c0 + 1).min(w - 1), (r0 + 1).min(h - 1));
-        let (tx, ty) = (
-            (fcx - c0 as f64).clamp(0.0, 1.0),
-            (fry - r0 as f64).clamp(0.0, 1.0),
-        );
-        let corners = [(c0, r0), (c1, r0), (c0, r1), (c1, r1)];
-        if corners.iter().any(|&(c, r)| !mask.is_valid(r * w + c)) {
-            let c = (x / dx).floor().clamp(0.0, (w - 1) as f64) as usize;
-            let r = (y / dy).floor().clamp(0.0, (h - 1) as f64) as usize;
-            return grad(c, r);
-        }
-        let [g00, g10, g01, g11] = corners.map(|(c, r)| grad(c, r));
-        let lerp = |k: usize| {
-            (1.0 - ty) * ((1.0 - tx) * g00[k] + tx * g10[k])
-                + ty * ((1.0 - tx) * g01[k] + tx * g11[k])
-        };
-        [lerp(0), lerp(1)]
-    };
-    let step_len = 0.5 * dx.min(dy);
-    let max_steps = 4 * (w + h) * ((dx.max(dy) / dx.min(dy)).ceil() as usize);
-    let mut downslope_cells = 0;
-    // (The fall lines start from the rupture zone, its first `zone_cells` entries; the cells
-    // they add are appended.)
-    for z in 0..zone_cells {
-        let start = zone[z];
-        let (sc, sr) = (start % w, start / w);
-        let (mut x, mut y) = g.local_metres(sc, sr);
-        let mut last = start;
-        for _ in 0..max_steps {
-            let [gx, gy] = grad_at(x, y);
-            let norm = gx.hypot(gy);
-            if norm < 1e-9 {
-                break;
-            }
-            x -= step_len * gx / norm;
-            y -= step_len * gy / norm;
-            if x < 0.0 || y < 0.0 || x >= w as f64 * dx || y >= h as f64 * dy {
-                break;
-            }
-            let (c, r) = ((x / dx) as usize, (y / dy) as usize);
-            let i = r * w + c;
-            if i == last {
-                continue;
-            }
-            if !has_unstable(i) || surface(i) > surface(last) {
-                break;
-            }
-            let [cgx, cgy] = grad(c, r);
-            if cgx.hypot(cgy) < tan_min {
-                break;
-            }
-            if !cells[i] {
-                cells[i] = true;
-                zone.push(i);
-                downslope_cells += 1;
-            }
-            last = i;
-        }
-    }
+    let downslope_cells = slab.downslope_reach(&mut cells, &mut zone);
     zone.sort_unstable();
     Ok(RuptureCells {
         cells: zone,
@@ -285,4 +145,207 @@ pub fn rupture_at_point(
         zone_cells,
         downslope_cells,
     })
+}
+
+/// The snow a rupture runs through: the terrain, its unstable layer and the grid's measures.
+struct Slab<'a> {
+    terrain: &'a LayeredTerrain,
+    g: &'a GridGeometry,
+    mask: &'a NodataMask,
+    unstable: &'a [f32],
+    params: &'a RuptureParams,
+    w: usize,
+    h: usize,
+    dx: f64,
+    dy: f64,
+}
+
+impl<'a> Slab<'a> {
+    fn new(terrain: &'a LayeredTerrain, params: &'a RuptureParams) -> Self {
+        let g = terrain.geometry();
+        Slab {
+            terrain,
+            g,
+            mask: terrain.mask(),
+            unstable: terrain.layer(SnowLayer::Unstable),
+            params,
+            w: g.width(),
+            h: g.height(),
+            dx: g.cell_size_x(),
+            dy: g.cell_size_y(),
+        }
+    }
+
+    /// The rupture cell of map point `(x, y)` (col, row) with its fractional cell position
+    /// (fc, fr): on the DEM, on a valid cell, with unstable snow of at least the minimum.
+    fn rupture_cell(&self, x: f64, y: f64) -> Result<(usize, usize, f64, f64), ReleaseAreaError> {
+        let (g, w, h) = (self.g, self.w, self.h);
+        let (fc, fr) = g
+            .map_to_cell(x, y)
+            .filter(|_| x.is_finite() && y.is_finite())
+            .ok_or(ReleaseAreaError::PointOutsideDem {
+                x,
+                y,
+                dem: MapExtent::of_grid(g),
+            })?;
+        let col = (fc.round().max(0.0) as usize).min(w - 1);
+        let row = (fr.round().max(0.0) as usize).min(h - 1);
+        let i0 = row * w + col;
+        if !self.mask.is_valid(i0) {
+            return Err(ReleaseAreaError::PointOnNodata { x, y, col, row });
+        }
+        let u0 = self.unstable[i0] as f64;
+        if u0.is_nan() || u0 < self.params.min_unstable_m {
+            return Err(ReleaseAreaError::NoUnstableSnow {
+                x,
+                y,
+                col,
+                row,
+                unstable_m: u0,
+                min_unstable_m: self.params.min_unstable_m,
+            });
+        }
+        Ok((col, row, fc, fr))
+    }
+
+    /// Whether cell `i` is valid and holds unstable snow.
+    fn has_unstable(&self, i: usize) -> bool {
+        self.mask.is_valid(i) && self.unstable[i] as f64 >= self.params.min_unstable_m
+    }
+
+    /// The snow surface of a cell (the sums of `LayeredTerrain::surface`).
+    fn surface(&self, i: usize) -> f64 {
+        (self.terrain.bedrock[i] + self.terrain.depth_at(i)) as f64
+    }
+
+    /// Step 3, the rupture zone: a flood fill from cell `i0` through unstable snow within
+    /// `reach` m of the point `p` (local metres). Returns the flags of the cells taken and
+    /// the cells in the order taken.
+    fn rupture_zone(&self, i0: usize, p: (f64, f64), reach: f64) -> (Vec<bool>, Vec<usize>) {
+        let (g, w) = (self.g, self.w);
+        let (px, py) = p;
+        let mut cells = vec![false; w * self.h];
+        let mut zone = Vec::new();
+        let mut queue = VecDeque::from([i0]);
+        cells[i0] = true;
+        while let Some(i) = queue.pop_front() {
+            zone.push(i);
+            let (c, r) = (i % w, i / w);
+            for dr in -1isize..=1 {
+                for dc in -1isize..=1 {
+                    let Some(j) = g.neighbour(c, r, dc, dr) else {
+                        continue;
+                    };
+                    if cells[j] || !self.has_unstable(j) {
+                        continue;
+                    }
+                    let (jx, jy) = g.local_metres(j % w, j / w);
+                    if (jx - px).hypot(jy - py) <= reach {
+                        cells[j] = true;
+                        queue.push_back(j);
+                    }
+                }
+            }
+        }
+        (cells, zone)
+    }
+
+    /// The snow surface's gradient at cell (c, r) (x east, y south): central differences,
+    /// one-sided next to nodata.
+    fn gradient(&self, c: usize, r: usize) -> [f64; 2] {
+        let i = r * self.w + c;
+        let at = |dc: isize, dr: isize| match self.g.neighbour(c, r, dc, dr) {
+            Some(j) if self.mask.is_valid(j) => (self.surface(j), 1.0),
+            _ => (self.surface(i), 0.0),
+        };
+        let ((zw, ww), (ze, we)) = (at(-1, 0), at(1, 0));
+        let ((zn, wn), (zs, ws)) = (at(0, -1), at(0, 1));
+        let gx = if ww + we > 0.0 {
+            (ze - zw) / ((ww + we) * self.dx)
+        } else {
+            0.0
+        };
+        let gy = if wn + ws > 0.0 {
+            (zs - zn) / ((wn + ws) * self.dy)
+        } else {
+            0.0
+        };
+        [gx, gy]
+    }
+
+    /// The bilinear gradient at local position (x, y) (metres); the nearest cell's when a
+    /// corner is nodata.
+    fn gradient_at(&self, x: f64, y: f64) -> [f64; 2] {
+        let (w, h, dx, dy) = (self.w, self.h, self.dx, self.dy);
+        let (fcx, fry) = (x / dx - 0.5, y / dy - 0.5);
+        let c0 = fcx.floor().clamp(0.0, (w - 1) as f64) as usize;
+        let r0 = fry.floor().clamp(0.0, (h - 1) as f64) as usize;
+        let (c1, r1) = ((c0 + 1).min(w - 1), (r0 + 1).min(h - 1));
+        let (tx, ty) = (
+            (fcx - c0 as f64).clamp(0.0, 1.0),
+            (fry - r0 as f64).clamp(0.0, 1.0),
+        );
+        let corners = [(c0, r0), (c1, r0), (c0, r1), (c1, r1)];
+        if corners.iter().any(|&(c, r)| !self.mask.is_valid(r * w + c)) {
+            let c = (x / dx).floor().clamp(0.0, (w - 1) as f64) as usize;
+            let r = (y / dy).floor().clamp(0.0, (h - 1) as f64) as usize;
+            return self.gradient(c, r);
+        }
+        let [g00, g10, g01, g11] = corners.map(|(c, r)| self.gradient(c, r));
+        let lerp = |k: usize| {
+            (1.0 - ty) * ((1.0 - tx) * g00[k] + tx * g10[k])
+                + ty * ((1.0 - tx) * g01[k] + tx * g11[k])
+        };
+        [lerp(0), lerp(1)]
+    }
+
+    /// Step 4, the downslope reach: a fall line from every cell of the rupture zone (the
+    /// first entries of `zone`), through unstable snow that does not rise and is at least the
+    /// minimum slope; the cells it adds are flagged in `cells` and appended to `zone`. Returns
+    /// their number.
+    fn downslope_reach(&self, cells: &mut [bool], zone: &mut Vec<usize>) -> usize {
+        let (w, h, dx, dy) = (self.w, self.h, self.dx, self.dy);
+        let tan_min = self.params.min_slope_deg.to_radians().tan();
+        let step_len = 0.5 * dx.min(dy);
+        let max_steps = 4 * (w + h) * ((dx.max(dy) / dx.min(dy)).ceil() as usize);
+        let mut downslope_cells = 0;
+        let zone_cells = zone.len();
+        for z in 0..zone_cells {
+            let start = zone[z];
+            let (sc, sr) = (start % w, start / w);
+            let (mut x, mut y) = self.g.local_metres(sc, sr);
+            let mut last = start;
+            for _ in 0..max_steps {
+                let [gx, gy] = self.gradient_at(x, y);
+                let norm = gx.hypot(gy);
+                if norm < 1e-9 {
+                    break;
+                }
+                x -= step_len * gx / norm;
+                y -= step_len * gy / norm;
+                if x < 0.0 || y < 0.0 || x >= w as f64 * dx || y >= h as f64 * dy {
+                    break;
+                }
+                let (c, r) = ((x / dx) as usize, (y / dy) as usize);
+                let i = r * w + c;
+                if i == last {
+                    continue;
+                }
+                if !self.has_unstable(i) || self.surface(i) > self.surface(last) {
+                    break;
+                }
+                let [cgx, cgy] = self.gradient(c, r);
+                if cgx.hypot(cgy) < tan_min {
+                    break;
+                }
+                if !cells[i] {
+                    cells[i] = true;
+                    zone.push(i);
+                    downslope_cells += 1;
+                }
+                last = i;
+            }
+        }
+        downslope_cells
+    }
 }

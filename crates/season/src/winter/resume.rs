@@ -138,18 +138,10 @@ fn validate_storms(
     Ok(())
 }
 
-/// Validates a decoded run state against the scenario and terrain it resumes (module docs).
-fn validate_state(
-    state: &RunState,
-    scenario: &Scenario,
-    terrain: &LayeredTerrain,
-) -> Result<(), CheckpointError> {
-    let json = serde_json::to_value(state)?;
-    check_numbers("", &json)?;
-    // The clock: within the season, plus the reach of one event past its end (the last draw
-    // comes at most 1 / (the always-active rates) after a time inside the season) and a day
-    // for the clock an avalanche or a skier run advances.
-    let days = scenario.days;
+/// The latest day a checkpoint's clocks may show: the season, plus the reach of one event past
+/// its end (the last draw comes at most 1 / (the always-active rates) after a time inside the
+/// season) and a day for the clock an avalanche or a skier run advances.
+fn latest_day(scenario: &Scenario) -> f64 {
     let e = &scenario.events;
     let steady =
         e.melt_and_state.max(0.0) + e.powder_diffusion.max(0.0) + e.wind_transport.max(0.0);
@@ -158,24 +150,51 @@ fn validate_state(
     } else {
         crate::scenario::MAX_SEASON_DAYS
     };
-    let latest = days + reach + 1.0;
-    let within = |field: &str, v: f64| -> Result<(), CheckpointError> {
-        if v.is_finite() && (0.0..=latest).contains(&v) {
-            Ok(())
-        } else {
-            Err(CheckpointError::implausible(
-                field,
-                crate::number_for_message(v),
-                format!("a day of the season, within [0, {latest}]"),
-            ))
-        }
-    };
-    within("scheduler.time_days", state.scheduler.time_days())?;
-    within("melt_clock_days", state.melt_clock_days)?;
-    if let Some(d) = state.shed_clock_days {
-        within("shed_clock_days", d)?;
+    scenario.days + reach + 1.0
+}
+
+/// A clock `v` (days) at `field` finite and within the season up to `latest`.
+fn check_day(field: &str, v: f64, latest: f64) -> Result<(), CheckpointError> {
+    if v.is_finite() && (0.0..=latest).contains(&v) {
+        Ok(())
+    } else {
+        Err(CheckpointError::implausible(
+            field,
+            crate::number_for_message(v),
+            format!("a day of the season, within [0, {latest}]"),
+        ))
     }
-    if let Some(d) = number_at(&json, &["scheduler", "snowfall_until"]) {
+}
+
+/// Validates a decoded run state against the scenario and terrain it resumes (module docs).
+fn validate_state(
+    state: &RunState,
+    scenario: &Scenario,
+    terrain: &LayeredTerrain,
+) -> Result<(), CheckpointError> {
+    let json = serde_json::to_value(state)?;
+    check_numbers("", &json)?;
+    let latest = latest_day(scenario);
+    validate_clocks(state, &json, latest)?;
+    validate_storms(&state.storms, latest)?;
+    validate_scheduler(&json, scenario)?;
+    validate_counters(state, scenario)?;
+    validate_terrain(state, terrain, latest)
+}
+
+/// The clocks of a run state: the scheduler's, the melt's and the shedding's days within the
+/// season (up to `latest`), the snowfall period's end at most two years past it.
+fn validate_clocks(
+    state: &RunState,
+    json: &serde_json::Value,
+    latest: f64,
+) -> Result<(), CheckpointError> {
+    check_day("scheduler.time_days", state.scheduler.time_days(), latest)?;
+    check_day("melt_clock_days", state.melt_clock_days, latest)?;
+    if let Some(d) = state.shed_clock_days {
+        check_day("shed_clock_days", d, latest)?;
+    }
+    if let Some(d) = number_at(json, &["scheduler", "snowfall_until"]) {
         // A snowfall period may outlast the season; not the clock's reach by a year.
         if !(d >= 0.0 && d <= latest + 365.0 * 2.0) {
             return Err(CheckpointError::implausible(
@@ -185,8 +204,16 @@ fn validate_state(
             ));
         }
     }
-    validate_storms(&state.storms, latest)?;
-    match number_at(&json, &["scheduler", "snowfall_mean_days"]) {
+    Ok(())
+}
+
+/// The scheduler's draws: a mean snowfall period within a year, the scenario's seed, and the
+/// steady kinds at the scenario's frequencies, none negative.
+fn validate_scheduler(
+    json: &serde_json::Value,
+    scenario: &Scenario,
+) -> Result<(), CheckpointError> {
+    match number_at(json, &["scheduler", "snowfall_mean_days"]) {
         Some(d) if d > 0.0 && d <= 365.0 => {}
         d => {
             return Err(CheckpointError::implausible(
@@ -203,7 +230,7 @@ fn validate_state(
             format!("the scenario's seed {}", scenario.seed),
         ));
     }
-    // The rates: the steady kinds at the scenario's frequencies, none negative.
+    let e = &scenario.events;
     let rates = json["scheduler"]["rates"].as_array().map_or(&[][..], |a| a);
     if rates.len() > 16 {
         return Err(CheckpointError::implausible(
@@ -237,7 +264,13 @@ fn validate_state(
             ));
         }
     }
-    // Counters: the drawn kinds were counted once a draw.
+    Ok(())
+}
+
+/// The counters of a run state: the drawn kinds counted once a draw at most, skier runs
+/// finished at most those started, and the timeline's indices within the scenario's tables
+/// (the weather's is checked against the resolved timeline).
+fn validate_counters(state: &RunState, scenario: &Scenario) -> Result<(), CheckpointError> {
     let draws = state.scheduler.draws();
     let drawn: u64 = state
         .event_counts
@@ -268,7 +301,6 @@ fn validate_state(
             format!("at most the {} runs started", state.ski.runs),
         ));
     }
-    // The timeline's indices (the weather's is checked against the resolved timeline).
     for (field, index, len) in [
         (
             "forced_index",
@@ -289,7 +321,16 @@ fn validate_state(
             ));
         }
     }
-    // The terrain: the summary the fingerprint was taken with, every avalanche on the grid.
+    Ok(())
+}
+
+/// The terrain of a run state: the summary the fingerprint was taken with, and every avalanche
+/// on the grid and on a day of the season (up to `latest`).
+fn validate_terrain(
+    state: &RunState,
+    terrain: &LayeredTerrain,
+    latest: f64,
+) -> Result<(), CheckpointError> {
     let g = terrain.geometry();
     let summary = terrain_summary(terrain);
     if state.terrain != summary {
@@ -307,7 +348,7 @@ fn validate_state(
                 format!("a cell of the {}x{} grid", g.width(), g.height()),
             ));
         }
-        within(&format!("avalanches[{k}].day"), a.day)?;
+        check_day(&format!("avalanches[{k}].day"), a.day, latest)?;
     }
     Ok(())
 }
