@@ -243,7 +243,7 @@ fn step_and_surface(
     shared.validate()?;
     enhanced::check_inputs("melt.energy_balance", terrain, pack, forcing)?;
     let geometry = terrain.geometry().clone();
-    let (n, w) = (geometry.len(), geometry.width());
+    let w = geometry.width();
     let mask = terrain.mask().clone();
     let invalid = mask.invalid_cells();
     let offsets = steps::OffsetRange::of(forcing.lapse_offset_c);
@@ -254,13 +254,7 @@ fn step_and_surface(
     );
     let kernel = Kernel::new(params, shared, forcing, &offsets);
     let albedo = albedo_table(shared);
-    let surface_rows: Vec<Option<&mut [f32]>> = match surface {
-        Some(a) => {
-            a.resize(n, 0.0);
-            a.chunks_mut(w).map(Some).collect()
-        }
-        None => (0..geometry.height()).map(|_| None).collect(),
-    };
+    let surface_rows = super::enhanced::surface_rows(surface, &geometry);
     let bedrock = &terrain.bedrock;
     let [c, s, u, p] = &mut terrain.snow;
     let rows: Vec<RowSums> = c

@@ -294,6 +294,37 @@ pub struct MeltForcing<'a> {
     pub window_days: f32,
 }
 
+impl MeltForcing<'_> {
+    /// The hour-weighted mean sea-level temperature of the window, °C (0 without hours).
+    pub fn mean_sea_level_c(&self) -> f32 {
+        let weight: f32 = self.hours.iter().map(|h| h.weight).sum();
+        if weight > 0.0 {
+            self.hours
+                .iter()
+                .map(|h| h.weight * h.sea_level_c)
+                .sum::<f32>()
+                / weight
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Per row of `geometry`, where a melt writes its snow surface: the rows of `surface` (sized
+/// to the grid), or none without a surface to fill.
+pub(super) fn surface_rows<'a>(
+    surface: Option<&'a mut Vec<f32>>,
+    geometry: &snowscape_terrain::GridGeometry,
+) -> Vec<Option<&'a mut [f32]>> {
+    match surface {
+        Some(a) => {
+            a.resize(geometry.len(), 0.0);
+            a.chunks_mut(geometry.width()).map(Some).collect()
+        }
+        None => (0..geometry.height()).map(|_| None).collect(),
+    }
+}
+
 /// What a window of melt did, m³ (snow volume) and m³ of water.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct MeltReport {
@@ -365,19 +396,11 @@ fn step_and_surface(
     params.validate()?;
     check_inputs("melt.enhanced", terrain, pack, forcing)?;
     let geometry = terrain.geometry().clone();
-    let n = geometry.len();
     let w = geometry.width();
     let mask = terrain.mask().clone();
     let invalid = mask.invalid_cells();
     let k = Coefficients::new(params, forcing);
-    // Per row, where to write its surface (none without a surface to fill).
-    let surface_rows: Vec<Option<&mut [f32]>> = match surface {
-        Some(a) => {
-            a.resize(n, 0.0);
-            a.chunks_mut(w).map(Some).collect()
-        }
-        None => (0..geometry.height()).map(|_| None).collect(),
-    };
+    let surface_rows = surface_rows(surface, &geometry);
     let bedrock = &terrain.bedrock;
     let [c, s, u, p] = &mut terrain.snow;
     let rows: Vec<RowSums> = c
@@ -634,16 +657,7 @@ const ALBEDO_ENTRIES: usize = (ALBEDO_MAX_DAYS / ALBEDO_STEP_DAYS) as usize + 1;
 
 impl Coefficients {
     fn new(p: &EnhancedMeltParams, f: &MeltForcing) -> Self {
-        let weight: f32 = f.hours.iter().map(|h| h.weight).sum();
-        let mean_sea_level = if weight > 0.0 {
-            f.hours
-                .iter()
-                .map(|h| h.weight * h.sea_level_c)
-                .sum::<f32>()
-                / weight
-        } else {
-            0.0
-        };
+        let mean_sea_level = f.mean_sea_level_c();
         let longwave_wh: f32 = f
             .hours
             .iter()

@@ -82,16 +82,7 @@ impl Kernel {
         f: &MeltForcing,
         offsets: &OffsetRange,
     ) -> Self {
-        let weight: f32 = f.hours.iter().map(|h| h.weight).sum();
-        let mean_sea_level = if weight > 0.0 {
-            f.hours
-                .iter()
-                .map(|h| h.weight * h.sea_level_c)
-                .sum::<f32>()
-                / weight
-        } else {
-            0.0
-        };
+        let mean_sea_level = f.mean_sea_level_c();
         let (z0, zu, zt) = (
             p.roughness_length_m,
             p.wind_height_m,
