@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 /// Why a station forcing cannot drive a season.
 #[derive(Debug, thiserror::Error)]
 pub enum StationError {
-    /// The file cannot be read or parsed (the reader's message names the line and value).
-    #[error("{path}: {source}")]
+    /// The file cannot be read or parsed (the reader's message names the file, the line and
+    /// the value).
+    #[error("{source}")]
     Read {
         path: PathBuf,
         #[source]
