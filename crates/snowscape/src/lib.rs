@@ -28,6 +28,7 @@
 //! | [`avalanche_release`] | one avalanche's release on a DEM (file, mask or rupture point), as `snowscape avalanche` and the Python package take it |
 //! | [`cover`] | both mesh covers' parameters from a TOML file |
 //! | [`engine_export`] | a run's terrain and snow for Unreal, Unity or Godot: heightmaps, weight maps, import scales |
+//! | [`validation`] | a run's snow depth against a measured depth raster: matching, statistics, baselines, class ratios, figures and the typed `validation.json` (the path of `snowscape validate` and the Python package's `validate`) |
 //! | [`transport_job`] | a 3D transport run's scenario, a DEM as its scene, the wind grid fitted to it |
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
@@ -70,6 +71,7 @@ pub mod report;
 pub mod season_run;
 pub mod station;
 pub mod transport_job;
+pub mod validation;
 
 pub use snowscape_avalanche as avalanche;
 pub use snowscape_environment as environment;
