@@ -10,16 +10,16 @@ use crate::failure::{BAD_INPUT, ExitCodeExt, Failure, JOB_FAILED};
 use crate::stdout::outln;
 use anyhow::{anyhow, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use snowscape::avalanche::validation::ThicknessConvention;
+use snowscape::avalanche::{
+    AvalancheParams, AvalancheRun, FrictionLaw, FrictionMaps, RunOptions, SamosAtParams,
+    SlopeGravity, StopReason,
+};
 use snowscape::avalanche_job::{
     self, AvalancheJob, AvalancheJobError, AvalancheProgress, AvalancheSettings, CompareSpec,
     FrictionRasterError, FrictionRasters, FrictionReport, OutputSpec,
 };
 use snowscape::avalanche_release::ReleaseSpec;
-use snowscape_avalanche::validation::ThicknessConvention;
-use snowscape_avalanche::{
-    AvalancheParams, AvalancheRun, FrictionLaw, FrictionMaps, RunOptions, SamosAtParams,
-    SlopeGravity, StopReason,
-};
 use snowscape_render::ColourMode;
 use snowscape_terrain::Grid;
 use std::path::PathBuf;
