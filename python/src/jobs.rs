@@ -63,7 +63,9 @@ pub(crate) fn avalanche<'py>(
     let outcome = py
         .detach(|| run_avalanche(&job, &mut Silent))
         .map_err(|e| match e {
-            AvalancheJobError::NoReleaseFile(_) => PyOSError::new_err(e.to_string()),
+            AvalancheJobError::NoReleaseFile(_) => {
+                PyOSError::new_err(snowscape::messages::clip_values(&e.to_string()))
+            }
             e => py_err(e),
         })?;
     let g = job.dem.geometry();
@@ -318,7 +320,7 @@ pub(crate) fn validate(
         .detach(|| snowscape::validation::run(&job))
         .map_err(|e| match e {
             ValidationError::MissingFile { .. } | ValidationError::MissingRunFile { .. } => {
-                PyOSError::new_err(e.to_string())
+                PyOSError::new_err(snowscape::messages::clip_values(&e.to_string()))
             }
             e => py_err(e),
         })?;
