@@ -25,7 +25,7 @@
 //! reported beside it (with each class's cell count and mean depths) for inspection only.
 
 use serde::Serialize;
-use snowscape_terrain::{Grid, surface};
+use snowscape_terrain::{Grid, operators, surface};
 
 /// Height of an elevation band, metres.
 pub const BAND_M: f64 = 200.0;
@@ -55,10 +55,10 @@ pub fn cell_terrain(bedrock: &Grid, i: usize) -> CellTerrain {
     let (col, row) = g.col_row(i);
     let (gx, gy) = surface::gradient(bedrock.data(), g, bedrock.mask(), col, row);
     let (gx, gy) = (f64::from(gx), f64::from(gy));
-    let steepness = (gx * gx + gy * gy).sqrt();
+    let steepness = operators::slope_tangent(gx, gy);
     // The downhill direction (-gx east, -gy north) as a compass bearing.
     let aspect_deg = if steepness > 0.0 {
-        (-gx).atan2(-gy).to_degrees().rem_euclid(360.0)
+        operators::aspect(gx, gy).to_degrees().rem_euclid(360.0)
     } else {
         0.0
     };
