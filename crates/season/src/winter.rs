@@ -125,6 +125,10 @@ struct RunState {
     /// Precipitation and peak SWE per altitude band.
     #[serde(default)]
     bands: crate::bands::BandRecord,
+    /// Whether snowfall or melt changed the snow since the ski area's distance map was
+    /// computed (the next skier refreshes it).
+    #[serde(default)]
+    terminus_stale: bool,
 }
 
 /// Where the season's latitude came from.
@@ -168,17 +172,14 @@ pub struct Winter {
     /// The hazard map may be out of date: an event that can change unstable snow ran since
     /// it was computed (an avalanche start recomputes it).
     hazard_stale: bool,
-    /// Painted release rates, 1/day per cell ([`Winter::set_painted_release`]); not
-    /// checkpointed (the editor's project keeps its paint and sets it again).
+    /// Painted release rates, 1/day per cell ([`Winter::set_painted_release`]; checkpointed).
     painted_release: Option<Vec<f32>>,
     /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
     avalanche_maps: AvalancheMaps,
     avalanche_workspace: AvalancheWorkspace,
-    /// The ski area, made at the first skier (not checkpointed: see [`crate::skiing`]).
+    /// The ski area, made at the first skier (checkpointed: see [`crate::skiing`]).
     ski_area: Option<SkiArea>,
     ski_scratch: SkiScratch,
-    /// Whether snowfall or melt changed the snow since the distance map was computed.
-    terminus_stale: bool,
     /// The hourly air, sun and precipitation factors.
     air: Air,
     /// Surface age, cold content and liquid water per cell (checkpointed).
@@ -331,6 +332,19 @@ impl Winter {
         let mut record = self.state.bands.clone();
         record.raise_peaks(&self.band_mean_swe());
         self.bands.summary(&record)
+    }
+    /// Drops the scratch buffers and the caches rebuilt from the state (the steps' buffers,
+    /// the shedding strips and holding table, the skiers' event lists): memory a season
+    /// between two runs need not hold. The next events rebuild them and the season continues
+    /// bit-identical (`tests/resume_skiers.rs`).
+    pub fn drop_workspace(&mut self) {
+        self.snowfall_scratch = SnowfallScratch::default();
+        self.stability_scratch = StabilityScratch::default();
+        self.diffusion_scratch = DiffusionScratch::default();
+        self.wind_scratch = WindScratch::default();
+        self.snowtran_scratch = SnowTranScratch::default();
+        self.shedding_scratch = Default::default();
+        self.ski_scratch = SkiScratch::default();
     }
     /// Whether the season is over.
     pub fn finished(&self) -> bool {
@@ -678,7 +692,7 @@ impl Winter {
             event.kind,
             EventKind::MeltAndStateStep | EventKind::SnowfallStep
         ) {
-            self.terminus_stale = true;
+            self.state.terminus_stale = true;
         }
         if matches!(
             event.kind,

@@ -95,6 +95,7 @@ pub(super) fn initial_state(
         shed_clock_days: None,
         storms: Vec::new(),
         bands: crate::bands::BandRecord::default(),
+        terminus_stale: false,
     }
 }
 
@@ -221,7 +222,6 @@ impl Winter {
             avalanche_workspace: AvalancheWorkspace::default(),
             ski_area: None,
             ski_scratch: SkiScratch::default(),
-            terminus_stale: false,
         }
     }
 

@@ -59,14 +59,14 @@ impl Winter {
                 Err(e) if no_snow(&e) => return Ok(None),
                 Err(e) => return Err(ski_err(e)),
             }
-            self.terminus_stale = false;
+            self.state.terminus_stale = false;
         }
         let Some(area) = self.ski_area.as_mut() else {
             return Ok(None);
         };
-        if self.terminus_stale {
+        if self.state.terminus_stale {
             match area.refresh_terminus(&p.ski, &self.terrain) {
-                Ok(()) => self.terminus_stale = false,
+                Ok(()) => self.state.terminus_stale = false,
                 Err(e) if no_snow(&e) => return Ok(None),
                 Err(e) => return Err(ski_err(e)),
             }
