@@ -566,11 +566,19 @@ fn restore_ski_area(
         ));
     }
     let latest_s = latest_day(scenario) * SECONDS_PER_DAY;
-    if !(header.time_s <= latest_s) || header.sweeps as u64 > MAX_COUNT {
+    // NaN and negative times are refused with the area's other values.
+    if header.time_s > latest_s {
         return Err(CheckpointError::implausible(
             "ski_area.time_s",
-            format!("{} s after {} sweeps", header.time_s, header.sweeps),
+            header.time_s,
             format!("a time within the season's {latest_s} s"),
+        ));
+    }
+    if header.sweeps as u64 > MAX_COUNT {
+        return Err(CheckpointError::implausible(
+            "ski_area.sweeps",
+            header.sweeps,
+            format!("at most {MAX_COUNT} sweeps"),
         ));
     }
     let tracks: SkiTracks = serde_json::from_slice(tracks).map_err(|e| {
