@@ -12,20 +12,15 @@ use crate::checkpoint::CheckpointError;
 use crate::forcing::StationForcing;
 use crate::melt::SnowpackState;
 use crate::phenomenon::PhenomenonError;
-use crate::powder_diffusion::DiffusionScratch;
 use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
 use crate::scheduler::{Event, EventKind, SECONDS_PER_DAY, Scheduler};
 use crate::skiing::SkiStats;
-use crate::snowfall::SnowfallScratch;
-use crate::snowtran_transport::SnowTranScratch;
-use crate::stability::StabilityScratch;
 use crate::weather::Air;
-use crate::wind_transport::WindScratch;
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::AvalancheWorkspace;
 use snowscape_avalanche::release_area::rupture_at_point;
 use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams, precompute};
-use snowscape_skiers::{SkiArea, SkiScratch};
+use snowscape_skiers::SkiArea;
 use snowscape_terrain::{LayeredTerrain, TerrainError};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -90,6 +85,7 @@ mod resume;
 mod setup;
 mod skier_runs;
 mod snowpack;
+mod workspace;
 
 pub use budget::{SeasonBudget, WaterBudget};
 
@@ -155,23 +151,8 @@ pub struct Winter {
     base_environment: EnvironmentParams,
     /// Wall-clock seconds per phenomenon (not part of the state: it differs between runs).
     pub wall_seconds: BTreeMap<&'static str, f64>,
-    snowfall_scratch: SnowfallScratch,
-    stability_scratch: StabilityScratch,
-    diffusion_scratch: DiffusionScratch,
-    wind_scratch: WindScratch,
-    snowtran_scratch: SnowTranScratch,
-    shedding_scratch: crate::slope_shedding::SheddingScratch,
-    /// Maximum upwind slope Sx for the current period's wind, degrees (Winstral et al. 2002).
-    sx: Vec<f32>,
-    /// The current wind field's snow-independent transport terms (the paper's wind model).
-    wind_terms: Option<crate::wind_transport::WindTerms>,
-    /// Bedrock slope per cell, degrees (for the avalanche hazard).
-    slope_deg: Vec<f32>,
-    /// Avalanche hazard per cell, 1/day (recomputed when the snow changes).
-    hazard: avalanches::HazardMap,
-    /// The hazard map may be out of date: an event that can change unstable snow ran since
-    /// it was computed (an avalanche start recomputes it).
-    hazard_stale: bool,
+    /// Scratch buffers and caches, dropped and rebuilt at will ([`Winter::drop_workspace`]).
+    workspace: workspace::SeasonWorkspace,
     /// Painted release rates, 1/day per cell ([`Winter::set_painted_release`]; checkpointed).
     painted_release: Option<Vec<f32>>,
     /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
@@ -179,7 +160,6 @@ pub struct Winter {
     avalanche_workspace: AvalancheWorkspace,
     /// The ski area, made at the first skier (checkpointed: see [`crate::skiing`]).
     ski_area: Option<SkiArea>,
-    ski_scratch: SkiScratch,
     /// The hourly air, sun and precipitation factors.
     air: Air,
     /// Surface age, cold content and liquid water per cell (checkpointed).
@@ -324,7 +304,7 @@ impl Winter {
     }
     /// The current avalanche hazard per cell, 1/day (Σ is the Avalanche-Start rate).
     pub fn avalanche_hazard(&self) -> &[f64] {
-        &self.hazard.lambda
+        &self.workspace.hazard.lambda
     }
     /// The season by 200 m altitude band so far: precipitation, rain share and peak SWE
     /// ([`crate::bands`]; the peak counts the snow now as well as the daily samples).
@@ -332,19 +312,6 @@ impl Winter {
         let mut record = self.state.bands.clone();
         record.raise_peaks(&self.band_mean_swe());
         self.bands.summary(&record)
-    }
-    /// Drops the scratch buffers and the caches rebuilt from the state (the steps' buffers,
-    /// the shedding strips and holding table, the skiers' event lists): memory a season
-    /// between two runs need not hold. The next events rebuild them and the season continues
-    /// bit-identical (`tests/resume_skiers.rs`).
-    pub fn drop_workspace(&mut self) {
-        self.snowfall_scratch = SnowfallScratch::default();
-        self.stability_scratch = StabilityScratch::default();
-        self.diffusion_scratch = DiffusionScratch::default();
-        self.wind_scratch = WindScratch::default();
-        self.snowtran_scratch = SnowTranScratch::default();
-        self.shedding_scratch = Default::default();
-        self.ski_scratch = SkiScratch::default();
     }
     /// Whether the season is over.
     pub fn finished(&self) -> bool {
@@ -364,6 +331,7 @@ impl Winter {
         stop: &std::sync::atomic::AtomicBool,
     ) -> Result<(), SeasonError> {
         let end = day.min(self.scenario.days);
+        self.ensure_workspace()?;
         while self.day() < end && !stop.load(std::sync::atomic::Ordering::Relaxed) {
             self.apply_timeline()?;
             let Some(event) = self.state.scheduler.next_event() else {
@@ -431,13 +399,13 @@ impl Winter {
             skiers: skiers.as_deref(),
             painted: self.painted_release.as_deref(),
         };
-        let total = self.hazard.compute(
+        let total = self.workspace.hazard.compute(
             &self.scenario.parameters.avalanche,
             &self.terrain,
-            &self.slope_deg,
+            &self.workspace.slope_deg,
             &sources,
         );
-        self.hazard_stale = false;
+        self.workspace.hazard_stale = false;
         self.state
             .scheduler
             .set_rate(EventKind::AvalancheStart, total, total > 0.0);
@@ -531,6 +499,7 @@ impl Winter {
             }
         };
         if rates != self.painted_release {
+            self.ensure_workspace()?;
             self.painted_release = rates;
             self.update_avalanche_rate();
         }
@@ -551,6 +520,7 @@ impl Winter {
             });
         };
         let cell = g.index(c.round() as usize, r.round() as usize);
+        self.ensure_workspace()?;
         let t = Instant::now();
         let rec = self.start_avalanche(cell, Trigger::User);
         *self.wall_seconds.entry("avalanche").or_default() += t.elapsed().as_secs_f64();
@@ -616,10 +586,10 @@ impl Winter {
             skiers: skiers.as_deref(),
             painted: self.painted_release.as_deref(),
         };
-        let total = self.hazard.update_cells(
+        let total = self.workspace.hazard.update_cells(
             &self.scenario.parameters.avalanche,
             &self.terrain,
-            &self.slope_deg,
+            &self.workspace.slope_deg,
             &sources,
             &changed,
         );
@@ -707,7 +677,7 @@ impl Winter {
         ) {
             // Wind erodes unstable snow where the powder is gone; skiers change the
             // recent-skier map.
-            self.hazard_stale = true;
+            self.workspace.hazard_stale = true;
         }
         *self.state.event_counts.entry(event.kind).or_default() += 1;
         if cfg!(debug_assertions) || event.index.is_multiple_of(64) {

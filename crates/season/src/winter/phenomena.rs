@@ -71,7 +71,7 @@ fn snowfall_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
         &params,
         &mut w.terrain,
         &w.environment.temperature,
-        &mut w.snowfall_scratch,
+        &mut w.workspace.snowfall,
         event.dt_days,
     )
     .map_err(err)?;
@@ -114,7 +114,7 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         &w.scenario.parameters.stability,
         &mut w.terrain,
         &w.environment.temperature,
-        &mut w.stability_scratch,
+        &mut w.workspace.stability,
         event.dt_days,
     )
     .map_err(err)?;
@@ -139,7 +139,7 @@ fn slope_shedding_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     let r = crate::slope_shedding::step(
         &w.scenario.parameters.slope_shedding,
         &mut w.terrain,
-        &mut w.shedding_scratch,
+        &mut w.workspace.shedding,
         event.dt_days,
     )
     .map_err(failed("slope_shedding", event.time_days))?;
@@ -153,7 +153,7 @@ fn powder_diffusion_step(w: &mut Winter, event: &Event) -> Result<(), SeasonErro
     let r = powder_diffusion::step(
         &w.scenario.parameters.powder_diffusion,
         &mut w.terrain,
-        &mut w.diffusion_scratch,
+        &mut w.workspace.diffusion,
         event.dt_days,
     )
     .map_err(failed("powder_diffusion", event.time_days))?;
@@ -180,7 +180,7 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
             &p.snowtran,
             &mut w.terrain,
             &forcing,
-            &mut w.snowtran_scratch,
+            &mut w.workspace.snowtran,
             event.dt_days,
         )
         .map_err(err)?;
@@ -188,7 +188,11 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         w.state.budget.wind_sublimation += r.sublimated;
         return Ok(());
     }
-    let maps = super::snowpack::wind_maps(&w.environment, &w.sx, w.wind_terms.as_ref());
+    let maps = super::snowpack::wind_maps(
+        &w.environment,
+        &w.workspace.sx,
+        w.workspace.wind_terms.as_ref(),
+    );
     // The drifting snow sublimates in the climate's air of the step, unless a humidity is set.
     let mut params = p.wind_transport.clone();
     let drift = &mut params.sx_redistribution.sublimation;
@@ -203,7 +207,7 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         &params,
         &mut w.terrain,
         &maps,
-        &mut w.wind_scratch,
+        &mut w.workspace.wind,
         event.dt_days,
     )
     .map_err(err)?;
@@ -216,10 +220,10 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
 fn avalanche_start(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
     let u = snowscape_terrain::random::uniform(w.scenario.seed, STREAM_AVALANCHE_CELL, event.index);
     // A fresh hazard map if the snow may have moved since it was computed.
-    if w.hazard_stale {
+    if w.workspace.hazard_stale {
         w.update_avalanche_rate();
     }
-    if let Some(cell) = w.hazard.pick(u) {
+    if let Some(cell) = w.workspace.hazard.pick(u) {
         // A painted cell releases by the paint with the share of its rate the paint brings
         // (a second draw, taken only where there is paint).
         let painted = w.painted_rate(cell);
@@ -228,7 +232,7 @@ fn avalanche_start(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
                 w.scenario.seed,
                 STREAM_PAINTED_TRIGGER,
                 event.index,
-            ) * w.hazard.lambda[cell]
+            ) * w.workspace.hazard.lambda[cell]
                 < painted
         {
             Trigger::Painted

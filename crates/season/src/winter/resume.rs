@@ -20,7 +20,6 @@
 //! ends bit-identical to an uninterrupted one.
 
 use super::{RunState, SeasonError, SnowpackState, Winter};
-use crate::avalanches::HazardSources;
 use crate::checkpoint::{self, CheckpointError, bedrock_fingerprint};
 use crate::forcing::StationForcing;
 use crate::scenario::Scenario;
@@ -770,18 +769,8 @@ impl Winter {
         self.refresh_air_temperature();
         // The hazard map of the restored snow (for `avalanche_hazard`); the scheduler's rate
         // is the checkpointed one, and the next start recomputes the map.
-        let skiers = self.recent_skier_map();
-        let sources = HazardSources {
-            skiers: skiers.as_deref(),
-            painted: self.painted_release.as_deref(),
-        };
-        self.hazard.compute(
-            &self.scenario.parameters.avalanche,
-            &self.terrain,
-            &self.slope_deg,
-            &sources,
-        );
-        self.hazard_stale = true;
+        self.ensure_workspace()?;
+        self.recompute_hazard();
         Ok(())
     }
 

@@ -6,18 +6,12 @@ use super::{LatitudeSource, RunState, SeasonBudget, SeasonError, Winter, resume,
 use crate::avalanches::{self, AvalancheMaps};
 use crate::forcing::StationForcing;
 use crate::melt::SnowpackState;
-use crate::powder_diffusion::DiffusionScratch;
 use crate::scenario::{Scenario, WeatherPeriod};
 use crate::scheduler::{EventKind, Scheduler};
 use crate::skiing::SkiStats;
-use crate::snowfall::SnowfallScratch;
-use crate::snowtran_transport::SnowTranScratch;
-use crate::stability::StabilityScratch;
 use crate::weather::{Air, AirSource};
-use crate::wind_transport::WindScratch;
 use snowscape_avalanche::AvalancheWorkspace;
 use snowscape_environment::{EnvironmentMaps, EnvironmentParams, SeasonSun};
-use snowscape_skiers::SkiScratch;
 use snowscape_terrain::LayeredTerrain;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -206,22 +200,11 @@ impl Winter {
             environment,
             base_environment,
             wall_seconds: BTreeMap::new(),
-            snowfall_scratch: SnowfallScratch::default(),
-            stability_scratch: StabilityScratch::default(),
-            diffusion_scratch: DiffusionScratch::default(),
-            wind_scratch: WindScratch::default(),
-            snowtran_scratch: SnowTranScratch::default(),
-            shedding_scratch: Default::default(),
-            sx: Vec::new(),
-            wind_terms: None,
-            slope_deg: Vec::new(),
-            hazard: Default::default(),
-            hazard_stale: true,
+            workspace: Default::default(),
             painted_release: None,
             avalanche_maps: AvalancheMaps::default(),
             avalanche_workspace: AvalancheWorkspace::default(),
             ski_area: None,
-            ski_scratch: SkiScratch::default(),
         }
     }
 
@@ -239,7 +222,8 @@ impl Winter {
                 .set_rate(EventKind::SnowfallStart, 0.0, false);
         }
         self.state.bands.ensure(self.bands.len());
-        self.slope_deg = avalanches::bedrock_slopes_deg(&self.terrain);
+        self.workspace.slope_deg = avalanches::bedrock_slopes_deg(&self.terrain);
+        self.workspace.built = true;
         let n = self.terrain.geometry().len();
         self.avalanche_maps = AvalancheMaps {
             scour: vec![0.0; n],

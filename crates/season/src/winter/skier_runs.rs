@@ -27,6 +27,7 @@ impl Winter {
     /// tracks kept), without moving the season's clock: the editor's painted skier areas.
     /// Returns the simulated seconds, `None` where no run could start (no skiable snow).
     pub fn ski_from(&mut self, x: f64, y: f64) -> Result<Option<f64>, SeasonError> {
+        self.ensure_workspace()?;
         let day = self.state.scheduler.time_days();
         let run = self.ski_run(day, Some([x, y]))?;
         if run.is_some() {
@@ -93,7 +94,7 @@ impl Winter {
                 &p.ski,
                 area,
                 &mut self.terrain,
-                &mut self.ski_scratch,
+                &mut self.workspace.ski,
                 p.step_s,
             )
             .map_err(ski_err)?;

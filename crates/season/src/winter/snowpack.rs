@@ -31,7 +31,7 @@ impl Winter {
         if p.sx_redistribution.enabled {
             let t = Instant::now();
             let w = &self.weather[self.state.weather_index];
-            self.sx = snowscape_environment::sheltering_index(
+            self.workspace.sx = snowscape_environment::sheltering_index(
                 &self.terrain.bedrock,
                 self.terrain.geometry(),
                 self.terrain.mask(),
@@ -40,10 +40,10 @@ impl Winter {
             )?;
             *self.wall_seconds.entry("sheltering").or_default() += t.elapsed().as_secs_f64();
         } else {
-            self.sx.clear();
+            self.workspace.sx.clear();
         }
-        self.wind_terms = if p.model == WindModel::Cordonnier {
-            let maps = wind_maps(&self.environment, &self.sx, None);
+        self.workspace.wind_terms = if p.model == WindModel::Cordonnier {
+            let maps = wind_maps(&self.environment, &self.workspace.sx, None);
             let terms = WindTerms::new(self.terrain.geometry(), self.terrain.mask(), &maps)
                 .map_err(|source| SeasonError::Phenomenon {
                     phenomenon: "wind_transport",
@@ -164,7 +164,7 @@ impl Winter {
                 rain_out: &mut self.pending_rain,
                 bands: (self.bands.band_of(), &mut self.state.bands.water_m),
             },
-            &mut self.snowfall_scratch,
+            &mut self.workspace.snowfall,
         )?;
         let b = &mut self.state.budget;
         b.snowfall += r.snow_m3;
@@ -210,7 +210,7 @@ impl Winter {
             window_days: (day - t0) as f32,
         };
         let p = &self.scenario.parameters.melt;
-        let surface = self.stability_scratch.surface_to_fill();
+        let surface = self.workspace.stability.surface_to_fill();
         let r = if p.model == MeltModel::EnergyBalance {
             melt::energy_balance::step_filling_surface(
                 &p.energy_balance,
