@@ -127,6 +127,61 @@ struct RunState {
     terminus_stale: bool,
 }
 
+/// Everything a checkpoint holds besides the terrain's snow layers, as plain data: the run
+/// state (scheduler, budget, counters, clocks, avalanche records), the snowpack's and the
+/// avalanches' per-cell maps, the rain to melt, the painted release rates and the ski area.
+/// The rest of a [`Winter`] is its scenario and inputs, the environment precompute and the
+/// workspace of scratch buffers and caches ([`Winter::drop_workspace`]).
+#[derive(Debug, Clone)]
+pub struct SeasonState {
+    run: RunState,
+    /// Surface age, cold content and liquid water per cell.
+    pack: SnowpackState,
+    /// Rain since the last melt window, m of water per cell.
+    pending_rain: Vec<f32>,
+    /// Snow the season's avalanches scoured and deposited, per cell.
+    avalanche_maps: AvalancheMaps,
+    /// Painted release rates, 1/day per cell ([`Winter::set_painted_release`]).
+    painted_release: Option<Vec<f32>>,
+    /// The ski area, made at the first skier (see [`crate::skiing`]).
+    ski_area: Option<SkiArea>,
+}
+
+impl SeasonState {
+    /// Simulated time, days since the season start.
+    pub fn day(&self) -> f64 {
+        self.run.scheduler.time_days()
+    }
+    /// The snow budget so far.
+    pub fn budget(&self) -> &SeasonBudget {
+        &self.run.budget
+    }
+    /// Every avalanche of the season so far, in order.
+    pub fn avalanches(&self) -> &[AvalancheRecord] {
+        &self.run.avalanches
+    }
+    /// The snowpack's surface state.
+    pub fn snowpack(&self) -> &SnowpackState {
+        &self.pack
+    }
+    /// Rain since the last melt window, m of water per cell.
+    pub fn pending_rain(&self) -> &[f32] {
+        &self.pending_rain
+    }
+    /// Snow the season's avalanches scoured and deposited so far, per cell, m.
+    pub fn avalanche_maps(&self) -> &AvalancheMaps {
+        &self.avalanche_maps
+    }
+    /// The painted release rates, 1/day per cell (`None`: no paint).
+    pub fn painted_release(&self) -> Option<&[f32]> {
+        self.painted_release.as_deref()
+    }
+    /// The ski area, once a skier has come.
+    pub fn ski_area(&self) -> Option<&SkiArea> {
+        self.ski_area.as_ref()
+    }
+}
+
 /// Where the season's latitude came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -146,26 +201,17 @@ pub struct Winter {
     weather: Vec<WeatherPeriod>,
     /// The terrain and its snow layers.
     pub terrain: LayeredTerrain,
-    state: RunState,
+    /// What a checkpoint holds besides the snow layers.
+    state: SeasonState,
     environment: EnvironmentMaps,
     base_environment: EnvironmentParams,
     /// Wall-clock seconds per phenomenon (not part of the state: it differs between runs).
     pub wall_seconds: BTreeMap<&'static str, f64>,
     /// Scratch buffers and caches, dropped and rebuilt at will ([`Winter::drop_workspace`]).
     workspace: workspace::SeasonWorkspace,
-    /// Painted release rates, 1/day per cell ([`Winter::set_painted_release`]; checkpointed).
-    painted_release: Option<Vec<f32>>,
-    /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
-    avalanche_maps: AvalancheMaps,
     avalanche_workspace: AvalancheWorkspace,
-    /// The ski area, made at the first skier (checkpointed: see [`crate::skiing`]).
-    ski_area: Option<SkiArea>,
     /// The hourly air, sun and precipitation factors.
     air: Air,
-    /// Surface age, cold content and liquid water per cell (checkpointed).
-    pack: SnowpackState,
-    /// Rain since the last melt window, m of water per cell (checkpointed).
-    pending_rain: Vec<f32>,
     latitude_source: LatitudeSource,
     /// The altitude band of each cell.
     bands: crate::bands::Bands,
@@ -246,6 +292,10 @@ impl Winter {
         Ok(w)
     }
 
+    /// Everything a checkpoint holds besides the snow layers ([`SeasonState`]).
+    pub fn state(&self) -> &SeasonState {
+        &self.state
+    }
     /// The scenario being run.
     pub fn scenario(&self) -> &Scenario {
         &self.scenario
@@ -268,7 +318,7 @@ impl Winter {
     }
     /// The snowpack's surface state (age, cold content, liquid water).
     pub fn snowpack(&self) -> &SnowpackState {
-        &self.pack
+        &self.state.pack
     }
     /// The hourly weather of the season.
     pub fn air(&self) -> &Air {
@@ -276,31 +326,31 @@ impl Winter {
     }
     /// Simulated time, days since the season start.
     pub fn day(&self) -> f64 {
-        self.state.scheduler.time_days()
+        self.state.run.scheduler.time_days()
     }
     /// The snow budget so far.
     pub fn budget(&self) -> &SeasonBudget {
-        &self.state.budget
+        &self.state.run.budget
     }
     /// Number of events of each kind so far.
     pub fn event_counts(&self) -> &BTreeMap<EventKind, u64> {
-        &self.state.event_counts
+        &self.state.run.event_counts
     }
     /// Every avalanche of the season so far, in order.
     pub fn avalanches(&self) -> &[AvalancheRecord] {
-        &self.state.avalanches
+        &self.state.run.avalanches
     }
     /// Snow thickness the season's avalanches scoured and deposited so far, per cell, m.
     pub fn avalanche_maps(&self) -> &AvalancheMaps {
-        &self.avalanche_maps
+        &self.state.avalanche_maps
     }
     /// The ski area (tracks, texture), once a skier has come.
     pub fn ski_area(&self) -> Option<&SkiArea> {
-        self.ski_area.as_ref()
+        self.state.ski_area.as_ref()
     }
     /// What the season's skiers did.
     pub fn ski_stats(&self) -> &SkiStats {
-        &self.state.ski
+        &self.state.run.ski
     }
     /// The current avalanche hazard per cell, 1/day (Σ is the Avalanche-Start rate).
     pub fn avalanche_hazard(&self) -> &[f64] {
@@ -309,7 +359,7 @@ impl Winter {
     /// The season by 200 m altitude band so far: precipitation, rain share and peak SWE
     /// ([`crate::bands`]; the peak counts the snow now as well as the daily samples).
     pub fn altitude_bands(&self) -> Vec<crate::bands::BandSummary> {
-        let mut record = self.state.bands.clone();
+        let mut record = self.state.run.bands.clone();
         record.raise_peaks(&self.band_mean_swe());
         self.bands.summary(&record)
     }
@@ -334,7 +384,7 @@ impl Winter {
         self.ensure_workspace()?;
         while self.day() < end && !stop.load(std::sync::atomic::Ordering::Relaxed) {
             self.apply_timeline()?;
-            let Some(event) = self.state.scheduler.next_event() else {
+            let Some(event) = self.state.run.scheduler.next_event() else {
                 break;
             };
             self.apply(event)?;
@@ -345,38 +395,42 @@ impl Winter {
     /// Starts weather periods and forced snowfall periods whose day has come.
     fn apply_timeline(&mut self) -> Result<(), SeasonError> {
         let now = self.day();
-        let next = self.state.weather_index + 1;
+        let next = self.state.run.weather_index + 1;
         if next < self.weather.len() && now >= self.weather[next].from_day {
-            self.state.weather_index = next;
+            self.state.run.weather_index = next;
             let w = self.weather[next].clone();
-            self.state.scheduler.set_rate(
+            self.state.run.scheduler.set_rate(
                 EventKind::SnowfallStart,
                 w.snowfall_per_week / 7.0,
                 true,
             );
             self.refresh_weather_maps()?;
         }
-        while let Some(p) = self.scenario.snowfall_periods.get(self.state.forced_index) {
+        while let Some(p) = self
+            .scenario
+            .snowfall_periods
+            .get(self.state.run.forced_index)
+        {
             if now < p.start_day {
                 break;
             }
             let until = p.start_day + p.days;
             if until > now {
-                self.state.scheduler.force_snowfall(p.start_day, until);
+                self.state.run.scheduler.force_snowfall(p.start_day, until);
                 self.follow_storms();
             }
-            self.state.forced_index += 1;
+            self.state.run.forced_index += 1;
         }
         while let Some(a) = self
             .scenario
             .avalanches
-            .get(self.state.user_avalanche_index)
+            .get(self.state.run.user_avalanche_index)
             .cloned()
         {
             if now < a.day {
                 break;
             }
-            self.state.user_avalanche_index += 1;
+            self.state.run.user_avalanche_index += 1;
             match self.trigger_avalanche(a.x, a.y) {
                 Ok(_) | Err(SeasonError::AvalanchePosition { .. }) => {}
                 Err(e) => return Err(e),
@@ -387,7 +441,8 @@ impl Winter {
 
     /// The recent-skier map the hazard reads, when skiers run.
     fn recent_skier_map(&self) -> Option<Vec<f32>> {
-        self.ski_area
+        self.state
+            .ski_area
             .as_ref()
             .map(|a| a.recent_skiers(&self.scenario.skiers.ski))
     }
@@ -397,7 +452,7 @@ impl Winter {
         let skiers = self.recent_skier_map();
         let sources = HazardSources {
             skiers: skiers.as_deref(),
-            painted: self.painted_release.as_deref(),
+            painted: self.state.painted_release.as_deref(),
         };
         let total = self.workspace.hazard.compute(
             &self.scenario.parameters.avalanche,
@@ -407,13 +462,15 @@ impl Winter {
         );
         self.workspace.hazard_stale = false;
         self.state
+            .run
             .scheduler
             .set_rate(EventKind::AvalancheStart, total, total > 0.0);
     }
 
     /// The painted release rate of `cell`, 1/day (0 without paint).
     pub(super) fn painted_rate(&self, cell: usize) -> f64 {
-        self.painted_release
+        self.state
+            .painted_release
             .as_ref()
             .map_or(0.0, |p| f64::from(p[cell]))
     }
@@ -498,9 +555,9 @@ impl Winter {
                 })
             }
         };
-        if rates != self.painted_release {
+        if rates != self.state.painted_release {
             self.ensure_workspace()?;
-            self.painted_release = rates;
+            self.state.painted_release = rates;
             self.update_avalanche_rate();
         }
         Ok(())
@@ -558,21 +615,23 @@ impl Winter {
                 trigger,
                 cell,
             },
-            &mut self.avalanche_maps,
+            &mut self.state.avalanche_maps,
             &mut self.avalanche_workspace,
         )
         .map_err(err)?;
-        self.state.budget.avalanche_outflow += rec.outflow_m3;
-        self.state.budget.avalanche_entrained += rec.entrained_m3;
+        self.state.run.budget.avalanche_outflow += rec.outflow_m3;
+        self.state.run.budget.avalanche_entrained += rec.entrained_m3;
         self.state
+            .run
             .scheduler
             .advance_clock(rec.simulated_s / SECONDS_PER_DAY);
         *self
             .state
+            .run
             .event_counts
             .entry(EventKind::AvalancheStep)
             .or_default() += rec.steps;
-        self.state.avalanches.push(rec.clone());
+        self.state.run.avalanches.push(rec.clone());
         // Only the released and entrained cells' unstable snow changed (the debris is stable
         // snow).
         let mut changed = cells;
@@ -584,7 +643,7 @@ impl Winter {
         let skiers = self.recent_skier_map();
         let sources = HazardSources {
             skiers: skiers.as_deref(),
-            painted: self.painted_release.as_deref(),
+            painted: self.state.painted_release.as_deref(),
         };
         let total = self.workspace.hazard.update_cells(
             &self.scenario.parameters.avalanche,
@@ -594,6 +653,7 @@ impl Winter {
             &changed,
         );
         self.state
+            .run
             .scheduler
             .set_rate(EventKind::AvalancheStart, total, total > 0.0);
         Ok(rec)
@@ -603,7 +663,7 @@ impl Winter {
     /// not depend on the weather and are kept).
     fn refresh_weather_maps(&mut self) -> Result<(), SeasonError> {
         let t = Instant::now();
-        let w = &self.weather[self.state.weather_index];
+        let w = &self.weather[self.state.run.weather_index];
         let params = weather_params(&self.base_environment, w);
         let g = self.terrain.geometry();
         self.environment.temperature = snowscape_environment::temperature(
@@ -641,7 +701,7 @@ impl Winter {
             EventKind::SkierStart => phenomenon_name(EventKind::SkierStep),
             kind => phenomenon_name(kind),
         };
-        let depth_before = (self.ski_area.is_some()
+        let depth_before = (self.state.ski_area.is_some()
             && matches!(
                 event.kind,
                 EventKind::SnowfallStep | EventKind::WindTransportStep
@@ -662,7 +722,7 @@ impl Winter {
             event.kind,
             EventKind::MeltAndStateStep | EventKind::SnowfallStep
         ) {
-            self.state.terminus_stale = true;
+            self.state.run.terminus_stale = true;
         }
         if matches!(
             event.kind,
@@ -679,7 +739,7 @@ impl Winter {
             // recent-skier map.
             self.workspace.hazard_stale = true;
         }
-        *self.state.event_counts.entry(event.kind).or_default() += 1;
+        *self.state.run.event_counts.entry(event.kind).or_default() += 1;
         if cfg!(debug_assertions) || event.index.is_multiple_of(64) {
             self.terrain
                 .check_invariants()

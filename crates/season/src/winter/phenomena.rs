@@ -66,7 +66,7 @@ fn snowfall_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
         return w.deliver_storms(day, false).map_err(err);
     }
     let mut params = p.snowfall.clone();
-    params.a0_precip = w.weather[w.state.weather_index].rain_snow_altitude_m;
+    params.a0_precip = w.weather[w.state.run.weather_index].rain_snow_altitude_m;
     let v = snowfall::step(
         &params,
         &mut w.terrain,
@@ -75,7 +75,7 @@ fn snowfall_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
         event.dt_days,
     )
     .map_err(err)?;
-    w.state.budget.snowfall += v.added;
+    w.state.run.budget.snowfall += v.added;
     Ok(())
 }
 
@@ -100,11 +100,15 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
             event.dt_days,
         )
         .map_err(&err)?;
-        w.state.budget.melt += v.removed;
+        w.state.run.budget.melt += v.removed;
     }
     // The next melt window reads the storms from its start (the paper's melt: none).
     let hourly = w.scenario.parameters.melt.model.hourly();
-    w.forget_storms(if hourly { w.state.melt_clock_days } else { day });
+    w.forget_storms(if hourly {
+        w.state.run.melt_clock_days
+    } else {
+        day
+    });
     let stability_step = if surface_filled {
         stability::step_on_filled_surface
     } else {
@@ -118,7 +122,7 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         event.dt_days,
     )
     .map_err(err)?;
-    w.state.budget.densification += r.densification;
+    w.state.run.budget.densification += r.densification;
     Ok(())
 }
 
@@ -130,12 +134,13 @@ fn slope_shedding_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     }
     let interval = w.scenario.parameters.slope_shedding.interval_days;
     if w.state
+        .run
         .shed_clock_days
         .is_some_and(|last| event.time_days < last + interval)
     {
         return Ok(());
     }
-    w.state.shed_clock_days = Some(event.time_days);
+    w.state.run.shed_clock_days = Some(event.time_days);
     let r = crate::slope_shedding::step(
         &w.scenario.parameters.slope_shedding,
         &mut w.terrain,
@@ -143,8 +148,8 @@ fn slope_shedding_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         event.dt_days,
     )
     .map_err(failed("slope_shedding", event.time_days))?;
-    w.state.budget.shedding_outflow += r.border_outflow_m3;
-    w.state.budget.shedding_moved += r.moved_m3;
+    w.state.run.budget.shedding_outflow += r.border_outflow_m3;
+    w.state.run.budget.shedding_moved += r.moved_m3;
     Ok(())
 }
 
@@ -157,7 +162,7 @@ fn powder_diffusion_step(w: &mut Winter, event: &Event) -> Result<(), SeasonErro
         event.dt_days,
     )
     .map_err(failed("powder_diffusion", event.time_days))?;
-    w.state.budget.diffusion_outflow += r.border_outflow;
+    w.state.run.budget.diffusion_outflow += r.border_outflow;
     Ok(())
 }
 
@@ -184,8 +189,8 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
             event.dt_days,
         )
         .map_err(err)?;
-        w.state.budget.wind_outflow += r.border_net_outflow;
-        w.state.budget.wind_sublimation += r.sublimated;
+        w.state.run.budget.wind_outflow += r.border_net_outflow;
+        w.state.run.budget.wind_sublimation += r.sublimated;
         return Ok(());
     }
     let maps = super::snowpack::wind_maps(
@@ -197,7 +202,13 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     let mut params = p.wind_transport.clone();
     let drift = &mut params.sx_redistribution.sublimation;
     if drift.relative_humidity_pct.is_none() {
-        let storms: Vec<(f64, f64)> = w.state.storms.iter().map(|s| (s.since, s.until)).collect();
+        let storms: Vec<(f64, f64)> = w
+            .state
+            .run
+            .storms
+            .iter()
+            .map(|s| (s.since, s.until))
+            .collect();
         let rh = w
             .air
             .mean_relative_humidity(day - event.dt_days, day, &storms);
@@ -211,8 +222,8 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         event.dt_days,
     )
     .map_err(err)?;
-    w.state.budget.wind_outflow += r.border_outflow;
-    w.state.budget.wind_sublimation += r.sublimated;
+    w.state.run.budget.wind_outflow += r.border_outflow;
+    w.state.run.budget.wind_sublimation += r.sublimated;
     Ok(())
 }
 

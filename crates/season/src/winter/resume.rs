@@ -599,12 +599,12 @@ impl Winter {
     /// Writes a checkpoint of the whole run state to `w`: the snow, the pack, the maps, the
     /// painted release rates and the ski area with its tracks.
     pub fn write_checkpoint(&self, w: &mut impl std::io::Write) -> Result<(), SeasonError> {
-        let m = &self.avalanche_maps;
-        let [age, cold, liquid, melting] = self.pack.arrays();
+        let m = &self.state.avalanche_maps;
+        let [age, cold, liquid, melting] = self.state.pack.arrays();
         let n = self.terrain.geometry().len();
         let zeros = vec![0.0f32; n];
-        let paint = self.painted_release.as_deref().unwrap_or(&zeros);
-        let area = self.ski_area.as_ref();
+        let paint = self.state.painted_release.as_deref().unwrap_or(&zeros);
+        let area = self.state.ski_area.as_ref();
         let [distance, recent_value, recent_time] = area.map_or([&zeros[..]; 3], |a| a.maps());
         let tracks = match area {
             Some(a) => a.tracks_json().map_err(CheckpointError::Header)?,
@@ -613,9 +613,9 @@ impl Winter {
         let tiles: Vec<(usize, &[f32])> =
             area.map_or_else(Vec::new, |a| a.texture().allocated().collect());
         let header = SavedRef {
-            run: &self.state,
+            run: &self.state.run,
             ski_area: area.map(SkiArea::header),
-            painted: self.painted_release.is_some(),
+            painted: self.state.painted_release.is_some(),
         };
         let extra: [&[f32]; EXTRA_MAPS] = [
             &m.scour,
@@ -624,7 +624,7 @@ impl Winter {
             cold,
             liquid,
             melting,
-            &self.pending_rain,
+            &self.state.pending_rain,
             paint,
             distance,
             recent_value,
@@ -702,7 +702,7 @@ impl Winter {
         validate_state(run, &scenario, &terrain)?;
         validate_maps(&terrain, &saved.layers, &saved.extra)?;
         let mut w = Self::with_forcing(scenario, terrain, forcing)?;
-        if saved.header.run.scenario_digest != w.state.scenario_digest {
+        if saved.header.run.scenario_digest != w.state.run.scenario_digest {
             return Err(SeasonError::CheckpointForcing);
         }
         if saved.header.run.weather_index >= w.weather.len() {
@@ -752,17 +752,17 @@ impl Winter {
             &self.scenario,
             &self.terrain,
         )?;
-        let period_changed = run.weather_index != self.state.weather_index;
+        let period_changed = run.weather_index != self.state.run.weather_index;
         for (layer, saved) in self.terrain.snow.iter_mut().zip(layers) {
             *layer = saved;
         }
-        self.avalanche_maps.scour = scour;
-        self.avalanche_maps.deposit = deposit;
-        self.pack = SnowpackState::from_arrays(pack);
-        self.pending_rain = pending_rain;
-        self.painted_release = painted.then_some(paint);
-        self.ski_area = ski_area;
-        self.state = run;
+        self.state.avalanche_maps.scour = scour;
+        self.state.avalanche_maps.deposit = deposit;
+        self.state.pack = SnowpackState::from_arrays(pack);
+        self.state.pending_rain = pending_rain;
+        self.state.painted_release = painted.then_some(paint);
+        self.state.ski_area = ski_area;
+        self.state.run = run;
         if period_changed {
             self.refresh_weather_maps()?;
         }
@@ -789,7 +789,7 @@ impl Winter {
                 now: terrain_summary(&self.terrain),
             });
         }
-        if run.scenario_digest != self.state.scenario_digest {
+        if run.scenario_digest != self.state.run.scenario_digest {
             let now = serde_json::to_value(&self.scenario).unwrap_or_default();
             return Err(match first_difference("", &run.scenario, &now) {
                 Some((key, checkpoint, now)) => SeasonError::CheckpointScenario {

@@ -72,7 +72,7 @@ impl Winter {
         let skiers = self.recent_skier_map();
         let sources = HazardSources {
             skiers: skiers.as_deref(),
-            painted: self.painted_release.as_deref(),
+            painted: self.state.painted_release.as_deref(),
         };
         self.workspace.hazard.compute(
             &self.scenario.parameters.avalanche,
