@@ -4,8 +4,10 @@
 //! The environment (sun, sky, bounce, temperature, wind) is computed on the bedrock, as the
 //! paper does (§4.1: `A = B` "allows precomputation"): sun, sky and bounce once for the season's
 //! dates, temperature and wind again at each weather change. The state that evolves — the snow
-//! layers, the scheduler, the budget — is plain data, so a checkpoint captures a run exactly
-//! and a resumed run ends bit-identical to an uninterrupted one.
+//! layers and the [`SeasonState`]: scheduler, budget, per-cell maps, paint, ski area — is plain
+//! data, so a checkpoint captures a run exactly and a resumed run ends bit-identical to an
+//! uninterrupted one. The scratch buffers and caches live in a workspace apart
+//! ([`Winter::drop_workspace`]), rebuilt when dropped.
 
 use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, HazardSources, Trigger};
 use crate::checkpoint::CheckpointError;
