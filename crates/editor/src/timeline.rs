@@ -15,10 +15,10 @@
 //! fork of the session's season, which has the same scenario on the same terrain, with
 //! [`Winter::restore_checkpoint`] (the weather period's maps recomputed when the snapshot's
 //! period is another). Restoring gives back the very bytes that were stored, and the restored
-//! season continues exactly as `snowscape run --resume` of them would (what a checkpoint does
-//! not hold, such as the season's ski area, is made again when next needed), at
+//! season continues exactly as `snowscape run --resume` of them would (the season's ski area
+//! and painted release rates included: both are in the checkpoint), at
 //! [`SNAPSHOT_BYTES_PER_CELL`] bytes per cell or less on realistic terrains
-//! (`tests/snapshot_memory.rs`: 16.7 at 256² after 3 days, 12.4 on the avaMal DEM after 2;
+//! (`tests/snapshot_memory.rs`: 16.8 at 256² after 3 days, 13.7 on the avaMal DEM after 2;
 //! a whole copy of the season took 285 and 268).
 //!
 //! **Memory budget.** The snapshots kept take at most the budget

@@ -1,20 +1,29 @@
 //! Checkpoints: the whole state of a season run in one file, so an interrupted run resumes
 //! and ends bit-identical to an uninterrupted one.
 //!
-//! Layout (little-endian, format version 3): the magic `SNOWCKPT`, a u32 format version, a
-//! u64 length of the JSON header, a u64 length of the maps, the JSON header (the caller's run
-//! state: scheduler, budget, time, the resolved scenario and a fingerprint of the inputs),
-//! the four snow layers as raw f32, bottom to top, then the caller's extra per-cell f32 maps,
-//! and last a CRC-32 (IEEE) of every byte before it. A reader checks the magic, the version,
-//! the lengths (a short file is "truncated", naming both sizes) and the checksum (a flipped
-//! bit is refused) before it parses anything. The file is written atomically by the caller
-//! (temporary name, then rename), so a crash mid-write leaves the previous checkpoint intact.
+//! Layout (little-endian, format version 4): the magic `SNOWCKPT`, a u32 format version, four
+//! u64 lengths (the JSON header, the maps, the ski tracks, the track tiles), the JSON header
+//! (the caller's run state: scheduler, budget, time, the resolved scenario and a fingerprint
+//! of the inputs), the four snow layers as raw f32, bottom to top, then the caller's extra
+//! per-cell f32 maps, the ski tracks (the caller's JSON: skiers on the slopes and finished
+//! tracks), the track texture's allocated tiles (each a u64 tile index and
+//! [`TILE`]² f32 texels), and last a CRC-32 (IEEE) of every byte before it. A reader checks the
+//! magic, the version, the lengths (a short file is "truncated", naming both sizes) and the
+//! checksum (a flipped bit is refused) before it parses anything. The file is written
+//! atomically by the caller (temporary name, then rename), so a crash mid-write leaves the
+//! previous checkpoint intact.
+//!
+//! **Older versions.** Version 3 (before the ski area and the painted release rates were
+//! checkpointed) and older are refused with [`CheckpointError::Version`], which names both
+//! versions: a version-3 checkpoint lacks what a resume needs to end bit-identical to an
+//! uninterrupted run, so the run is started again.
 //!
 //! [`read_file`] opens only a regular file (a device such as `/dev/zero` reads without end, a
 //! FIFO blocks: both are refused before anything is read), refuses one longer than the
-//! largest checkpoint of the terrain (a [`MAX_HEADER`] header and the maps of its cells), and
-//! after the preamble checks the file's length against the one the preamble announces,
-//! before the body is allocated.
+//! largest checkpoint of the terrain ([`max_len`]: a [`MAX_HEADER`] header, the maps of its
+//! cells, [`MAX_TRACKS`] bytes of tracks and every tile of its track texture), and after the
+//! preamble checks each length against its bound and the file's length against the one the
+//! preamble announces, before the body is allocated.
 //!
 //! The checksum detects damage, not nonsense: a file written wrong or forged with a matching
 //! checksum can still hold an index past its table, a time of −1e300 or NaN snow. The caller
@@ -23,17 +32,23 @@
 //! value (cut to [`crate::MAX_ECHO_CHARS`] characters).
 
 use serde::{Serialize, de::DeserializeOwned};
+use snowscape_skiers::texture::TILE;
 use snowscape_terrain::{LayeredTerrain, random::mix64};
 use std::io::{Read, Write};
 use thiserror::Error;
 
 const MAGIC: &[u8; 8] = b"SNOWCKPT";
 /// The format this build writes and reads.
-pub const VERSION: u32 = 3;
-/// Bytes before the JSON header: magic, version, two lengths.
-const PREAMBLE: usize = 8 + 4 + 8 + 8;
+pub const VERSION: u32 = 4;
+/// Bytes before the JSON header: magic, version, four lengths.
+pub const PREAMBLE: usize = 8 + 4 + 4 * 8;
 /// Largest JSON header accepted, bytes.
 pub const MAX_HEADER: u64 = 64 << 20;
+/// Largest ski-tracks section accepted, bytes (1 GiB: a season of 10 000 runs of 50 kB of
+/// JSON each is half of it; the tracks grow with the runs, not with the terrain).
+pub const MAX_TRACKS: u64 = 1 << 30;
+/// Bytes of one track tile in a checkpoint: its u64 index and its texels.
+pub const TILE_BYTES: u64 = 8 + 4 * (TILE * TILE) as u64;
 
 /// Why a checkpoint could not be written or read.
 #[derive(Debug, Error)]
@@ -58,6 +73,15 @@ pub enum CheckpointError {
     Header(#[from] serde_json::Error),
     #[error("checkpoint header of {0} bytes is implausibly large")]
     HeaderTooLarge(u64),
+    #[error(
+        "checkpoint {section} section of {bytes} bytes is implausible: at most {max} bytes{unit}"
+    )]
+    SectionSize {
+        section: &'static str,
+        bytes: u64,
+        max: u64,
+        unit: &'static str,
+    },
     #[error("checkpoint holds layers for {found} cells, the terrain has {expected}")]
     SizeMismatch { expected: usize, found: usize },
     #[error("checkpoint {path} is {kind}, not a regular file: refusing to read it")]
@@ -104,9 +128,26 @@ impl CheckpointError {
     }
 }
 
-/// The largest checkpoint of a terrain of `cells` cells with `extra` extra maps, bytes.
-pub fn max_len(cells: usize, extra: usize) -> u64 {
-    PREAMBLE as u64 + MAX_HEADER + 4 * (4 + extra as u64) * cells as u64 + 4
+/// What a checkpoint of a terrain may hold: its cells, the caller's extra maps, and the tiles
+/// of its track texture.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Bounds {
+    /// Grid cells.
+    pub cells: usize,
+    /// Extra per-cell maps after the four layers.
+    pub extra: usize,
+    /// Tiles of the track texture (all of them may be allocated).
+    pub tiles: usize,
+}
+
+/// The largest checkpoint within `bounds`, bytes.
+pub fn max_len(bounds: Bounds) -> u64 {
+    PREAMBLE as u64
+        + MAX_HEADER
+        + 4 * (4 + bounds.extra as u64) * bounds.cells as u64
+        + MAX_TRACKS
+        + TILE_BYTES * bounds.tiles as u64
+        + 4
 }
 
 /// Reads and verifies the checkpoint file at `path` (as [`read`]), opening only a regular
@@ -114,8 +155,7 @@ pub fn max_len(cells: usize, extra: usize) -> u64 {
 /// the body is allocated (module docs).
 pub fn read_file<H: DeserializeOwned>(
     path: &std::path::Path,
-    cells: usize,
-    extra: usize,
+    bounds: Bounds,
 ) -> Result<Contents<H>, CheckpointError> {
     let open = |source| CheckpointError::Open {
         path: path.to_path_buf(),
@@ -136,7 +176,7 @@ pub fn read_file<H: DeserializeOwned>(
     if !meta.is_file() {
         return Err(not_regular(meta.file_type()));
     }
-    let max = max_len(cells, extra);
+    let max = max_len(bounds);
     if meta.len() > max {
         return Err(CheckpointError::TooLarge {
             path: path.to_path_buf(),
@@ -146,7 +186,7 @@ pub fn read_file<H: DeserializeOwned>(
     }
     // `take` bounds the read even if the file grows while it is read.
     let mut r = std::io::BufReader::new(file).take(max + 1);
-    read_bounded(&mut r, Some(meta.len()), cells, extra)
+    read_bounded(&mut r, Some(meta.len()), bounds)
 }
 
 /// A fingerprint of a terrain's bedrock and geometry, to refuse resuming on other inputs.
@@ -161,40 +201,87 @@ pub fn bedrock_fingerprint(terrain: &LayeredTerrain) -> u64 {
     h
 }
 
-/// Writes `header`, the snow layers of `terrain` and the `extra` per-cell maps to `w`.
+/// What a checkpoint holds besides its header and snow layers.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Payload<'a> {
+    /// Extra per-cell maps, in order.
+    pub extra: &'a [&'a [f32]],
+    /// The ski tracks, the caller's JSON (empty: none).
+    pub tracks: &'a [u8],
+    /// The track texture's allocated tiles, `(index, TILE² texels)`, in index order.
+    pub tiles: &'a [(usize, &'a [f32])],
+}
+
+/// A writer that sums what passes through it.
+struct Summed<'w, W: Write> {
+    w: &'w mut W,
+    crc: crc32fast::Hasher,
+    buf: Vec<u8>,
+}
+
+impl<W: Write> Summed<'_, W> {
+    fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.crc.update(bytes);
+        self.w.write_all(bytes)
+    }
+
+    /// `floats` as little-endian bytes, after the u64 `prefix` when there is one.
+    fn put_floats(&mut self, prefix: Option<u64>, floats: &[f32]) -> std::io::Result<()> {
+        let mut buf = std::mem::take(&mut self.buf);
+        buf.clear();
+        if let Some(p) = prefix {
+            buf.extend_from_slice(&p.to_le_bytes());
+        }
+        for v in floats {
+            buf.extend_from_slice(&v.to_le_bytes());
+        }
+        let r = self.put(&buf);
+        self.buf = buf;
+        r
+    }
+}
+
+/// Writes `header`, the snow layers of `terrain` and the `payload` to `w`.
 pub fn write<H: Serialize>(
     w: &mut impl Write,
     header: &H,
     terrain: &LayeredTerrain,
-    extra: &[&[f32]],
+    payload: Payload,
 ) -> Result<(), CheckpointError> {
     let json = serde_json::to_vec(header)?;
     let maps: Vec<&[f32]> = terrain
         .snow
         .iter()
         .map(|l| l.as_slice())
-        .chain(extra.iter().copied())
+        .chain(payload.extra.iter().copied())
         .collect();
     let maps_len: usize = maps.iter().map(|m| 4 * m.len()).sum();
-    let mut crc = crc32fast::Hasher::new();
-    let mut put = |w: &mut dyn Write, bytes: &[u8]| -> std::io::Result<()> {
-        crc.update(bytes);
-        w.write_all(bytes)
+    let tiles_len = TILE_BYTES * payload.tiles.len() as u64;
+    let mut out = Summed {
+        w,
+        crc: crc32fast::Hasher::new(),
+        buf: Vec::with_capacity(terrain.geometry().len() * 4),
     };
-    put(w, MAGIC)?;
-    put(w, &VERSION.to_le_bytes())?;
-    put(w, &(json.len() as u64).to_le_bytes())?;
-    put(w, &(maps_len as u64).to_le_bytes())?;
-    put(w, &json)?;
-    let mut buf = Vec::with_capacity(terrain.geometry().len() * 4);
-    for layer in maps {
-        buf.clear();
-        for v in layer {
-            buf.extend_from_slice(&v.to_le_bytes());
-        }
-        put(w, &buf)?;
+    out.put(MAGIC)?;
+    out.put(&VERSION.to_le_bytes())?;
+    for len in [
+        json.len() as u64,
+        maps_len as u64,
+        payload.tracks.len() as u64,
+        tiles_len,
+    ] {
+        out.put(&len.to_le_bytes())?;
     }
-    w.write_all(&crc.finalize().to_le_bytes())?;
+    out.put(&json)?;
+    for layer in maps {
+        out.put_floats(None, layer)?;
+    }
+    out.put(payload.tracks)?;
+    for &(index, texels) in payload.tiles {
+        out.put_floats(Some(index as u64), texels)?;
+    }
+    let crc = out.crc.finalize();
+    out.w.write_all(&crc.to_le_bytes())?;
     Ok(())
 }
 
@@ -207,25 +294,55 @@ pub struct Contents<H> {
     pub layers: [Vec<f32>; 4],
     /// The caller's extra maps, in the order they were written.
     pub extra: Vec<Vec<f32>>,
+    /// The ski tracks' JSON (empty: none).
+    pub tracks: Vec<u8>,
+    /// The track texture's tiles, `(index, TILE² texels)`, as written.
+    pub tiles: Vec<(usize, Vec<f32>)>,
 }
 
-impl<H> Contents<H> {
-    /// Overwrites the snow layers of `terrain` (same geometry as the checkpoint's).
-    pub fn restore_layers(&mut self, terrain: &mut LayeredTerrain) {
-        for (layer, saved) in terrain.snow.iter_mut().zip(self.layers.iter_mut()) {
-            std::mem::swap(layer, saved);
-        }
-    }
-}
-
-/// Reads and verifies a checkpoint written by [`write`] for a terrain of `cells` cells with
-/// `extra` extra maps. Nothing is parsed before the lengths and the checksum are checked.
+/// Reads and verifies a checkpoint written by [`write`] within `bounds`. Nothing is parsed
+/// before the lengths and the checksum are checked.
 pub fn read<H: DeserializeOwned>(
     r: &mut impl Read,
-    cells: usize,
-    extra: usize,
+    bounds: Bounds,
 ) -> Result<Contents<H>, CheckpointError> {
-    read_bounded(r, None, cells, extra)
+    read_bounded(r, None, bounds)
+}
+
+/// The section lengths of a preamble, each checked against its bound.
+fn section_lengths(pre: &[u8; PREAMBLE], bounds: Bounds) -> Result<[u64; 4], CheckpointError> {
+    let word = |at: usize| u64::from_le_bytes(pre[at..at + 8].try_into().unwrap_or([0; 8]));
+    let lens = [word(12), word(20), word(28), word(36)];
+    let [header_len, maps_len, tracks_len, tiles_len] = lens;
+    if header_len > MAX_HEADER {
+        return Err(CheckpointError::HeaderTooLarge(header_len));
+    }
+    let maps = 4 + bounds.extra as u64;
+    let expected_maps = 4 * maps * bounds.cells as u64;
+    if maps_len != expected_maps {
+        return Err(CheckpointError::SizeMismatch {
+            expected: bounds.cells,
+            found: (maps_len / (4 * maps)).min(usize::MAX as u64) as usize,
+        });
+    }
+    if tracks_len > MAX_TRACKS {
+        return Err(CheckpointError::SectionSize {
+            section: "ski tracks",
+            bytes: tracks_len,
+            max: MAX_TRACKS,
+            unit: "",
+        });
+    }
+    let max_tiles = TILE_BYTES * bounds.tiles as u64;
+    if tiles_len > max_tiles || !tiles_len.is_multiple_of(TILE_BYTES) {
+        return Err(CheckpointError::SectionSize {
+            section: "track tiles",
+            bytes: tiles_len,
+            max: max_tiles,
+            unit: ", a whole number of tiles",
+        });
+    }
+    Ok(lens)
 }
 
 /// [`read`], knowing the length of the file when it is one: a length other than the one the
@@ -233,8 +350,7 @@ pub fn read<H: DeserializeOwned>(
 fn read_bounded<H: DeserializeOwned>(
     r: &mut impl Read,
     file_len: Option<u64>,
-    cells: usize,
-    extra: usize,
+    bounds: Bounds,
 ) -> Result<Contents<H>, CheckpointError> {
     let mut pre = [0u8; PREAMBLE];
     let got = read_up_to(r, &mut pre)?;
@@ -243,31 +359,21 @@ fn read_bounded<H: DeserializeOwned>(
     if got < 8 || &magic != MAGIC {
         return Err(CheckpointError::BadMagic { found: magic });
     }
+    // The version before the lengths: an older format's preamble is shorter.
+    let version = u32::from_le_bytes([pre[8], pre[9], pre[10], pre[11]]);
+    if got >= 12 && version != VERSION {
+        return Err(CheckpointError::Version { found: version });
+    }
     if got < PREAMBLE {
         return Err(CheckpointError::Truncated {
             expected: PREAMBLE as u64,
             found: got as u64,
         });
     }
-    let word = |at: usize| u64::from_le_bytes(pre[at..at + 8].try_into().unwrap_or([0; 8]));
-    let version = u32::from_le_bytes([pre[8], pre[9], pre[10], pre[11]]);
-    if version != VERSION {
-        return Err(CheckpointError::Version { found: version });
-    }
-    let (header_len, maps_len) = (word(12), word(20));
-    if header_len > MAX_HEADER {
-        return Err(CheckpointError::HeaderTooLarge(header_len));
-    }
-    let maps = 4 + extra;
-    let expected_maps = 4 * maps as u64 * cells as u64;
-    if maps_len != expected_maps {
-        return Err(CheckpointError::SizeMismatch {
-            expected: cells,
-            found: (maps_len / (4 * maps as u64)).min(usize::MAX as u64) as usize,
-        });
-    }
-    // Both lengths are bounded now: the header by MAX_HEADER, the maps by the terrain.
-    let body_len = header_len + maps_len;
+    // Every length is bounded now: the header by MAX_HEADER, the maps and tiles by the
+    // terrain, the tracks by MAX_TRACKS.
+    let [header_len, maps_len, tracks_len, tiles_len] = section_lengths(&pre, bounds)?;
+    let body_len = header_len + maps_len + tracks_len + tiles_len;
     if let Some(len) = file_len {
         let expected = PREAMBLE as u64 + body_len + 4;
         if len < expected {
@@ -305,24 +411,42 @@ fn read_bounded<H: DeserializeOwned>(
     if stored != computed {
         return Err(CheckpointError::Checksum { stored, computed });
     }
-    let header: H = serde_json::from_slice(&body[..header_len as usize])?;
-    let mut all: Vec<Vec<f32>> = body[header_len as usize..body_len as usize]
-        .chunks_exact(4 * cells.max(1))
+    let (header_bytes, rest) = body.split_at(header_len as usize);
+    let (map_bytes, rest) = rest.split_at(maps_len as usize);
+    let (track_bytes, rest) = rest.split_at(tracks_len as usize);
+    let tile_bytes = &rest[..tiles_len as usize];
+    let header: H = serde_json::from_slice(header_bytes)?;
+    let floats = |bytes: &[u8]| -> Vec<f32> {
+        bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect()
+    };
+    let maps = 4 + bounds.extra;
+    let mut all: Vec<Vec<f32>> = map_bytes
+        .chunks_exact(4 * bounds.cells.max(1))
         .take(maps)
-        .map(|bytes| {
-            bytes
-                .chunks_exact(4)
-                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                .collect()
-        })
+        .map(floats)
         .collect();
     all.resize(maps, Vec::new());
     let extra_maps = all.split_off(4);
     let layers: [Vec<f32>; 4] = all.try_into().unwrap_or_default();
+    let tiles = tile_bytes
+        .chunks_exact(TILE_BYTES as usize)
+        .map(|t| {
+            let index = u64::from_le_bytes(t[..8].try_into().unwrap_or([0xff; 8]));
+            (
+                usize::try_from(index).unwrap_or(usize::MAX),
+                floats(&t[8..]),
+            )
+        })
+        .collect();
     Ok(Contents {
         header,
         layers,
         extra: extra_maps,
+        tracks: track_bytes.to_vec(),
+        tiles,
     })
 }
 
@@ -345,6 +469,14 @@ mod tests {
     use super::*;
     use snowscape_terrain::{Grid, GridGeometry, SnowLayer};
 
+    fn bounds(cells: usize, extra: usize) -> Bounds {
+        Bounds {
+            cells,
+            extra,
+            tiles: 1,
+        }
+    }
+
     fn terrain() -> LayeredTerrain {
         let g = GridGeometry::square(5, 3, 2.0).unwrap();
         let mut t = LayeredTerrain::from_bedrock(Grid::from_fn(g, |c, r| (c * 7 + r) as f32));
@@ -360,13 +492,21 @@ mod tests {
     fn round_trip_is_bit_exact() {
         let t = terrain();
         let mut bytes = Vec::new();
-        write(&mut bytes, &("day", 42u32), &t, &[&[7.0f32; 15]]).unwrap();
+        let tile: Vec<f32> = (0..TILE * TILE).map(|k| k as f32 / 8192.0).collect();
+        let payload = Payload {
+            extra: &[&[7.0f32; 15]],
+            tracks: b"[1,2]",
+            tiles: &[(0, &tile[..])],
+        };
+        write(&mut bytes, &("day", 42u32), &t, payload).unwrap();
         let mut back = LayeredTerrain::from_bedrock(Grid::from_fn(t.geometry().clone(), |c, r| {
             (c * 7 + r) as f32
         }));
-        let mut c: Contents<(String, u32)> = read(&mut bytes.as_slice(), 15, 1).unwrap();
-        c.restore_layers(&mut back);
+        let c: Contents<(String, u32)> = read(&mut bytes.as_slice(), bounds(15, 1)).unwrap();
+        back.snow = c.layers.clone();
         assert_eq!(c.extra, vec![vec![7.0f32; 15]]);
+        assert_eq!(c.tracks, b"[1,2]");
+        assert_eq!(c.tiles, vec![(0, tile)]);
         assert_eq!(c.header, ("day".to_string(), 42));
         assert_eq!(back, t);
         assert_eq!(bedrock_fingerprint(&back), bedrock_fingerprint(&t));
@@ -376,38 +516,64 @@ mod tests {
     fn corrupt_or_truncated_files_are_typed_errors() {
         let t = terrain();
         let mut bytes = Vec::new();
-        write(&mut bytes, &1u8, &t, &[]).unwrap();
+        write(&mut bytes, &1u8, &t, Payload::default()).unwrap();
         let cut = &bytes[..bytes.len() - 3];
         assert!(matches!(
-            read::<u8>(&mut &cut[..], 15, 0),
+            read::<u8>(&mut &cut[..], bounds(15, 0)),
             Err(CheckpointError::Truncated { expected, found })
                 if expected == bytes.len() as u64 && found == cut.len() as u64
         ));
         assert!(matches!(
-            read::<u8>(&mut &bytes[..10], 15, 0),
+            read::<u8>(&mut &bytes[..10], bounds(15, 0)),
             Err(CheckpointError::Truncated { .. })
         ));
         let mut bad = bytes.clone();
         bad[0] = b'X';
         assert!(matches!(
-            read::<u8>(&mut bad.as_slice(), 15, 0),
+            read::<u8>(&mut bad.as_slice(), bounds(15, 0)),
             Err(CheckpointError::BadMagic { .. })
         ));
         let mut longer = bytes.clone();
         longer.push(0);
         assert!(matches!(
-            read::<u8>(&mut longer.as_slice(), 15, 0),
+            read::<u8>(&mut longer.as_slice(), bounds(15, 0)),
             Err(CheckpointError::TrailingBytes { extra: 1 })
         ));
         assert!(matches!(
-            read::<u8>(&mut bytes.as_slice(), 16, 0),
+            read::<u8>(&mut bytes.as_slice(), bounds(16, 0)),
             Err(CheckpointError::SizeMismatch { expected: 16, .. })
         ));
         let mut old = bytes.clone();
-        old[8..12].copy_from_slice(&2u32.to_le_bytes());
+        old[8..12].copy_from_slice(&3u32.to_le_bytes());
+        let e = read::<u8>(&mut old.as_slice(), bounds(15, 0)).unwrap_err();
+        assert!(matches!(e, CheckpointError::Version { found: 3 }), "{e:?}");
+        let m = e.to_string();
+        assert!(m.contains("version 3") && m.contains("version 4"), "{m}");
+        // A forged tile section: more tiles than the texture has, or a partial tile.
+        let mut many = bytes.clone();
+        many[36..44].copy_from_slice(&(2 * TILE_BYTES).to_le_bytes());
         assert!(matches!(
-            read::<u8>(&mut old.as_slice(), 15, 0),
-            Err(CheckpointError::Version { found: 2 })
+            read::<u8>(&mut many.as_slice(), bounds(15, 0)),
+            Err(CheckpointError::SectionSize {
+                section: "track tiles",
+                ..
+            })
+        ));
+        many[36..44].copy_from_slice(&7u64.to_le_bytes());
+        assert!(matches!(
+            read::<u8>(&mut many.as_slice(), bounds(15, 0)),
+            Err(CheckpointError::SectionSize {
+                section: "track tiles",
+                ..
+            })
+        ));
+        many[28..36].copy_from_slice(&(MAX_TRACKS + 1).to_le_bytes());
+        assert!(matches!(
+            read::<u8>(&mut many.as_slice(), bounds(15, 0)),
+            Err(CheckpointError::SectionSize {
+                section: "ski tracks",
+                ..
+            })
         ));
     }
 
@@ -415,13 +581,18 @@ mod tests {
     fn every_flipped_bit_is_refused() {
         let t = terrain();
         let mut bytes = Vec::new();
-        write(&mut bytes, &("state", 7u32), &t, &[&[1.5f32; 15]]).unwrap();
+        let payload = Payload {
+            extra: &[&[1.5f32; 15]],
+            tracks: b"{}",
+            tiles: &[],
+        };
+        write(&mut bytes, &("state", 7u32), &t, payload).unwrap();
         for byte in 0..bytes.len() {
             for bit in 0..8 {
                 let mut b = bytes.clone();
                 b[byte] ^= 1 << bit;
                 assert!(
-                    read::<(String, u32)>(&mut b.as_slice(), 15, 1).is_err(),
+                    read::<(String, u32)>(&mut b.as_slice(), bounds(15, 1)).is_err(),
                     "a flip of bit {bit} of byte {byte} was accepted"
                 );
             }

@@ -16,9 +16,11 @@
 //! tracks (§6.2). The distance-to-terminus map is refreshed at the next start after snowfall
 //! or melt changed the snow.
 //!
-//! **Checkpoints** hold the snow (compaction included) but not the ski area: a resumed run
-//! starts a fresh track texture and skier numbering, so with skiers a resumed season is not
-//! bit-identical to an uninterrupted one (without skiers it is).
+//! **Checkpoints** hold the snow (compaction included) and the ski area: its clock and next
+//! skier id, the skiers on the slopes, the finished tracks, the track texture's tiles, the
+//! recent-skier map, the distance-to-terminus map (the spawn weights are rebuilt from it) and
+//! whether it is due a refresh ([`snowscape_skiers::snapshot`]), so a resumed season with
+//! skiers ends bit-identical to an uninterrupted one (`tests/resume_skiers.rs`).
 
 use serde::{Deserialize, Serialize};
 use snowscape_skiers::{SkiParams, Terminus};

@@ -4,28 +4,25 @@
 //! The environment (sun, sky, bounce, temperature, wind) is computed on the bedrock, as the
 //! paper does (§4.1: `A = B` "allows precomputation"): sun, sky and bounce once for the season's
 //! dates, temperature and wind again at each weather change. The state that evolves — the snow
-//! layers, the scheduler, the budget — is plain data, so a checkpoint captures a run exactly
-//! and a resumed run ends bit-identical to an uninterrupted one.
+//! layers and the [`SeasonState`]: scheduler, budget, per-cell maps, paint, ski area — is plain
+//! data, so a checkpoint captures a run exactly and a resumed run ends bit-identical to an
+//! uninterrupted one. The scratch buffers and caches live in a workspace apart
+//! ([`Winter::drop_workspace`]), rebuilt when dropped.
 
 use crate::avalanches::{self, AvalancheMaps, AvalancheRecord, HazardSources, Trigger};
 use crate::checkpoint::CheckpointError;
 use crate::forcing::StationForcing;
 use crate::melt::SnowpackState;
 use crate::phenomenon::PhenomenonError;
-use crate::powder_diffusion::DiffusionScratch;
 use crate::scenario::{Scenario, WeatherPeriod, day_of_year};
 use crate::scheduler::{Event, EventKind, SECONDS_PER_DAY, Scheduler};
 use crate::skiing::SkiStats;
-use crate::snowfall::SnowfallScratch;
-use crate::snowtran_transport::SnowTranScratch;
-use crate::stability::StabilityScratch;
 use crate::weather::Air;
-use crate::wind_transport::WindScratch;
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::AvalancheWorkspace;
 use snowscape_avalanche::release_area::rupture_at_point;
 use snowscape_environment::{EnvironmentError, EnvironmentMaps, EnvironmentParams, precompute};
-use snowscape_skiers::{SkiArea, SkiScratch};
+use snowscape_skiers::SkiArea;
 use snowscape_terrain::{LayeredTerrain, TerrainError};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -90,6 +87,7 @@ mod resume;
 mod setup;
 mod skier_runs;
 mod snowpack;
+mod workspace;
 
 pub use budget::{SeasonBudget, WaterBudget};
 
@@ -125,6 +123,65 @@ struct RunState {
     /// Precipitation and peak SWE per altitude band.
     #[serde(default)]
     bands: crate::bands::BandRecord,
+    /// Whether snowfall or melt changed the snow since the ski area's distance map was
+    /// computed (the next skier refreshes it).
+    #[serde(default)]
+    terminus_stale: bool,
+}
+
+/// Everything a checkpoint holds besides the terrain's snow layers, as plain data: the run
+/// state (scheduler, budget, counters, clocks, avalanche records), the snowpack's and the
+/// avalanches' per-cell maps, the rain to melt, the painted release rates and the ski area.
+/// The rest of a [`Winter`] is its scenario and inputs, the environment precompute and the
+/// workspace of scratch buffers and caches ([`Winter::drop_workspace`]).
+#[derive(Debug, Clone)]
+pub struct SeasonState {
+    run: RunState,
+    /// Surface age, cold content and liquid water per cell.
+    pack: SnowpackState,
+    /// Rain since the last melt window, m of water per cell.
+    pending_rain: Vec<f32>,
+    /// Snow the season's avalanches scoured and deposited, per cell.
+    avalanche_maps: AvalancheMaps,
+    /// Painted release rates, 1/day per cell ([`Winter::set_painted_release`]).
+    painted_release: Option<Vec<f32>>,
+    /// The ski area, made at the first skier (see [`crate::skiing`]).
+    ski_area: Option<SkiArea>,
+}
+
+impl SeasonState {
+    /// Simulated time, days since the season start.
+    pub fn day(&self) -> f64 {
+        self.run.scheduler.time_days()
+    }
+    /// The snow budget so far.
+    pub fn budget(&self) -> &SeasonBudget {
+        &self.run.budget
+    }
+    /// Every avalanche of the season so far, in order.
+    pub fn avalanches(&self) -> &[AvalancheRecord] {
+        &self.run.avalanches
+    }
+    /// The snowpack's surface state.
+    pub fn snowpack(&self) -> &SnowpackState {
+        &self.pack
+    }
+    /// Rain since the last melt window, m of water per cell.
+    pub fn pending_rain(&self) -> &[f32] {
+        &self.pending_rain
+    }
+    /// Snow the season's avalanches scoured and deposited so far, per cell, m.
+    pub fn avalanche_maps(&self) -> &AvalancheMaps {
+        &self.avalanche_maps
+    }
+    /// The painted release rates, 1/day per cell (`None`: no paint).
+    pub fn painted_release(&self) -> Option<&[f32]> {
+        self.painted_release.as_deref()
+    }
+    /// The ski area, once a skier has come.
+    pub fn ski_area(&self) -> Option<&SkiArea> {
+        self.ski_area.as_ref()
+    }
 }
 
 /// Where the season's latitude came from.
@@ -146,45 +203,17 @@ pub struct Winter {
     weather: Vec<WeatherPeriod>,
     /// The terrain and its snow layers.
     pub terrain: LayeredTerrain,
-    state: RunState,
+    /// What a checkpoint holds besides the snow layers.
+    state: SeasonState,
     environment: EnvironmentMaps,
     base_environment: EnvironmentParams,
     /// Wall-clock seconds per phenomenon (not part of the state: it differs between runs).
     pub wall_seconds: BTreeMap<&'static str, f64>,
-    snowfall_scratch: SnowfallScratch,
-    stability_scratch: StabilityScratch,
-    diffusion_scratch: DiffusionScratch,
-    wind_scratch: WindScratch,
-    snowtran_scratch: SnowTranScratch,
-    shedding_scratch: crate::slope_shedding::SheddingScratch,
-    /// Maximum upwind slope Sx for the current period's wind, degrees (Winstral et al. 2002).
-    sx: Vec<f32>,
-    /// The current wind field's snow-independent transport terms (the paper's wind model).
-    wind_terms: Option<crate::wind_transport::WindTerms>,
-    /// Bedrock slope per cell, degrees (for the avalanche hazard).
-    slope_deg: Vec<f32>,
-    /// Avalanche hazard per cell, 1/day (recomputed when the snow changes).
-    hazard: avalanches::HazardMap,
-    /// The hazard map may be out of date: an event that can change unstable snow ran since
-    /// it was computed (an avalanche start recomputes it).
-    hazard_stale: bool,
-    /// Painted release rates, 1/day per cell ([`Winter::set_painted_release`]); not
-    /// checkpointed (the editor's project keeps its paint and sets it again).
-    painted_release: Option<Vec<f32>>,
-    /// Snow the season's avalanches scoured and deposited, per cell (checkpointed).
-    avalanche_maps: AvalancheMaps,
+    /// Scratch buffers and caches, dropped and rebuilt at will ([`Winter::drop_workspace`]).
+    workspace: workspace::SeasonWorkspace,
     avalanche_workspace: AvalancheWorkspace,
-    /// The ski area, made at the first skier (not checkpointed: see [`crate::skiing`]).
-    ski_area: Option<SkiArea>,
-    ski_scratch: SkiScratch,
-    /// Whether snowfall or melt changed the snow since the distance map was computed.
-    terminus_stale: bool,
     /// The hourly air, sun and precipitation factors.
     air: Air,
-    /// Surface age, cold content and liquid water per cell (checkpointed).
-    pack: SnowpackState,
-    /// Rain since the last melt window, m of water per cell (checkpointed).
-    pending_rain: Vec<f32>,
     latitude_source: LatitudeSource,
     /// The altitude band of each cell.
     bands: crate::bands::Bands,
@@ -265,6 +294,10 @@ impl Winter {
         Ok(w)
     }
 
+    /// Everything a checkpoint holds besides the snow layers ([`SeasonState`]).
+    pub fn state(&self) -> &SeasonState {
+        &self.state
+    }
     /// The scenario being run.
     pub fn scenario(&self) -> &Scenario {
         &self.scenario
@@ -287,7 +320,7 @@ impl Winter {
     }
     /// The snowpack's surface state (age, cold content, liquid water).
     pub fn snowpack(&self) -> &SnowpackState {
-        &self.pack
+        &self.state.pack
     }
     /// The hourly weather of the season.
     pub fn air(&self) -> &Air {
@@ -295,40 +328,40 @@ impl Winter {
     }
     /// Simulated time, days since the season start.
     pub fn day(&self) -> f64 {
-        self.state.scheduler.time_days()
+        self.state.run.scheduler.time_days()
     }
     /// The snow budget so far.
     pub fn budget(&self) -> &SeasonBudget {
-        &self.state.budget
+        &self.state.run.budget
     }
     /// Number of events of each kind so far.
     pub fn event_counts(&self) -> &BTreeMap<EventKind, u64> {
-        &self.state.event_counts
+        &self.state.run.event_counts
     }
     /// Every avalanche of the season so far, in order.
     pub fn avalanches(&self) -> &[AvalancheRecord] {
-        &self.state.avalanches
+        &self.state.run.avalanches
     }
     /// Snow thickness the season's avalanches scoured and deposited so far, per cell, m.
     pub fn avalanche_maps(&self) -> &AvalancheMaps {
-        &self.avalanche_maps
+        &self.state.avalanche_maps
     }
     /// The ski area (tracks, texture), once a skier has come.
     pub fn ski_area(&self) -> Option<&SkiArea> {
-        self.ski_area.as_ref()
+        self.state.ski_area.as_ref()
     }
     /// What the season's skiers did.
     pub fn ski_stats(&self) -> &SkiStats {
-        &self.state.ski
+        &self.state.run.ski
     }
     /// The current avalanche hazard per cell, 1/day (Σ is the Avalanche-Start rate).
     pub fn avalanche_hazard(&self) -> &[f64] {
-        &self.hazard.lambda
+        &self.workspace.hazard.lambda
     }
     /// The season by 200 m altitude band so far: precipitation, rain share and peak SWE
     /// ([`crate::bands`]; the peak counts the snow now as well as the daily samples).
     pub fn altitude_bands(&self) -> Vec<crate::bands::BandSummary> {
-        let mut record = self.state.bands.clone();
+        let mut record = self.state.run.bands.clone();
         record.raise_peaks(&self.band_mean_swe());
         self.bands.summary(&record)
     }
@@ -350,9 +383,10 @@ impl Winter {
         stop: &std::sync::atomic::AtomicBool,
     ) -> Result<(), SeasonError> {
         let end = day.min(self.scenario.days);
+        self.ensure_workspace()?;
         while self.day() < end && !stop.load(std::sync::atomic::Ordering::Relaxed) {
             self.apply_timeline()?;
-            let Some(event) = self.state.scheduler.next_event() else {
+            let Some(event) = self.state.run.scheduler.next_event() else {
                 break;
             };
             self.apply(event)?;
@@ -363,38 +397,42 @@ impl Winter {
     /// Starts weather periods and forced snowfall periods whose day has come.
     fn apply_timeline(&mut self) -> Result<(), SeasonError> {
         let now = self.day();
-        let next = self.state.weather_index + 1;
+        let next = self.state.run.weather_index + 1;
         if next < self.weather.len() && now >= self.weather[next].from_day {
-            self.state.weather_index = next;
+            self.state.run.weather_index = next;
             let w = self.weather[next].clone();
-            self.state.scheduler.set_rate(
+            self.state.run.scheduler.set_rate(
                 EventKind::SnowfallStart,
                 w.snowfall_per_week / 7.0,
                 true,
             );
             self.refresh_weather_maps()?;
         }
-        while let Some(p) = self.scenario.snowfall_periods.get(self.state.forced_index) {
+        while let Some(p) = self
+            .scenario
+            .snowfall_periods
+            .get(self.state.run.forced_index)
+        {
             if now < p.start_day {
                 break;
             }
             let until = p.start_day + p.days;
             if until > now {
-                self.state.scheduler.force_snowfall(p.start_day, until);
+                self.state.run.scheduler.force_snowfall(p.start_day, until);
                 self.follow_storms();
             }
-            self.state.forced_index += 1;
+            self.state.run.forced_index += 1;
         }
         while let Some(a) = self
             .scenario
             .avalanches
-            .get(self.state.user_avalanche_index)
+            .get(self.state.run.user_avalanche_index)
             .cloned()
         {
             if now < a.day {
                 break;
             }
-            self.state.user_avalanche_index += 1;
+            self.state.run.user_avalanche_index += 1;
             match self.trigger_avalanche(a.x, a.y) {
                 Ok(_) | Err(SeasonError::AvalanchePosition { .. }) => {}
                 Err(e) => return Err(e),
@@ -405,7 +443,8 @@ impl Winter {
 
     /// The recent-skier map the hazard reads, when skiers run.
     fn recent_skier_map(&self) -> Option<Vec<f32>> {
-        self.ski_area
+        self.state
+            .ski_area
             .as_ref()
             .map(|a| a.recent_skiers(&self.scenario.skiers.ski))
     }
@@ -415,23 +454,25 @@ impl Winter {
         let skiers = self.recent_skier_map();
         let sources = HazardSources {
             skiers: skiers.as_deref(),
-            painted: self.painted_release.as_deref(),
+            painted: self.state.painted_release.as_deref(),
         };
-        let total = self.hazard.compute(
+        let total = self.workspace.hazard.compute(
             &self.scenario.parameters.avalanche,
             &self.terrain,
-            &self.slope_deg,
+            &self.workspace.slope_deg,
             &sources,
         );
-        self.hazard_stale = false;
+        self.workspace.hazard_stale = false;
         self.state
+            .run
             .scheduler
             .set_rate(EventKind::AvalancheStart, total, total > 0.0);
     }
 
     /// The painted release rate of `cell`, 1/day (0 without paint).
     pub(super) fn painted_rate(&self, cell: usize) -> f64 {
-        self.painted_release
+        self.state
+            .painted_release
             .as_ref()
             .map_or(0.0, |p| f64::from(p[cell]))
     }
@@ -516,8 +557,9 @@ impl Winter {
                 })
             }
         };
-        if rates != self.painted_release {
-            self.painted_release = rates;
+        if rates != self.state.painted_release {
+            self.ensure_workspace()?;
+            self.state.painted_release = rates;
             self.update_avalanche_rate();
         }
         Ok(())
@@ -537,6 +579,7 @@ impl Winter {
             });
         };
         let cell = g.index(c.round() as usize, r.round() as usize);
+        self.ensure_workspace()?;
         let t = Instant::now();
         let rec = self.start_avalanche(cell, Trigger::User);
         *self.wall_seconds.entry("avalanche").or_default() += t.elapsed().as_secs_f64();
@@ -574,21 +617,23 @@ impl Winter {
                 trigger,
                 cell,
             },
-            &mut self.avalanche_maps,
+            &mut self.state.avalanche_maps,
             &mut self.avalanche_workspace,
         )
         .map_err(err)?;
-        self.state.budget.avalanche_outflow += rec.outflow_m3;
-        self.state.budget.avalanche_entrained += rec.entrained_m3;
+        self.state.run.budget.avalanche_outflow += rec.outflow_m3;
+        self.state.run.budget.avalanche_entrained += rec.entrained_m3;
         self.state
+            .run
             .scheduler
             .advance_clock(rec.simulated_s / SECONDS_PER_DAY);
         *self
             .state
+            .run
             .event_counts
             .entry(EventKind::AvalancheStep)
             .or_default() += rec.steps;
-        self.state.avalanches.push(rec.clone());
+        self.state.run.avalanches.push(rec.clone());
         // Only the released and entrained cells' unstable snow changed (the debris is stable
         // snow).
         let mut changed = cells;
@@ -600,16 +645,17 @@ impl Winter {
         let skiers = self.recent_skier_map();
         let sources = HazardSources {
             skiers: skiers.as_deref(),
-            painted: self.painted_release.as_deref(),
+            painted: self.state.painted_release.as_deref(),
         };
-        let total = self.hazard.update_cells(
+        let total = self.workspace.hazard.update_cells(
             &self.scenario.parameters.avalanche,
             &self.terrain,
-            &self.slope_deg,
+            &self.workspace.slope_deg,
             &sources,
             &changed,
         );
         self.state
+            .run
             .scheduler
             .set_rate(EventKind::AvalancheStart, total, total > 0.0);
         Ok(rec)
@@ -619,7 +665,7 @@ impl Winter {
     /// not depend on the weather and are kept).
     fn refresh_weather_maps(&mut self) -> Result<(), SeasonError> {
         let t = Instant::now();
-        let w = &self.weather[self.state.weather_index];
+        let w = &self.weather[self.state.run.weather_index];
         let params = weather_params(&self.base_environment, w);
         let g = self.terrain.geometry();
         self.environment.temperature = snowscape_environment::temperature(
@@ -657,7 +703,7 @@ impl Winter {
             EventKind::SkierStart => phenomenon_name(EventKind::SkierStep),
             kind => phenomenon_name(kind),
         };
-        let depth_before = (self.ski_area.is_some()
+        let depth_before = (self.state.ski_area.is_some()
             && matches!(
                 event.kind,
                 EventKind::SnowfallStep | EventKind::WindTransportStep
@@ -678,7 +724,7 @@ impl Winter {
             event.kind,
             EventKind::MeltAndStateStep | EventKind::SnowfallStep
         ) {
-            self.terminus_stale = true;
+            self.state.run.terminus_stale = true;
         }
         if matches!(
             event.kind,
@@ -693,9 +739,9 @@ impl Winter {
         ) {
             // Wind erodes unstable snow where the powder is gone; skiers change the
             // recent-skier map.
-            self.hazard_stale = true;
+            self.workspace.hazard_stale = true;
         }
-        *self.state.event_counts.entry(event.kind).or_default() += 1;
+        *self.state.run.event_counts.entry(event.kind).or_default() += 1;
         if cfg!(debug_assertions) || event.index.is_multiple_of(64) {
             self.terrain
                 .check_invariants()

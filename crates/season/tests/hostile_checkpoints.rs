@@ -238,7 +238,12 @@ fn only_a_regular_file_of_bounded_length_is_read() {
     }
     // Longer than the largest checkpoint of this terrain (sparse: no disk used).
     let big = d.join("big.bin");
-    let max = checkpoint::max_len(COLS * ROWS, 7);
+    // 11 extra maps; the 24x20 grid at 8 texels per cell is 3x3 tiles of 64².
+    let max = checkpoint::max_len(checkpoint::Bounds {
+        cells: COLS * ROWS,
+        extra: 11,
+        tiles: 9,
+    });
     std::fs::File::create(&big)
         .unwrap()
         .set_len(max + 1)
@@ -267,4 +272,180 @@ fn only_a_regular_file_of_bounded_length_is_read() {
         }))
     ));
     std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// The season of these tests with 48 skiers a day stepped 2 s a start (so that skiers are
+/// on the slopes at a checkpoint) and painted release rates, on the cone under 1 m of snow.
+fn ski_scenario() -> snowscape_season::scenario::Scenario {
+    let mut s = scenario();
+    s.skiers.per_day = 48.0;
+    s.skiers.max_run_s = 2.0;
+    s
+}
+
+/// A genuine checkpoint of the skiing season at day 1.5.
+fn ski_checkpoint() -> Vec<u8> {
+    let mut t = terrain();
+    t.layer_mut(snowscape_terrain::SnowLayer::Stable).fill(1.0);
+    let mut w = Winter::new(ski_scenario(), t).unwrap();
+    let paint: Vec<f32> = (0..COLS * ROWS).map(|i| (i % 5) as f32 * 0.05).collect();
+    w.set_painted_release(Some(&paint), 60.0).unwrap();
+    w.run_until(1.5).unwrap();
+    let area = w.ski_area().expect("skiers came");
+    assert!(!area.skiers().is_empty(), "no skier on the slopes");
+    assert!(!area.finished_tracks().is_empty(), "no finished track");
+    assert!(area.texture().allocated_tiles() > 0);
+    let mut bytes = Vec::new();
+    w.write_checkpoint(&mut bytes).unwrap();
+    bytes
+}
+
+/// The refusal of a forged skiing checkpoint: the field named and the message.
+fn ski_refused(bytes: &[u8]) -> (String, String) {
+    match Winter::resume(ski_scenario(), terrain(), &mut &bytes[..]) {
+        Err(SeasonError::Checkpoint(e @ CheckpointError::Implausible { .. })) => {
+            let m = e.to_string();
+            let CheckpointError::Implausible { field, .. } = e else {
+                unreachable!()
+            };
+            (field, m)
+        }
+        Err(e) => panic!("expected an implausible value, got {e:?}"),
+        Ok(_) => panic!("a forged checkpoint was resumed"),
+    }
+}
+
+/// `bytes` with its header, ski tracks (as JSON) and tiles edited, lengths and CRC anew.
+fn forge_ski(
+    bytes: &[u8],
+    edit: impl FnOnce(&mut Value, &mut Value, &mut Vec<u8>, &mut Vec<u8>),
+) -> Vec<u8> {
+    let (header, rest) = split_raw(bytes);
+    let (mut maps, tracks, mut tiles) = sections(&rest);
+    let mut header: Value = serde_json::from_slice(&header).unwrap();
+    let mut tracks: Value = serde_json::from_slice(&tracks).unwrap();
+    edit(&mut header, &mut tracks, &mut maps, &mut tiles);
+    assemble_sections(
+        &serde_json::to_vec(&header).unwrap(),
+        &maps,
+        &serde_json::to_vec(&tracks).unwrap(),
+        &tiles,
+    )
+}
+
+/// An edit of a skiing checkpoint: header, tracks, maps, tiles.
+type SkiEdit = Box<dyn Fn(&mut Value, &mut Value, &mut Vec<u8>, &mut Vec<u8>)>;
+
+/// Sets the f32 at `at` (in words) of `bytes`.
+fn set_word(bytes: &mut [u8], at: usize, v: f32) {
+    bytes[4 * at..4 * at + 4].copy_from_slice(&v.to_le_bytes());
+}
+
+#[test]
+fn a_forged_ski_area_or_paint_is_refused_naming_the_field() {
+    let bytes = ski_checkpoint();
+    let w = Winter::resume(ski_scenario(), terrain(), &mut &bytes[..]).unwrap();
+    assert!(w.ski_area().is_some());
+    let n = COLS * ROWS;
+    // The maps: 4 layers, then scour, deposit, 4 pack arrays, rain, paint, ski distance,
+    // recent count, recent time.
+    let map = move |k: usize, cell: usize| (4 + k) * n + cell;
+    // A tile: its u64 index, then TILE² texels.
+    let texel = |k: usize| 2 + k;
+    let cases: Vec<(&str, SkiEdit)> = vec![
+        (
+            "ski_area.next_id",
+            Box::new(|h, _, _, _| h["ski_area"]["next_id"] = json!(1u64 << 62)),
+        ),
+        (
+            "ski_area.seed",
+            Box::new(|h, _, _, _| h["ski_area"]["seed"] = json!(987_654_321u64)),
+        ),
+        (
+            "ski_area.time_s",
+            Box::new(|h, _, _, _| h["ski_area"]["time_s"] = json!(1e300)),
+        ),
+        (
+            "ski_area.time_s",
+            Box::new(|h, _, _, _| h["ski_area"]["time_s"] = json!(-5.0)),
+        ),
+        (
+            "ski_area.texels_per_cell",
+            Box::new(|h, _, _, _| h["ski_area"]["texels_per_cell"] = json!(3)),
+        ),
+        (
+            "ski tracks",
+            Box::new(|h, _, _, _| h["ski_area"] = Value::Null),
+        ),
+        (
+            "ski tracks",
+            Box::new(|_, t, _, _| t["skiers"] = json!("not a list")),
+        ),
+        (
+            "ski skiers[0].pos",
+            Box::new(|_, t, _, _| t["skiers"][0]["pos"] = json!([-1e9, 3.0])),
+        ),
+        (
+            "ski skiers[0].cell",
+            Box::new(|_, t, _, _| t["skiers"][0]["cell"] = json!([COLS, 0])),
+        ),
+        (
+            "ski skiers[0].id",
+            Box::new(|_, t, _, _| t["skiers"][0]["track"]["id"] = json!(1u64 << 40)),
+        ),
+        (
+            "ski skiers[0].track.cells",
+            Box::new(move |_, t, _, _| t["skiers"][0]["track"]["cells"] = json!([n])),
+        ),
+        (
+            "ski finished[0].cells",
+            Box::new(|_, t, _, _| t["finished"][0]["cells"][0] = json!(1u64 << 40)),
+        ),
+        (
+            "painted_release cell 7",
+            Box::new(move |_, _, m, _| set_word(m, map(7, 7), f32::NAN)),
+        ),
+        (
+            "painted_release cell 8",
+            Box::new(move |_, _, m, _| set_word(m, map(7, 8), -1.0)),
+        ),
+        (
+            "ski distance cell 9",
+            Box::new(move |_, _, m, _| set_word(m, map(8, 9), f32::NAN)),
+        ),
+        (
+            "ski distance cell 10",
+            Box::new(move |_, _, m, _| set_word(m, map(8, 10), -3.0)),
+        ),
+        (
+            "recent skiers cell 11",
+            Box::new(move |_, _, m, _| set_word(m, map(9, 11), f32::INFINITY)),
+        ),
+        (
+            "recent skier time cell 12",
+            Box::new(move |_, _, m, _| set_word(m, map(10, 12), -1.0)),
+        ),
+        (
+            "ski texture tile",
+            Box::new(|_, _, _, t| t[..8].copy_from_slice(&99u64.to_le_bytes())),
+        ),
+        (
+            "ski texture tile",
+            Box::new(|_, _, _, t| t[..8].copy_from_slice(&u64::MAX.to_le_bytes())),
+        ),
+        (
+            "texel 5",
+            Box::new(move |_, _, _, t| set_word(t, texel(5), 2.0)),
+        ),
+        (
+            "texel 6",
+            Box::new(move |_, _, _, t| set_word(t, texel(6), f32::NAN)),
+        ),
+    ];
+    for (want, edit) in cases {
+        let forged = forge_ski(&bytes, edit);
+        let (field, message) = ski_refused(&forged);
+        assert!(field.contains(want), "{want}: refused {field}: {message}");
+        assert!(message.contains(&field), "{message}");
+    }
 }

@@ -35,16 +35,16 @@ const SPAWN_TRIES: u64 = 64;
 /// track texture, the recent-skier map and the clock.
 #[derive(Debug, Clone)]
 pub struct SkiArea {
-    geometry: GridGeometry,
-    seed: u64,
+    pub(crate) geometry: GridGeometry,
+    pub(crate) seed: u64,
     /// Simulation time, s. Tracks and passes are stamped with it; the season may set it.
     pub time_s: f64,
-    next_id: u64,
-    terminus: TerminusMap,
-    skiers: Vec<Skier>,
-    finished: Vec<Track>,
-    texture: TrackTexture,
-    recent: RecentSkiers,
+    pub(crate) next_id: u64,
+    pub(crate) terminus: TerminusMap,
+    pub(crate) skiers: Vec<Skier>,
+    pub(crate) finished: Vec<Track>,
+    pub(crate) texture: TrackTexture,
+    pub(crate) recent: RecentSkiers,
 }
 
 /// Buffers reused by [`step`] (one event list per skier).

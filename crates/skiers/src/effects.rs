@@ -179,6 +179,14 @@ impl RecentSkiers {
             time: vec![0.0; cells],
         }
     }
+    /// A map from its counts and the times of their last passes (a checkpoint's).
+    pub fn from_arrays(value: Vec<f32>, time: Vec<f32>) -> Self {
+        Self { value, time }
+    }
+    /// The counts at their last passes and the times of those passes, s.
+    pub fn arrays(&self) -> (&[f32], &[f32]) {
+        (&self.value, &self.time)
+    }
     /// The decayed count of cell `i` at time `t` (s), with e-folding time `tau` (s).
     #[inline]
     pub fn at(&self, i: usize, t: f64, tau: f64) -> f64 {

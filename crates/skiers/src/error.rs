@@ -117,6 +117,16 @@ pub enum SkiError {
         /// Why.
         reason: &'static str,
     },
+    /// A decoded value of a ski area (a checkpoint's) out of range.
+    #[error("{field} = {value} is implausible: {expected}")]
+    Implausible {
+        /// What the value is.
+        field: String,
+        /// The value.
+        value: String,
+        /// What it should be.
+        expected: String,
+    },
     /// The PNG encoder failed.
     #[error("cannot encode the track PNG: {source}")]
     Png {

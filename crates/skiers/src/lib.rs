@@ -18,7 +18,8 @@
 //!   by `exp(−added/fade_depth)`).
 //! - [`effects`]: compaction (unstable → stable → compacted, mass kept), the decaying
 //!   recent-skier map, trigger candidates drawn from the keyed random numbers.
-//! - [`area`]: the state [`SkiArea`] and the pure [`step`]; [`output`]: the PNG (with JSON
+//! - [`area`]: the state [`SkiArea`] and the pure [`step`]; [`snapshot`]: the area as plain
+//!   data for a season's checkpoint, validated when restored; [`output`]: the PNG (with JSON
 //!   sidecar and world file) and GeoJSON outputs.
 //!
 //! Units: metres, seconds, radians inside, degrees in [`SkiParams`]. Positions are local metres
@@ -33,6 +34,7 @@ pub mod frame;
 pub mod params;
 pub mod refine;
 pub mod skier;
+pub mod snapshot;
 pub mod steering;
 pub mod terminus;
 pub mod texture;
@@ -46,6 +48,7 @@ pub use error::SkiError;
 pub use params::SkiParams;
 pub use refine::{effective_slope, turn_frequency};
 pub use skier::{Skier, SteeringChoice, StopReason, Track};
+pub use snapshot::{SkiAreaHeader, SkiAreaMaps, SkiTracks};
 pub use terminus::{Terminus, TerminusMap};
 pub use texture::TrackTexture;
 

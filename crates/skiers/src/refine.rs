@@ -48,7 +48,7 @@ pub fn effective_slope(slope_rad: f64, frequency: f64, amplitude_m: f64) -> f64 
 }
 
 /// The sine-wave state of one skier's refined track.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SineTrack {
     /// Amplitude `a`, m.
     pub amplitude_m: f64,

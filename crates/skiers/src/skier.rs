@@ -108,8 +108,9 @@ pub(crate) struct StepContext<'a> {
 /// Key purpose of steering draws.
 pub(crate) const STEER: u64 = 0x5354_4545_5231;
 
-/// A skier on the slope.
-#[derive(Debug, Clone, PartialEq)]
+/// A skier on the slope (serialized whole into a season's checkpoint: every field steers
+/// the rest of its run).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Skier {
     pub(crate) pos: (f64, f64),
     pub(crate) heading: (f64, f64),

@@ -347,6 +347,37 @@ impl TerminusMap {
         }
     }
 
+    /// A map of `width`×`height` cells from its distances (a checkpoint's): the spawn weights
+    /// are rebuilt from them bit-identical to [`Self::compute`]'s, since a cell's weight is its
+    /// distance where finite and every cell the rule does not update holds 0 (a terminus) or
+    /// +∞ (no snow), which add nothing.
+    pub fn from_distance(
+        width: usize,
+        height: usize,
+        distance: Vec<f32>,
+        sweeps: usize,
+        rule: Terminus,
+    ) -> Self {
+        let mut acc = 0.0f64;
+        let spawn_cdf = distance
+            .iter()
+            .map(|&d| {
+                if d.is_finite() {
+                    acc += f64::from(d);
+                }
+                acc
+            })
+            .collect();
+        Self {
+            width,
+            height,
+            distance,
+            spawn_cdf,
+            sweeps,
+            rule,
+        }
+    }
+
     /// Distance to the terminus per cell, m (`f32::INFINITY`: no route, a dead-end or a cell
     /// without snow).
     pub fn distance(&self) -> &[f32] {

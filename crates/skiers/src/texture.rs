@@ -263,6 +263,57 @@ impl TrackTexture {
         Ok(())
     }
 
+    /// The allocated tiles, in index order: `(index, TILE² texels row by row)`.
+    pub fn allocated(&self) -> impl Iterator<Item = (usize, &[f32])> {
+        self.tiles
+            .iter()
+            .enumerate()
+            .filter_map(|(k, t)| t.as_deref().map(|t| (k, t)))
+    }
+
+    /// Tiles of a texture over a `grid_width`×`grid_height` grid at `texels_per_cell`.
+    pub fn tile_count(grid_width: usize, grid_height: usize, texels_per_cell: usize) -> usize {
+        (grid_width * texels_per_cell).div_ceil(TILE)
+            * (grid_height * texels_per_cell).div_ceil(TILE)
+    }
+
+    /// Sets the allocated tiles of an empty texture (a checkpoint's), each index within the
+    /// texture and above the one before, each tile of TILE² texels in [0, 1].
+    pub fn restore_tiles(&mut self, tiles: Vec<(usize, Vec<f32>)>) -> Result<(), SkiError> {
+        let bad = |field: String, value: String, expected: &str| SkiError::Implausible {
+            field,
+            value,
+            expected: expected.to_string(),
+        };
+        let mut last = None;
+        for (index, texels) in tiles {
+            if index >= self.tiles.len() || last.is_some_and(|l| index <= l) {
+                return Err(bad(
+                    "ski texture tile".into(),
+                    index.to_string(),
+                    "a tile of the texture, in increasing order",
+                ));
+            }
+            last = Some(index);
+            if texels.len() != TILE * TILE {
+                return Err(bad(
+                    format!("ski texture tile {index}"),
+                    format!("{} texels", texels.len()),
+                    "TILE² texels",
+                ));
+            }
+            if let Some(k) = texels.iter().position(|v| !(0.0..=1.0).contains(v)) {
+                return Err(bad(
+                    format!("ski texture tile {index} texel {k}"),
+                    texels[k].to_string(),
+                    "an intensity in [0, 1]",
+                ));
+            }
+            self.tiles[index] = Some(texels.into_boxed_slice());
+        }
+        Ok(())
+    }
+
     /// Tiles along x and y (for row iteration by callers that stream the texture).
     pub fn tiles(&self) -> (usize, usize) {
         (self.tiles_x, self.tiles_y)

@@ -66,16 +66,16 @@ fn snowfall_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
         return w.deliver_storms(day, false).map_err(err);
     }
     let mut params = p.snowfall.clone();
-    params.a0_precip = w.weather[w.state.weather_index].rain_snow_altitude_m;
+    params.a0_precip = w.weather[w.state.run.weather_index].rain_snow_altitude_m;
     let v = snowfall::step(
         &params,
         &mut w.terrain,
         &w.environment.temperature,
-        &mut w.snowfall_scratch,
+        &mut w.workspace.snowfall,
         event.dt_days,
     )
     .map_err(err)?;
-    w.state.budget.snowfall += v.added;
+    w.state.run.budget.snowfall += v.added;
     Ok(())
 }
 
@@ -100,11 +100,15 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
             event.dt_days,
         )
         .map_err(&err)?;
-        w.state.budget.melt += v.removed;
+        w.state.run.budget.melt += v.removed;
     }
     // The next melt window reads the storms from its start (the paper's melt: none).
     let hourly = w.scenario.parameters.melt.model.hourly();
-    w.forget_storms(if hourly { w.state.melt_clock_days } else { day });
+    w.forget_storms(if hourly {
+        w.state.run.melt_clock_days
+    } else {
+        day
+    });
     let stability_step = if surface_filled {
         stability::step_on_filled_surface
     } else {
@@ -114,11 +118,11 @@ fn melt_and_state_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         &w.scenario.parameters.stability,
         &mut w.terrain,
         &w.environment.temperature,
-        &mut w.stability_scratch,
+        &mut w.workspace.stability,
         event.dt_days,
     )
     .map_err(err)?;
-    w.state.budget.densification += r.densification;
+    w.state.run.budget.densification += r.densification;
     Ok(())
 }
 
@@ -130,21 +134,22 @@ fn slope_shedding_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     }
     let interval = w.scenario.parameters.slope_shedding.interval_days;
     if w.state
+        .run
         .shed_clock_days
         .is_some_and(|last| event.time_days < last + interval)
     {
         return Ok(());
     }
-    w.state.shed_clock_days = Some(event.time_days);
+    w.state.run.shed_clock_days = Some(event.time_days);
     let r = crate::slope_shedding::step(
         &w.scenario.parameters.slope_shedding,
         &mut w.terrain,
-        &mut w.shedding_scratch,
+        &mut w.workspace.shedding,
         event.dt_days,
     )
     .map_err(failed("slope_shedding", event.time_days))?;
-    w.state.budget.shedding_outflow += r.border_outflow_m3;
-    w.state.budget.shedding_moved += r.moved_m3;
+    w.state.run.budget.shedding_outflow += r.border_outflow_m3;
+    w.state.run.budget.shedding_moved += r.moved_m3;
     Ok(())
 }
 
@@ -153,11 +158,11 @@ fn powder_diffusion_step(w: &mut Winter, event: &Event) -> Result<(), SeasonErro
     let r = powder_diffusion::step(
         &w.scenario.parameters.powder_diffusion,
         &mut w.terrain,
-        &mut w.diffusion_scratch,
+        &mut w.workspace.diffusion,
         event.dt_days,
     )
     .map_err(failed("powder_diffusion", event.time_days))?;
-    w.state.budget.diffusion_outflow += r.border_outflow;
+    w.state.run.budget.diffusion_outflow += r.border_outflow;
     Ok(())
 }
 
@@ -180,20 +185,30 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
             &p.snowtran,
             &mut w.terrain,
             &forcing,
-            &mut w.snowtran_scratch,
+            &mut w.workspace.snowtran,
             event.dt_days,
         )
         .map_err(err)?;
-        w.state.budget.wind_outflow += r.border_net_outflow;
-        w.state.budget.wind_sublimation += r.sublimated;
+        w.state.run.budget.wind_outflow += r.border_net_outflow;
+        w.state.run.budget.wind_sublimation += r.sublimated;
         return Ok(());
     }
-    let maps = super::snowpack::wind_maps(&w.environment, &w.sx, w.wind_terms.as_ref());
+    let maps = super::snowpack::wind_maps(
+        &w.environment,
+        &w.workspace.sx,
+        w.workspace.wind_terms.as_ref(),
+    );
     // The drifting snow sublimates in the climate's air of the step, unless a humidity is set.
     let mut params = p.wind_transport.clone();
     let drift = &mut params.sx_redistribution.sublimation;
     if drift.relative_humidity_pct.is_none() {
-        let storms: Vec<(f64, f64)> = w.state.storms.iter().map(|s| (s.since, s.until)).collect();
+        let storms: Vec<(f64, f64)> = w
+            .state
+            .run
+            .storms
+            .iter()
+            .map(|s| (s.since, s.until))
+            .collect();
         let rh = w
             .air
             .mean_relative_humidity(day - event.dt_days, day, &storms);
@@ -203,12 +218,12 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
         &params,
         &mut w.terrain,
         &maps,
-        &mut w.wind_scratch,
+        &mut w.workspace.wind,
         event.dt_days,
     )
     .map_err(err)?;
-    w.state.budget.wind_outflow += r.border_outflow;
-    w.state.budget.wind_sublimation += r.sublimated;
+    w.state.run.budget.wind_outflow += r.border_outflow;
+    w.state.run.budget.wind_sublimation += r.sublimated;
     Ok(())
 }
 
@@ -216,10 +231,10 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
 fn avalanche_start(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
     let u = snowscape_terrain::random::uniform(w.scenario.seed, STREAM_AVALANCHE_CELL, event.index);
     // A fresh hazard map if the snow may have moved since it was computed.
-    if w.hazard_stale {
+    if w.workspace.hazard_stale {
         w.update_avalanche_rate();
     }
-    if let Some(cell) = w.hazard.pick(u) {
+    if let Some(cell) = w.workspace.hazard.pick(u) {
         // A painted cell releases by the paint with the share of its rate the paint brings
         // (a second draw, taken only where there is paint).
         let painted = w.painted_rate(cell);
@@ -228,7 +243,7 @@ fn avalanche_start(w: &mut Winter, event: &Event) -> Result<(), SeasonError> {
                 w.scenario.seed,
                 STREAM_PAINTED_TRIGGER,
                 event.index,
-            ) * w.hazard.lambda[cell]
+            ) * w.workspace.hazard.lambda[cell]
                 < painted
         {
             Trigger::Painted

@@ -8,19 +8,30 @@
 //! end plus one event's reach), the timeline indices within their tables, every number of the
 //! run state finite and within [`MAX_MAGNITUDE`] (counters within [`MAX_COUNT`]), each
 //! avalanche's cell on the grid, the seed and the constant event rates the scenario's, the
-//! snow layers finite and ≥ 0 and the other maps finite. A refusal is a
+//! snow layers finite and ≥ 0, the painted release rates finite and ≥ 0 and the other maps
+//! finite, and the ski area as [`SkiArea::restore`] checks it (tile indices within the
+//! texture, texels in [0, 1], skiers and track cells on the grid, ids below the next id) with
+//! its seed and termini rule the scenario's and its clock within the season. A refusal is a
 //! [`CheckpointError::Implausible`] naming the field and the value.
+//!
+//! Besides the run state, a checkpoint holds the painted release rates (a map, and whether
+//! there is paint) and the ski area (its scalars in the header, three maps, the tracks and
+//! the texture's tiles in sections of their own), so a resumed season with skiers and paint
+//! ends bit-identical to an uninterrupted one.
 
 use super::{RunState, SeasonError, SnowpackState, Winter};
-use crate::avalanches::HazardSources;
 use crate::checkpoint::{self, CheckpointError, bedrock_fingerprint};
 use crate::forcing::StationForcing;
 use crate::scenario::Scenario;
-use crate::scheduler::EventKind;
+use crate::scheduler::{EventKind, SECONDS_PER_DAY};
+use serde::{Deserialize, Serialize};
+use snowscape_skiers::{SkiArea, SkiAreaHeader, SkiAreaMaps, SkiError, SkiTracks, TrackTexture};
 use snowscape_terrain::LayeredTerrain;
 
-/// Extra per-cell maps after the four layers: scour, deposit, the pack's four arrays, rain.
-const EXTRA_MAPS: usize = 7;
+/// Extra per-cell maps after the four layers: scour, deposit, the pack's four arrays, rain,
+/// the painted release rates, and the ski area's distance to the terminus, recent-skier count
+/// and time (zeros where there is no paint or no ski area).
+const EXTRA_MAPS: usize = 11;
 
 /// Largest magnitude of any number in a checkpointed run state (volumes in m³, days, metres):
 /// 10^15 m³ is a million km³ of snow, beyond any terrain's.
@@ -369,6 +380,10 @@ fn validate_maps(
         "liquid_water",
         "melting",
         "pending_rain",
+        "painted_release",
+        "ski distance",
+        "recent skiers",
+        "recent skier time",
     ];
     for (k, layer) in layers.iter().enumerate() {
         let ok = |(i, v): (usize, &f32)| v.is_finite() && *v >= 0.0 && (valid(i) || *v == 0.0);
@@ -380,7 +395,8 @@ fn validate_maps(
             ));
         }
     }
-    for (k, map) in extra.iter().enumerate() {
+    // The ski area's maps are validated with the area ([`SkiArea::restore`]).
+    for (k, map) in extra.iter().enumerate().take(PAINT) {
         if let Some(i) = map
             .iter()
             .enumerate()
@@ -393,8 +409,19 @@ fn validate_maps(
             ));
         }
     }
+    let paint = extra.get(PAINT).map_or(&[][..], |m| m);
+    if let Some(i) = paint.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+        return Err(CheckpointError::implausible(
+            format!("painted_release cell {i}"),
+            paint[i],
+            "a finite release rate >= 0 per day",
+        ));
+    }
     Ok(())
 }
+
+/// Index of the painted release rates among the extra maps.
+const PAINT: usize = 7;
 
 /// Size and cell size of a terrain, for messages.
 pub(super) fn terrain_summary(terrain: &LayeredTerrain) -> String {
@@ -459,25 +486,156 @@ fn short(v: &serde_json::Value) -> String {
     s
 }
 
+/// The header a checkpoint file holds: the run state and what says which of the ski area's
+/// and the paint's sections hold something.
+#[derive(Serialize)]
+struct SavedRef<'a> {
+    #[serde(flatten)]
+    run: &'a RunState,
+    /// The ski area's scalars (`None`: no skier has come).
+    ski_area: Option<SkiAreaHeader>,
+    /// Whether painted release rates are set (the map is written either way).
+    painted: bool,
+}
+
+/// [`SavedRef`], read back.
+#[derive(Deserialize)]
+struct Saved {
+    #[serde(flatten)]
+    run: RunState,
+    ski_area: Option<SkiAreaHeader>,
+    painted: bool,
+}
+
+/// What bounds a checkpoint of `scenario` on `terrain`: its cells, the extra maps, the tiles
+/// of the track texture at the scenario's resolution.
+fn bounds(scenario: &Scenario, terrain: &LayeredTerrain) -> checkpoint::Bounds {
+    let g = terrain.geometry();
+    checkpoint::Bounds {
+        cells: g.len(),
+        extra: EXTRA_MAPS,
+        tiles: TrackTexture::tile_count(g.width(), g.height(), scenario.skiers.ski.texels_per_cell),
+    }
+}
+
+/// A refusal of the ski area's values as a checkpoint's.
+fn ski_refusal(e: SkiError) -> CheckpointError {
+    match e {
+        SkiError::Implausible {
+            field,
+            value,
+            expected,
+        } => CheckpointError::implausible(field, value, expected),
+        e => CheckpointError::implausible("ski_area", e, "a ski area of this scenario"),
+    }
+}
+
+/// The ski area of a checkpoint (`None` when no skier had come), validated against the
+/// scenario and the season's clock (`latest`, days).
+fn restore_ski_area(
+    header: Option<SkiAreaHeader>,
+    maps: SkiAreaMaps,
+    tracks: &[u8],
+    tiles: Vec<(usize, Vec<f32>)>,
+    scenario: &Scenario,
+    terrain: &LayeredTerrain,
+) -> Result<Option<SkiArea>, CheckpointError> {
+    let Some(header) = header else {
+        if !tracks.is_empty() || !tiles.is_empty() {
+            return Err(CheckpointError::implausible(
+                "ski tracks",
+                format!("{} bytes and {} tiles", tracks.len(), tiles.len()),
+                "none without a ski area",
+            ));
+        }
+        return Ok(None);
+    };
+    if header.seed != scenario.seed {
+        return Err(CheckpointError::implausible(
+            "ski_area.seed",
+            header.seed,
+            format!("the scenario's seed {}", scenario.seed),
+        ));
+    }
+    if header.rule != scenario.skiers.terminus {
+        return Err(CheckpointError::implausible(
+            "ski_area.rule",
+            format!("{:?}", header.rule),
+            format!("the scenario's terminus {:?}", scenario.skiers.terminus),
+        ));
+    }
+    let latest_s = latest_day(scenario) * SECONDS_PER_DAY;
+    // NaN and negative times are refused with the area's other values.
+    if header.time_s > latest_s {
+        return Err(CheckpointError::implausible(
+            "ski_area.time_s",
+            header.time_s,
+            format!("a time within the season's {latest_s} s"),
+        ));
+    }
+    if header.sweeps as u64 > MAX_COUNT {
+        return Err(CheckpointError::implausible(
+            "ski_area.sweeps",
+            header.sweeps,
+            format!("at most {MAX_COUNT} sweeps"),
+        ));
+    }
+    let tracks: SkiTracks = serde_json::from_slice(tracks).map_err(|e| {
+        CheckpointError::implausible("ski tracks", e, "the JSON of the skiers and their tracks")
+    })?;
+    SkiArea::restore(
+        &scenario.skiers.ski,
+        terrain.geometry().clone(),
+        header,
+        maps,
+        tracks,
+        tiles,
+    )
+    .map(Some)
+    .map_err(ski_refusal)
+}
+
 impl Winter {
-    /// Writes a checkpoint of the whole run state to `w`.
+    /// Writes a checkpoint of the whole run state to `w`: the snow, the pack, the maps, the
+    /// painted release rates and the ski area with its tracks.
     pub fn write_checkpoint(&self, w: &mut impl std::io::Write) -> Result<(), SeasonError> {
-        let m = &self.avalanche_maps;
-        let [age, cold, liquid, melting] = self.pack.arrays();
-        checkpoint::write(
-            w,
-            &self.state,
-            &self.terrain,
-            &[
-                &m.scour,
-                &m.deposit,
-                age,
-                cold,
-                liquid,
-                melting,
-                &self.pending_rain,
-            ],
-        )?;
+        let m = &self.state.avalanche_maps;
+        let [age, cold, liquid, melting] = self.state.pack.arrays();
+        let n = self.terrain.geometry().len();
+        let zeros = vec![0.0f32; n];
+        let paint = self.state.painted_release.as_deref().unwrap_or(&zeros);
+        let area = self.state.ski_area.as_ref();
+        let [distance, recent_value, recent_time] = area.map_or([&zeros[..]; 3], |a| a.maps());
+        let tracks = match area {
+            Some(a) => a.tracks_json().map_err(CheckpointError::Header)?,
+            None => Vec::new(),
+        };
+        let tiles: Vec<(usize, &[f32])> =
+            area.map_or_else(Vec::new, |a| a.texture().allocated().collect());
+        let header = SavedRef {
+            run: &self.state.run,
+            ski_area: area.map(SkiArea::header),
+            painted: self.state.painted_release.is_some(),
+        };
+        let extra: [&[f32]; EXTRA_MAPS] = [
+            &m.scour,
+            &m.deposit,
+            age,
+            cold,
+            liquid,
+            melting,
+            &self.state.pending_rain,
+            paint,
+            distance,
+            recent_value,
+            recent_time,
+        ];
+        let payload = checkpoint::Payload {
+            extra: &extra,
+            tracks: &tracks,
+            tiles: &tiles,
+        };
+        checkpoint::write(w, &header, &self.terrain, payload)?;
         Ok(())
     }
 
@@ -498,7 +656,7 @@ impl Winter {
         forcing: Option<StationForcing>,
         r: &mut impl std::io::Read,
     ) -> Result<Self, SeasonError> {
-        let saved = checkpoint::read::<RunState>(r, terrain.geometry().len(), EXTRA_MAPS)?;
+        let saved = checkpoint::read::<Saved>(r, bounds(&scenario, &terrain))?;
         Self::resume_from(scenario, terrain, forcing, saved)
     }
 
@@ -510,7 +668,7 @@ impl Winter {
         forcing: Option<StationForcing>,
         path: &std::path::Path,
     ) -> Result<Self, SeasonError> {
-        let saved = checkpoint::read_file::<RunState>(path, terrain.geometry().len(), EXTRA_MAPS)?;
+        let saved = checkpoint::read_file::<Saved>(path, bounds(&scenario, &terrain))?;
         Self::resume_from(scenario, terrain, forcing, saved)
     }
 
@@ -518,85 +676,122 @@ impl Winter {
         scenario: Scenario,
         terrain: LayeredTerrain,
         forcing: Option<StationForcing>,
-        mut saved: checkpoint::Contents<RunState>,
+        saved: checkpoint::Contents<Saved>,
     ) -> Result<Self, SeasonError> {
-        if saved.header.fingerprint != bedrock_fingerprint(&terrain) {
+        let run = &saved.header.run;
+        if run.fingerprint != bedrock_fingerprint(&terrain) {
             let now = terrain_summary(&terrain);
-            let now = if now == saved.header.terrain {
+            let now = if now == run.terrain {
                 format!("{now}, with other altitudes")
             } else {
                 now
             };
             return Err(SeasonError::CheckpointTerrain {
-                checkpoint: crate::clip_for_message(&saved.header.terrain),
+                checkpoint: crate::clip_for_message(&run.terrain),
                 now,
             });
         }
         let now = serde_json::to_value(&scenario).unwrap_or_default();
-        if let Some((key, checkpoint, now)) = first_difference("", &saved.header.scenario, &now) {
+        if let Some((key, checkpoint, now)) = first_difference("", &run.scenario, &now) {
             return Err(SeasonError::CheckpointScenario {
                 key,
                 checkpoint,
                 now,
             });
         }
-        validate_state(&saved.header, &scenario, &terrain)?;
+        validate_state(run, &scenario, &terrain)?;
         validate_maps(&terrain, &saved.layers, &saved.extra)?;
         let mut w = Self::with_forcing(scenario, terrain, forcing)?;
-        if saved.header.scenario_digest != w.state.scenario_digest {
+        if saved.header.run.scenario_digest != w.state.run.scenario_digest {
             return Err(SeasonError::CheckpointForcing);
         }
-        if saved.header.weather_index >= w.weather.len() {
+        if saved.header.run.weather_index >= w.weather.len() {
             return Err(CheckpointError::implausible(
                 "weather_index",
-                saved.header.weather_index,
+                saved.header.run.weather_index,
                 format!("an index within the {} weather periods", w.weather.len()),
             )
             .into());
         }
-        saved.restore_layers(&mut w.terrain);
-        let mut extra = std::mem::take(&mut saved.extra);
-        w.pending_rain = extra.pop().unwrap_or_default();
-        let pack = extra.split_off(2);
-        w.pack = SnowpackState::from_arrays(pack);
-        w.avalanche_maps.deposit = extra.pop().unwrap_or_default();
-        w.avalanche_maps.scour = extra.pop().unwrap_or_default();
-        let state = saved.header;
-        let weather_changed = state.weather_index != 0;
-        w.state = state;
-        if weather_changed {
-            w.refresh_weather_maps()?;
-        }
-        w.refresh_air_temperature();
-        // The hazard map of the restored snow (for `avalanche_hazard`; a start recomputes it);
-        // the scheduler's rate is the checkpointed one.
-        w.hazard.compute(
-            &w.scenario.parameters.avalanche,
-            &w.terrain,
-            &w.slope_deg,
-            &HazardSources::default(),
-        );
-        w.hazard_stale = true;
+        w.restore_saved(saved)?;
         Ok(w)
+    }
+
+    /// Sets the season's state to a checkpoint's (checked against this season's terrain and
+    /// scenario): the snow, the maps, the run state, the paint and the ski area; then the
+    /// weather period's maps when the period is another, the air temperature and the hazard.
+    fn restore_saved(&mut self, saved: checkpoint::Contents<Saved>) -> Result<(), SeasonError> {
+        let checkpoint::Contents {
+            header,
+            layers,
+            extra,
+            tracks,
+            tiles,
+        } = saved;
+        let mut extra = extra.into_iter();
+        let mut next = || extra.next().unwrap_or_default();
+        let (scour, deposit) = (next(), next());
+        let pack = vec![next(), next(), next(), next()];
+        let pending_rain = next();
+        let paint = next();
+        let ski_maps = SkiAreaMaps {
+            distance: next(),
+            recent_value: next(),
+            recent_time: next(),
+        };
+        let Saved {
+            run,
+            ski_area,
+            painted,
+        } = header;
+        let ski_area = restore_ski_area(
+            ski_area,
+            ski_maps,
+            &tracks,
+            tiles,
+            &self.scenario,
+            &self.terrain,
+        )?;
+        let period_changed = run.weather_index != self.state.run.weather_index;
+        for (layer, saved) in self.terrain.snow.iter_mut().zip(layers) {
+            *layer = saved;
+        }
+        self.state.avalanche_maps.scour = scour;
+        self.state.avalanche_maps.deposit = deposit;
+        self.state.pack = SnowpackState::from_arrays(pack);
+        self.state.pending_rain = pending_rain;
+        self.state.painted_release = painted.then_some(paint);
+        self.state.ski_area = ski_area;
+        self.state.run = run;
+        if period_changed {
+            self.refresh_weather_maps()?;
+        }
+        self.refresh_air_temperature();
+        // The hazard map of the restored snow (for `avalanche_hazard`); the scheduler's rate
+        // is the checkpointed one, and the next start recomputes the map.
+        self.ensure_workspace()?;
+        self.recompute_hazard();
+        Ok(())
     }
 
     /// Sets this season to the state of a checkpoint written by it or by a fork of it (the
     /// same scenario and weather on the same terrain) as [`Winter::resume`] restores it, but
     /// without the environment precompute: this season's is kept (the weather period's maps
-    /// are refreshed when the checkpoint's period is another). What a checkpoint does not
-    /// hold is left as a resume leaves it (no ski area, no painted release rates). The
-    /// editor's timeline keeps its snapshots as checkpoints and restores them so.
+    /// are refreshed when the checkpoint's period is another). The ski area and the painted
+    /// release rates are the checkpoint's. The editor's timeline keeps its snapshots as
+    /// checkpoints and restores them so.
     pub fn restore_checkpoint(&mut self, r: &mut impl std::io::Read) -> Result<(), SeasonError> {
-        let mut saved = checkpoint::read::<RunState>(r, self.terrain.geometry().len(), EXTRA_MAPS)?;
-        if saved.header.fingerprint != bedrock_fingerprint(&self.terrain) {
+        let saved = checkpoint::read::<Saved>(r, bounds(&self.scenario, &self.terrain))?;
+        let run = &saved.header.run;
+        if run.fingerprint != bedrock_fingerprint(&self.terrain) {
             return Err(SeasonError::CheckpointTerrain {
-                checkpoint: saved.header.terrain.clone(),
+                checkpoint: run.terrain.clone(),
                 now: terrain_summary(&self.terrain),
             });
         }
-        if saved.header.scenario_digest != self.state.scenario_digest {
+        if run.scenario_digest != self.state.run.scenario_digest {
             let now = serde_json::to_value(&self.scenario).unwrap_or_default();
-            return Err(match first_difference("", &saved.header.scenario, &now) {
+            return Err(match first_difference("", &run.scenario, &now) {
                 Some((key, checkpoint, now)) => SeasonError::CheckpointScenario {
                     key,
                     checkpoint,
@@ -605,30 +800,7 @@ impl Winter {
                 None => SeasonError::CheckpointForcing,
             });
         }
-        let period_changed = saved.header.weather_index != self.state.weather_index;
-        saved.restore_layers(&mut self.terrain);
-        let mut extra = std::mem::take(&mut saved.extra);
-        self.pending_rain = extra.pop().unwrap_or_default();
-        let pack = extra.split_off(2);
-        self.pack = SnowpackState::from_arrays(pack);
-        self.avalanche_maps.deposit = extra.pop().unwrap_or_default();
-        self.avalanche_maps.scour = extra.pop().unwrap_or_default();
-        self.state = saved.header;
-        self.ski_area = None;
-        self.painted_release = None;
-        self.terminus_stale = false;
-        if period_changed {
-            self.refresh_weather_maps()?;
-        }
-        self.refresh_air_temperature();
-        self.hazard.compute(
-            &self.scenario.parameters.avalanche,
-            &self.terrain,
-            &self.slope_deg,
-            &HazardSources::default(),
-        );
-        self.hazard_stale = true;
-        Ok(())
+        self.restore_saved(saved)
     }
 }
 

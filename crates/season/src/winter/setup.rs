@@ -2,22 +2,19 @@
 //! resolves, the run state it starts from, the hourly air it draws on, and the readying of the
 //! maps and rates before the first event.
 
-use super::{LatitudeSource, RunState, SeasonBudget, SeasonError, Winter, resume, scenario_digest};
+use super::{
+    LatitudeSource, RunState, SeasonBudget, SeasonError, SeasonState, Winter, resume,
+    scenario_digest,
+};
 use crate::avalanches::{self, AvalancheMaps};
 use crate::forcing::StationForcing;
 use crate::melt::SnowpackState;
-use crate::powder_diffusion::DiffusionScratch;
 use crate::scenario::{Scenario, WeatherPeriod};
 use crate::scheduler::{EventKind, Scheduler};
 use crate::skiing::SkiStats;
-use crate::snowfall::SnowfallScratch;
-use crate::snowtran_transport::SnowTranScratch;
-use crate::stability::StabilityScratch;
 use crate::weather::{Air, AirSource};
-use crate::wind_transport::WindScratch;
 use snowscape_avalanche::AvalancheWorkspace;
 use snowscape_environment::{EnvironmentMaps, EnvironmentParams, SeasonSun};
-use snowscape_skiers::SkiScratch;
 use snowscape_terrain::LayeredTerrain;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -95,6 +92,7 @@ pub(super) fn initial_state(
         shed_clock_days: None,
         storms: Vec::new(),
         bands: crate::bands::BandRecord::default(),
+        terminus_stale: false,
     }
 }
 
@@ -195,33 +193,23 @@ impl Winter {
         Self {
             bands,
             air,
-            pack: SnowpackState::new(n_cells),
-            pending_rain: vec![0.0; n_cells],
             latitude_source,
             scenario,
             weather,
             terrain,
-            state,
+            state: SeasonState {
+                run: state,
+                pack: SnowpackState::new(n_cells),
+                pending_rain: vec![0.0; n_cells],
+                avalanche_maps: AvalancheMaps::default(),
+                painted_release: None,
+                ski_area: None,
+            },
             environment,
             base_environment,
             wall_seconds: BTreeMap::new(),
-            snowfall_scratch: SnowfallScratch::default(),
-            stability_scratch: StabilityScratch::default(),
-            diffusion_scratch: DiffusionScratch::default(),
-            wind_scratch: WindScratch::default(),
-            snowtran_scratch: SnowTranScratch::default(),
-            shedding_scratch: Default::default(),
-            sx: Vec::new(),
-            wind_terms: None,
-            slope_deg: Vec::new(),
-            hazard: Default::default(),
-            hazard_stale: true,
-            painted_release: None,
-            avalanche_maps: AvalancheMaps::default(),
+            workspace: Default::default(),
             avalanche_workspace: AvalancheWorkspace::default(),
-            ski_area: None,
-            ski_scratch: SkiScratch::default(),
-            terminus_stale: false,
         }
     }
 
@@ -235,19 +223,22 @@ impl Winter {
         self.environment.store(&mut self.terrain)?;
         if self.air.from_station() {
             self.state
+                .run
                 .scheduler
                 .set_rate(EventKind::SnowfallStart, 0.0, false);
         }
-        self.state.bands.ensure(self.bands.len());
-        self.slope_deg = avalanches::bedrock_slopes_deg(&self.terrain);
+        self.state.run.bands.ensure(self.bands.len());
+        self.workspace.slope_deg = avalanches::bedrock_slopes_deg(&self.terrain);
+        self.workspace.built = true;
         let n = self.terrain.geometry().len();
-        self.avalanche_maps = AvalancheMaps {
+        self.state.avalanche_maps = AvalancheMaps {
             scour: vec![0.0; n],
             deposit: vec![0.0; n],
         };
         self.update_avalanche_rate();
         let per_day = self.scenario.skiers.per_day;
         self.state
+            .run
             .scheduler
             .set_rate(EventKind::SkierStart, per_day, per_day > 0.0);
         Ok(())

@@ -11,10 +11,11 @@ impl Winter {
     /// on by the run's duration. See [`crate::skiing`].
     pub(super) fn run_skier(&mut self, event_day: f64) -> Result<(), SeasonError> {
         let p = self.scenario.skiers.clone();
-        let k = self.state.ski.runs as usize;
+        let k = self.state.run.ski.runs as usize;
         let start = p.starts.get(k % p.starts.len().max(1)).copied();
         if let Some(elapsed) = self.ski_run(event_day, start)? {
             self.state
+                .run
                 .scheduler
                 .advance_clock(elapsed / SECONDS_PER_DAY);
             self.update_avalanche_rate();
@@ -27,7 +28,8 @@ impl Winter {
     /// tracks kept), without moving the season's clock: the editor's painted skier areas.
     /// Returns the simulated seconds, `None` where no run could start (no skiable snow).
     pub fn ski_from(&mut self, x: f64, y: f64) -> Result<Option<f64>, SeasonError> {
-        let day = self.state.scheduler.time_days();
+        self.ensure_workspace()?;
+        let day = self.state.run.scheduler.time_days();
         let run = self.ski_run(day, Some([x, y]))?;
         if run.is_some() {
             self.update_avalanche_rate();
@@ -48,25 +50,25 @@ impl Winter {
         // Without skiable snow there is no terminus: no run today.
         let no_snow =
             |e: &snowscape_skiers::SkiError| matches!(e, snowscape_skiers::SkiError::NoTerminus(_));
-        if self.ski_area.is_none() {
+        if self.state.ski_area.is_none() {
             match SkiArea::new(
                 &p.ski,
                 &self.terrain,
                 p.terminus.clone(),
                 self.scenario.seed,
             ) {
-                Ok(a) => self.ski_area = Some(a),
+                Ok(a) => self.state.ski_area = Some(a),
                 Err(e) if no_snow(&e) => return Ok(None),
                 Err(e) => return Err(ski_err(e)),
             }
-            self.terminus_stale = false;
+            self.state.run.terminus_stale = false;
         }
-        let Some(area) = self.ski_area.as_mut() else {
+        let Some(area) = self.state.ski_area.as_mut() else {
             return Ok(None);
         };
-        if self.terminus_stale {
+        if self.state.run.terminus_stale {
             match area.refresh_terminus(&p.ski, &self.terrain) {
-                Ok(()) => self.terminus_stale = false,
+                Ok(()) => self.state.run.terminus_stale = false,
                 Err(e) if no_snow(&e) => return Ok(None),
                 Err(e) => return Err(ski_err(e)),
             }
@@ -82,26 +84,26 @@ impl Winter {
         if !matches!(spawned, Ok(n) if n > 0) {
             return Ok(None);
         }
-        self.state.ski.runs += 1;
+        self.state.run.ski.runs += 1;
         let mut elapsed = 0.0;
         let mut triggers = Vec::new();
         while elapsed < p.max_run_s {
-            let Some(area) = self.ski_area.as_mut() else {
+            let Some(area) = self.state.ski_area.as_mut() else {
                 break;
             };
             let r = snowscape_skiers::step(
                 &p.ski,
                 area,
                 &mut self.terrain,
-                &mut self.ski_scratch,
+                &mut self.workspace.ski,
                 p.step_s,
             )
             .map_err(ski_err)?;
             elapsed += p.step_s;
-            self.state.ski.steps += 1;
-            self.state.ski.distance_m += r.distance_m;
-            self.state.budget.densification += r.compaction.densification_m3;
-            self.state.ski.finished += r
+            self.state.run.ski.steps += 1;
+            self.state.run.ski.distance_m += r.distance_m;
+            self.state.run.budget.densification += r.compaction.densification_m3;
+            self.state.run.ski.finished += r
                 .finished
                 .iter()
                 .filter(|f| f.stop == snowscape_skiers::StopReason::Terminus)
@@ -109,7 +111,7 @@ impl Winter {
             triggers.extend(r.triggers.iter().map(|t| t.cell));
             for cell in triggers.drain(..) {
                 match self.start_avalanche(cell, Trigger::Skier) {
-                    Ok(_) => self.state.ski.avalanches_triggered += 1,
+                    Ok(_) => self.state.run.ski.avalanches_triggered += 1,
                     Err(SeasonError::AvalanchePosition { .. }) => {}
                     Err(e) => return Err(e),
                 }
@@ -123,7 +125,7 @@ impl Winter {
 
     /// Fades the ski tracks under snow that `before` (total depth per cell) did not hold.
     pub(super) fn fade_tracks(&mut self, before: Option<Vec<f32>>) -> Result<(), SeasonError> {
-        let (Some(before), Some(area)) = (before, self.ski_area.as_mut()) else {
+        let (Some(before), Some(area)) = (before, self.state.ski_area.as_mut()) else {
             return Ok(());
         };
         let added: Vec<f32> = self
@@ -135,7 +137,7 @@ impl Winter {
             .collect();
         area.fade_tracks(&self.scenario.skiers.ski, &added)
             .map_err(|e| SeasonError::Skier {
-                day: self.state.scheduler.time_days(),
+                day: self.state.run.scheduler.time_days(),
                 reason: e.to_string(),
             })
     }

@@ -30,8 +30,8 @@ impl Winter {
         let p = &self.scenario.parameters.wind_transport;
         if p.sx_redistribution.enabled {
             let t = Instant::now();
-            let w = &self.weather[self.state.weather_index];
-            self.sx = snowscape_environment::sheltering_index(
+            let w = &self.weather[self.state.run.weather_index];
+            self.workspace.sx = snowscape_environment::sheltering_index(
                 &self.terrain.bedrock,
                 self.terrain.geometry(),
                 self.terrain.mask(),
@@ -40,10 +40,10 @@ impl Winter {
             )?;
             *self.wall_seconds.entry("sheltering").or_default() += t.elapsed().as_secs_f64();
         } else {
-            self.sx.clear();
+            self.workspace.sx.clear();
         }
-        self.wind_terms = if p.model == WindModel::Cordonnier {
-            let maps = wind_maps(&self.environment, &self.sx, None);
+        self.workspace.wind_terms = if p.model == WindModel::Cordonnier {
+            let maps = wind_maps(&self.environment, &self.workspace.sx, None);
             let terms = WindTerms::new(self.terrain.geometry(), self.terrain.mask(), &maps)
                 .map_err(|source| SeasonError::Phenomenon {
                     phenomenon: "wind_transport",
@@ -63,7 +63,7 @@ impl Winter {
     pub(super) fn refresh_air_temperature(&mut self) {
         if self.scenario.parameters.melt.model.hourly() {
             self.air.daily_temperature_map(
-                self.state.melt_clock_days,
+                self.state.run.melt_clock_days,
                 self.terrain.mask(),
                 &mut self.environment.temperature,
             );
@@ -73,12 +73,12 @@ impl Winter {
     /// Follows the scheduler's snowfall period: a new one is recorded, the running one's end
     /// kept up to date (a forced period may lengthen it).
     pub(super) fn follow_storms(&mut self) {
-        let Some((since, until)) = self.state.scheduler.snowfall_period() else {
+        let Some((since, until)) = self.state.run.scheduler.snowfall_period() else {
             return;
         };
-        match self.state.storms.last_mut() {
+        match self.state.run.storms.last_mut() {
             Some(s) if s.since == since => s.until = until,
-            _ => self.state.storms.push(StormSpan {
+            _ => self.state.run.storms.push(StormSpan {
                 since,
                 until,
                 delivered_to: since,
@@ -96,8 +96,8 @@ impl Winter {
         ended_only: bool,
     ) -> Result<(), PhenomenonError> {
         let orographic = self.scenario.parameters.snowfall.model == SnowfallModel::Orographic;
-        for k in 0..self.state.storms.len() {
-            let s = self.state.storms[k];
+        for k in 0..self.state.run.storms.len() {
+            let s = self.state.run.storms[k];
             let to = s.until.min(day);
             if to <= s.delivered_to || (ended_only && s.until > day) {
                 continue;
@@ -106,7 +106,7 @@ impl Winter {
                 let table = self.air.storm_precipitation(s.delivered_to, to);
                 self.add_precipitation(&table)?;
             }
-            self.state.storms[k].delivered_to = to;
+            self.state.run.storms[k].delivered_to = to;
         }
         Ok(())
     }
@@ -115,6 +115,7 @@ impl Winter {
     /// start of the next melt window).
     pub(super) fn forget_storms(&mut self, day: f64) {
         self.state
+            .run
             .storms
             .retain(|s| s.until > day || s.delivered_to < s.until);
     }
@@ -122,13 +123,13 @@ impl Winter {
     /// Samples each altitude band's mean SWE at the first event of each season day.
     pub(super) fn sample_band_swe(&mut self, day: f64) {
         let today = day.max(0.0).floor() as u64;
-        if self.state.bands.sampled_day.is_some_and(|d| d >= today) {
+        if self.state.run.bands.sampled_day.is_some_and(|d| d >= today) {
             return;
         }
         let t = Instant::now();
         let mean = self.band_mean_swe();
-        self.state.bands.raise_peaks(&mean);
-        self.state.bands.sampled_day = Some(today);
+        self.state.run.bands.raise_peaks(&mean);
+        self.state.run.bands.sampled_day = Some(today);
         *self.wall_seconds.entry("altitude_bands").or_default() += t.elapsed().as_secs_f64();
     }
 
@@ -136,7 +137,7 @@ impl Winter {
     pub(super) fn band_mean_swe(&self) -> Vec<f64> {
         self.bands.mean_swe_m(
             &self.terrain,
-            &self.pack.liquid_water_m,
+            &self.state.pack.liquid_water_m,
             self.scenario.parameters.melt.enhanced.layer_density_kg_m3,
         )
     }
@@ -159,14 +160,14 @@ impl Winter {
             table,
             snowfall::PrecipitationTargets {
                 densities_kg_m3: p.melt.enhanced.layer_density_kg_m3,
-                surface_age: &mut self.pack.surface_age_days,
+                surface_age: &mut self.state.pack.surface_age_days,
                 reset_swe_m: p.melt.enhanced.reset_swe_m,
-                rain_out: &mut self.pending_rain,
-                bands: (self.bands.band_of(), &mut self.state.bands.water_m),
+                rain_out: &mut self.state.pending_rain,
+                bands: (self.bands.band_of(), &mut self.state.run.bands.water_m),
             },
-            &mut self.snowfall_scratch,
+            &mut self.workspace.snowfall,
         )?;
-        let b = &mut self.state.budget;
+        let b = &mut self.state.run.budget;
         b.snowfall += r.snow_m3;
         b.water.snowfall_water += r.snow_water_m3;
         b.water.rain += r.rain_m3;
@@ -178,7 +179,7 @@ impl Winter {
     /// from the last melt event to `day`. Returns whether it ran, leaving the snow surface in
     /// the stability scratch ([`crate::stability::step_on_filled_surface`]).
     pub(super) fn snowpack_melt(&mut self, day: f64) -> Result<bool, PhenomenonError> {
-        let t0 = self.state.melt_clock_days;
+        let t0 = self.state.run.melt_clock_days;
         let min_window = self.scenario.parameters.melt.enhanced.min_window_hours / 24.0;
         if day - t0 < min_window && day < self.scenario.days {
             return Ok(false);
@@ -188,6 +189,7 @@ impl Winter {
         }
         let storms: Vec<(f64, f64)> = self
             .state
+            .run
             .storms
             .iter()
             .map(|s| (s.since, s.until))
@@ -206,17 +208,17 @@ impl Winter {
             lapse_offset_c: &self.air.lapse_offset_c,
             sky_view_factor: svf,
             reflected: &reflected,
-            rain_m: &self.pending_rain,
+            rain_m: &self.state.pending_rain,
             window_days: (day - t0) as f32,
         };
         let p = &self.scenario.parameters.melt;
-        let surface = self.stability_scratch.surface_to_fill();
+        let surface = self.workspace.stability.surface_to_fill();
         let r = if p.model == MeltModel::EnergyBalance {
             melt::energy_balance::step_filling_surface(
                 &p.energy_balance,
                 &p.enhanced,
                 &mut self.terrain,
-                &mut self.pack,
+                &mut self.state.pack,
                 &forcing,
                 surface,
             )?
@@ -224,14 +226,14 @@ impl Winter {
             melt::enhanced::step_filling_surface(
                 &p.enhanced,
                 &mut self.terrain,
-                &mut self.pack,
+                &mut self.state.pack,
                 &forcing,
                 surface,
             )?
         };
-        self.pending_rain.fill(0.0);
+        self.state.pending_rain.fill(0.0);
         let a = self.terrain.geometry().cell_area();
-        let b = &mut self.state.budget;
+        let b = &mut self.state.run.budget;
         b.melt += r.melted_snow_m3;
         b.refreeze += r.refrozen_snow_m3;
         b.sublimation += r.sublimated_snow_m3;
@@ -242,8 +244,8 @@ impl Winter {
         b.water.refrozen += r.refrozen_water_m3;
         b.water.runoff += r.runoff_m3;
         b.water.pending = 0.0;
-        b.water.store = self.pack.liquid_volume(a);
-        self.state.melt_clock_days = day;
+        b.water.store = self.state.pack.liquid_volume(a);
+        self.state.run.melt_clock_days = day;
         self.refresh_air_temperature();
         Ok(true)
     }

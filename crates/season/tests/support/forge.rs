@@ -10,8 +10,9 @@ use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::Winter;
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain};
 
-/// Bytes before the JSON header: magic, version, header length, maps length.
-pub const PREAMBLE: usize = 28;
+/// Bytes before the JSON header: magic, version, the lengths of the header, the maps, the ski
+/// tracks and the track tiles.
+pub const PREAMBLE: usize = checkpoint::PREAMBLE;
 pub const COLS: usize = 24;
 pub const ROWS: usize = 20;
 
@@ -44,13 +45,47 @@ pub fn checkpoint_at(day: f64) -> Vec<u8> {
     bytes
 }
 
-/// The JSON header's bytes and the raw maps of a checkpoint.
+/// The JSON header's bytes and the raw maps of a checkpoint (the maps followed by the ski
+/// sections, with their two lengths ahead of them: see [`assemble_raw`]).
 pub fn split_raw(bytes: &[u8]) -> (Vec<u8>, Vec<u8>) {
     let len = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap()) as usize;
-    let (header_len, maps_len) = (len(12), len(20));
+    let (header_len, maps_len, tracks_len, tiles_len) = (len(12), len(20), len(28), len(36));
     let header = bytes[PREAMBLE..PREAMBLE + header_len].to_vec();
-    let maps = bytes[PREAMBLE + header_len..PREAMBLE + header_len + maps_len].to_vec();
+    let body = PREAMBLE + header_len;
+    let mut maps = bytes[body..body + maps_len + tracks_len + tiles_len].to_vec();
+    maps.extend_from_slice(&(tracks_len as u64).to_le_bytes());
+    maps.extend_from_slice(&(tiles_len as u64).to_le_bytes());
     (header, maps)
+}
+
+/// The sections after the header as [`split_raw`] gives them: the maps, the ski tracks and
+/// the track tiles.
+pub fn sections(rest: &[u8]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
+    let n = rest.len();
+    let len = |at: usize| u64::from_le_bytes(rest[at..at + 8].try_into().unwrap()) as usize;
+    let (tracks_len, tiles_len) = (len(n - 16), len(n - 8));
+    let maps_len = n - 16 - tracks_len - tiles_len;
+    (
+        rest[..maps_len].to_vec(),
+        rest[maps_len..maps_len + tracks_len].to_vec(),
+        rest[maps_len + tracks_len..n - 16].to_vec(),
+    )
+}
+
+/// A checkpoint of `json`, the maps, the ski tracks and the track tiles, with lengths and CRC
+/// computed anew.
+pub fn assemble_sections(json: &[u8], maps: &[u8], tracks: &[u8], tiles: &[u8]) -> Vec<u8> {
+    let mut out = b"SNOWCKPT".to_vec();
+    out.extend_from_slice(&checkpoint::VERSION.to_le_bytes());
+    for len in [json.len(), maps.len(), tracks.len(), tiles.len()] {
+        out.extend_from_slice(&(len as u64).to_le_bytes());
+    }
+    for part in [json, maps, tracks, tiles] {
+        out.extend_from_slice(part);
+    }
+    let crc = crc32fast::hash(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
 }
 
 /// The JSON header and the raw maps of a checkpoint.
@@ -59,18 +94,25 @@ pub fn split(bytes: &[u8]) -> (Value, Vec<u8>) {
     (serde_json::from_slice(&header).unwrap(), maps)
 }
 
-/// A checkpoint of the header bytes `json` and `maps` with lengths and CRC computed anew:
-/// what a forger (or a writer with a bug) produces, and the checksum accepts.
+/// A checkpoint of the header bytes `json` and `maps` (as [`split_raw`] gives them) with
+/// lengths and CRC computed anew: what a forger (or a writer with a bug) produces, and the
+/// checksum accepts. Maps too short to hold the two section lengths are assembled as they
+/// are, without ski sections.
 pub fn assemble_raw(json: &[u8], maps: &[u8]) -> Vec<u8> {
-    let mut out = b"SNOWCKPT".to_vec();
-    out.extend_from_slice(&checkpoint::VERSION.to_le_bytes());
-    out.extend_from_slice(&(json.len() as u64).to_le_bytes());
-    out.extend_from_slice(&(maps.len() as u64).to_le_bytes());
-    out.extend_from_slice(json);
-    out.extend_from_slice(maps);
-    let crc = crc32fast::hash(&out);
-    out.extend_from_slice(&crc.to_le_bytes());
-    out
+    if maps.len() < 16 {
+        return assemble_sections(json, maps, &[], &[]);
+    }
+    let n = maps.len();
+    let len = |at: usize| u64::from_le_bytes(maps[at..at + 8].try_into().unwrap()) as usize;
+    let (tracks_len, tiles_len) = (len(n - 16), len(n - 8));
+    match (n - 16).checked_sub(tracks_len.saturating_add(tiles_len)) {
+        Some(_) => {
+            let (m, t, l) = sections(maps);
+            assemble_sections(json, &m, &t, &l)
+        }
+        // Lengths a mutation made nonsense of: the bytes as one maps section.
+        None => assemble_sections(json, maps, &[], &[]),
+    }
 }
 
 /// [`assemble_raw`] of a JSON header.
