@@ -23,6 +23,7 @@
 //! | [`render`] | previews, glTF, GIF/PNG encoding |
 //! | [`outputs`] | the output layer of a season (every file of `snowscape run`) |
 //! | [`season_run`] | one season run to its end with snapshots, checkpoints, resume and every output (the path of `snowscape run` and `demo`) |
+//! | [`simulation`] | the one driver of a season (chunks to a stop time, outputs on schedules, progress and cancel through a `Control`), for the command line, the editor and Python |
 //! | [`report`] | the typed `report.json` of every job |
 //! | [`avalanche_release`] | one avalanche's release on a DEM (file, mask or rupture point), as `snowscape avalanche` and the Python package take it |
 //! | [`cover`] | both mesh covers' parameters from a TOML file |
@@ -66,6 +67,7 @@ pub mod output_folder;
 pub mod outputs;
 pub mod report;
 pub mod season_run;
+pub mod simulation;
 pub mod station;
 pub mod transport_job;
 
