@@ -189,13 +189,8 @@ impl<'w, K: Copy> Simulation<'w, K> {
         self
     }
 
-    /// The season being run.
-    pub fn winter(&self) -> &Winter {
-        self.winter
-    }
-
     /// The day the run ends at: its stop time, or the season's end if that comes first.
-    pub fn effective_stop_time(&self) -> f64 {
+    fn stop_day(&self) -> f64 {
         self.stop_time.min(self.winter.scenario().days)
     }
 
@@ -208,7 +203,7 @@ impl<'w, K: Copy> Simulation<'w, K> {
     ) -> Result<StopReason, SimulationError<E>> {
         let started = Instant::now();
         let start_day = self.winter.day();
-        let stop_time = self.effective_stop_time();
+        let stop_time = self.stop_day();
         let mut outputs: Vec<(K, Timer)> = self
             .outputs
             .iter()
