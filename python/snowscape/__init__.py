@@ -22,7 +22,7 @@ import numpy as np
 
 from . import _snowscape
 
-__all__ = ["Raster", "read_dem", "write", "Winter", "avalanche", "cover", "transport"]
+__all__ = ["Raster", "read_dem", "write", "Winter", "avalanche", "cover", "transport", "validate"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -479,3 +479,35 @@ def transport(
     out: Dict[str, Any] = {name: Raster._from_native(parts) for name, parts in rasters}
     out["report"] = json.loads(report)
     return out
+
+
+def validate(
+    run: PathLike,
+    observed: PathLike,
+    *,
+    mask: Optional[PathLike] = None,
+    out: Optional[PathLike] = None,
+    snow_threshold: float = 0.05,
+    wind_from: Optional[float] = None,
+) -> Dict[str, Any]:
+    """A run's snow depth against a measured depth raster, as ``snowscape validate`` computes
+    it: ``run`` is a folder written by ``snowscape run`` or ``demo`` (its ``depth.tif``,
+    ``bedrock.tif`` and ``report.json`` are read), ``observed`` a depth raster in metres (any
+    cell size and extent, matched by map coordinates), ``mask`` a raster whose nonzero cells are
+    compared; ``snow_threshold`` (m) the depth above which a cell is snow-covered,
+    ``wind_from`` (degrees clockwise from north) the prevailing wind of the lee/windward ratio
+    (default: the run's report.json, else 270).
+
+    Writes ``validation.json``, ``validation.png`` and ``scatter.png`` into ``out`` (default
+    ``run/validation``) and returns the report: the keys of ``validation.json`` (correlations,
+    errors, snow-cover agreement, terrain-only baselines, class ratios).
+    """
+    report = _snowscape.validate(
+        os.fspath(run),
+        os.fspath(observed),
+        None if mask is None else os.fspath(mask),
+        None if out is None else os.fspath(out),
+        float(snow_threshold),
+        None if wind_from is None else float(wind_from),
+    )
+    return json.loads(report)

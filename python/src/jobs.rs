@@ -6,18 +6,19 @@ use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use snowscape::avalanche::validation::ThicknessConvention;
-use snowscape::avalanche::{
-    AvalancheError, AvalancheParams, AvalancheWorkspace, ReleasedCells, RestOutcome, SamosAtParams,
+use snowscape::avalanche::{AvalancheParams, SamosAtParams};
+use snowscape::avalanche_job::{
+    AvalancheJob, AvalancheJobError, AvalancheSettings, Silent, run as run_avalanche,
 };
-use snowscape::avalanche_release::{ReleaseSpec, release_terrain};
+use snowscape::avalanche_release::ReleaseSpec;
 use snowscape::cover::{CoverParameters, DiffusionCoverReport, MeshInputSummary};
-use snowscape::io::ReadOptions;
 use snowscape::mesh::{SourceFrame, UpAxis, read_scene};
-use snowscape::terrain::SnowLayer;
 use std::path::PathBuf;
 
-/// One avalanche from release to rest on `dem`: the peak thickness and speed, the deposit and
-/// the entrained depth (grid rasters) and the summary (JSON).
+/// One avalanche from release to rest on `dem`, the job of `snowscape avalanche`
+/// ([`snowscape::avalanche_job`], without an output folder): the peak thickness and speed, the
+/// deposit and the entrained depth (grid rasters) and the flat summary (JSON,
+/// [`snowscape::avalanche_job::AvalancheSummary`]).
 #[pyfunction]
 #[pyo3(signature = (dem, release_path, release_mask, release_point, thickness, slope_normal, params_json, duration, snow_cover))]
 #[allow(clippy::too_many_arguments)]
@@ -34,133 +35,50 @@ pub(crate) fn avalanche<'py>(
     snow_cover: f64,
 ) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
     let dem = grid_in(dem)?;
-    dem.check_terrain().map_err(py_err)?;
-    let params = avalanche_params(&params_json)?;
-    params.validate().map_err(py_err)?;
-    let options = snowscape::avalanche::RunOptions {
-        duration_s: duration,
-        ..Default::default()
-    };
-    options.validate().map_err(py_err)?;
-    let spec = match (release_path, release_mask, release_point) {
-        (Some(p), None, None) => {
-            if !p.exists() {
-                return Err(PyOSError::new_err(format!(
-                    "release {}: no such file",
-                    p.display()
-                )));
-            }
-            ReleaseSpec::File(p)
-        }
-        (None, Some(m), None) => {
-            if m.len() != dem.geometry().len() {
-                return Err(value_err(format!(
-                    "release mask has {} cells, the DEM {} x {}",
-                    m.len(),
-                    dem.geometry().width(),
-                    dem.geometry().height()
-                )));
-            }
-            ReleaseSpec::Mask(m.iter().map(|&b| b != 0).collect())
-        }
-        (None, None, Some((x, y))) => {
-            if !(x.is_finite() && y.is_finite()) {
-                return Err(value_err(format!(
-                    "release point ({x}, {y}) must be finite"
-                )));
-            }
-            ReleaseSpec::Point(x, y)
-        }
+    let release = match (release_path, release_mask, release_point) {
+        (Some(p), None, None) => ReleaseSpec::File(p),
+        (None, Some(m), None) => ReleaseSpec::Mask(m.iter().map(|&b| b != 0).collect()),
+        (None, None, Some((x, y))) => ReleaseSpec::Point(x, y),
         _ => {
             return Err(value_err(
                 "give exactly one release: a path, a mask or (x, y)",
             ));
         }
     };
-    let convention = if slope_normal {
+    let mut settings = AvalancheSettings::new(release);
+    settings.thickness_m = thickness;
+    settings.thickness_measured = if slope_normal {
         ThicknessConvention::SlopeNormal
     } else {
         ThicknessConvention::Vertical
     };
-    let (mut terrain, cells, area) = release_terrain(
-        &dem,
-        &spec,
-        thickness,
-        convention,
-        &ReadOptions::default(),
-        snow_cover,
-    )
-    .map_err(py_err)?;
-    let outcome: RestOutcome = py
-        .detach(|| {
-            AvalancheWorkspace::new().run_to_rest::<AvalancheError>(
-                &mut terrain,
-                ReleasedCells::new(&cells, None),
-                &params,
-                &options,
-                SnowLayer::Stable,
-                |_| Ok(()),
-            )
-        })
-        .map_err(py_err)?;
-    let g = dem.geometry();
-    let n = g.len();
-    let dense = |cells: Vec<f64>| cells.into_iter().map(|v| v as f32).collect::<Vec<f32>>();
-    let maps = vec![
-        (
-            "peak_thickness",
-            dense(RestOutcome::dense(&outcome.peak_thickness, n)),
-        ),
-        (
-            "peak_velocity",
-            dense(RestOutcome::dense(&outcome.peak_speed, n)),
-        ),
-        ("deposit", dense(RestOutcome::dense(&outcome.deposited, n))),
-        (
-            "entrained",
-            dense(RestOutcome::dense(&outcome.entrained, n)),
-        ),
-    ];
-    let rasters = maps
-        .into_iter()
-        .map(|(name, v)| (name.to_string(), grid_out(py, g, dem.mask(), &v)))
-        .collect();
-    Ok((
-        rasters,
-        summary_json(&outcome, area.count(), area.area_m2(), &params)?,
-    ))
-}
-
-/// The avalanche summary, one flat object: the run's figures ([`RestOutcome::summary`]:
-/// runout, travel angle, footprint, stop...), the volumes, the release and the parameters.
-fn summary_json(
-    outcome: &RestOutcome,
-    release_cells: usize,
-    release_area_m2: f64,
-    params: &AvalancheParams,
-) -> PyResult<String> {
-    let mut summary = match serde_json::to_value(&outcome.summary) {
-        Ok(serde_json::Value::Object(m)) => m,
-        Ok(_) => serde_json::Map::new(),
-        Err(e) => return Err(value_err(format!("the avalanche summary: {e}"))),
+    settings.snow_cover_m = snow_cover;
+    settings.flow = avalanche_params(&params_json)?;
+    settings.run.duration_s = duration;
+    let job = AvalancheJob {
+        source: "python".into(),
+        dem,
+        settings,
     };
-    for (key, value) in [
-        ("released_volume_m3", serde_json::json!(outcome.released_m3)),
-        (
-            "entrained_volume_m3",
-            serde_json::json!(outcome.entrained_m3),
-        ),
-        (
-            "deposited_volume_m3",
-            serde_json::json!(outcome.deposited_m3),
-        ),
-        ("release_cells", serde_json::json!(release_cells)),
-        ("release_area_m2", serde_json::json!(release_area_m2)),
-        ("parameters", serde_json::json!(params)),
-    ] {
-        summary.insert(key.to_string(), value);
-    }
-    Ok(serde_json::Value::Object(summary).to_string())
+    let outcome = py
+        .detach(|| run_avalanche(&job, &mut Silent))
+        .map_err(|e| match e {
+            AvalancheJobError::NoReleaseFile(_) => {
+                PyOSError::new_err(snowscape::messages::clip_values(&e.to_string()))
+            }
+            e => py_err(e),
+        })?;
+    let g = job.dem.geometry();
+    let rasters = outcome
+        .maps()
+        .into_iter()
+        .map(|(name, v)| (name.to_string(), grid_out(py, g, job.dem.mask(), &v)))
+        .collect();
+    let summary = outcome
+        .summary()
+        .to_json()
+        .map_err(|e| value_err(format!("the avalanche summary: {e}")))?;
+    Ok((rasters, summary.to_string()))
 }
 
 /// The flow parameters from the keyword arguments' JSON. `friction` takes the command line's
@@ -372,4 +290,39 @@ pub(crate) fn transport<'py>(
     let report = TransportReport::new(&scenario, &out, input, t0.elapsed().as_secs_f64());
     let report = serde_json::to_string(&report).map_err(|e| value_err(e.to_string()))?;
     Ok((rasters, report))
+}
+
+/// A run's snow depth against a measured depth raster, the job of `snowscape validate`
+/// ([`snowscape::validation::run`]): writes `validation.json`, `validation.png` and
+/// `scatter.png` into `out` (default `RUN/validation`) and returns the report (JSON, the keys
+/// of `validation.json`).
+#[pyfunction]
+#[pyo3(signature = (run, observed, mask, out, snow_threshold, wind_from))]
+pub(crate) fn validate(
+    py: Python<'_>,
+    run: PathBuf,
+    observed: PathBuf,
+    mask: Option<PathBuf>,
+    out: Option<PathBuf>,
+    snow_threshold: f64,
+    wind_from: Option<f64>,
+) -> PyResult<String> {
+    use snowscape::validation::{ValidateJob, ValidationError};
+    let job = ValidateJob {
+        run,
+        observed,
+        mask,
+        out,
+        snow_threshold_m: snow_threshold,
+        wind_from_deg: wind_from,
+    };
+    let outcome = py
+        .detach(|| snowscape::validation::run(&job))
+        .map_err(|e| match e {
+            ValidationError::MissingFile { .. } | ValidationError::MissingRunFile { .. } => {
+                PyOSError::new_err(snowscape::messages::clip_values(&e.to_string()))
+            }
+            e => py_err(e),
+        })?;
+    serde_json::to_string(&outcome.report).map_err(|e| value_err(e.to_string()))
 }

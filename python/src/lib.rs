@@ -497,6 +497,7 @@ fn _snowscape(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(jobs::avalanche, m)?)?;
     m.add_function(wrap_pyfunction!(jobs::cover, m)?)?;
     m.add_function(wrap_pyfunction!(jobs::transport, m)?)?;
+    m.add_function(wrap_pyfunction!(jobs::validate, m)?)?;
     m.add_class::<PyWinter>()?;
     m.add("CHUNK_DAYS", CHUNK_DAYS)?;
     Ok(())

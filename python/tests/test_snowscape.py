@@ -1,6 +1,7 @@
 """The Python package against the command line and hand-computed values, on the shared real
 DEMs (../shared/data beside the checkout; the tests fail when it is missing)."""
 
+import json
 import os
 import subprocess
 from pathlib import Path
@@ -389,3 +390,24 @@ def test_station_forcing_drives_the_season_as_the_command_line(tmp_path):
     resumed = snowscape.Winter.resume(out, dem)
     assert resumed.day == w.day
     assert same_bytes(resumed.depth().values, cli_depth)
+
+
+def test_validate_matches_the_command_line(tmp_path):
+    # A short run on avaWog, its own depth as the observation: the same validation.json as
+    # `snowscape validate` (but the paths), rho = 1, and bad input named.
+    run = tmp_path / "run"
+    snowscape_cli("run", "--dem", str(wog_dem()), "--days", "3", "--out", str(run))
+    observed = run / "depth.tif"
+    v = snowscape.validate(run, observed, out=tmp_path / "py")
+    assert v["command"] == "validate"
+    assert v["cells_compared"] > 0
+    assert v["outputs"] == ["validation.json", "validation.png", "scatter.png"]
+    for name in v["outputs"]:
+        assert (tmp_path / "py" / name).is_file(), name
+    snowscape_cli("validate", "--run", str(run), "--observed", str(observed), "--out", str(tmp_path / "cli"))
+    cli = json.loads((tmp_path / "cli" / "validation.json").read_text())
+    assert cli == json.loads((tmp_path / "py" / "validation.json").read_text()) == v
+    with pytest.raises(OSError, match="no/such.tif"):
+        snowscape.validate(run, "no/such.tif")
+    with pytest.raises(ValueError, match="-1"):
+        snowscape.validate(run, observed, snow_threshold=-1.0)

@@ -21,6 +21,7 @@ use crate::release_area::{ReleaseAreaError, ReleaseMask, release_from_shapefile}
 use crate::rest::{AvalancheWorkspace, ReleasedCells, RestOutcome};
 use crate::run::{AvalancheRun, RunOptions, RunSummary};
 use snowscape_io::{RasterError, ReadOptions};
+use snowscape_terrain::operators;
 use snowscape_terrain::{Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -149,9 +150,11 @@ pub fn flank_angle(hv: &[f64], n: usize) -> (f64, usize, f64) {
         for c in 1..n - 1 {
             let v = hv[r * n + c];
             if v > 0.1 * hmax && v < 0.9 * hmax {
-                let gx = (hv[r * n + c + 1] - hv[r * n + c - 1]) / 2.0;
-                let gy = (hv[(r + 1) * n + c] - hv[(r - 1) * n + c]) / 2.0;
-                sum += gx.hypot(gy).atan().to_degrees();
+                let (west, east) = (hv[r * n + c - 1], hv[r * n + c + 1]);
+                let (north, south) = (hv[(r - 1) * n + c], hv[(r + 1) * n + c]);
+                let gx = operators::centred_difference(Some(west), v, Some(east), 1.0);
+                let gy = operators::centred_difference(Some(north), v, Some(south), 1.0);
+                sum += operators::slope_angle(gx, gy).to_degrees();
                 count += 1;
             }
         }

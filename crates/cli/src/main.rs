@@ -13,7 +13,6 @@ mod pairs;
 mod progress;
 mod report;
 mod stdout;
-mod validation;
 
 use clap::Parser;
 use failure::Failure;

@@ -13,7 +13,7 @@
 
 use crate::RenderError;
 use snowscape_mesh::{MeshFrame, TriMesh};
-use snowscape_terrain::GridGeometry;
+use snowscape_terrain::{GridGeometry, operators};
 
 pub use snowscape_terrain::lattice::{lattice_axis, lattice_vertices};
 
@@ -194,8 +194,9 @@ fn lattice_normal(l: &Lattice, a: usize, b: usize) -> [f32; 3] {
         (b + 1 < l.zs.len()).then(|| at(a, b + 1)),
         &|v| l.zs[v / nc],
     );
-    let inv = 1.0 / (gx * gx + gz * gz + 1.0).sqrt();
-    [-gx * inv, inv, -gz * inv]
+    // The lattice is y up: the upward normal of (x, z) with its last two axes swapped.
+    let [nx, nz, ny] = operators::upward_normal(gx, gz);
+    [nx, ny, nz]
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@ use crate::planes::{Planes, Source, check_length};
 use crate::shade::{self, HeightField};
 use image::RgbaImage;
 use rayon::prelude::*;
-use snowscape_terrain::{Grid, LayeredTerrain, surface};
+use snowscape_terrain::{Grid, LayeredTerrain, operators, surface};
 
 /// How a preview is coloured before lighting.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -319,15 +319,12 @@ impl Scene<'_, '_> {
 
 /// Unit upward normals (x east, y north, z up) of one row of the surface. Central differences
 /// as in `snowscape_terrain::surface::gradient` (which handles rows next to nodata); rows of an
-/// all-valid grid take a fast path with the same result.
+/// all-valid grid take a fast path with the same stencil (`snowscape_terrain::operators`).
 pub(crate) fn row_normals(z: &[f32], planes: &Planes, row: usize, out: &mut Vec<[f32; 3]>) {
     let g = &planes.geometry;
     let (w, h) = (g.width(), g.height());
     out.clear();
-    let normal = |gx: f32, gy: f32| {
-        let inv = 1.0 / (gx * gx + gy * gy + 1.0).sqrt();
-        [-gx * inv, -gy * inv, inv]
-    };
+    let normal = operators::upward_normal::<f32>;
     if planes.mask.has_nodata() || w < 2 {
         out.extend((0..w).map(|col| {
             let (gx, gy) = surface::gradient(z, g, &planes.mask, col, row);
@@ -347,7 +344,12 @@ pub(crate) fn row_normals(z: &[f32], planes: &Planes, row: usize, out: &mut Vec<
     };
     for col in 0..w {
         let (west, east) = (col.saturating_sub(1), (col + 1).min(w - 1));
-        let gx = (line[east] - line[west]) / ((east - west) as f32 * dx);
+        let gx = operators::centred_difference(
+            (west < col).then(|| line[west]),
+            line[col],
+            (east > col).then(|| line[east]),
+            dx,
+        );
         let gy = (north[col] - south[col]) * inv_dy;
         out.push(normal(gx, gy));
     }

@@ -7,7 +7,7 @@
 //! [`Masked`] (the terrain's per-cell nodata flags).
 
 use rayon::prelude::*;
-use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask, surface};
+use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask, operators, surface};
 use thiserror::Error;
 
 /// A bad input to a phenomenon step: a map of the wrong size, a parameter out of range or a
@@ -207,8 +207,8 @@ pub(crate) fn fill_surface(terrain: &LayeredTerrain, out: &mut Vec<f32>) {
 
 /// Norm of the surface gradient `‖∇A‖` (tan of the slope) along one row, into `out`.
 ///
-/// Central differences in the interior (the stencil of [`surface::gradient`], written without
-/// per-cell clamping); border cells and cells next to nodata use [`surface::gradient`]'s
+/// Central differences in the interior ([`operators::interior_difference`]: the stencil of
+/// [`surface::gradient`] without per-cell clamping); border cells and cells next to nodata use [`surface::gradient`]'s
 /// one-sided rule. Nodata cells get 0.
 pub(crate) fn row_gradient_norm<V: Validity>(
     a: &[f32],
@@ -237,7 +237,7 @@ pub(crate) fn row_gradient_norm_in<V: Validity>(
     let half_inv_dy = (0.5 / geometry.cell_size_y()) as f32;
     let slow = |col: usize| -> f32 {
         let (gx, gy) = surface::gradient(a, geometry, mask, col, row);
-        (gx * gx + gy * gy).sqrt()
+        operators::slope_tangent(gx, gy)
     };
     let base = row * w;
     let first = cols.start;
@@ -264,9 +264,9 @@ pub(crate) fn row_gradient_norm_in<V: Validity>(
         out[col - first] = if !valid.at(i) {
             0.0
         } else if valid.at(i - 1) && valid.at(i + 1) && valid.at(i - w) && valid.at(i + w) {
-            let gx = (mid[col + 1] - mid[col - 1]) * half_inv_dx;
-            let gy = (up[col] - dn[col]) * half_inv_dy;
-            (gx * gx + gy * gy).sqrt()
+            let gx = operators::interior_difference(mid[col - 1], mid[col + 1], half_inv_dx);
+            let gy = operators::interior_difference(dn[col], up[col], half_inv_dy);
+            operators::slope_tangent(gx, gy)
         } else {
             slow(col)
         };

@@ -55,9 +55,9 @@ pub mod sheltered;
 mod stencils;
 mod terms;
 pub use sheltered::{DriftSublimationParams, SxParams};
+pub use snowscape_terrain::operators::{one_sided_second_difference, second_difference};
 pub use stencils::{
-    downwind_split, eroded_depth, erosion_curvature, one_sided_second_difference,
-    second_difference, tamping_share, vertical_wind_change,
+    downwind_split, eroded_depth, erosion_curvature, tamping_share, vertical_wind_change,
 };
 pub use terms::WindTerms;
 

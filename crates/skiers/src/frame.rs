@@ -7,7 +7,7 @@
 //! is exact for projected and geographic grids alike.
 
 use crate::SkiError;
-use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
+use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask, operators};
 
 /// Map coordinates `(X, Y)` of the local position `(x, y)` (m).
 pub fn local_to_map(geometry: &GridGeometry, x: f64, y: f64) -> (f64, f64) {
@@ -109,40 +109,23 @@ impl<'a> SnowView<'a> {
     pub fn centre(&self, col: usize, row: usize) -> (f64, f64) {
         ((col as f64 + 0.5) * self.dx, (row as f64 + 0.5) * self.dy)
     }
-    /// Surface gradient `(∂A/∂x, ∂A/∂y)` at a cell in the local frame (x east, y south), by
-    /// central differences, one-sided at borders and next to nodata.
+    /// Surface gradient `(∂A/∂x, ∂A/∂y)` at a cell in the local frame (x east, y south):
+    /// [`operators::gradient_south`], one-sided at borders and next to nodata.
     pub fn gradient(&self, col: usize, row: usize) -> (f64, f64) {
-        let i = row * self.width + col;
-        let a = self.surface(i) as f64;
-        let at = |dc: isize, dr: isize| -> (f64, f64) {
+        let at = |dc: isize, dr: isize| {
             let (c, r) = (col as isize + dc, row as isize + dr);
             if c < 0 || r < 0 || c as usize >= self.width || r as usize >= self.height {
-                return (a, 0.0);
+                return None;
             }
             let j = r as usize * self.width + c as usize;
-            if self.mask.is_valid(j) {
-                (self.surface(j) as f64, 1.0)
-            } else {
-                (a, 0.0)
-            }
+            self.mask.is_valid(j).then(|| self.surface(j) as f64)
         };
-        let ((aw, ww), (ae, we)) = (at(-1, 0), at(1, 0));
-        let ((an, wn), (as_, ws)) = (at(0, -1), at(0, 1));
-        let gx = if ww + we > 0.0 {
-            (ae - aw) / ((ww + we) * self.dx)
-        } else {
-            0.0
-        };
-        let gy = if wn + ws > 0.0 {
-            (as_ - an) / ((wn + ws) * self.dy)
-        } else {
-            0.0
-        };
-        (gx, gy)
+        let a = self.surface(row * self.width + col) as f64;
+        operators::gradient_south(a, at, self.dx, self.dy)
     }
     /// Surface slope angle of a cell, radians.
     pub fn slope(&self, col: usize, row: usize) -> f64 {
         let (gx, gy) = self.gradient(col, row);
-        (gx * gx + gy * gy).sqrt().atan()
+        operators::slope_angle(gx, gy)
     }
 }

@@ -42,14 +42,7 @@ pub fn release_terrain(
     dem_options: &ReadOptions,
     snow_cover_m: f64,
 ) -> Result<(LayeredTerrain, Vec<usize>, ReleaseMask), ReleaseError> {
-    if let Some(t) = thickness
-        && !(t.is_finite() && t > 0.0 && t <= MAX_THICKNESS_M)
-    {
-        return Err(ReleaseError::Thickness(t));
-    }
-    if !(snow_cover_m.is_finite() && (0.0..=MAX_THICKNESS_M).contains(&snow_cover_m)) {
-        return Err(ReleaseError::SnowCover(snow_cover_m));
-    }
+    check_release_values(thickness, snow_cover_m)?;
     let (mut terrain, cells, area) = release_only(dem, spec, thickness, convention, dem_options)?;
     if snow_cover_m > 0.0 {
         // The cover the flow can entrain, outside the release (whose snow it releases).
@@ -70,6 +63,46 @@ pub fn release_terrain(
 /// Largest release thickness and snow cover, m.
 pub const MAX_THICKNESS_M: f64 = 50.0;
 
+/// Checks a release thickness ((0, 50] m) and a snow cover ([0, 50] m).
+pub fn check_release_values(
+    thickness_m: Option<f64>,
+    snow_cover_m: f64,
+) -> Result<(), ReleaseError> {
+    if let Some(t) = thickness_m
+        && !(t.is_finite() && t > 0.0 && t <= MAX_THICKNESS_M)
+    {
+        return Err(ReleaseError::Thickness(t));
+    }
+    if !(snow_cover_m.is_finite() && (0.0..=MAX_THICKNESS_M).contains(&snow_cover_m)) {
+        return Err(ReleaseError::SnowCover(snow_cover_m));
+    }
+    Ok(())
+}
+
+impl ReleaseSpec {
+    /// A release as the command line names it: `X,Y` map coordinates (finite) as a rupture
+    /// point, anything else as the path of an existing file.
+    pub fn parse(text: &str) -> Result<Self, ReleaseError> {
+        let parts: Vec<&str> = text.split(',').collect();
+        if parts.len() == 2
+            && let (Ok(x), Ok(y)) = (
+                parts[0].trim().parse::<f64>(),
+                parts[1].trim().parse::<f64>(),
+            )
+        {
+            if !(x.is_finite() && y.is_finite()) {
+                return Err(ReleaseError::NonFinitePoint(text.to_string()));
+            }
+            return Ok(Self::Point(x, y));
+        }
+        let path = std::path::PathBuf::from(text);
+        if !path.exists() {
+            return Err(ReleaseError::NotPointOrFile(text.to_string()));
+        }
+        Ok(Self::File(path))
+    }
+}
+
 /// Why a release was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum ReleaseError {
@@ -81,6 +114,10 @@ pub enum ReleaseError {
     SnowCover(f64),
     #[error("the release holds no snow (released volume 0 m³)")]
     NoSnow,
+    #[error("{0:?}: the coordinates must be finite")]
+    NonFinitePoint(String),
+    #[error("{0:?} is neither X,Y map coordinates nor an existing file")]
+    NotPointOrFile(String),
 }
 
 /// The release's terrain, cells and mask, before the cover and the checks.
@@ -159,4 +196,22 @@ fn release_only(
     };
     let cells = (0..area.cells.len()).filter(|&i| area.cells[i]).collect();
     Ok((terrain, cells, area))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn release_points_and_files_are_told_apart() {
+        assert_eq!(
+            ReleaseSpec::parse("631500.5, 212300").unwrap(),
+            ReleaseSpec::Point(631500.5, 212300.0)
+        );
+        assert!(ReleaseSpec::parse("nan,3").is_err());
+        let e = ReleaseSpec::parse("no/such/file.shp")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no/such/file.shp"), "{e}");
+    }
 }

@@ -25,9 +25,11 @@
 //! | [`season_run`] | one season run to its end with snapshots, checkpoints, resume and every output (the path of `snowscape run` and `demo`) |
 //! | [`simulation`] | the one driver of a season (chunks to a stop time, outputs on schedules, progress and cancel through a `Control`), for the command line, the editor and Python |
 //! | [`report`] | the typed `report.json` of every job |
+//! | [`avalanche_job`] | one avalanche from release to rest on a DEM, its range checks, maps, frames, comparison and typed `report.json` (the path of `snowscape avalanche` and the Python package's `avalanche`) |
 //! | [`avalanche_release`] | one avalanche's release on a DEM (file, mask or rupture point), as `snowscape avalanche` and the Python package take it |
 //! | [`cover`] | both mesh covers' parameters from a TOML file |
 //! | [`engine_export`] | a run's terrain and snow for Unreal, Unity or Godot: heightmaps, weight maps, import scales |
+//! | [`validation`] | a run's snow depth against a measured depth raster: matching, statistics, baselines, class ratios, figures and the typed `validation.json` (the path of `snowscape validate` and the Python package's `validate`) |
 //! | [`transport_job`] | a 3D transport run's scenario, a DEM as its scene, the wind grid fitted to it |
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
@@ -57,6 +59,7 @@
 //! The examples in `crates/snowscape/examples` run a season on a DEM and write every output,
 //! an avalanche to rest, a mesh cover and a transport run.
 
+pub mod avalanche_job;
 pub mod avalanche_release;
 pub mod cover;
 pub mod cpu;
@@ -70,6 +73,7 @@ pub mod season_run;
 pub mod simulation;
 pub mod station;
 pub mod transport_job;
+pub mod validation;
 
 pub use snowscape_avalanche as avalanche;
 pub use snowscape_environment as environment;

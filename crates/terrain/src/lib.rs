@@ -14,8 +14,9 @@
 //! - [`random`]: counter-based random numbers keyed by (seed, stream, index), so a run is a pure
 //!   function of its inputs and seed whatever the thread count.
 //! - [`procedural`]: the deterministic procedural alpine terrain bundled as the default input.
-//! - [`surface`]: slopes and normals by central differences, shared by the renderer, the mesh
-//!   exporter and the phenomena.
+//! - [`operators`]: the one family of finite-difference stencils (gradient, slope, aspect,
+//!   normal, curvature) in f32 and f64, with the grid's axes stated once; [`surface`]: those
+//!   stencils per cell of a grid, shared by the renderer, the mesh exporter and the phenomena.
 
 pub mod crs_facts;
 pub mod crs_latitude;
@@ -25,6 +26,7 @@ pub mod grid;
 pub mod lattice;
 pub mod layers;
 pub mod materials;
+pub mod operators;
 pub mod procedural;
 pub mod random;
 pub mod solar;

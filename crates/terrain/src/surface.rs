@@ -1,13 +1,15 @@
-//! Surface derivatives of a height field: gradient, slope, aspect and normals.
+//! Surface derivatives of a height field on its grid: gradient, slope and normals per cell,
+//! the stencils of [`crate::operators`] read through the grid's nodata mask.
 //!
 //! Central differences `∂z/∂x ≈ (z[c+1] - z[c-1]) / 2dx` in the interior, one-sided at the
 //! borders and next to nodata cells (a missing neighbour is replaced by the cell itself).
 //! x points east, y points north (row 0 is north, so `∂z/∂y = (z[r-1] - z[r+1]) / 2dy`).
 
-use crate::{GridGeometry, NodataMask};
+use crate::{GridGeometry, NodataMask, operators};
 use rayon::prelude::*;
 
-/// The height gradient `(∂z/∂x, ∂z/∂y)` at `(col, row)`, x east and y north.
+/// The height gradient `(∂z/∂x, ∂z/∂y)` at `(col, row)`, x east and y north
+/// ([`operators::gradient`]: nodata neighbours and the border make it one-sided).
 #[inline]
 pub fn gradient(
     z: &[f32],
@@ -16,37 +18,25 @@ pub fn gradient(
     col: usize,
     row: usize,
 ) -> (f32, f32) {
-    let i = geometry.index(col, row);
-    let at = |dc: isize, dr: isize| -> (f32, f32) {
-        match geometry.neighbour(col, row, dc, dr) {
-            Some(j) if mask.is_valid(j) => (z[j], 1.0),
-            _ => (z[i], 0.0),
-        }
+    let at = |dc: isize, dr: isize| {
+        geometry
+            .neighbour(col, row, dc, dr)
+            .filter(|&j| mask.is_valid(j))
+            .map(|j| z[j])
     };
-    let (zw, ww) = at(-1, 0);
-    let (ze, we) = at(1, 0);
-    let (zn, wn) = at(0, -1);
-    let (zs, ws) = at(0, 1);
-    let dx = geometry.cell_size_x() as f32;
-    let dy = geometry.cell_size_y() as f32;
-    let gx = if ww + we > 0.0 {
-        (ze - zw) / ((ww + we) * dx)
-    } else {
-        0.0
-    };
-    let gy = if wn + ws > 0.0 {
-        (zn - zs) / ((wn + ws) * dy)
-    } else {
-        0.0
-    };
-    (gx, gy)
+    operators::gradient(
+        z[geometry.index(col, row)],
+        at,
+        geometry.cell_size_x() as f32,
+        geometry.cell_size_y() as f32,
+    )
 }
 
 /// Slope angle in radians at `(col, row)`.
 #[inline]
 pub fn slope(z: &[f32], geometry: &GridGeometry, mask: &NodataMask, col: usize, row: usize) -> f32 {
     let (gx, gy) = gradient(z, geometry, mask, col, row);
-    (gx * gx + gy * gy).sqrt().atan()
+    operators::slope_angle(gx, gy)
 }
 
 /// Unit upward normal `(nx, ny, nz)` (x east, y north, z up) of every cell.
@@ -56,8 +46,7 @@ pub fn normals(z: &[f32], geometry: &GridGeometry, mask: &NodataMask) -> Vec<[f3
     out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
         for (col, n) in line.iter_mut().enumerate() {
             let (gx, gy) = gradient(z, geometry, mask, col, row);
-            let inv = 1.0 / (gx * gx + gy * gy + 1.0).sqrt();
-            *n = [-gx * inv, -gy * inv, inv];
+            *n = operators::upward_normal(gx, gy);
         }
     });
     out

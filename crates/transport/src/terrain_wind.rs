@@ -24,7 +24,7 @@
 use crate::error::TransportError;
 use crate::params::TransportParams;
 use rayon::prelude::*;
-use snowscape_terrain::GridGeometry;
+use snowscape_terrain::{GridGeometry, operators};
 
 /// Checks a map's length against the grid.
 pub(crate) fn check_len(
@@ -60,7 +60,10 @@ pub fn components(w: f64, theta: f64) -> (f64, f64) {
 /// Slope `β` and facing azimuth `ξ` from the height gradient (east, north) (Eqs. 5.7-5.8).
 #[inline]
 pub fn slope_and_azimuth(dz_dx: f64, dz_dy: f64) -> (f64, f64) {
-    (dz_dx.hypot(dz_dy).atan(), (-dz_dx).atan2(-dz_dy))
+    (
+        operators::slope_angle(dz_dx, dz_dy),
+        operators::aspect(dz_dx, dz_dy),
+    )
 }
 
 /// The modified wind (Eqs. 5.10-5.15) for slope `beta`, azimuth `xi`, normalised curvature
@@ -94,36 +97,18 @@ fn z_at(z: &[f32], g: &GridGeometry, c: usize, r: usize, dc: isize, dr: isize) -
 }
 
 /// Height gradient (east, north) at a cell by central differences (Eqs. 5.5-5.6),
-/// one-sided at the border. Row 0 is the northern edge.
+/// one-sided at the border ([`operators::gradient`]). Row 0 is the northern edge.
 fn gradient(z: &[f32], g: &GridGeometry, c: usize, r: usize) -> (f64, f64) {
-    let span = |lo: usize, hi: usize| (hi - lo) as f64;
-    let (w, h) = (g.width(), g.height());
-    let (c0, c1) = (c.saturating_sub(1), (c + 1).min(w - 1));
-    let (r0, r1) = (r.saturating_sub(1), (r + 1).min(h - 1));
-    let gx = if c1 > c0 {
-        (z_at(z, g, c1, r, 0, 0) - z_at(z, g, c0, r, 0, 0)) / (span(c0, c1) * g.cell_size_x())
-    } else {
-        0.0
-    };
-    // North is row − 1.
-    let gy = if r1 > r0 {
-        (z_at(z, g, c, r0, 0, 0) - z_at(z, g, c, r1, 0, 0)) / (span(r0, r1) * g.cell_size_y())
-    } else {
-        0.0
-    };
-    (gx, gy)
+    let at = |dc: isize, dr: isize| g.neighbour(c, r, dc, dr).map(|j| f64::from(z[j]));
+    let z0 = f64::from(z[g.index(c, r)]);
+    operators::gradient(z0, at, g.cell_size_x(), g.cell_size_y())
 }
 
-/// Raw curvature weight of Eq. 5.9 at a cell, neighbours `k` cells away (clamped).
+/// Raw curvature weight of Eq. 5.9 at a cell, neighbours `k` cells away (clamped to the
+/// grid): [`operators::directional_curvature`].
 fn raw_curvature(z: &[f32], g: &GridGeometry, c: usize, r: usize, k: isize, eta: f64) -> f64 {
     let at = |dc, dr| z_at(z, g, c, r, dc, dr);
-    let z0 = at(0, 0);
-    let d = 2.0 * eta;
-    let dd = 2.0 * std::f64::consts::SQRT_2 * eta;
-    0.25 * ((z0 - 0.5 * (at(-k, 0) + at(k, 0))) / d
-        + (z0 - 0.5 * (at(0, k) + at(0, -k))) / d
-        + (z0 - 0.5 * (at(-k, k) + at(k, -k))) / dd
-        + (z0 - 0.5 * (at(-k, -k) + at(k, k))) / dd)
+    operators::directional_curvature(at(0, 0), at, k, eta)
 }
 
 /// Applies the terrain modification (Section 5.4) to the wind `(u, v)` at `z_r` over the

@@ -1,6 +1,7 @@
 //! Pass 1 (velocities) and pass 2 (pipe momentum and fluxes) on one row, for any lane width.
 
 use super::*;
+use snowscape_terrain::operators;
 
 /// Velocities of pass 1 on one row.
 #[inline(always)]
@@ -79,15 +80,15 @@ unsafe fn cell_flow_lanes<V: Lanes>(
         let vy = half * (p1 + vy_d);
         let a = |i: usize| ld::<V>(inp.bed, i) + ld::<V>(inp.h, i);
         let (inv_two_dx, inv_two_dy) = (V::splat(k.inv_two_dx), V::splat(k.inv_two_dy));
-        let mut gx = (a(kk + 1) - a(kk - 1)) * inv_two_dx;
-        let mut gy = (a(kk + pw) - a(kk - pw)) * inv_two_dy;
+        let mut gx = operators::interior_difference(a(kk - 1), a(kk + 1), inv_two_dx);
+        let mut gy = operators::interior_difference(a(kk - pw), a(kk + pw), inv_two_dy);
         let mut c2 = V::splat(1.0);
         let mut cf = V::splat(1.0);
         if k.projected {
             // [`projected_gradient`] in lanes.
             let b = |i: usize| ld::<V>(inp.bed, i);
-            let bx = (b(kk + 1) - b(kk - 1)) * inv_two_dx;
-            let by = (b(kk + pw) - b(kk - pw)) * inv_two_dy;
+            let bx = operators::interior_difference(b(kk - 1), b(kk + 1), inv_two_dx);
+            let by = operators::interior_difference(b(kk - pw), b(kk + pw), inv_two_dy);
             c2 = V::splat(1.0) / (V::splat(1.0) + (bx * bx + by * by));
             gx = c2 * (bx + c2 * (gx - bx));
             gy = c2 * (by + c2 * (gy - by));
@@ -155,10 +156,13 @@ pub(super) unsafe fn curvature_load<V: Lanes>(
         let (nw, n, ne) = (b(kk - pw - 1), b(kk - pw), b(kk - pw + 1));
         let (w, c, e) = (b(kk - 1), b(kk), b(kk + 1));
         let (sw, s, se) = (b(kk + pw - 1), b(kk + pw), b(kk + pw + 1));
-        let two = V::splat(2.0);
-        let bxx = (((nw + w) + sw) + ((ne + e) + se) - two * ((n + c) + s)) * V::splat(k.inv_dx2);
-        let byy = (((nw + n) + ne) + ((sw + s) + se) - two * ((w + c) + e)) * V::splat(k.inv_dy2);
-        let bxy = ((se - sw) - (ne - nw)) * V::splat(k.inv_four_dxdy);
+        let (bxx, byy, bxy) = operators::quadratic_fit_hessian(
+            [[nw, n, ne], [w, c, e], [sw, s, se]],
+            V::splat(2.0),
+            V::splat(k.inv_dx2),
+            V::splat(k.inv_dy2),
+            V::splat(k.inv_four_dxdy),
+        );
         let vhv = vx * vx * bxx + (vx + vx) * vy * bxy + vy * vy * byy;
         let f = V::splat(1.0) + vhv * V::splat(1.0 / G);
         let zero = V::splat(0.0);

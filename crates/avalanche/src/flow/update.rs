@@ -2,6 +2,7 @@
 //! their per-cell stencils, for any lane width.
 
 use super::*;
+use snowscape_terrain::operators;
 
 /// Outflow factors of pass 1 on one row.
 #[inline(always)]
@@ -642,8 +643,9 @@ fn gradient(
     }
     let ak = a(k);
     let side = |i: usize| if walls && nodata[i] { ak } else { a(i) };
-    let gx = (side(k + 1) - side(k - 1)) * pg.inv_two_dx;
-    let gy = (side(k + pw) - side(k - pw)) * pg.inv_two_dy;
+    // The padded grid's rows run south, as its y axis (the flow's frame).
+    let gx = operators::interior_difference(side(k - 1), side(k + 1), pg.inv_two_dx);
+    let gy = operators::interior_difference(side(k - pw), side(k + pw), pg.inv_two_dy);
     Some([gx, gy])
 }
 

@@ -1,6 +1,7 @@
 //! A rupture at a point: the release zone a slab grows into from an unstable cell.
 
 use super::*;
+use snowscape_terrain::operators;
 
 /// Parameters of the rupture at a point (module docs, *Rupture at a point*).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
@@ -250,26 +251,17 @@ impl<'a> Slab<'a> {
         (cells, zone)
     }
 
-    /// The snow surface's gradient at cell (c, r) (x east, y south): central differences,
-    /// one-sided next to nodata.
+    /// The snow surface's gradient at cell (c, r) (x east, y south):
+    /// [`operators::gradient_south`], one-sided next to nodata.
     fn gradient(&self, c: usize, r: usize) -> [f64; 2] {
-        let i = r * self.w + c;
-        let at = |dc: isize, dr: isize| match self.g.neighbour(c, r, dc, dr) {
-            Some(j) if self.mask.is_valid(j) => (self.surface(j), 1.0),
-            _ => (self.surface(i), 0.0),
+        let at = |dc: isize, dr: isize| {
+            self.g
+                .neighbour(c, r, dc, dr)
+                .filter(|&j| self.mask.is_valid(j))
+                .map(|j| self.surface(j))
         };
-        let ((zw, ww), (ze, we)) = (at(-1, 0), at(1, 0));
-        let ((zn, wn), (zs, ws)) = (at(0, -1), at(0, 1));
-        let gx = if ww + we > 0.0 {
-            (ze - zw) / ((ww + we) * self.dx)
-        } else {
-            0.0
-        };
-        let gy = if wn + ws > 0.0 {
-            (zs - zn) / ((wn + ws) * self.dy)
-        } else {
-            0.0
-        };
+        let (gx, gy) =
+            operators::gradient_south(self.surface(r * self.w + c), at, self.dx, self.dy);
         [gx, gy]
     }
 

@@ -1,7 +1,6 @@
 //! One module per verb; [`dispatch`] is the only entry point.
 
 mod avalanche;
-mod avalanche_compare;
 mod bench;
 mod convert;
 pub mod cover;

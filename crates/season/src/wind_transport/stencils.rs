@@ -1,17 +1,5 @@
-//! The small per-cell formulas of wind transport, each a pure function of a few values.
-
-/// Central second difference `f₋ − 2f₀ + f₊` (divide by the squared spacing).
-#[inline(always)]
-pub fn second_difference(minus: f32, centre: f32, plus: f32) -> f32 {
-    minus - 2.0 * centre + plus
-}
-
-/// One-sided second difference at a border cell from itself and the next two cells inwards,
-/// `f₀ − 2f₁ + f₂` (the curvature of the nearest full stencil; divide by the squared spacing).
-#[inline(always)]
-pub fn one_sided_second_difference(own: f32, next: f32, after: f32) -> f32 {
-    own - 2.0 * next + after
-}
+//! The small per-cell formulas of wind transport, each a pure function of a few values (the
+//! second differences they read are `snowscape_terrain::operators`').
 
 /// Wind resistance of the snow surface, `curvW = |W_x| ∂²A/∂x² + |W_y| ∂²A/∂y²`, s⁻¹
 /// (Cordonnier 2018, Section 5.4).
@@ -53,6 +41,7 @@ pub fn tamping_share(a_z: f32, tamping_dt: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use snowscape_terrain::operators::{one_sided_second_difference, second_difference};
 
     #[test]
     fn second_differences_are_exact_on_parabolas() {

@@ -9,6 +9,7 @@
 //! The pass reads one buffer and writes another (Jacobi style), so its result does not depend on
 //! the order in which rows are visited.
 
+use crate::operators;
 use rayon::prelude::*;
 
 /// Slope (tangent) where terracing starts: tan 28°.
@@ -43,15 +44,17 @@ fn steepness_weight(gradient: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// Gradient magnitude (tangent of the slope) at `(col, row)` by central differences, one-sided
-/// at the borders.
+/// Gradient magnitude (tangent of the slope) at `(col, row)` of the square field `z`:
+/// [`operators::gradient`], one-sided at the borders.
 #[inline(always)]
 fn gradient_at(z: &[f32], size: usize, col: usize, row: usize, cell_size: f32) -> f32 {
-    let (cw, ce) = (col.saturating_sub(1), (col + 1).min(size - 1));
-    let (rn, rs) = (row.saturating_sub(1), (row + 1).min(size - 1));
-    let gx = (z[row * size + ce] - z[row * size + cw]) / ((ce - cw).max(1) as f32 * cell_size);
-    let gy = (z[rn * size + col] - z[rs * size + col]) / ((rs - rn).max(1) as f32 * cell_size);
-    (gx * gx + gy * gy).sqrt()
+    let at = |dc: isize, dr: isize| {
+        let (c, r) = (col as isize + dc, row as isize + dr);
+        (c >= 0 && r >= 0 && (c as usize) < size && (r as usize) < size)
+            .then(|| z[r as usize * size + c as usize])
+    };
+    let (gx, gy) = operators::gradient(z[row * size + col], at, cell_size, cell_size);
+    operators::slope_tangent(gx, gy)
 }
 
 /// Terraces the square height field `z` (`size` cells per side, metres) in bands of

@@ -1,58 +1,77 @@
-//! `snowscape avalanche --compare REF [--path LINE.shp]`: the AIMEC-like comparison of the run
-//! with a reference peak-thickness raster (`snowscape_avalanche::comparison`), written as
-//! `comparison` in report.json, `comparison_profile.csv` and the plot `comparison.png`.
+//! The AIMEC-like comparison of a run with a reference peak-thickness raster
+//! (`snowscape_avalanche::comparison`, as AvaFrame's ana3AIMEC compares runs along their path):
+//! `comparison` in report.json, the profile `comparison_profile.csv` and its plot
+//! `comparison.png` (`snowscape avalanche --compare REF [--path LINE.shp]`).
 
-use crate::outputs::{Written, write_png};
-use anyhow::Context;
+use super::AvalancheJobError;
+use crate::outputs::{OutputError, Written, write_png};
 use image::{Rgba, RgbaImage};
 use snowscape_avalanche::comparison::{PathComparison, compare_along_path, thalweg};
 use snowscape_avalanche::validation::read_polyline;
 use snowscape_io::{ReadOptions, read_dem, write_bytes_atomic};
 use snowscape_render::pixel_font::{LINE_HEIGHT, draw_text};
 use snowscape_terrain::{Grid, GridGeometry};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// What `--compare` and `--path` name, read before the run (a bad file is refused before any
-/// output is written).
+/// What a comparison names: the reference run's peak thickness, the path along which to
+/// compare (default: the run's thalweg) and the corridor's half-width.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompareSpec {
+    /// Reference peak-thickness raster (e.g. AvaFrame's `*_pft.asc`), matched by map
+    /// coordinates.
+    pub reference: PathBuf,
+    /// A line shapefile of the avalanche path (e.g. AvaFrame's `LINES/path_aimec.shp`).
+    pub path: Option<PathBuf>,
+    /// Half-width of the corridor around the path, m, in (0, 100 000].
+    pub corridor_m: f64,
+}
+
+/// Widest corridor half-width, m.
+pub const MAX_CORRIDOR_M: f64 = 1e5;
+
+/// The reference raster and the path line, read before the run (a bad file is refused before
+/// any output is written).
 pub struct CompareInputs {
     pub reference: Grid,
     pub path: Option<Vec<(f64, f64)>>,
 }
 
 /// Reads the reference raster and the path line.
-pub fn read_inputs(reference: &Path, path: Option<&Path>) -> anyhow::Result<CompareInputs> {
-    let grid = read_dem(reference, &ReadOptions::default())
-        .with_context(|| format!("--compare {}", reference.display()))?;
-    let path = match path {
-        Some(p) => {
-            let line = read_polyline(p).with_context(|| format!("--path {}", p.display()))?;
-            anyhow::ensure!(
-                line.len() >= 2,
-                "--path {}: the line has {} vertices, it needs at least 2",
-                p.display(),
-                line.len()
-            );
-            Some(line)
+pub fn read_inputs(spec: &CompareSpec) -> Result<CompareInputs, AvalancheJobError> {
+    let reference = read_dem(&spec.reference, &ReadOptions::default()).map_err(|source| {
+        AvalancheJobError::CompareReference {
+            path: spec.reference.clone(),
+            source: Box::new(source),
         }
-        None => None,
-    };
-    Ok(CompareInputs {
-        reference: grid,
-        path,
-    })
+    })?;
+    let path = spec.path.as_deref().map(read_path).transpose()?;
+    Ok(CompareInputs { reference, path })
 }
 
-/// Compares the run's peak maps with the reference along the path (or the run's thalweg) and
-/// writes the profile and its plot.
-pub fn compare_and_write(
-    out: &mut Written,
+/// Reads the path line: at least 2 vertices.
+fn read_path(p: &Path) -> Result<Vec<(f64, f64)>, AvalancheJobError> {
+    let line = read_polyline(p).map_err(|source| AvalancheJobError::ComparePath {
+        path: p.to_path_buf(),
+        source: Box::new(source),
+    })?;
+    if line.len() < 2 {
+        return Err(AvalancheJobError::PathTooShort {
+            path: p.to_path_buf(),
+            vertices: line.len(),
+        });
+    }
+    Ok(line)
+}
+
+/// Compares the run's peak maps with the reference along the path (or the run's thalweg).
+pub fn compare(
     inputs: &CompareInputs,
     dem: &Grid,
     peak_thickness: &[f64],
     peak_speed: &[f64],
     threshold_m: f64,
     corridor_m: f64,
-) -> anyhow::Result<PathComparison> {
+) -> PathComparison {
     let g: &GridGeometry = dem.geometry();
     let derived;
     let path = match &inputs.path {
@@ -63,7 +82,7 @@ pub fn compare_and_write(
             (derived.as_slice(), "thalweg of the run")
         }
     };
-    let c = compare_along_path(
+    compare_along_path(
         g,
         peak_thickness,
         peak_speed,
@@ -71,7 +90,11 @@ pub fn compare_and_write(
         path,
         threshold_m,
         corridor_m,
-    );
+    )
+}
+
+/// Writes the comparison's profile (`comparison_profile.csv`) and its plot (`comparison.png`).
+pub fn write(out: &mut Written, c: &PathComparison) -> Result<(), OutputError> {
     let mut csv = String::from("s_m,thickness_m,reference_thickness_m,speed_m_s\n");
     for b in &c.profile {
         csv.push_str(&format!(
@@ -80,8 +103,8 @@ pub fn compare_and_write(
         ));
     }
     write_bytes_atomic(&out.path("comparison_profile.csv"), csv.as_bytes())?;
-    write_png(&out.path("comparison.png"), &plot(&c))?;
-    Ok(c)
+    write_png(&out.path("comparison.png"), &plot(c))?;
+    Ok(())
 }
 
 /// Peak thickness of the run (blue) and the reference (red) along the path, with both runout

@@ -1,4 +1,6 @@
-//! Validation of a run's snow depth against a measured depth raster (`snowscape validate`).
+//! Validation of a run's snow depth against a measured depth raster (`snowscape validate`, the
+//! Python package's `snowscape.validate`; the job and its typed `validation.json` are
+//! [`run`] and [`ValidationReport`]).
 //!
 //! [`compare`] matches the observed raster (and an optional mask) to the run's cells by map
 //! coordinates ([`matching`]), keeps the cells valid in every input, and measures on them:
@@ -24,17 +26,24 @@
 //! table.
 
 pub mod classes;
+mod compare;
 pub mod figures;
+mod job;
 pub mod matching;
 pub mod stats;
 pub mod summary;
 
-use classes::{CellTerrain, Contrast, ContrastRatio, cell_terrain, contrast_ratio};
-use matching::{CellSample, Extent, MaskSample, Sampling, sample_mask, sample_observed};
+pub use compare::compare;
+pub use job::{
+    DEFAULT_WIND_FROM_DEG, OUTPUTS, ValidateJob, ValidationOutcome, ValidationReport, run,
+};
+
+use classes::ContrastRatio;
+use matching::{Extent, Sampling};
 use serde::Serialize;
 use snowscape_io::RasterError;
 use snowscape_terrain::{Crs, Grid};
-use stats::{LinearFit, Metrics, quantile_map, spearman};
+use stats::Metrics;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -93,6 +102,22 @@ pub enum ValidationError {
     },
     #[error("--run {path}: {message}")]
     Report { path: PathBuf, message: String },
+    /// The output folder cannot be opened (nothing was written).
+    #[error(transparent)]
+    OutputFolder(crate::outputs::OutputError),
+    /// An output could not be written.
+    #[error(transparent)]
+    Output(#[from] crate::outputs::OutputError),
+    #[error("cannot encode validation.json: {0}")]
+    Encode(#[source] serde_json::Error),
+}
+
+impl ValidationError {
+    /// Whether the validation was refused for its input (nothing was written) rather than
+    /// failing while it wrote.
+    pub fn is_bad_input(&self) -> bool {
+        !matches!(self, Self::Output(_) | Self::Encode(_))
+    }
 }
 
 /// A raster of the validation and where it came from.
@@ -222,202 +247,12 @@ pub struct Validation {
 }
 
 /// The matched maps, one value per run cell (row-major), NaN where a cell is not compared.
+#[derive(Debug, Clone)]
 pub struct Maps {
     pub width: usize,
     pub height: usize,
     pub observed: Vec<f64>,
     pub simulated: Vec<f64>,
-}
-
-fn pixel_size(g: &Grid) -> [f64; 2] {
-    let t = g.geometry().transform();
-    [t.pixel_width, t.pixel_height]
-}
-
-fn check_crs(run: &Input, other: &Input) -> Result<(), ValidationError> {
-    match (run.grid.geometry().crs(), other.grid.geometry().crs()) {
-        (Some(ours @ Crs::Epsg(a)), Some(theirs @ Crs::Epsg(b))) if a != b => {
-            Err(ValidationError::CrsMismatch {
-                flag: other.flag,
-                path: other.path.to_path_buf(),
-                theirs: theirs.clone(),
-                ours: ours.clone(),
-            })
-        }
-        (Some(ours), Some(theirs)) if ours != theirs => {
-            tracing::warn!(
-                "{} {} declares {theirs}, the run {ours}: taken as the same CRS",
-                other.flag,
-                other.path.display()
-            );
-            Ok(())
-        }
-        _ => Ok(()),
-    }
-}
-
-fn check_overlap(run: &Input, other: &Input) -> Result<(), ValidationError> {
-    let (a, b) = (
-        Extent::of(run.grid.geometry()),
-        Extent::of(other.grid.geometry()),
-    );
-    if a.overlaps(&b) {
-        Ok(())
-    } else {
-        Err(ValidationError::NoOverlap {
-            flag: other.flag,
-            path: other.path.to_path_buf(),
-            extent: Box::new(b),
-            run: run.path.to_path_buf(),
-            run_extent: Box::new(a),
-        })
-    }
-}
-
-/// Compares the run's depth with the observed depth (module docs).
-pub fn compare(
-    inputs: &Inputs,
-    settings: &Settings,
-) -> Result<(Validation, Maps), ValidationError> {
-    let Settings {
-        snow_threshold_m: threshold,
-        wind_from_deg,
-    } = *settings;
-    if !(threshold.is_finite() && threshold >= 0.0) {
-        return Err(ValidationError::BadParameter {
-            flag: "--snow-threshold",
-            value: threshold,
-            expected: "a depth in metres >= 0",
-        });
-    }
-    if !wind_from_deg.is_finite() {
-        return Err(ValidationError::BadParameter {
-            flag: "--wind-from",
-            value: wind_from_deg,
-            expected: "a direction in degrees clockwise from north",
-        });
-    }
-    let (depth, bedrock) = (inputs.depth.grid, inputs.bedrock.grid);
-    let run = depth.geometry();
-    if !run.same_cells(bedrock.geometry()) {
-        return Err(ValidationError::GridMismatch {
-            dir: inputs
-                .depth
-                .path
-                .parent()
-                .unwrap_or(Path::new("."))
-                .to_path_buf(),
-            bedrock: snowscape_io::describe(bedrock),
-            depth: snowscape_io::describe(depth),
-        });
-    }
-    for other in std::iter::once(&inputs.observed).chain(inputs.mask.as_ref()) {
-        check_crs(&inputs.depth, other)?;
-        check_overlap(&inputs.depth, other)?;
-    }
-    let (sampling, observed) = sample_observed(run, inputs.observed.grid);
-    let mask = inputs.mask.map(|m| sample_mask(run, m.grid));
-
-    let mut excluded = Exclusions::default();
-    let mut cells = Vec::new();
-    let mut obs = Vec::new();
-    let mut maps = Maps {
-        width: run.width(),
-        height: run.height(),
-        observed: vec![f64::NAN; run.len()],
-        simulated: vec![f64::NAN; run.len()],
-    };
-    for i in 0..run.len() {
-        let valid = |g: &Grid| g.mask().is_valid(i) && g.data()[i].is_finite();
-        if !valid(depth) || !valid(bedrock) {
-            excluded.run_nodata += 1;
-            continue;
-        }
-        let o = match observed[i] {
-            CellSample::Outside => {
-                excluded.outside_observed += 1;
-                continue;
-            }
-            CellSample::Nodata => {
-                excluded.observed_nodata += 1;
-                continue;
-            }
-            CellSample::Value(v) => v,
-        };
-        match mask.as_ref().map(|m| m[i]) {
-            Some(MaskSample::Outside) => excluded.outside_mask += 1,
-            Some(MaskSample::MaskedOut) => excluded.masked_out += 1,
-            Some(MaskSample::Use) | None => {
-                cells.push(i);
-                obs.push(o);
-                maps.observed[i] = o;
-                maps.simulated[i] = f64::from(depth.data()[i]);
-            }
-        }
-    }
-    if cells.is_empty() {
-        return Err(ValidationError::NoValidCells {
-            run: inputs.depth.path.to_path_buf(),
-            observed: inputs.observed.path.to_path_buf(),
-            excluded,
-        });
-    }
-    let sim: Vec<f64> = cells.iter().map(|&i| f64::from(depth.data()[i])).collect();
-    let terrain: Vec<CellTerrain> = cells.iter().map(|&i| cell_terrain(bedrock, i)).collect();
-    let altitude: Vec<f64> = terrain.iter().map(|t| t.altitude_m).collect();
-    let northness: Vec<f64> = terrain.iter().map(|t| t.northness).collect();
-
-    let fit = LinearFit::fit(&altitude, &northness, &obs);
-    let baselines = Baselines {
-        altitude_rank: Baseline {
-            prediction: "observed depths quantile-mapped onto the altitude ranks; Spearman's rho of the altitude itself",
-            fit: None,
-            metrics: Metrics::of(
-                &quantile_map(&altitude, &obs),
-                &obs,
-                Some(&altitude),
-                threshold,
-            ),
-        },
-        altitude_northness: Baseline {
-            prediction: "least-squares plane of observed depth on altitude and northness cos(aspect)*sin(slope), fitted on the compared cells",
-            fit: Some(PlaneFit {
-                intercept_m: fit.intercept,
-                per_m_altitude: fit.slope_a,
-                per_northness: fit.slope_b,
-            }),
-            metrics: Metrics::of(&fit.predict(&altitude, &northness), &obs, None, threshold),
-        },
-    };
-    let ratio = |c| contrast_ratio(c, &terrain, &sim, &obs, wind_from_deg);
-    let validation = Validation {
-        cells_compared: cells.len(),
-        excluded,
-        matching: MatchingSummary {
-            sampling,
-            run_extent: Extent::of(run),
-            observed_extent: Extent::of(inputs.observed.grid.geometry()),
-            run_pixel_size: pixel_size(depth),
-            observed_pixel_size: pixel_size(inputs.observed.grid),
-            mask_extent: inputs.mask.map(|m| Extent::of(m.grid.geometry())),
-        },
-        snow_threshold_m: threshold,
-        observed_mean_m: stats::mean(&obs),
-        simulation: Metrics::of(&sim, &obs, None, threshold),
-        baselines,
-        spearman_with_altitude: AltitudeRho {
-            simulated: spearman(&sim, &altitude),
-            observed: spearman(&obs, &altitude),
-        },
-        ratios: Ratios {
-            band_m: classes::BAND_M,
-            wind_from_deg: wind_from_deg.rem_euclid(360.0),
-            north_south: ratio(Contrast::NorthSouth),
-            steep_moderate: ratio(Contrast::SteepModerate),
-            lee_windward: ratio(Contrast::LeeWindward),
-        },
-    };
-    Ok((validation, maps))
 }
 
 /// The prevailing wind of a run from its `report.json`: the direction of the mean wind
