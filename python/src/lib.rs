@@ -10,7 +10,8 @@ use pyo3::types::PyBytes;
 use snowscape::io::{RasterFormat, ReadOptions, read_dem, write_raster};
 use snowscape::season::scenario::Scenario;
 use snowscape::season::winter::Winter;
-use snowscape::season_run::{CHECKPOINT, CHUNK_DAYS, RESOLVED_SCENARIO, write_checkpoint};
+use snowscape::season_run::{CHECKPOINT, RESOLVED_SCENARIO, write_checkpoint};
+use snowscape::simulation::{CHUNK_DAYS, Control, Simulation};
 use snowscape::terrain::{
     Crs, GeoTransform, Grid, GridGeometry, LayeredTerrain, NodataMask, SnowLayer,
 };
@@ -196,6 +197,41 @@ fn on_pool<T: Send>(pool: &Option<rayon::ThreadPool>, f: impl FnOnce() -> T + Se
     }
 }
 
+/// A season run from Python: the chunks run without the GIL on the season's thread pool; the
+/// progress callback and Ctrl-C are heard between them.
+struct PyControl<'py, 'a> {
+    py: Python<'py>,
+    pool: &'a Option<rayon::ThreadPool>,
+    progress: Option<&'a Py<PyAny>>,
+    /// The exception that stopped the run (the callback's, or Ctrl-C's KeyboardInterrupt).
+    raised: Option<PyErr>,
+}
+
+impl Control for PyControl<'_, '_> {
+    fn progress(&mut self, day: f64, _stop_time: f64) {
+        if self.raised.is_none()
+            && let Some(callback) = self.progress
+            && let Err(e) = callback.call1(self.py, (day,))
+        {
+            self.raised = Some(e);
+        }
+    }
+
+    fn cancelled(&mut self) -> bool {
+        if self.raised.is_none()
+            && let Err(e) = self.py.check_signals()
+        {
+            self.raised = Some(e);
+        }
+        self.raised.is_some()
+    }
+
+    fn run_chunk(&mut self, chunk: &mut (dyn FnMut() + Send)) {
+        let pool = self.pool;
+        self.py.detach(|| on_pool(pool, chunk));
+    }
+}
+
 /// The most worker threads `threads=` takes.
 const MAX_THREADS: i64 = 1024;
 
@@ -367,8 +403,9 @@ impl PyWinter {
         toml::to_string(self.winter.scenario()).map_err(|e| value_err(e.to_string()))
     }
 
-    /// Runs the season to `day` in chunks of at most `CHUNK_DAYS`, without the GIL; between
-    /// chunks calls `progress(day)` and honours Ctrl-C (the state stays consistent).
+    /// Runs the season to `day` through the library's driver (`snowscape::simulation`), in
+    /// chunks of at most `CHUNK_DAYS` without the GIL; between chunks calls `progress(day)`
+    /// and honours Ctrl-C (the state stays consistent and runs on).
     #[pyo3(signature = (day, progress=None))]
     fn run_until(&mut self, py: Python<'_>, day: f64, progress: Option<Py<PyAny>>) -> PyResult<()> {
         let days = self.winter.scenario().days;
@@ -380,21 +417,18 @@ impl PyWinter {
                 "day {day} lies past the season's end ({days} days): give the scenario more days, e.g. scenario={{\"days\": {day}}}"
             )));
         }
-        while self.winter.day() < day {
-            let before = self.winter.day();
-            let next = (before + CHUNK_DAYS).min(day);
-            let Self { winter, pool } = self;
-            py.detach(|| on_pool(pool, || winter.run_until(next)))
-                .map_err(py_err)?;
-            if let Some(cb) = &progress {
-                cb.call1(py, (self.winter.day(),))?;
-            }
-            py.check_signals()?;
-            if self.winter.day() <= before {
-                break;
-            }
-        }
-        Ok(())
+        let Self { winter, pool } = self;
+        let mut control = PyControl {
+            py,
+            pool,
+            progress: progress.as_ref(),
+            raised: None,
+        };
+        Simulation::new(winter, day)
+            .run(&mut control)
+            .map_err(|e| py_err(*e))?;
+        // The callback's exception, or Ctrl-C's KeyboardInterrupt, that stopped the run.
+        control.raised.map_or(Ok(()), Err)
     }
 
     /// Total snow depth of every cell, m.

@@ -70,6 +70,26 @@ def test_checkpoint_resume_and_threads_are_bit_identical(tmp_path):
     assert store > 0
 
 
+def test_an_exception_in_progress_stops_the_season_where_it_stands():
+    # The callback runs between two chunks of the library's season driver: its exception
+    # stops the run there, and the season runs on from that day to the same bytes.
+    dem = snowscape.read_dem(wog_dem())
+    straight = snowscape.Winter(dem, scenario={"days": 3}, seed=5).run()
+    w = snowscape.Winter(dem, scenario={"days": 3}, seed=5)
+    seen = []
+
+    def progress(day):
+        seen.append(day)
+        if len(seen) == 3:
+            raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        w.run(progress=progress)
+    assert len(seen) == 3 and w.day == seen[-1] and 0 < w.day < 3
+    w.run()
+    assert same_bytes(w.depth().values, straight.depth().values)
+
+
 def test_transform_matches_the_asc_header():
     dem = snowscape.read_dem(wog_dem())
     # avaWog.asc: ncols 490, nrows 555, xllcenter 167455.348391387, yllcenter 361955.626633194,

@@ -10,9 +10,13 @@
 //! reports [`JobProgress`] (a step: the days done) and ends with a [`JobOutcome`] that
 //! [`Session::finish_job`] installs.
 //!
-//! **Cancel.** A `cancel` message raises the job's flag: a step stops at the next of its
-//! 100 slices (a slice ends at the first season event past it) and is dropped, so the season
-//! stays at the day the step started from; a scenario change, a load or an export cannot
+//! **A step** runs the season through the library's driver ([`snowscape::simulation`]), as
+//! `snowscape run` and the Python package do: in [`STEP_SLICES`] chunks, the progress reported
+//! every [`PROGRESS_INTERVAL`] of wall time.
+//!
+//! **Cancel.** A `cancel` message raises the job's flag: a step stops between two season
+//! events (the flag is the driver's interrupt) and is dropped, so the season stays at the day
+//! the step started from; a scenario change, a load or an export cannot
 //! stop inside the season's precompute or the file writers, so their result is dropped when
 //! they end (files an export wrote stay). `cancel` also ends a live avalanche (its flowing
 //! snow deposits where it is) or a skier descent. Without a server, [`Session::handle`] runs
@@ -24,6 +28,7 @@ use crate::project::{ProjectContents, ProjectDir, ProjectError};
 use crate::protocol::{ErrorCode, ServerMessage};
 use crate::session::{Exporter, Out, Outgoing, Refusal, Session};
 use serde::{Deserialize, Serialize};
+use snowscape::simulation::{Control, Schedule, Simulation, StopReason};
 use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::Winter;
 use snowscape_terrain::LayeredTerrain;
@@ -36,7 +41,7 @@ use std::time::{Duration, Instant};
 /// state stay well within a workstation's memory).
 pub const MAX_IMPORT_CELLS: usize = 4096 * 4096;
 
-/// Slices of a season step (progress and cancel points).
+/// Chunks of a season step (the driver's chunk is the step's length over this).
 pub const STEP_SLICES: usize = 100;
 /// Shortest wall time between two progress reports of a job.
 pub const PROGRESS_INTERVAL: Duration = Duration::from_millis(100);
@@ -154,6 +159,30 @@ fn keep_or_remove_upload(path: &std::path::Path, name: &str, keep: bool) {
     }
 }
 
+/// A season step as the driver sees it: progress reported to the tabs, the job's cancel flag
+/// stopping the season between two events.
+struct StepControl<'a> {
+    progress: &'a mut JobProgress,
+    report: &'a mut dyn FnMut(JobProgress),
+    cancel: Arc<AtomicBool>,
+    /// The step's first day.
+    from: f64,
+    started: Instant,
+}
+
+impl Control for StepControl<'_> {
+    fn progress(&mut self, day: f64, stop_time: f64) {
+        self.progress.phase = JobPhase::Running;
+        self.progress.done = day.min(stop_time) - self.from;
+        self.progress.elapsed_s = self.started.elapsed().as_secs_f64();
+        (self.report)(self.progress.clone());
+    }
+
+    fn interrupt_flag(&self) -> Option<Arc<AtomicBool>> {
+        Some(self.cancel.clone())
+    }
+}
+
 /// Work handed to a worker: everything it needs, owned.
 pub struct Job {
     progress: JobProgress,
@@ -191,42 +220,28 @@ impl Job {
             } => {
                 let from = winter.day();
                 let target = (from + days).min(winter.scenario().days);
-                let mut last = Instant::now();
                 // The painted release probability is a hazard source of the season's
                 // scheduler: its avalanches start during the step's days.
-                let mut outcome = crate::painted::set_painted_release(&mut winter, &paint)
-                    .err()
-                    .map(JobOutcome::Failed);
-                // Slices end where a single run_until(target) would pass anyway: the same
-                // events in the same order, so the same season.
-                for k in 1..=STEP_SLICES {
-                    if outcome.is_some() {
-                        break;
-                    }
-                    if cancelled() {
-                        outcome = Some(JobOutcome::Cancelled);
-                        break;
-                    }
-                    let until = if k == STEP_SLICES {
-                        target
-                    } else {
-                        from + (target - from) * k as f64 / STEP_SLICES as f64
-                    };
-                    if let Err(e) = winter.run_until(until) {
-                        outcome = Some(JobOutcome::Failed((ErrorCode::Failed, e.to_string())));
-                        break;
-                    }
-                    if last.elapsed() >= PROGRESS_INTERVAL {
-                        last = Instant::now();
-                        progress.phase = JobPhase::Running;
-                        progress.done = winter.day().min(target) - from;
-                        progress.elapsed_s = started.elapsed().as_secs_f64();
-                        report(progress.clone());
-                    }
+                if let Err(e) = crate::painted::set_painted_release(&mut winter, &paint) {
+                    return JobOutcome::Failed(e);
                 }
-                match outcome {
-                    Some(o) => o,
-                    None => match crate::painted::apply_painted(&mut winter, &paint, from) {
+                let mut control = StepControl {
+                    progress: &mut progress,
+                    report,
+                    cancel: self.cancel.clone(),
+                    from,
+                    started,
+                };
+                // The driver's chunks end where a single run_until(target) would pass anyway:
+                // the same events in the same order, so the same season.
+                let reason = Simulation::new(&mut winter, target)
+                    .max_chunk_days((target - from) / STEP_SLICES as f64)
+                    .progress(Schedule::WallTimeInterval(PROGRESS_INTERVAL))
+                    .run(&mut control);
+                match reason {
+                    Err(e) => JobOutcome::Failed((ErrorCode::Failed, e.to_string())),
+                    Ok(StopReason::Cancelled { .. }) => JobOutcome::Cancelled,
+                    Ok(_) => match crate::painted::apply_painted(&mut winter, &paint, from) {
                         Ok(()) => JobOutcome::Stepped { winter, from },
                         Err(e) => JobOutcome::Failed(e),
                     },

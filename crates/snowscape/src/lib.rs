@@ -23,6 +23,7 @@
 //! | [`render`] | previews, glTF, GIF/PNG encoding |
 //! | [`outputs`] | the output layer of a season (every file of `snowscape run`) |
 //! | [`season_run`] | one season run to its end with snapshots, checkpoints, resume and every output (the path of `snowscape run` and `demo`) |
+//! | [`simulation`] | the one driver of a season (chunks to a stop time, outputs on schedules, progress and cancel through a `Control`), for the command line, the editor and Python |
 //! | [`report`] | the typed `report.json` of every job |
 //! | [`avalanche_job`] | one avalanche from release to rest on a DEM, its range checks, maps, frames, comparison and typed `report.json` (the path of `snowscape avalanche` and the Python package's `avalanche`) |
 //! | [`avalanche_release`] | one avalanche's release on a DEM (file, mask or rupture point), as `snowscape avalanche` and the Python package take it |
@@ -69,6 +70,7 @@ pub mod output_folder;
 pub mod outputs;
 pub mod report;
 pub mod season_run;
+pub mod simulation;
 pub mod station;
 pub mod transport_job;
 pub mod validation;

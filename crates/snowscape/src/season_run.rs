@@ -2,11 +2,12 @@
 //! (and the Python package will), so that the same terrain, scenario and seed give the same
 //! bytes from each front end.
 //!
-//! The season runs in chunks of at most [`CHUNK_DAYS`] between its milestones: at each
-//! snapshot day a preview frame is written (`frames/frame_NNNN.png`), at each checkpoint day
-//! and at `stop_at` the whole state (`checkpoint.bin`, from which [`SeasonJob::resume`]
-//! continues bit-identically). An interrupt flag set from outside (Ctrl-C) stops the season
-//! between two events, where its state is consistent, and writes a checkpoint. At the end every
+//! The job is the output folder's setup, one [`Simulation`] run and the writing of its
+//! outputs. The simulation fires a preview frame at each snapshot day
+//! (`frames/frame_NNNN.png`) and the whole state at each checkpoint day (`checkpoint.bin`, put
+//! in place at once, from which [`SeasonJob::resume`] continues bit-identically); a stop at
+//! `stop_at`, or a cancel from the front end's [`Control`] (Ctrl-C: the season stops between
+//! two events, where its state is consistent), ends the job with a checkpoint. At the end every
 //! output of [`crate::outputs::write_all`] is written, then the environment maps, the
 //! avalanche scour and deposit, the ski tracks, the final checkpoint and `report.json`; an
 //! earlier run's outputs that this one did not write again are removed.
@@ -14,6 +15,9 @@
 use crate::output_folder::OutputFolder;
 use crate::outputs::{OutputError, Written, write_all, write_png};
 use crate::report::{InputSummary, MassBudget, Report, timings_object};
+use crate::simulation::{
+    Control, Schedule, Simulation, SimulationError, StopReason, cancel_requested,
+};
 use image::RgbaImage;
 use snowscape_io::{AtomicWriteError, write_atomic, write_bytes_atomic};
 use snowscape_render::{PreviewOptions, render_preview};
@@ -21,7 +25,6 @@ use snowscape_season::scenario::Scenario;
 use snowscape_season::winter::{LatitudeSource, SeasonError, Winter, phenomenon_name};
 use snowscape_terrain::{Grid, LayeredTerrain};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Name of the checkpoint file inside the output folder.
@@ -32,9 +35,6 @@ pub const RESOLVED_SCENARIO: &str = "scenario.toml";
 
 /// The largest earlier frame read back on a resume (a 512-pixel RGBA PNG is at most ~1 MiB).
 const MAX_FRAME_BYTES: u64 = 64 << 20;
-
-/// Longest stretch of simulated days between two checks of the interrupt flag.
-pub const CHUNK_DAYS: f64 = 0.25;
 
 /// What a front end adds to a season report's `parameters.extra`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -124,19 +124,6 @@ pub struct SeasonJob {
     /// the law's scalars), set on a fresh or a resumed season alike.
     pub friction_maps: snowscape_avalanche::FrictionMaps,
 }
-
-/// What a front end hears while a season runs (all optional).
-pub trait SeasonProgress {
-    /// A stage (`environment`, `season`, `write_rasters`, ...) finished in `seconds`.
-    fn stage(&mut self, _name: &str, _seconds: f64) {}
-    /// The season has reached `day`.
-    fn day(&mut self, _day: f64) {}
-}
-
-/// Hears nothing.
-pub struct Silent;
-
-impl SeasonProgress for Silent {}
 
 /// How a season job ended.
 #[derive(Debug)]
@@ -281,19 +268,18 @@ pub fn write_checkpoint(dir: &Path, winter: &Winter) -> Result<(), SeasonJobErro
     })
 }
 
-/// Stage timings, also told to the caller.
-struct Stages<'a> {
+/// Stage timings, in the order the stages first ran.
+#[derive(Default)]
+struct Stages {
     timings: Vec<(String, f64)>,
-    progress: &'a mut dyn SeasonProgress,
 }
 
-impl Stages<'_> {
+impl Stages {
     fn record(&mut self, name: &str, seconds: f64) {
         match self.timings.iter_mut().find(|(n, _)| n == name) {
             Some((_, s)) => *s += seconds,
             None => self.timings.push((name.to_string(), seconds)),
         }
-        self.progress.stage(name, seconds);
     }
 
     fn run<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
@@ -304,58 +290,142 @@ impl Stages<'_> {
     }
 }
 
-/// Runs the season of `job` and writes every output (module docs). `interrupted`, when set
-/// from outside, stops the job with a checkpoint at the next chance.
-pub fn run_season(
-    job: SeasonJob,
-    interrupted: &AtomicBool,
-    progress: &mut dyn SeasonProgress,
-) -> Result<SeasonOutcome, SeasonJobError> {
-    let started = Instant::now();
-    crate::memory::check_season(job.bedrock.geometry().len(), job.memory_budget)?;
-    let mut folder = OutputFolder::open(&job.out).map_err(SeasonJobError::OutputFolder)?;
+/// The outputs the season fires while it runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SeasonOutput {
+    /// A preview frame at a snapshot day.
+    Frame,
+    /// `checkpoint.bin` at a checkpoint day, put in place at once.
+    Checkpoint,
+}
+
+/// This run's own files so far in the staging folder (the resolved scenario, frames, the
+/// checkpoint), for a commit that ends it before its outputs (a cancel, `--stop-at`) and for
+/// a periodic checkpoint; and the frames of the time-lapse.
+struct Staged {
+    dir: PathBuf,
+    files: Vec<String>,
+    /// One per snapshot day, drawn (or read back from the run resumed) once reached.
+    frames: Vec<Option<RgbaImage>>,
+    frame_view: PreviewOptions,
+}
+
+impl Staged {
+    /// Draws and writes frame `k` of the season as it stands.
+    fn frame(&mut self, k: usize, winter: &Winter) -> Result<(), SeasonJobError> {
+        let img = render_preview(&winter.terrain, &self.frame_view)?;
+        write_png(&self.dir.join(frame_name(k)), &img)?;
+        self.files.push(frame_name(k));
+        self.frames[k] = Some(img);
+        Ok(())
+    }
+
+    /// Writes the season's checkpoint.
+    fn checkpoint(&mut self, winter: &Winter) -> Result<(), SeasonJobError> {
+        write_checkpoint(&self.dir, winter)?;
+        self.files.push(CHECKPOINT.into());
+        Ok(())
+    }
+
+    /// Reads back, and stages again, the frames of the resumed run `dir` up to `day`: a
+    /// resume reads every frame up to its checkpoint's day.
+    fn read_earlier_frames(
+        &mut self,
+        dir: &Path,
+        snaps: &[f64],
+        day: f64,
+    ) -> Result<(), SeasonJobError> {
+        for (k, _) in snaps.iter().enumerate().filter(|&(_, &d)| d <= day) {
+            let path = dir.join(frame_name(k));
+            let bytes = snowscape_io::input::read_regular(&path, MAX_FRAME_BYTES)
+                .map_err(|e| SeasonJobError::EarlierFrameFile(Box::new(e)))?;
+            let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
+                .map_err(|source| SeasonJobError::EarlierFrame {
+                    path: path.clone(),
+                    source,
+                })?;
+            // The frame is this run's too: it goes into the folder with the others.
+            write_bytes_atomic(&self.dir.join(frame_name(k)), &bytes)?;
+            self.files.push(frame_name(k));
+            self.frames[k] = Some(img.to_rgba8());
+        }
+        Ok(())
+    }
+}
+
+/// Opens the output folder of a season and creates the staging folder's `frames/`.
+fn open_folder(out: &Path) -> Result<OutputFolder, SeasonJobError> {
+    let folder = OutputFolder::open(out).map_err(SeasonJobError::OutputFolder)?;
     folder
         .check_subfolder("frames")
         .map_err(SeasonJobError::OutputFolder)?;
-    let stage = folder.staging().to_path_buf();
-    std::fs::create_dir(stage.join("frames")).map_err(|source| {
+    let frames = folder.staging().join("frames");
+    std::fs::create_dir(&frames).map_err(|source| {
         SeasonJobError::Output(OutputError::CreateFolder {
-            path: stage.join("frames"),
+            path: frames,
             source,
         })
     })?;
-    // This run's own files so far (frames, the resolved scenario), for a commit that ends it
-    // before its outputs (an interrupt, --stop-at) and for a periodic checkpoint.
-    let mut staged: Vec<String> = Vec::new();
+    Ok(folder)
+}
+
+/// The season of `job`: a fresh one on its bedrock, or the one its checkpoint in `resume`
+/// continues.
+fn start_winter(
+    scenario: &Scenario,
+    forcing: &Option<snowscape_season::forcing::StationForcing>,
+    resume: &Option<PathBuf>,
+    terrain: LayeredTerrain,
+) -> Result<Winter, SeasonJobError> {
+    match resume {
+        None => Ok(Winter::with_forcing(
+            scenario.clone(),
+            terrain,
+            forcing.clone(),
+        )?),
+        Some(dir) => {
+            let path = dir.join(CHECKPOINT);
+            // Only a regular file of at most the terrain's largest checkpoint is read (a
+            // symbolic link to /dev/zero or a FIFO is refused before any read).
+            Winter::resume_from_file(scenario.clone(), terrain, forcing.clone(), &path).map_err(
+                |source| SeasonJobError::Resume {
+                    path,
+                    source: Box::new(source),
+                },
+            )
+        }
+    }
+}
+
+/// Runs the season of `job` and writes every output (module docs). `control` hears the
+/// season's days; its interrupt flag (Ctrl-C) or its cancel stops the job with a checkpoint
+/// at the next chance.
+pub fn run_season(
+    job: SeasonJob,
+    control: &mut dyn Control,
+) -> Result<SeasonOutcome, SeasonJobError> {
+    let started = Instant::now();
+    crate::memory::check_season(job.bedrock.geometry().len(), job.memory_budget)?;
+    let mut folder = open_folder(&job.out)?;
+    let mut staged = Staged {
+        dir: folder.staging().to_path_buf(),
+        files: Vec::new(),
+        frames: Vec::new(),
+        frame_view: PreviewOptions {
+            max_size: Some(512),
+            ..job.view.clone()
+        },
+    };
     if job.write_scenario {
         let text = toml::to_string(&job.scenario).map_err(SeasonJobError::EncodeScenario)?;
-        write_bytes_atomic(&stage.join(RESOLVED_SCENARIO), text.as_bytes())?;
-        staged.push(RESOLVED_SCENARIO.into());
+        write_bytes_atomic(&staged.dir.join(RESOLVED_SCENARIO), text.as_bytes())?;
+        staged.files.push(RESOLVED_SCENARIO.into());
     }
     let input = InputSummary::of(&job.source, &job.bedrock);
-    let mut stages = Stages {
-        timings: Vec::new(),
-        progress,
-    };
+    let mut stages = Stages::default();
     let terrain = LayeredTerrain::from_bedrock(job.bedrock);
-    let mut winter = stages.run("environment", || -> Result<Winter, SeasonJobError> {
-        match &job.resume {
-            None => Ok(Winter::with_forcing(
-                job.scenario.clone(),
-                terrain,
-                job.forcing.clone(),
-            )?),
-            Some(dir) => {
-                let path = dir.join(CHECKPOINT);
-                // Only a regular file of at most the terrain's largest checkpoint is read
-                // (a symbolic link to /dev/zero or a FIFO is refused before any read).
-                Winter::resume_from_file(job.scenario.clone(), terrain, job.forcing.clone(), &path)
-                    .map_err(|source| SeasonJobError::Resume {
-                        path,
-                        source: Box::new(source),
-                    })
-            }
-        }
+    let mut winter = stages.run("environment", || {
+        start_winter(&job.scenario, &job.forcing, &job.resume, terrain)
     })?;
     winter.set_friction_maps(job.friction_maps)?;
     for w in season_warnings(&winter) {
@@ -363,111 +433,108 @@ pub fn run_season(
     }
 
     let snaps = snapshot_days(winter.scenario());
-    let checkpoints = checkpoint_days(winter.scenario());
-    let mut frames: Vec<Option<RgbaImage>> = vec![None; snaps.len()];
+    staged.frames = vec![None; snaps.len()];
     if let Some(dir) = &job.resume {
-        for (k, &d) in snaps.iter().enumerate() {
-            if d <= winter.day() {
-                let path = dir.join(frame_name(k));
-                let bytes = snowscape_io::input::read_regular(&path, MAX_FRAME_BYTES)
-                    .map_err(|e| SeasonJobError::EarlierFrameFile(Box::new(e)))?;
-                let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
-                    .map_err(|source| SeasonJobError::EarlierFrame {
-                        path: path.clone(),
-                        source,
-                    })?;
-                // The frame is this run's too: it goes into the folder with the others.
-                write_bytes_atomic(&stage.join(frame_name(k)), &bytes)?;
-                staged.push(frame_name(k));
-                frames[k] = Some(img.to_rgba8());
-            }
-        }
+        staged.read_earlier_frames(dir, &snaps, winter.day())?;
     }
-    let frame_view = PreviewOptions {
-        max_size: Some(512),
-        ..job.view.clone()
-    };
-    let days = winter.scenario().days;
     let t_season = Instant::now();
-    let stop_at = job.stop_at.filter(|&d| d < days);
-    let mut milestones: Vec<f64> = snaps
-        .iter()
-        .chain(checkpoints.iter())
-        .chain(stop_at.iter())
-        .copied()
-        .collect();
-    milestones.sort_by(f64::total_cmp);
-    milestones.dedup();
-    let start_day = winter.day();
-    for &m in milestones.iter().filter(|&&m| m > start_day) {
-        while winter.day() < m {
-            let next = (winter.day() + CHUNK_DAYS).min(m);
-            winter.run_until_unless(next, interrupted)?;
-            stages.progress.day(winter.day());
-            if interrupted.load(Ordering::SeqCst) {
-                // A chunk that reached a snapshot day writes its frame before the checkpoint:
-                // a resume reads every frame up to the checkpoint's day.
-                if winter.day() >= m
-                    && let Some(k) = snaps.iter().position(|&d| d == m)
-                {
-                    let img = render_preview(&winter.terrain, &frame_view)?;
-                    write_png(&stage.join(frame_name(k)), &img)?;
-                    staged.push(frame_name(k));
-                }
-                write_checkpoint(&stage, &winter)?;
-                staged.push(CHECKPOINT.into());
-                folder.commit(&staged, None)?;
-                return Ok(SeasonOutcome::Interrupted {
-                    day: winter.day(),
-                    outputs_pending: false,
-                });
-            }
-            if winter.finished() {
-                break;
-            }
-        }
-        if let Some(k) = snaps.iter().position(|&d| d == m) {
-            let img = render_preview(&winter.terrain, &frame_view)?;
-            write_png(&stage.join(frame_name(k)), &img)?;
-            staged.push(frame_name(k));
-            frames[k] = Some(img);
-        }
-        if stop_at == Some(m) {
-            write_checkpoint(&stage, &winter)?;
-            staged.push(CHECKPOINT.into());
-            folder.commit(&staged, None)?;
-            return Ok(SeasonOutcome::Stopped { day: winter.day() });
-        }
-        if checkpoints.contains(&m) {
+    let days = winter.scenario().days;
+    // A stop at or before the resumed day is no stop: the season runs to its end.
+    let stop_time = job
+        .stop_at
+        .filter(|&d| d < days && d > winter.day())
+        .unwrap_or(days);
+    let checkpoints = checkpoint_days(winter.scenario());
+    let reason = Simulation::new(&mut winter, stop_time)
+        .output(SeasonOutput::Frame, Schedule::SpecificTimes(snaps))
+        .output(
+            SeasonOutput::Checkpoint,
+            Schedule::SpecificTimes(checkpoints),
+        )
+        .run_with(control, |output, at, winter| match output {
+            SeasonOutput::Frame => staged.frame(at.index, winter),
             // In place at once, with the frames so far: a run killed later resumes from it.
-            write_checkpoint(&stage, &winter)?;
-            staged.push(CHECKPOINT.into());
-            folder.place(&staged)?;
+            SeasonOutput::Checkpoint => {
+                staged.checkpoint(winter)?;
+                Ok(folder.place(&staged.files)?)
+            }
+        })
+        .map_err(|e| match e {
+            SimulationError::Season(e) => SeasonJobError::Season(e),
+            SimulationError::Output(e) => e,
+        })?;
+    match reason {
+        StopReason::StopTime { day } | StopReason::WallTimeLimit { day, .. } => {
+            return commit_stopped(folder, staged, &winter, SeasonOutcome::Stopped { day });
         }
+        StopReason::Cancelled { day } => {
+            let outcome = SeasonOutcome::Interrupted {
+                day,
+                outputs_pending: false,
+            };
+            return commit_stopped(folder, staged, &winter, outcome);
+        }
+        StopReason::Stalled { day } => {
+            tracing::warn!("no event can happen after day {day:.2}: the season ends there");
+        }
+        StopReason::SeasonEnded { .. } => {}
     }
     stages.record("season", t_season.elapsed().as_secs_f64());
     winter.terrain.check_invariants()?;
 
     // An interrupt that came once the season was complete stops before its outputs, with the
     // final checkpoint: a resume writes them.
-    if interrupted.load(Ordering::SeqCst) {
-        write_checkpoint(&stage, &winter)?;
-        staged.push(CHECKPOINT.into());
-        folder.commit(&staged, None)?;
-        return Ok(SeasonOutcome::Interrupted {
+    if cancel_requested(control) {
+        let outcome = SeasonOutcome::Interrupted {
             day: winter.day(),
             outputs_pending: true,
-        });
+        };
+        return commit_stopped(folder, staged, &winter, outcome);
     }
-    let mut out = Written::new(&stage);
-    out.cog = job.cog;
-    let frames: Vec<RgbaImage> = frames.into_iter().flatten().collect();
-    out.files.extend(staged.iter().cloned());
-    // Every output at once (different files; the state no longer changes): the rasters,
-    // previews, glb and time-lapse, the environment and avalanche maps, the ski tracks and the
-    // final checkpoint. Files are listed in that order, and the first error in that order is
-    // returned once all have finished.
-    let (dir, cog) = (out.dir.clone(), out.cog);
+    let files = write_outputs(&winter, (&job.view, job.cog), staged, &mut stages)?;
+    let mut report = season_report(
+        &job.command,
+        &job.extra_parameters,
+        input,
+        &winter,
+        (stages.timings, started.elapsed().as_secs_f64()),
+        files,
+    );
+    report.removed_stale = folder.stale(&report.outputs);
+    let text = serde_json::to_vec_pretty(&report).map_err(OutputError::Report)?;
+    folder.commit(&report.outputs, Some(&text))?;
+    Ok(SeasonOutcome::Finished(Box::new(report)))
+}
+
+/// Ends a job stopped before its outputs: the season's checkpoint, then the run's files so
+/// far committed into the folder.
+fn commit_stopped(
+    folder: OutputFolder,
+    mut staged: Staged,
+    winter: &Winter,
+    outcome: SeasonOutcome,
+) -> Result<SeasonOutcome, SeasonJobError> {
+    staged.checkpoint(winter)?;
+    folder.commit(&staged.files, None)?;
+    Ok(outcome)
+}
+
+/// Writes every output of the finished season into the staging folder; the files written (the
+/// run's staged files first), each stage's time recorded.
+///
+/// Every output at once (different files; the state no longer changes): the rasters, previews,
+/// glb and time-lapse, the environment and avalanche maps, the ski tracks and the final
+/// checkpoint. Files are listed in that order, and the first error in that order is returned
+/// once all have finished.
+fn write_outputs(
+    winter: &Winter,
+    (view, cog): (&PreviewOptions, bool),
+    staged: Staged,
+    stages: &mut Stages,
+) -> Result<Vec<String>, SeasonJobError> {
+    let dir = staged.dir;
+    let mut files = staged.files;
+    let frames: Vec<RgbaImage> = staged.frames.into_iter().flatten().collect();
     let written = |write: &(dyn Fn(&mut Written) -> Result<(), SeasonJobError> + Sync)| {
         let mut files = Written::new(&dir);
         files.cog = cog;
@@ -479,7 +546,7 @@ pub fn run_season(
         || {
             let mut files = Written::new(&dir);
             files.cog = cog;
-            let result = write_all(&mut files, &winter.terrain, &frames, &job.view);
+            let result = write_all(&mut files, &winter.terrain, &frames, view);
             (files, result)
         },
         || {
@@ -492,27 +559,24 @@ pub fn run_season(
                         ),
                         (
                             "write_avalanches",
-                            written(&|w| write_avalanche_maps(w, &winter)),
+                            written(&|w| write_avalanche_maps(w, winter)),
                         ),
                         (
                             "write_ski_tracks",
-                            written(&|w| write_ski_tracks(w, &winter)),
+                            written(&|w| write_ski_tracks(w, winter)),
                         ),
                     ]
                 },
                 || {
                     let t0 = Instant::now();
-                    (
-                        write_checkpoint(&stage, &winter),
-                        t0.elapsed().as_secs_f64(),
-                    )
+                    (write_checkpoint(&dir, winter), t0.elapsed().as_secs_f64())
                 },
             )
         },
     );
     let mut first_error: Option<SeasonJobError> = None;
-    let (files, result) = all;
-    out.files.extend(files.files);
+    let (all_files, result) = all;
+    files.extend(all_files.files);
     match result {
         Ok(stage_seconds) => {
             for (name, seconds) in stage_seconds {
@@ -523,9 +587,9 @@ pub fn run_season(
             first_error.get_or_insert(e.into());
         }
     }
-    for (name, (files, seconds, result)) in maps {
+    for (name, (written, seconds, result)) in maps {
         stages.record(name, seconds);
-        out.files.extend(files.files);
+        files.extend(written.files);
         if let Err(e) = result {
             first_error.get_or_insert(e);
         }
@@ -538,20 +602,8 @@ pub fn run_season(
     if let Some(e) = first_error {
         return Err(e);
     }
-    out.files.push(CHECKPOINT.into());
-
-    let mut report = season_report(
-        &job.command,
-        &job.extra_parameters,
-        input,
-        &winter,
-        (stages.timings, started.elapsed().as_secs_f64()),
-        out.files,
-    );
-    report.removed_stale = folder.stale(&report.outputs);
-    let text = serde_json::to_vec_pretty(&report).map_err(OutputError::Report)?;
-    folder.commit(&report.outputs, Some(&text))?;
-    Ok(SeasonOutcome::Finished(Box::new(report)))
+    files.push(CHECKPOINT.into());
+    Ok(files)
 }
 
 /// Writes the environment maps: `sun.tif`, `sky.tif`, `irradiance.tif`, `temperature.tif`,

@@ -5,7 +5,8 @@
 use crate::failure::Failure;
 use crate::stdout::outln;
 use anyhow::anyhow;
-use snowscape::season_run::{SeasonOutcome, SeasonProgress, run_season as run_job};
+use snowscape::season_run::{SeasonOutcome, run_season as run_job};
+use snowscape::simulation::Control;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -22,12 +23,15 @@ fn install_interrupt_flag() -> Arc<AtomicBool> {
     flag
 }
 
-/// The day bar, advanced by the season.
-struct Bar(indicatif::ProgressBar);
+/// The day bar, advanced by the season, and the Ctrl-C flag that stops it.
+struct Bar(indicatif::ProgressBar, Arc<AtomicBool>);
 
-impl SeasonProgress for Bar {
-    fn day(&mut self, day: f64) {
+impl Control for Bar {
+    fn progress(&mut self, day: f64, _stop_time: f64) {
         self.0.set_position((day * 10.0) as u64);
+    }
+    fn interrupt_flag(&self) -> Option<Arc<AtomicBool>> {
+        Some(self.1.clone())
     }
 }
 
@@ -36,8 +40,8 @@ pub fn run_season(job: SeasonJob, quiet: bool) -> Result<(), Failure> {
     let interrupted = install_interrupt_flag();
     let out = job.out.clone();
     let days = job.scenario.days;
-    let mut bar = Bar(crate::progress::day_bar(days, quiet));
-    let outcome = run_job(job, &interrupted, &mut bar).map_err(|e| {
+    let mut bar = Bar(crate::progress::day_bar(days, quiet), interrupted);
+    let outcome = run_job(job, &mut bar).map_err(|e| {
         bar.0.abandon();
         let code = if e.is_bad_input() {
             crate::failure::BAD_INPUT
