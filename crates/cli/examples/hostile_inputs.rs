@@ -19,7 +19,9 @@ use serde_json::Value;
 use std::path::Path;
 
 /// Bytes before a checkpoint's JSON header: magic, version, header length, maps length.
-const PREAMBLE: usize = 28;
+/// A format-4 checkpoint's preamble: magic, version, and the lengths of its header, maps, ski
+/// tracks and track tiles (`snowscape_season::checkpoint::PREAMBLE`).
+const PREAMBLE: usize = 8 + 4 + 4 * 8;
 
 type Io = std::io::Result<()>;
 
@@ -167,13 +169,17 @@ fn craft(dir: &Path) -> Io {
 }
 
 /// A checkpoint of the header bytes `json` and `maps`, lengths and CRC computed anew.
-fn assemble(version: &[u8], json: &[u8], maps: &[u8]) -> Vec<u8> {
+/// A checkpoint of `json` and `maps` with the ski sections `tail` (their two lengths
+/// `tail_lens`, then their bytes) and a CRC over it all.
+fn assemble(version: &[u8], json: &[u8], maps: &[u8], tail: (&[u8], &[u8])) -> Vec<u8> {
     let mut out = b"SNOWCKPT".to_vec();
     out.extend_from_slice(version);
     out.extend_from_slice(&(json.len() as u64).to_le_bytes());
     out.extend_from_slice(&(maps.len() as u64).to_le_bytes());
+    out.extend_from_slice(tail.0);
     out.extend_from_slice(json);
     out.extend_from_slice(maps);
+    out.extend_from_slice(tail.1);
     let crc = crc32fast::hash(&out);
     out.extend_from_slice(&crc.to_le_bytes());
     out
@@ -203,6 +209,11 @@ fn forge(run: &Path, dir: &Path) -> Io {
     let (header_len, maps_len) = (word(12), word(20));
     let json = &bytes[PREAMBLE..PREAMBLE + header_len];
     let maps = &bytes[PREAMBLE + header_len..PREAMBLE + header_len + maps_len];
+    // The ski tracks' and tiles' lengths and bytes, kept as they are.
+    let tail = (
+        &bytes[28..PREAMBLE],
+        &bytes[PREAMBLE + header_len + maps_len..bytes.len() - 4],
+    );
     let version = &bytes[8..12];
     variant(run, dir, "ckpt_sparse", None, 1 << 40)?;
     let mut long = bytes.clone();
@@ -222,7 +233,7 @@ fn forge(run: &Path, dir: &Path) -> Io {
         run,
         dir,
         "ckpt_index",
-        Some(&assemble(version, &index, maps)),
+        Some(&assemble(version, &index, maps, tail)),
         0,
     )?;
     let time = edited(&|h| h["scheduler"]["time_days"] = Value::from(-1e300));
@@ -230,7 +241,7 @@ fn forge(run: &Path, dir: &Path) -> Io {
         run,
         dir,
         "ckpt_time",
-        Some(&assemble(version, &time, maps)),
+        Some(&assemble(version, &time, maps, tail)),
         0,
     )?;
     let mut nan = maps.to_vec();
@@ -239,7 +250,7 @@ fn forge(run: &Path, dir: &Path) -> Io {
         run,
         dir,
         "ckpt_nan",
-        Some(&assemble(version, json, &nan)),
+        Some(&assemble(version, json, &nan, tail)),
         0,
     )
 }
