@@ -280,7 +280,7 @@ impl TerminusMap {
                 break;
             }
         }
-        Ok(Self::finish(d, w, h, sweeps, rule.clone(), &field))
+        Ok(Self::from_distance(w, h, d, sweeps, rule.clone()))
     }
 
     /// The same map by the synchronous automaton (every cell updated from the previous
@@ -314,43 +314,13 @@ impl TerminusMap {
                 break;
             }
         }
-        Ok(Self::finish(d, w, h, iterations, rule.clone(), &field))
+        Ok(Self::from_distance(w, h, d, iterations, rule.clone()))
     }
 
-    fn finish(
-        distance: Vec<f32>,
-        width: usize,
-        height: usize,
-        sweeps: usize,
-        rule: Terminus,
-        field: &Field,
-    ) -> Self {
-        // Spawn weight: the distance itself, on skiable cells with a route and not at a terminus.
-        let mut acc = 0.0f64;
-        let spawn_cdf = distance
-            .iter()
-            .zip(&field.updated)
-            .map(|(&d, &u)| {
-                if u && d.is_finite() {
-                    acc += f64::from(d);
-                }
-                acc
-            })
-            .collect();
-        Self {
-            width,
-            height,
-            distance,
-            spawn_cdf,
-            sweeps,
-            rule,
-        }
-    }
-
-    /// A map of `width`×`height` cells from its distances (a checkpoint's): the spawn weights
-    /// are rebuilt from them bit-identical to [`Self::compute`]'s, since a cell's weight is its
-    /// distance where finite and every cell the rule does not update holds 0 (a terminus) or
-    /// +∞ (no snow), which add nothing.
+    /// A map of `width`×`height` cells from its distances (the automaton's, or a
+    /// checkpoint's). Spawn weight: the distance itself, on cells with a route (finite) that
+    /// are not termini (0): a cell the automaton does not update keeps its start, 0 (a
+    /// terminus) or +∞ (no snow), which add nothing, so one rule serves both.
     pub fn from_distance(
         width: usize,
         height: usize,

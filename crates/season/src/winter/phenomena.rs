@@ -202,13 +202,7 @@ fn wind_transport_step(w: &mut Winter, event: &Event) -> Result<(), SeasonError>
     let mut params = p.wind_transport.clone();
     let drift = &mut params.sx_redistribution.sublimation;
     if drift.relative_humidity_pct.is_none() {
-        let storms: Vec<(f64, f64)> = w
-            .state
-            .run
-            .storms
-            .iter()
-            .map(|s| (s.since, s.until))
-            .collect();
+        let storms = super::snowpack::storm_windows(&w.state.run.storms);
         let rh = w
             .air
             .mean_relative_humidity(day - event.dt_days, day, &storms);

@@ -22,6 +22,12 @@ pub(super) struct StormSpan {
     pub delivered_to: f64,
 }
 
+/// The `(since, until)` days of the storms a run state lists (the melt and drift humidity
+/// windows read them).
+pub(super) fn storm_windows(storms: &[StormSpan]) -> Vec<(f64, f64)> {
+    storms.iter().map(|s| (s.since, s.until)).collect()
+}
+
 impl Winter {
     /// What the current period's wind field gives wind transport: the sheltering index (the
     /// short- and long-range maximum upwind slopes, when the Sx redistribution is on), then the
@@ -187,13 +193,7 @@ impl Winter {
         if let Some(table) = self.air.station_precipitation(t0, day) {
             self.add_precipitation(&table)?;
         }
-        let storms: Vec<(f64, f64)> = self
-            .state
-            .run
-            .storms
-            .iter()
-            .map(|s| (s.since, s.until))
-            .collect();
+        let storms = storm_windows(&self.state.run.storms);
         let hours = self.air.melt_hours(t0, day, &storms);
         let reflected: Vec<&[f32]> = self
             .air
