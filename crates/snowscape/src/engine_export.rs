@@ -492,121 +492,18 @@ pub fn export_run(
     if options.with_snow {
         heightmaps.push(("snow", &maps.surface));
     }
-    let layer_names = ["compacted", "stable", "unstable", "powder", "rock"];
-    let write_bytes = |name: &str, bytes: &[u8], files: &mut Vec<String>| {
-        let path = out.join(name);
-        write_bytes_atomic(&path, bytes).map_err(|e| ExportError::Write {
-            path,
-            message: e.to_string(),
-        })?;
-        files.push(name.to_string());
-        Ok::<(), ExportError>(())
+    let target = Target {
+        out,
+        maps: &maps,
+        heightmaps: &heightmaps,
+        size,
+        z_range: (lo, hi),
+        spacing,
     };
     let import = match options.engine {
-        Engine::Unreal => {
-            for t in tiles(size, options.tile) {
-                for (name, h) in &heightmaps {
-                    let c = codes(&cut(h, size[0], &t), lo, hi);
-                    let bytes: Vec<u8> = c.iter().flat_map(|v| v.to_ne_bytes()).collect();
-                    let file = format!("heightmap_{name}{}.png", t.suffix);
-                    write_png(&out.join(&file), (t.w, t.h), &bytes, ExtendedColorType::L16)?;
-                    files.push(file);
-                }
-                for (l, w) in layer_names.iter().zip(&maps.weights) {
-                    let file = format!("weight_{l}{}.png", t.suffix);
-                    write_png(
-                        &out.join(&file),
-                        (t.w, t.h),
-                        &cut(w, size[0], &t),
-                        ExtendedColorType::L8,
-                    )?;
-                    files.push(file);
-                }
-            }
-            let z_scale = (hi - lo) * 12800.0 / 65535.0;
-            ImportSettings::Unreal {
-                dialog: "Landscape mode > Manage > Import from File (heightmap_bedrock.png, or its tiles); one paint layer per weight map",
-                scale_x: spacing[0] * 100.0,
-                scale_y: spacing[1] * 100.0,
-                scale_z: z_scale,
-                location_z_cm: lo * 100.0 + 256.0 * z_scale,
-                resolution: size,
-                tile_samples: options.tile,
-                heightmap_code_to_height_m: format!("z = {lo} + code / 65535 * {}", hi - lo),
-            }
-        }
-        Engine::Unity => {
-            for (name, h) in &heightmaps {
-                let c = codes(h, lo, hi);
-                let bytes: Vec<u8> = c.iter().flat_map(|v| v.to_le_bytes()).collect();
-                write_bytes(&format!("heightmap_{name}.raw"), &bytes, &mut files)?;
-            }
-            let n = size[0] - 1;
-            for (k, group) in [[0usize, 1, 2, 3], [4, 5, 5, 5]].iter().enumerate() {
-                let splat = splat_rgba(&maps, size, n, group);
-                let file = format!("splatmap_{k}.png");
-                write_png(&out.join(&file), (n, n), &splat, ExtendedColorType::Rgba8)?;
-                files.push(file);
-            }
-            ImportSettings::Unity {
-                dialog: "Terrain > Terrain Settings > Import Raw: depth 16 bit, byte order Windows, flip vertically (row 0 of the file is north)",
-                heightmap_resolution: size[0],
-                terrain_width_m: extent[0],
-                terrain_length_m: extent[1],
-                terrain_height_m: hi - lo,
-                position_y_m: lo,
-                splatmaps: BTreeMap::from([
-                    (
-                        "splatmap_0.png",
-                        vec!["compacted", "stable", "unstable", "powder"],
-                    ),
-                    ("splatmap_1.png", vec!["rock"]),
-                ]),
-                control_texture_resolution: n,
-            }
-        }
-        Engine::Godot => {
-            for (name, h) in &heightmaps {
-                let c = codes(h, lo, hi);
-                let bytes: Vec<u8> = c.iter().flat_map(|v| v.to_le_bytes()).collect();
-                write_bytes(&format!("heightmap_{name}.raw"), &bytes, &mut files)?;
-                let geometry =
-                    GridGeometry::new(size[0], size[1], spacing[0].max(1e-6), spacing[1].max(1e-6))
-                        .map_err(|e| ExportError::Write {
-                            path: out.to_path_buf(),
-                            message: e.to_string(),
-                        })?;
-                let file = format!("heightmap_{name}.exr");
-                write_exr(&out.join(&file), &geometry, &[("R", h)]).map_err(|e| {
-                    ExportError::Write {
-                        path: out.join(&file),
-                        message: e.to_string(),
-                    }
-                })?;
-                files.push(file);
-            }
-            // R rock, G compacted + stable, B unstable, A powder.
-            let splat = splat_rgba(&maps, size, size[0], &[4, 6, 2, 3]);
-            write_png(
-                &out.join("splatmap.png"),
-                (size[0], size[1]),
-                &splat,
-                ExtendedColorType::Rgba8,
-            )?;
-            files.push("splatmap.png".into());
-            ImportSettings::Godot {
-                add_on: "HTerrain (Zylann's Heightmap Terrain, Godot 4): Import dialog",
-                heightmap: "heightmap_bedrock.raw (16-bit little endian) with the min and max heights below, or heightmap_bedrock.exr (32-bit float, metres)",
-                min_height_m: lo,
-                max_height_m: hi,
-                resolution: size[0],
-                cell_size_m: spacing[0],
-                splatmap: BTreeMap::from([(
-                    "splatmap.png",
-                    vec!["rock", "compacted + stable", "unstable", "powder"],
-                )]),
-            }
-        }
+        Engine::Unreal => unreal_files(&target, options.tile, &mut files)?,
+        Engine::Unity => unity_files(&target, extent, &mut files)?,
+        Engine::Godot => godot_files(&target, &mut files)?,
     };
     let report = EngineExport {
         engine: options.engine,
@@ -622,8 +519,167 @@ pub fn export_run(
         Engine::Godot => "godot_import.json",
     };
     let text = serde_json::to_string_pretty(&report).unwrap_or_default();
-    write_bytes(name, text.as_bytes(), &mut files)?;
+    write_file(out, name, text.as_bytes(), &mut files)?;
     Ok(EngineExport { files, ..report })
+}
+
+/// What every engine's files are made from: the output folder, the resampled maps, the
+/// heightmaps to write (bedrock, and snow with `--with-snow`), the engine's sample size, the
+/// height range the 16-bit codes span and the sample spacing, m.
+struct Target<'a> {
+    out: &'a Path,
+    maps: &'a Maps,
+    heightmaps: &'a [(&'a str, &'a [f32])],
+    size: [usize; 2],
+    z_range: (f64, f64),
+    spacing: [f64; 2],
+}
+
+/// The weight maps' names, in the order of `Maps::weights`.
+const LAYER_NAMES: [&str; 5] = ["compacted", "stable", "unstable", "powder", "rock"];
+
+/// Writes `bytes` to `name` in `out` atomically and lists it in `files`.
+fn write_file(
+    out: &Path,
+    name: &str,
+    bytes: &[u8],
+    files: &mut Vec<String>,
+) -> Result<(), ExportError> {
+    let path = out.join(name);
+    write_bytes_atomic(&path, bytes).map_err(|e| ExportError::Write {
+        path,
+        message: e.to_string(),
+    })?;
+    files.push(name.to_string());
+    Ok(())
+}
+
+/// Unreal's files (16-bit PNG heightmaps and 8-bit weight maps, in tiles of `tile` samples
+/// when asked) and its import settings.
+fn unreal_files(
+    target: &Target,
+    tile: Option<usize>,
+    files: &mut Vec<String>,
+) -> Result<ImportSettings, ExportError> {
+    let (out, maps, size, (lo, hi), spacing) = (
+        target.out,
+        target.maps,
+        target.size,
+        target.z_range,
+        target.spacing,
+    );
+    for t in tiles(size, tile) {
+        for (name, h) in target.heightmaps {
+            let c = codes(&cut(h, size[0], &t), lo, hi);
+            let bytes: Vec<u8> = c.iter().flat_map(|v| v.to_ne_bytes()).collect();
+            let file = format!("heightmap_{name}{}.png", t.suffix);
+            write_png(&out.join(&file), (t.w, t.h), &bytes, ExtendedColorType::L16)?;
+            files.push(file);
+        }
+        for (l, w) in LAYER_NAMES.iter().zip(&maps.weights) {
+            let file = format!("weight_{l}{}.png", t.suffix);
+            write_png(
+                &out.join(&file),
+                (t.w, t.h),
+                &cut(w, size[0], &t),
+                ExtendedColorType::L8,
+            )?;
+            files.push(file);
+        }
+    }
+    let z_scale = (hi - lo) * 12800.0 / 65535.0;
+    Ok(ImportSettings::Unreal {
+        dialog: "Landscape mode > Manage > Import from File (heightmap_bedrock.png, or its tiles); one paint layer per weight map",
+        scale_x: spacing[0] * 100.0,
+        scale_y: spacing[1] * 100.0,
+        scale_z: z_scale,
+        location_z_cm: lo * 100.0 + 256.0 * z_scale,
+        resolution: size,
+        tile_samples: tile,
+        heightmap_code_to_height_m: format!("z = {lo} + code / 65535 * {}", hi - lo),
+    })
+}
+
+/// Unity's files (16-bit RAW heightmaps, two RGBA splat maps) and its import settings;
+/// `extent` is the terrain's size, m.
+fn unity_files(
+    t: &Target,
+    extent: [f64; 2],
+    files: &mut Vec<String>,
+) -> Result<ImportSettings, ExportError> {
+    let (out, maps, size, (lo, hi)) = (t.out, t.maps, t.size, t.z_range);
+    for (name, h) in t.heightmaps {
+        let c = codes(h, lo, hi);
+        let bytes: Vec<u8> = c.iter().flat_map(|v| v.to_le_bytes()).collect();
+        write_file(out, &format!("heightmap_{name}.raw"), &bytes, files)?;
+    }
+    let n = size[0] - 1;
+    for (k, group) in [[0usize, 1, 2, 3], [4, 5, 5, 5]].iter().enumerate() {
+        let splat = splat_rgba(maps, size, n, group);
+        let file = format!("splatmap_{k}.png");
+        write_png(&out.join(&file), (n, n), &splat, ExtendedColorType::Rgba8)?;
+        files.push(file);
+    }
+    Ok(ImportSettings::Unity {
+        dialog: "Terrain > Terrain Settings > Import Raw: depth 16 bit, byte order Windows, flip vertically (row 0 of the file is north)",
+        heightmap_resolution: size[0],
+        terrain_width_m: extent[0],
+        terrain_length_m: extent[1],
+        terrain_height_m: hi - lo,
+        position_y_m: lo,
+        splatmaps: BTreeMap::from([
+            (
+                "splatmap_0.png",
+                vec!["compacted", "stable", "unstable", "powder"],
+            ),
+            ("splatmap_1.png", vec!["rock"]),
+        ]),
+        control_texture_resolution: n,
+    })
+}
+
+/// Godot's files (16-bit RAW and 32-bit EXR heightmaps, one RGBA splat map) and the HTerrain
+/// import settings.
+fn godot_files(t: &Target, files: &mut Vec<String>) -> Result<ImportSettings, ExportError> {
+    let (out, maps, size, (lo, hi), spacing) = (t.out, t.maps, t.size, t.z_range, t.spacing);
+    for (name, h) in t.heightmaps {
+        let c = codes(h, lo, hi);
+        let bytes: Vec<u8> = c.iter().flat_map(|v| v.to_le_bytes()).collect();
+        write_file(out, &format!("heightmap_{name}.raw"), &bytes, files)?;
+        let geometry =
+            GridGeometry::new(size[0], size[1], spacing[0].max(1e-6), spacing[1].max(1e-6))
+                .map_err(|e| ExportError::Write {
+                    path: out.to_path_buf(),
+                    message: e.to_string(),
+                })?;
+        let file = format!("heightmap_{name}.exr");
+        write_exr(&out.join(&file), &geometry, &[("R", h)]).map_err(|e| ExportError::Write {
+            path: out.join(&file),
+            message: e.to_string(),
+        })?;
+        files.push(file);
+    }
+    // R rock, G compacted + stable, B unstable, A powder.
+    let splat = splat_rgba(maps, size, size[0], &[4, 6, 2, 3]);
+    write_png(
+        &out.join("splatmap.png"),
+        (size[0], size[1]),
+        &splat,
+        ExtendedColorType::Rgba8,
+    )?;
+    files.push("splatmap.png".into());
+    Ok(ImportSettings::Godot {
+        add_on: "HTerrain (Zylann's Heightmap Terrain, Godot 4): Import dialog",
+        heightmap: "heightmap_bedrock.raw (16-bit little endian) with the min and max heights below, or heightmap_bedrock.exr (32-bit float, metres)",
+        min_height_m: lo,
+        max_height_m: hi,
+        resolution: size[0],
+        cell_size_m: spacing[0],
+        splatmap: BTreeMap::from([(
+            "splatmap.png",
+            vec!["rock", "compacted + stable", "unstable", "powder"],
+        )]),
+    })
 }
 
 /// RGBA bytes of four weight channels at `n` × `n` texels (nearest sample); channel index 5
