@@ -5,7 +5,7 @@
 //! precompute read the height field once per direction on top of it.
 
 use crate::kernel::{Kernel, KernelError};
-use snowscape_environment::{EnvironmentParams, precompute};
+use snowscape_environment::{EnvironmentMaps, EnvironmentParams, precompute};
 use snowscape_season::avalanches::{
     AvalancheParameters, HazardMap, HazardSources, bedrock_slopes_deg,
 };
@@ -73,6 +73,19 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
             },
         ));
     }
+    kernels.extend(phenomenon_kernels(&base, &maps)?);
+    kernels.extend(season_loop_kernels(terrain)?);
+    Ok(kernels)
+}
+
+/// One kernel per grid-wide phenomenon step (snowfall, melt, stability, hazard map, powder
+/// diffusion, wind transport) on the snowy terrain `base` with its environment `maps`.
+fn phenomenon_kernels(
+    base: &LayeredTerrain,
+    maps: &EnvironmentMaps,
+) -> Result<Vec<Kernel>, KernelError> {
+    let cells = base.bedrock.len();
+    let mut kernels = Vec::new();
     let temperature = maps.temperature.clone();
     {
         let (mut t, temp, mut scratch) = (
@@ -187,6 +200,14 @@ pub fn season_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
             },
         ));
     }
+    Ok(kernels)
+}
+
+/// The season's event loop over `terrain`: the 100-day winter without avalanches
+/// (cells × grid-wide events) and the default winter with its natural avalanches (cell-days).
+fn season_loop_kernels(terrain: &Grid) -> Result<Vec<Kernel>, KernelError> {
+    let cells = terrain.data().len();
+    let mut kernels = Vec::new();
     // The grid event loop alone (no avalanches): cells × grid-wide events.
     let mut calm = Scenario {
         days: SEASON_DAYS,
