@@ -218,6 +218,87 @@ fn precheck_inner<R: Read + Seek>(
     len: u64,
     max_cells: usize,
 ) -> Result<Option<Layout>> {
+    let Some(mut ifd) = first_directory(path, r, len)? else {
+        return Ok(None);
+    };
+    let (Some(w), Some(h)) = (ifd.first(256)?, ifd.first(257)?) else {
+        return Ok(None);
+    };
+    check_cells(path, w, h, max_cells)?;
+    if w == 0 || h == 0 {
+        return Ok(None);
+    }
+    let unsupported = |what: String| RasterError::TiffUnsupported {
+        path: path.to_path_buf(),
+        what,
+    };
+    let code = ifd.first(259)?.unwrap_or(1);
+    let (compression, ratio) = u16::try_from(code)
+        .ok()
+        .and_then(max_expansion)
+        .ok_or_else(|| {
+            unsupported(format!(
+                "compression {code} (this reader decodes none, LZW, Deflate and PackBits)"
+            ))
+        })?;
+    let spp = ifd.first(277)?.unwrap_or(1).max(1);
+    let bits = ifd.first(258)?.unwrap_or(1);
+    if !(1..=64).contains(&bits) {
+        return Err(unsupported(format!("{bits} bits per sample")));
+    }
+    let planar = ifd.first(284)?.unwrap_or(1) == 2;
+    let chunk_samples = if planar { 1 } else { spp };
+    let tiled = ifd.find(322).is_some() || ifd.find(324).is_some();
+    let (cw, ch, off_tag, count_tag, kind) = if tiled {
+        let tw = ifd.first(322)?.unwrap_or(0);
+        let th = ifd.first(323)?.unwrap_or(0);
+        (tw, th, 324, 325, "tile")
+    } else {
+        let rps = ifd.first(278)?.unwrap_or(h).min(h);
+        (w, rps, 273, 279, "strip")
+    };
+    if cw == 0 || ch == 0 {
+        return Err(unsupported(format!("{kind}s of {cw}x{ch} cells")));
+    }
+    let (across, down) = (w.div_ceil(cw), h.div_ceil(ch));
+    // Both are at most the cell count (checked above), so the product fits.
+    let chunks = across * down;
+    let (Some(offs), Some(counts)) = (ifd.find(off_tag), ifd.find(count_tag)) else {
+        return Ok(None);
+    };
+    for e in [offs, counts] {
+        if e.count < chunks {
+            return Err(RasterError::GeoTiffTag {
+                path: path.to_path_buf(),
+                tag: e.tag,
+                name: tag_name(e.tag),
+                reason: format!(
+                    "{} values, but the {w}x{h} image in {kind}s of {cw}x{ch} needs {chunks}",
+                    e.count
+                ),
+            });
+        }
+    }
+    let chunk_layout = Chunks {
+        size: (w, h),
+        chunk: (cw, ch),
+        count: chunks,
+        tiled,
+        bits,
+        samples: chunk_samples,
+        compression,
+        ratio,
+    };
+    check_chunks(&mut ifd, (offs, counts), &chunk_layout).map(Some)
+}
+
+/// The first image directory of a TIFF or BigTIFF file of `len` bytes read by `r`: its
+/// header and every entry whose values lie inside the file (`None`: not a TIFF).
+fn first_directory<'a, R: Read + Seek>(
+    path: &'a Path,
+    r: &'a mut BoundedReader<R>,
+    len: u64,
+) -> Result<Option<Ifd<'a, R>>> {
     if len < 8 {
         return Ok(None);
     }
@@ -329,70 +410,44 @@ fn precheck_inner<R: Read + Seek>(
             at,
         });
     }
-    let (Some(w), Some(h)) = (ifd.first(256)?, ifd.first(257)?) else {
-        return Ok(None);
-    };
-    check_cells(path, w, h, max_cells)?;
-    if w == 0 || h == 0 {
-        return Ok(None);
-    }
-    let unsupported = |what: String| RasterError::TiffUnsupported {
-        path: path.to_path_buf(),
-        what,
-    };
-    let code = ifd.first(259)?.unwrap_or(1);
-    let (compression, ratio) = u16::try_from(code)
-        .ok()
-        .and_then(max_expansion)
-        .ok_or_else(|| {
-            unsupported(format!(
-                "compression {code} (this reader decodes none, LZW, Deflate and PackBits)"
-            ))
-        })?;
-    let spp = ifd.first(277)?.unwrap_or(1).max(1);
-    let bits = ifd.first(258)?.unwrap_or(1);
-    if !(1..=64).contains(&bits) {
-        return Err(unsupported(format!("{bits} bits per sample")));
-    }
-    let planar = ifd.first(284)?.unwrap_or(1) == 2;
-    let chunk_samples = if planar { 1 } else { spp };
-    let tiled = ifd.find(322).is_some() || ifd.find(324).is_some();
-    let (cw, ch, off_tag, count_tag, kind) = if tiled {
-        let tw = ifd.first(322)?.unwrap_or(0);
-        let th = ifd.first(323)?.unwrap_or(0);
-        (tw, th, 324, 325, "tile")
-    } else {
-        let rps = ifd.first(278)?.unwrap_or(h).min(h);
-        (w, rps, 273, 279, "strip")
-    };
-    if cw == 0 || ch == 0 {
-        return Err(unsupported(format!("{kind}s of {cw}x{ch} cells")));
-    }
-    let (across, down) = (w.div_ceil(cw), h.div_ceil(ch));
-    // Both are at most the cell count (checked above), so the product fits.
-    let chunks = across * down;
+    Ok(Some(ifd))
+}
+
+/// A band's strips or tiles as the directory lays them out, for [`check_chunks`].
+struct Chunks {
+    /// The image's size, cells.
+    size: (u64, u64),
+    /// A chunk's size, cells.
+    chunk: (u64, u64),
+    /// How many chunks band 1 has.
+    count: u64,
+    /// Whether they are tiles (else strips).
+    tiled: bool,
+    /// Bits per sample and samples per chunk pixel.
+    bits: u64,
+    samples: u64,
+    /// The compression's name and its largest expansion ratio.
+    compression: &'static str,
+    ratio: u64,
+}
+
+/// Checks that band 1's chunks lie inside the file (offsets `offs`, stored lengths `counts`)
+/// and cannot decode to more than their compression allows, each and together.
+fn check_chunks<R: Read + Seek>(
+    ifd: &mut Ifd<'_, R>,
+    (offs, counts): (Entry, Entry),
+    c: &Chunks,
+) -> Result<Layout> {
+    let (path, len) = (ifd.path, ifd.len);
+    let ((w, h), (cw, ch), chunks, tiled) = (c.size, c.chunk, c.count, c.tiled);
+    let (compression, ratio) = (c.compression, c.ratio);
+    let kind = if tiled { "tile" } else { "strip" };
     let row_bytes = |width: u64| -> u64 {
         width
-            .saturating_mul(bits)
-            .saturating_mul(chunk_samples)
+            .saturating_mul(c.bits)
+            .saturating_mul(c.samples)
             .div_ceil(8)
     };
-    let (Some(offs), Some(counts)) = (ifd.find(off_tag), ifd.find(count_tag)) else {
-        return Ok(None);
-    };
-    for e in [offs, counts] {
-        if e.count < chunks {
-            return Err(RasterError::GeoTiffTag {
-                path: path.to_path_buf(),
-                tag: e.tag,
-                name: tag_name(e.tag),
-                reason: format!(
-                    "{} values, but the {w}x{h} image in {kind}s of {cw}x{ch} needs {chunks}",
-                    e.count
-                ),
-            });
-        }
-    }
     let offsets = ifd.values(offs, chunks)?;
     let stored = ifd.values(counts, chunks)?;
     let mut total: u64 = 0;
@@ -451,5 +506,5 @@ fn precheck_inner<R: Read + Seek>(
             ratio,
         });
     }
-    Ok(Some(layout))
+    Ok(layout)
 }
