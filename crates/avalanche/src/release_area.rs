@@ -112,12 +112,12 @@ pub struct MapExtent {
 impl MapExtent {
     /// The extent of a grid (cell edges).
     pub fn of_grid(g: &GridGeometry) -> Self {
-        let t = g.transform();
+        let [x_min, y_min, x_max, y_max] = g.map_bounds();
         Self {
-            x_min: t.origin_x,
-            x_max: t.origin_x + g.width() as f64 * t.pixel_width,
-            y_min: t.origin_y - g.height() as f64 * t.pixel_height,
-            y_max: t.origin_y,
+            x_min,
+            x_max,
+            y_min,
+            y_max,
         }
     }
 

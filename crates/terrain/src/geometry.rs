@@ -276,6 +276,17 @@ impl GridGeometry {
             self.height as f64 * self.cell_size_y,
         )
     }
+    /// The map rectangle the cells cover (their outer edges), CRS units:
+    /// `[x_min, y_min, x_max, y_max]`.
+    pub fn map_bounds(&self) -> [f64; 4] {
+        let t = &self.transform;
+        [
+            t.origin_x,
+            t.origin_y - self.height as f64 * t.pixel_height,
+            t.origin_x + self.width as f64 * t.pixel_width,
+            t.origin_y,
+        ]
+    }
     /// The georeferencing transform.
     pub fn transform(&self) -> &GeoTransform {
         &self.transform

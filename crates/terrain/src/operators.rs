@@ -118,9 +118,8 @@ pub fn gradient_south<T: Real>(
     dx: T,
     dy: T,
 ) -> (T, T) {
-    let gx = centred_difference(at(-1, 0), centre, at(1, 0), dx);
-    let gy = centred_difference(at(0, -1), centre, at(0, 1), dy);
-    (gx, gy)
+    // The same stencil with the rows read the other way round.
+    gradient(centre, |dc, dr| at(dc, -dr), dx, dy)
 }
 
 /// The norm of a gradient, `|∇z|`: the tangent of the slope.
