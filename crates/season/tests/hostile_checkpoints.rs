@@ -16,9 +16,9 @@ fn resume(bytes: &[u8]) -> Result<Winter, SeasonError> {
     Winter::resume(scenario(), terrain(), &mut &bytes[..])
 }
 
-/// The field an `Implausible` refusal names, and its message.
-fn refused_field(bytes: &[u8]) -> (String, String) {
-    match resume(bytes) {
+/// The field an `Implausible` refusal of a resume names, and its message.
+fn implausible<T>(resumed: Result<T, SeasonError>) -> (String, String) {
+    match resumed {
         Err(SeasonError::Checkpoint(e @ CheckpointError::Implausible { .. })) => {
             let m = e.to_string();
             let CheckpointError::Implausible { field, .. } = e else {
@@ -29,6 +29,11 @@ fn refused_field(bytes: &[u8]) -> (String, String) {
         Err(e) => panic!("expected an implausible value, got {e:?}"),
         Ok(_) => panic!("a forged checkpoint was resumed"),
     }
+}
+
+/// The field an `Implausible` refusal names, and its message.
+fn refused_field(bytes: &[u8]) -> (String, String) {
+    implausible(resume(bytes))
 }
 
 #[test]
@@ -302,17 +307,7 @@ fn ski_checkpoint() -> Vec<u8> {
 
 /// The refusal of a forged skiing checkpoint: the field named and the message.
 fn ski_refused(bytes: &[u8]) -> (String, String) {
-    match Winter::resume(ski_scenario(), terrain(), &mut &bytes[..]) {
-        Err(SeasonError::Checkpoint(e @ CheckpointError::Implausible { .. })) => {
-            let m = e.to_string();
-            let CheckpointError::Implausible { field, .. } = e else {
-                unreachable!()
-            };
-            (field, m)
-        }
-        Err(e) => panic!("expected an implausible value, got {e:?}"),
-        Ok(_) => panic!("a forged checkpoint was resumed"),
-    }
+    implausible(Winter::resume(ski_scenario(), terrain(), &mut &bytes[..]))
 }
 
 /// `bytes` with its header, ski tracks (as JSON) and tiles edited, lengths and CRC anew.
