@@ -114,7 +114,7 @@ fn roof_and_basin_scene_built_in_code() {
     let meshes: Vec<_> = scene
         .objects
         .iter()
-        .map(snowscape_mesh::SnowMesh::from_object)
+        .map(snowscape_mesh::SnowObject::from_object)
         .collect();
     let obj = out.path().join("roof_and_basin.obj");
     snowscape_mesh::write::write_obj(&obj, &meshes, &scene.frame).unwrap();

@@ -65,6 +65,7 @@ impl Snowfall {
         let tagged = snow.tagged();
         let tracer = Tracer::new(scene, &tagged);
         let snow_top = snow
+            .mesh
             .positions
             .iter()
             .map(|q| q[2])

@@ -12,7 +12,7 @@
 use crate::edge_groups::Topology;
 use crate::launch_sites::LaunchSites;
 use image::{Rgba, RgbaImage};
-use snowscape_mesh::{MeshFrame, SnowMesh, TriMesh};
+use snowscape_mesh::{MeshFrame, SnowObject, TriMesh};
 use snowscape_terrain::random::{hash3, uniform};
 
 /// Density levels of the atlas.
@@ -38,7 +38,7 @@ pub fn dusting_mesh(
     topo: &Topology,
     min_depth: f64,
     seed: u64,
-) -> Option<SnowMesh> {
+) -> Option<SnowObject> {
     let lift = sites.spacing * 1e-3;
     let (mut positions, mut uvs, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
     let band = 1.0 / LEVELS as f32;
@@ -70,16 +70,18 @@ pub fn dusting_mesh(
         ]);
         triangles.push([base, base + 1, base + 2]);
     }
-    (!triangles.is_empty()).then(|| SnowMesh {
-        mesh: TriMesh {
-            name: "dusting".into(),
-            frame: MeshFrame::Scene,
-            positions,
-            normals: None,
-            triangles,
-        },
-        uvs: Some(uvs),
-        texture: Some(atlas(seed)),
+    (!triangles.is_empty()).then(|| {
+        SnowObject::textured(
+            TriMesh {
+                name: "dusting".into(),
+                frame: MeshFrame::Scene,
+                positions,
+                normals: None,
+                uvs: Some(uvs),
+                triangles,
+            },
+            atlas(seed),
+        )
     })
 }
 

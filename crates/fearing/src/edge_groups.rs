@@ -289,6 +289,7 @@ mod tests {
             positions,
             normals: None,
             triangles,
+            uvs: None,
         }
     }
 

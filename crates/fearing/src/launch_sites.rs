@@ -294,6 +294,7 @@ mod tests {
                 normals: None,
                 // One upward triangle and one vertical one (no sites).
                 triangles: vec![[0, 1, 2], [0, 1, 3]],
+                uvs: None,
             }],
             ..Default::default()
         };

@@ -58,7 +58,7 @@ pub struct FearingCover {
     pub topology: Topology,
     pub surface: SnowSurface,
     /// Flake dusting of the sites too thin for the surface (Section 3.8), if any.
-    pub dusting: Option<snowscape_mesh::SnowMesh>,
+    pub dusting: Option<snowscape_mesh::SnowObject>,
     pub report: FearingReport,
 }
 
@@ -66,7 +66,7 @@ impl FearingCover {
     /// The meshes of the cover, in the order its files hold them: the snow surface (`snow`),
     /// then the dusting of the faces too steep to hold snow, if any (an alpha-masked texture
     /// travels with it).
-    pub fn meshes(&self) -> Vec<snowscape_mesh::SnowMesh> {
+    pub fn meshes(&self) -> Vec<snowscape_mesh::SnowObject> {
         let mut meshes = vec![self.surface.to_mesh("snow")];
         meshes.extend(self.dusting.clone());
         meshes
@@ -209,8 +209,8 @@ pub fn cover(scene: &Scene, params: &FearingParams) -> Result<FearingCover, Fear
     r.mass.final_m3 = vol;
     r.mass.closure_error_m3 = r.mass.allocated_m3 - r.mass.left_scene_m3 - vol;
     r.flakes_per_s = r.flakes_shot as f64 / r.timings.accumulation_s.max(1e-9);
-    r.surface_vertices = cover.surface.positions.len();
-    r.surface_triangles = cover.surface.triangles.len();
+    r.surface_vertices = cover.surface.mesh.positions.len();
+    r.surface_triangles = cover.surface.mesh.triangles.len();
     r.max_depth_m = max_depth;
     r.mean_depth_m = vol / cover.sites.upward_area.max(1e-300);
     Ok(cover)

@@ -21,6 +21,7 @@ pub fn plane(name: &str, size: f32, z: f32) -> SceneObject {
         positions: vec![[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]],
         normals: None,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
+        uvs: None,
     }
 }
 
@@ -53,6 +54,7 @@ pub fn cuboid(name: &str, lo: [f32; 3], hi: [f32; 3]) -> SceneObject {
         positions,
         normals: None,
         triangles,
+        uvs: None,
     }
 }
 
@@ -91,6 +93,7 @@ pub fn steep_face(ground: f32) -> Scene {
         ],
         normals: None,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
+        uvs: None,
     };
     Scene {
         objects: vec![plane("ground", ground, 0.0), face],

@@ -23,16 +23,17 @@
 use crate::edge_groups::Topology;
 use crate::launch_sites::LaunchSites;
 use crate::tracer::Tag;
-use snowscape_mesh::{MeshFrame, SnowMesh, TriMesh};
+use snowscape_mesh::{MeshFrame, SnowObject, TriMesh};
 use std::collections::HashMap;
 
-/// The snow surface of all edge groups, scene metres.
+/// The snow surface of all edge groups: the mesh (scene metres, named "snow") with each
+/// vertex's depth and each triangle's tag beside it.
 #[derive(Debug, Clone, Default)]
 pub struct SnowSurface {
-    pub positions: Vec<[f32; 3]>,
+    /// Positions (the snow's top, or a wall's base at depth 0) and triangles.
+    pub mesh: TriMesh,
     /// Snow depth at each vertex, metres.
     pub depth: Vec<f32>,
-    pub triangles: Vec<[u32; 3]>,
     /// What each triangle is: a site's top or a group's wall.
     pub tags: Vec<Tag>,
 }
@@ -81,10 +82,16 @@ impl SnowSurface {
             }
             polys.push(poly);
         }
-        let mut s = SnowSurface::default();
+        let mut s = SnowSurface {
+            mesh: TriMesh {
+                name: "snow".into(),
+                ..TriMesh::default()
+            },
+            ..SnowSurface::default()
+        };
         let lift = |p: [f64; 3], d: f64| [p[0] as f32, p[1] as f32, (p[2] + d) as f32];
         for (p, &d) in base.iter().zip(&vdepth) {
-            s.positions.push(lift(*p, d));
+            s.mesh.positions.push(lift(*p, d));
             s.depth.push(d as f32);
         }
         // Base copies of border corners for the walls, created on demand.
@@ -95,11 +102,12 @@ impl SnowSurface {
             let poly = &polys[i];
             let group = topo.group[i];
             if d >= min_depth || poly.iter().any(|&v| vdepth[v as usize] >= min_depth) {
-                let centre = s.positions.len() as u32;
-                s.positions.push(lift(c.centroid(), d));
+                let centre = s.mesh.positions.len() as u32;
+                s.mesh.positions.push(lift(c.centroid(), d));
                 s.depth.push(d as f32);
                 for k in 0..poly.len() {
-                    s.triangles
+                    s.mesh
+                        .triangles
                         .push([centre, poly[k], poly[(k + 1) % poly.len()]]);
                     s.tags.push(Tag::SnowTop {
                         site: i as u32,
@@ -116,14 +124,14 @@ impl SnowSurface {
                 let mut bottom = |v: u32| {
                     *base_copy.entry(v).or_insert_with(|| {
                         let p = base[v as usize];
-                        s.positions.push(lift(p, 0.0));
+                        s.mesh.positions.push(lift(p, 0.0));
                         s.depth.push(0.0);
-                        (s.positions.len() - 1) as u32
+                        (s.mesh.positions.len() - 1) as u32
                     })
                 };
                 let (ba, bb) = (bottom(va), bottom(vb));
-                s.triangles.push([ba, bb, vb]);
-                s.triangles.push([ba, vb, va]);
+                s.mesh.triangles.push([ba, bb, vb]);
+                s.mesh.triangles.push([ba, vb, va]);
                 s.tags.push(Tag::SnowWall { group });
                 s.tags.push(Tag::SnowWall { group });
             }
@@ -136,10 +144,10 @@ impl SnowSurface {
         if passes == 0 {
             return;
         }
-        let n = self.positions.len();
+        let n = self.mesh.positions.len();
         // Edges of the top triangles, as a compressed adjacency (deduplicated).
-        let mut edges: Vec<(u32, u32)> = Vec::with_capacity(6 * self.triangles.len());
-        for (t, tag) in self.triangles.iter().zip(&self.tags) {
+        let mut edges: Vec<(u32, u32)> = Vec::with_capacity(6 * self.mesh.triangles.len());
+        for (t, tag) in self.mesh.triangles.iter().zip(&self.tags) {
             if matches!(tag, Tag::SnowTop { .. }) {
                 for k in 0..3 {
                     let (a, b) = (t[k], t[(k + 1) % 3]);
@@ -191,7 +199,7 @@ impl SnowSurface {
         for v in 0..n {
             if start[v + 1] > start[v] {
                 let dz = depth[v] - self.depth[v] as f64;
-                self.positions[v][2] = (self.positions[v][2] as f64 + dz) as f32;
+                self.mesh.positions[v][2] = (self.mesh.positions[v][2] as f64 + dz) as f32;
                 self.depth[v] = depth[v] as f32;
             }
         }
@@ -200,12 +208,13 @@ impl SnowSurface {
     /// Snow volume under the top surface (each top triangle's mean depth times its horizontal
     /// area), m³.
     pub fn top_volume(&self) -> f64 {
-        self.triangles
+        self.mesh
+            .triangles
             .iter()
             .zip(&self.tags)
             .filter(|(_, tag)| matches!(tag, Tag::SnowTop { .. }))
             .map(|(t, _)| {
-                let [a, b, c] = t.map(|i| self.positions[i as usize].map(f64::from));
+                let [a, b, c] = t.map(|i| self.mesh.positions[i as usize].map(f64::from));
                 let area =
                     0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs();
                 area * t
@@ -219,36 +228,38 @@ impl SnowSurface {
 
     /// Triangles with their tags, for the tracer.
     pub fn tagged(&self) -> Vec<([[f32; 3]; 3], Tag)> {
-        self.triangles
+        self.mesh
+            .triangles
             .iter()
             .zip(&self.tags)
-            .map(|(t, &tag)| (t.map(|i| self.positions[i as usize]), tag))
+            .map(|(t, &tag)| (t.map(|i| self.mesh.positions[i as usize]), tag))
             .collect()
     }
 
     /// The surface as a mesh to write (unused vertices dropped).
-    pub fn to_mesh(&self, name: &str) -> SnowMesh {
-        let mut remap = vec![u32::MAX; self.positions.len()];
+    pub fn to_mesh(&self, name: &str) -> SnowObject {
+        let mut remap = vec![u32::MAX; self.mesh.positions.len()];
         let mut positions = Vec::new();
         let triangles = self
+            .mesh
             .triangles
             .iter()
             .map(|t| {
                 t.map(|v| {
                     if remap[v as usize] == u32::MAX {
                         remap[v as usize] = positions.len() as u32;
-                        positions.push(self.positions[v as usize]);
+                        positions.push(self.mesh.positions[v as usize]);
                     }
                     remap[v as usize]
                 })
             })
             .collect();
-        SnowMesh::new(TriMesh {
+        SnowObject::new(TriMesh {
             name: name.into(),
             frame: MeshFrame::Scene,
             positions,
-            normals: None,
             triangles,
+            ..TriMesh::default()
         })
     }
 }

@@ -56,6 +56,7 @@ fn open_plane_gets_uniform_depth() {
     // The surface is as deep in the middle.
     let mid = c
         .surface
+        .mesh
         .positions
         .iter()
         .filter(|p| p[0].abs() < 1.0 && p[1].abs() < 1.0)
@@ -354,7 +355,7 @@ fn same_seed_same_snow_on_one_and_two_threads() {
             .collect::<Vec<_>>()
     };
     assert_eq!(vols(&a), vols(&b));
-    assert_eq!(a.surface.positions, b.surface.positions);
+    assert_eq!(a.surface.mesh.positions, b.surface.mesh.positions);
     assert_eq!(a.report.flakes_shot, b.report.flakes_shot);
     let other = cover(
         &scene,

@@ -165,10 +165,10 @@ fn surface_smoothing_removes_speckle_and_keeps_the_volume() {
     .unwrap();
     // Roughness: the mean |depth - mean depth of the top-surface neighbours| over top vertices.
     let roughness = |s: &snowscape_fearing::SnowSurface| {
-        let n = s.positions.len();
+        let n = s.mesh.positions.len();
         let mut sum = vec![0.0f64; n];
         let mut count = vec![0u32; n];
-        for (t, tag) in s.triangles.iter().zip(&s.tags) {
+        for (t, tag) in s.mesh.triangles.iter().zip(&s.tags) {
             if matches!(tag, snowscape_fearing::tracer::Tag::SnowTop { .. }) {
                 for k in 0..3 {
                     let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);

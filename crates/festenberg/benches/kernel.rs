@@ -46,6 +46,7 @@ fn cube(name: String, min: [f32; 3], max: [f32; 3]) -> SceneObject {
             .iter()
             .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
             .collect(),
+        uvs: None,
     }
 }
 

@@ -29,17 +29,13 @@
 //! gets copies of its high-`u` vertices with `u - k`, which sample the same texels of the
 //! `u`-periodic mask.
 
+use snowscape_mesh::TriMesh;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-/// Texture coordinates of a snow mesh (vertices may have been duplicated at seams).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TexturedMesh {
-    pub positions: Vec<[f32; 3]>,
-    pub normals: Vec<[f32; 3]>,
-    /// glTF convention: `u` along the boundary (mask repeats), `v` in [0, 1] across it.
-    pub uvs: Vec<[f32; 2]>,
-    pub triangles: Vec<[u32; 3]>,
+/// What [`texture`] did to a mesh (its vertices may have been duplicated at seams).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct UvStats {
     /// Boundary loops found.
     pub loops: usize,
     /// Vertices given coordinates by propagation.
@@ -51,15 +47,20 @@ pub struct TexturedMesh {
 /// Rows of the mask image, so `v` can be kept on texel centres (no wrap-around bleeding).
 pub const MASK_ROWS: f32 = 256.0;
 
-/// Computes the boundary texture coordinates of a mesh with `ground` points under its
-/// vertices, unit vertex `normals`, and mask length `scale` metres.
-pub fn texture(
-    positions: &[[f32; 3]],
-    ground: &[[f32; 3]],
-    normals: &[[f32; 3]],
-    triangles: &[[u32; 3]],
-    scale: f32,
-) -> TexturedMesh {
+/// Gives `mesh` (scene frame, its unit vertex normals set) its boundary texture coordinates
+/// (glTF convention: `u` along the boundary, where the mask repeats, `v` in [0, 1] across it),
+/// with `ground` points under its vertices and mask length `scale` metres; vertices are
+/// duplicated where a triangle straddles a loop's `u` seam.
+///
+/// # Panics
+/// If the mesh has no normals (the cover pipeline computes them first).
+pub fn texture(mesh: &mut TriMesh, ground: &[[f32; 3]], scale: f32) -> UvStats {
+    let positions = &mesh.positions;
+    let triangles = &mesh.triangles;
+    let normals = mesh
+        .normals
+        .as_deref()
+        .expect("the boundary texture needs the mesh's vertex normals");
     let n = positions.len();
     // (u, v in metres, period k); k = 0 for vertices not yet processed.
     let mut coord: Vec<Option<(f32, f32, f32)>> = vec![None; n];
@@ -70,10 +71,8 @@ pub fn texture(
     }
     let propagated = propagate(positions, triangles, scale, &mut coord);
     let rows = MASK_ROWS;
-    let mut out = TexturedMesh {
-        positions: positions.to_vec(),
-        normals: normals.to_vec(),
-        uvs: coord
+    mesh.uvs = Some(
+        coord
             .iter()
             .map(|c| {
                 let (u, v) = c.map_or((0.0, scale), |(u, v, _)| (u, v));
@@ -89,14 +88,13 @@ pub fn texture(
                 [u, v.clamp(0.5 / rows, 1.0 - 0.5 / rows)]
             })
             .collect(),
-        triangles: triangles.to_vec(),
+    );
+    let period: Vec<f32> = coord.iter().map(|c| c.map_or(0.0, |c| c.2)).collect();
+    UvStats {
         loops: loops.len(),
         propagated,
-        seam_copies: 0,
-    };
-    let period: Vec<f32> = coord.iter().map(|c| c.map_or(0.0, |c| c.2)).collect();
-    fix_seams(&mut out, &period);
-    out
+        seam_copies: fix_seams(mesh, &period),
+    }
 }
 
 /// Boundary loops: directed edges used by one triangle, chained head to tail.
@@ -333,7 +331,12 @@ pub fn march(p1: [f32; 3], p2: [f32; 3], p3: [f32; 3], v1: f32, v2: f32) -> (f32
     (best.0 as f32, best.1 as f32)
 }
 
-fn fix_seams(m: &mut TexturedMesh, period: &[f32]) {
+/// Duplicates the high-`u` corners of every triangle straddling its loop's seam (period `k`)
+/// with `u - k`; returns the number of copies.
+fn fix_seams(m: &mut TriMesh, period: &[f32]) -> usize {
+    let (Some(normals), Some(uvs)) = (m.normals.as_mut(), m.uvs.as_mut()) else {
+        return 0;
+    };
     let mut copy: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
     for ti in 0..m.triangles.len() {
         let t = m.triangles[ti];
@@ -341,7 +344,7 @@ fn fix_seams(m: &mut TexturedMesh, period: &[f32]) {
         if k <= 0.0 {
             continue;
         }
-        let us = t.map(|i| m.uvs[i as usize][0]);
+        let us = t.map(|i| uvs[i as usize][0]);
         let lo = us.iter().copied().fold(f32::INFINITY, f32::min);
         let hi = us.iter().copied().fold(f32::NEG_INFINITY, f32::max);
         if hi - lo <= 0.5 * k {
@@ -353,16 +356,16 @@ fn fix_seams(m: &mut TexturedMesh, period: &[f32]) {
                 let j = *copy.entry(i).or_insert_with(|| {
                     let j = m.positions.len() as u32;
                     m.positions.push(m.positions[i as usize]);
-                    m.normals.push(m.normals[i as usize]);
-                    let [u, v] = m.uvs[i as usize];
-                    m.uvs.push([u - k, v]);
+                    normals.push(normals[i as usize]);
+                    let [u, v] = uvs[i as usize];
+                    uvs.push([u - k, v]);
                     j
                 });
                 m.triangles[ti][s] = j;
             }
         }
     }
-    m.seam_copies = copy.len();
+    copy.len()
 }
 
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {

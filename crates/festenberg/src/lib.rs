@@ -16,7 +16,7 @@
 //!    propagation of Fig. 10 ([`boundary_uv`]) and a procedural boundary alpha mask ([`mask`]);
 //! 7. the growth mode: Eq. 2 iterated with a four-neighbour Laplacian ([`growth`]).
 //!
-//! [`cover`] runs steps 1-6 and returns a [`snowscape_mesh::SnowMesh`] ready for the GLB and
+//! [`cover`] runs steps 1-6 and returns a [`snowscape_mesh::SnowObject`] ready for the GLB and
 //! OBJ writers; [`grow_cover`] runs the growth mode and hands out one mesh per frame. Results
 //! are deterministic and do not depend on the thread count.
 

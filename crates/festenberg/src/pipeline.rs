@@ -14,7 +14,7 @@ use crate::sites::SiteField;
 use crate::surface_mesh::{self, SiteMesh};
 use serde::Serialize;
 use snowscape_mesh::write::vertex_normals;
-use snowscape_mesh::{HeightSpanMap, HeightSpanOptions, MeshFrame, Scene, SnowMesh, TriMesh};
+use snowscape_mesh::{HeightSpanMap, HeightSpanOptions, Scene, SnowObject};
 use std::time::Instant;
 
 /// Counts and timings of a snow cover, for reports.
@@ -75,7 +75,7 @@ impl CoverStats {
 #[derive(Debug, Clone)]
 pub struct SnowCover {
     /// The snow mesh with normals, texture coordinates and the boundary mask.
-    pub mesh: SnowMesh,
+    pub mesh: SnowObject,
     pub resolved: Resolved,
     pub field: SiteField,
     pub kernel: KernelField,
@@ -150,15 +150,16 @@ pub fn cover(scene: &Scene, params: &CoverParams) -> Result<SnowCover, Festenber
     let surface = timer.run("mesh", || {
         surface_mesh::build(&field, &links, &kernel.height, offsets.as_deref())
     });
-    let normals = vertex_normals(&surface.positions, &surface.triangles);
-    let textured = timer.run("texture_coordinates", || {
-        texture(
-            &surface.positions,
-            &surface.ground,
-            &normals,
-            &surface.triangles,
-            r.mask_scale_m as f32,
-        )
+    let SiteMesh {
+        mesh: mut snow,
+        ground,
+        quads,
+        corner_triangles,
+        ..
+    } = surface;
+    snow.normals = Some(vertex_normals(&snow.positions, &snow.triangles));
+    let uv = timer.run("texture_coordinates", || {
+        texture(&mut snow, &ground, r.mask_scale_m as f32)
     });
     let mask = timer.run("mask", || boundary_mask(MASK_ROWS as u32, 1));
     let dx2 = r.resolution_m * r.resolution_m;
@@ -173,26 +174,16 @@ pub fn cover(scene: &Scene, params: &CoverParams) -> Result<SnowCover, Festenber
         snowy_sites: kernel.height.iter().filter(|&&h| h > 0.0).count(),
         volume_m3: kernel.height.iter().map(|&h| h as f64).sum::<f64>() * dx2,
         max_height_m: kernel.height.iter().copied().fold(0.0, f32::max),
-        vertices: textured.positions.len(),
-        triangles: textured.triangles.len(),
-        quads: surface.quads,
-        corner_triangles: surface.corner_triangles,
-        boundary_loops: textured.loops,
-        uv_propagated: textured.propagated,
-        seam_copies: textured.seam_copies,
+        vertices: snow.positions.len(),
+        triangles: snow.triangles.len(),
+        quads,
+        corner_triangles,
+        boundary_loops: uv.loops,
+        uv_propagated: uv.propagated,
+        seam_copies: uv.seam_copies,
         timings: timer.0,
     };
-    let mesh = SnowMesh {
-        mesh: TriMesh {
-            name: "snow".into(),
-            frame: MeshFrame::Scene,
-            positions: textured.positions,
-            normals: Some(textured.normals),
-            triangles: textured.triangles,
-        },
-        uvs: Some(textured.uvs),
-        texture: Some(mask),
-    };
+    let mesh = SnowObject::textured(snow, mask);
     Ok(SnowCover {
         mesh,
         resolved: r,
@@ -202,16 +193,12 @@ pub fn cover(scene: &Scene, params: &CoverParams) -> Result<SnowCover, Festenber
     })
 }
 
-/// A surface mesh as a writable snow mesh (normals computed, no texture).
-pub fn plain_mesh(name: &str, surface: SiteMesh) -> SnowMesh {
-    let normals = vertex_normals(&surface.positions, &surface.triangles);
-    SnowMesh::new(TriMesh {
-        name: name.into(),
-        frame: MeshFrame::Scene,
-        positions: surface.positions,
-        normals: Some(normals),
-        triangles: surface.triangles,
-    })
+/// A surface mesh as a snow object to write (named `name`, normals computed, no texture).
+pub fn plain_mesh(name: &str, surface: SiteMesh) -> SnowObject {
+    let mut mesh = surface.mesh;
+    mesh.name = name.into();
+    mesh.normals = Some(vertex_normals(&mesh.positions, &mesh.triangles));
+    SnowObject::new(mesh)
 }
 
 /// The growth mode (Eq. 2, no bridges or overhangs) on `scene`: `frame(index, time, mesh)`
@@ -220,7 +207,7 @@ pub fn grow_cover<E: From<FestenbergError>>(
     scene: &Scene,
     params: &CoverParams,
     growth: &GrowthParams,
-    mut frame: impl FnMut(usize, f64, SnowMesh) -> Result<(), E>,
+    mut frame: impl FnMut(usize, f64, SnowObject) -> Result<(), E>,
 ) -> Result<(Resolved, GrowthReport), E> {
     let (r, _map, field) = prepare_sites(scene, params, false)?;
     let graph: Vec<SiteLinks> = links(&field);

@@ -13,20 +13,20 @@
 
 use crate::links::SiteLinks;
 use crate::sites::SiteField;
+use snowscape_mesh::TriMesh;
 
-/// A snow surface mesh over the sites, as built: its positions and triangles (scene frame, as
-/// a `snowscape_mesh::TriMesh`) with each vertex's site and ground point, which the texture and
-/// the bridges need; [`crate::pipeline::plain_mesh`] makes the mesh to write of it.
+/// A snow surface mesh over the sites, as built: the mesh (scene frame, named "snow", no
+/// normals yet) with each vertex's site and ground point beside it, which the texture and the
+/// bridges need; [`crate::pipeline::plain_mesh`] makes the object to write of it.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SiteMesh {
-    /// Snow surface positions (scene metres, z up).
-    pub positions: Vec<[f32; 3]>,
+    /// The snow surface: positions (scene metres, z up) and counter-clockwise triangles seen
+    /// from above.
+    pub mesh: TriMesh,
     /// The ground point under each vertex (the site without snow and offset).
     pub ground: Vec<[f32; 3]>,
     /// The site of each vertex.
     pub site: Vec<u32>,
-    /// Counter-clockwise triangles seen from above.
-    pub triangles: Vec<[u32; 3]>,
     /// Quads split into two triangles.
     pub quads: usize,
     /// Triangles cutting concave corners.
@@ -44,7 +44,13 @@ pub fn build(
     heights: &[f32],
     offsets: Option<&[[f32; 2]]>,
 ) -> SiteMesh {
-    let mut m = SiteMesh::default();
+    let mut m = SiteMesh {
+        mesh: TriMesh {
+            name: "snow".into(),
+            ..TriMesh::default()
+        },
+        ..SiteMesh::default()
+    };
     let mut vertex = vec![u32::MAX; field.len()];
     let eps = NO_SNOW * field.depth;
     let (w, h) = (field.width, field.height);
@@ -61,12 +67,13 @@ pub fn build(
                 .iter()
                 .map(|&i| {
                     if vertex[i] == u32::MAX {
-                        vertex[i] = m.positions.len() as u32;
+                        vertex[i] = m.mesh.positions.len() as u32;
                         let [x, y] = field.column_xy(field.column[i] as usize);
                         let off = offsets.map_or([0.0; 2], |o| o[i]);
                         let g = [x as f32, y as f32, field.z[i]];
                         m.ground.push(g);
-                        m.positions
+                        m.mesh
+                            .positions
                             .push([g[0] + off[0], g[1] + off[1], g[2] + heights[i]]);
                         m.site.push(i as u32);
                     }
@@ -85,12 +92,12 @@ pub fn build(
                         let c1 = south(b);
                         if c1.is_some() && c1 == east(d) {
                             if let Some(v) = add(&mut m, &[a, b, c1.unwrap_or(0), d]) {
-                                let t = split_quad(&m.positions, [v[0], v[1], v[2], v[3]]);
-                                m.triangles.extend(t);
+                                let t = split_quad(&m.mesh.positions, [v[0], v[1], v[2], v[3]]);
+                                m.mesh.triangles.extend(t);
                                 m.quads += 1;
                             }
                         } else if let Some(v) = add(&mut m, &[a, d, b]) {
-                            m.triangles.push([v[0], v[1], v[2]]);
+                            m.mesh.triangles.push([v[0], v[1], v[2]]);
                             m.corner_triangles += 1;
                         }
                     }
@@ -98,7 +105,7 @@ pub fn build(
                         if let Some(cc) = south(b)
                             && let Some(v) = add(&mut m, &[a, cc, b])
                         {
-                            m.triangles.push([v[0], v[1], v[2]]);
+                            m.mesh.triangles.push([v[0], v[1], v[2]]);
                             m.corner_triangles += 1;
                         }
                     }
@@ -106,7 +113,7 @@ pub fn build(
                         if let Some(cc) = east(d)
                             && let Some(v) = add(&mut m, &[a, d, cc])
                         {
-                            m.triangles.push([v[0], v[1], v[2]]);
+                            m.mesh.triangles.push([v[0], v[1], v[2]]);
                             m.corner_triangles += 1;
                         }
                     }
@@ -120,7 +127,7 @@ pub fn build(
                     && west(b).is_none()
                     && let Some(v) = add(&mut m, &[b, d, cc])
                 {
-                    m.triangles.push([v[0], v[1], v[2]]);
+                    m.mesh.triangles.push([v[0], v[1], v[2]]);
                     m.corner_triangles += 1;
                 }
             }

@@ -128,7 +128,7 @@ fn growth_frames_do_not_depend_on_the_thread_count() {
     assert_eq!(one.len(), 3);
     assert!(one[2].triangles.len() > 100);
     // The snow grows frame by frame.
-    let top = |m: &snowscape_mesh::SnowMesh| m.positions.iter().map(|p| p[2]).fold(0.0, f32::max);
+    let top = |m: &snowscape_mesh::SnowObject| m.positions.iter().map(|p| p[2]).fold(0.0, f32::max);
     assert!(top(&one[0]) < top(&one[2]));
     assert_eq!(one, two);
 }

@@ -8,7 +8,7 @@
 //!   placed standing on it;
 //! - [`SceneBvh`]: ray casting through a compressed wide BVH (obvhs), one ray or a batch on
 //!   rayon: first hit, and "is anything above this point";
-//! - [`write`](mod@write): snow meshes ([`SnowMesh`]) written as GLB or OBJ + MTL + PNG, atomically, in the
+//! - [`write`](mod@write): snow meshes ([`SnowObject`]) written as GLB or OBJ + MTL + PNG, atomically, in the
 //!   input's own axes and units;
 //! - [`preview`]: a CPU z-buffer rasteriser for a PNG preview of a scene and its snow.
 
@@ -29,4 +29,4 @@ pub use raycast::{Ray, RayHit, SceneBvh};
 pub use read::{MeshFormat, read_scene};
 pub use report::{MeshReport, ObjectReport};
 pub use scene::{Bounds, MeshFrame, Scene, SceneObject, SourceFrame, TriMesh, UpAxis};
-pub use write::SnowMesh;
+pub use write::SnowObject;

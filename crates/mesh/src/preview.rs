@@ -18,7 +18,7 @@
 
 use crate::MeshError;
 use crate::scene::{Bounds, Scene};
-use crate::write::SnowMesh;
+use crate::write::SnowObject;
 use glam::Vec3;
 use image::{Rgb, RgbImage};
 use std::path::Path;
@@ -96,7 +96,7 @@ impl Material {
 /// The triangles to draw: corners and material.
 fn triangles<'a>(
     scene: &'a Scene,
-    snow: &'a [SnowMesh],
+    snow: &'a [SnowObject],
     ground: &'a [[Vec3; 3]],
 ) -> Result<Vec<([Vec3; 3], Material)>, MeshError> {
     let mut out = Vec::new();
@@ -135,7 +135,7 @@ fn triangles<'a>(
 /// Renders `scene` with `snow` on it.
 pub fn render_preview(
     scene: &Scene,
-    snow: &[SnowMesh],
+    snow: &[SnowObject],
     opts: &PreviewOptions,
 ) -> Result<RgbImage, MeshError> {
     render(scene, snow, opts).map(|(image, _)| image)
@@ -146,7 +146,7 @@ pub fn render_preview(
 /// the scene's horizontal bounding circle, so the scene keeps its size from frame to frame.
 pub fn render_turntable(
     scene: &Scene,
-    snow: &[SnowMesh],
+    snow: &[SnowObject],
     opts: &PreviewOptions,
     frames: usize,
 ) -> Result<Vec<RgbImage>, MeshError> {
@@ -189,7 +189,7 @@ pub fn render_turntable(
 /// [`render_preview`], and what each pixel shows (row-major; `None`: sky).
 fn render(
     scene: &Scene,
-    snow: &[SnowMesh],
+    snow: &[SnowObject],
     opts: &PreviewOptions,
 ) -> Result<(RgbImage, Vec<Option<Material>>), MeshError> {
     render_framed(scene, snow, opts, None)
@@ -198,7 +198,7 @@ fn render(
 /// [`render`] with the camera fitted to `frame` instead of the scene's bounds.
 fn render_framed(
     scene: &Scene,
-    snow: &[SnowMesh],
+    snow: &[SnowObject],
     opts: &PreviewOptions,
     frame: Option<&Bounds>,
 ) -> Result<(RgbImage, Vec<Option<Material>>), MeshError> {
@@ -322,7 +322,7 @@ fn render_framed(
 pub fn write_preview(
     path: &Path,
     scene: &Scene,
-    snow: &[SnowMesh],
+    snow: &[SnowObject],
     opts: &PreviewOptions,
 ) -> Result<(), MeshError> {
     let img = render_preview(scene, snow, opts)?;
@@ -474,6 +474,7 @@ mod tests {
             positions: vec![[0., 0., z], [1., 0., z], [1., 1., z], [0., 1., z]],
             normals: None,
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            uvs: None,
         }
     }
 
@@ -496,7 +497,7 @@ mod tests {
         // The square fills 90 % of each side: 81 % of the pixels.
         assert!((lit as f32 / 10_000.0 - 0.81).abs() < 0.03, "{lit}");
         let grey = img.get_pixel(50, 50).0[0];
-        let snow = SnowMesh::from_object(&quad(0.0));
+        let snow = SnowObject::from_object(&quad(0.0));
         let img = render_preview(&scene, &[snow], &opts).unwrap();
         assert!(
             img.get_pixel(50, 50).0[0] > grey,
@@ -508,7 +509,7 @@ mod tests {
     }
 
     /// A box standing on the ground with a snow slab on its top, seen from the south-west.
-    fn box_with_snow() -> (Scene, SnowMesh) {
+    fn box_with_snow() -> (Scene, SnowObject) {
         let (lo, hi) = (0.0f32, 1.0f32);
         let p = |x: f32, y: f32, z: f32| [x, y, z];
         let positions = vec![
@@ -540,6 +541,7 @@ mod tests {
                 positions,
                 normals: None,
                 triangles,
+                uvs: None,
             }],
             ..Default::default()
         };
@@ -554,8 +556,9 @@ mod tests {
             ],
             normals: None,
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            uvs: None,
         };
-        (scene, SnowMesh::from_object(&slab))
+        (scene, SnowObject::from_object(&slab))
     }
 
     #[test]

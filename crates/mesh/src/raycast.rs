@@ -215,6 +215,7 @@ mod tests {
             positions: vec![[0., 0., z], [size, 0., z], [size, size, z], [0., size, z]],
             normals: None,
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            uvs: None,
         }
     }
 

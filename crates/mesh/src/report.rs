@@ -215,6 +215,7 @@ pub(crate) fn check_object(
             positions,
             normals,
             triangles,
+            uvs: None,
         }),
         report,
     ))

@@ -168,9 +168,13 @@ pub enum MeshFrame {
     Gltf,
 }
 
-/// The project's triangle mesh: named, with its frame ([`MeshFrame`]), vertex positions,
-/// optional unit vertex normals and counter-clockwise triangles. A scene object
-/// ([`SceneObject`]) is one in the scene frame; the terrain and snow GLB meshes one in glTF's.
+/// The project's one triangle mesh (after pbrt-v4's `TriangleMesh`): named, with its frame
+/// ([`MeshFrame`]), vertex positions, counter-clockwise triangles and optional per-vertex
+/// attributes (unit normals, texture coordinates). Every mesh path uses it: a scene object
+/// ([`SceneObject`]) is one in the scene frame; the terrain and snow GLB meshes are ones in
+/// glTF's; the snow covers build theirs with their own per-vertex records beside it
+/// (festenberg's sites and ground points, Fearing's depths and triangle tags); the writers take
+/// it with a texture as a [`SnowObject`](crate::write::SnowObject).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct TriMesh {
     /// Name from the file (OBJ `o`/`g`, glTF node or mesh name, PLY file stem), or of what
@@ -180,8 +184,11 @@ pub struct TriMesh {
     pub frame: MeshFrame,
     /// Vertex positions, metres.
     pub positions: Vec<[f32; 3]>,
-    /// Unit vertex normals from the file, one per position, if the file had them.
+    /// Unit vertex normals, one per position, if the file had them or they were computed.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Texture coordinates, one per position, if the mesh has them: glTF convention, u right,
+    /// v down from the top left of the image.
+    pub uvs: Option<Vec<[f32; 2]>>,
     /// Triangles as indices into `positions`, counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
 }
@@ -339,6 +346,7 @@ mod tests {
                 .to_vec(),
             normals: None,
             triangles: vec![[0, 1, 2]],
+            uvs: None,
         };
         assert_eq!(o.triangle_normal(0), [0.0, 0.0, 1.0]);
         assert!((o.triangle_area(0) - 0.5).abs() < 1e-6);

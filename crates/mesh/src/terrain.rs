@@ -52,6 +52,7 @@ pub fn grid_object(grid: &Grid, name: &str) -> Result<SceneObject, MeshError> {
         positions,
         normals: None,
         triangles,
+        uvs: None,
     })
 }
 
@@ -164,6 +165,7 @@ mod tests {
             positions: vec![[x0, 0.0, 0.0], [x0 + 1.0, 0.0, 0.0], [x0, 1.0, 1.0]],
             normals: None,
             triangles: vec![[0, 1, 2]],
+            uvs: None,
         };
         let mut scene = Scene {
             objects: vec![cube(0.0), cube(3.0)],
@@ -235,6 +237,7 @@ mod tests {
             positions: vec![[0., 0., 5.], [2., 0., 5.], [2., 2., 5.], [0., 2., 6.]],
             normals: None,
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            uvs: None,
         };
         let ground = place_on_grid(&mut cube, &g, 5.0, 4.0).unwrap();
         // Footprint x in [4, 6]: cell-centre coordinate 1.5..2.5, terrain 1.5..2.5.

@@ -126,6 +126,7 @@ mod tests {
             positions: vec![[x0, 0.0, z], [x1, 0.0, z], [x1, 4.0, z], [x0, 4.0, z]],
             normals: None,
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            uvs: None,
         }
     }
 

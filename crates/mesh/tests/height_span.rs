@@ -16,6 +16,7 @@ fn quad(name: &str, [x0, y0, x1, y1]: [f32; 4], z: f32) -> SceneObject {
         positions: vec![[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]],
         normals: None,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
+        uvs: None,
     }
 }
 
@@ -45,6 +46,7 @@ fn cube(name: &str, min: [f32; 3], max: [f32; 3]) -> SceneObject {
             .iter()
             .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
             .collect(),
+        uvs: None,
     }
 }
 

@@ -13,7 +13,7 @@ mod mutate;
 use counting::peak_of;
 use proptest::prelude::*;
 use snowscape_mesh::read::{MAX_COORDINATE_M, MAX_TRIANGLES, MAX_VERTICES};
-use snowscape_mesh::write::{SnowMesh, glb_bytes, write_obj};
+use snowscape_mesh::write::{SnowObject, glb_bytes, write_obj};
 use snowscape_mesh::{MeshError, SourceFrame, TriMesh, read_scene};
 use std::path::Path;
 use std::sync::OnceLock;
@@ -155,7 +155,7 @@ fn seeds() -> &'static Vec<(&'static str, Vec<u8>)> {
     static SEEDS: OnceLock<Vec<(&'static str, Vec<u8>)>> = OnceLock::new();
     SEEDS.get_or_init(|| {
         let d = tempfile::tempdir().unwrap();
-        let mesh = SnowMesh::new(grid_mesh());
+        let mesh = SnowObject::new(grid_mesh());
         let obj = d.path().join("grid.obj");
         write_obj(&obj, std::slice::from_ref(&mesh), &SourceFrame::default()).unwrap();
         let glb = glb_bytes(&[mesh], &SourceFrame::default(), Path::new("grid.glb")).unwrap();

@@ -2,7 +2,7 @@
 
 mod common;
 use snowscape_mesh::preview::{PreviewOptions, SKY, render_preview, write_preview};
-use snowscape_mesh::{Ray, Scene, SceneBvh, SnowMesh, SourceFrame, read_scene};
+use snowscape_mesh::{Ray, Scene, SceneBvh, SnowObject, SourceFrame, read_scene};
 
 fn bunny() -> Scene {
     read_scene(&common::mesh_path("bunny_npm.obj"), &SourceFrame::default())
@@ -126,7 +126,7 @@ fn bunny_preview_shows_a_plausible_silhouette() {
     greys.sort_unstable();
     assert!(greys[greys.len() * 9 / 10] > greys[greys.len() / 10] + 20);
     // The same bunny drawn as snow is brighter, and the PNG is written atomically.
-    let snow = SnowMesh::from_object(&scene.objects[0]);
+    let snow = SnowObject::from_object(&scene.objects[0]);
     let white = render_preview(&Scene::default(), std::slice::from_ref(&snow), &opts).unwrap();
     let mean = |im: &image::RgbImage| {
         let v: Vec<f64> = im

@@ -3,7 +3,7 @@
 
 mod common;
 use snowscape_mesh::write::{glb_bytes, write_glb, write_obj};
-use snowscape_mesh::{MeshError, Scene, SnowMesh, SourceFrame, TriMesh, UpAxis, read_scene};
+use snowscape_mesh::{MeshError, Scene, SnowObject, SourceFrame, TriMesh, UpAxis, read_scene};
 use std::path::Path;
 
 /// Each triangle's three corner positions, in order.
@@ -47,7 +47,7 @@ fn glb_and_obj_round_trip_in_the_input_frame() {
         ("airplane.ply", SourceFrame::default()),
     ] {
         let (scene, _) = read_scene(&common::mesh_path(file), &frame).unwrap();
-        let meshes: Vec<SnowMesh> = scene.objects.iter().map(SnowMesh::from_object).collect();
+        let meshes: Vec<SnowObject> = scene.objects.iter().map(SnowObject::from_object).collect();
         let d = tempfile::tempdir().unwrap();
         let glb = d.path().join("snow.glb");
         let obj = d.path().join("snow.obj");
@@ -77,7 +77,7 @@ fn glb_and_obj_round_trip_in_the_input_frame() {
 #[test]
 fn files_are_in_the_input_units_not_the_scene_metres() {
     let frame = SourceFrame::new(UpAxis::Y, 0.01).unwrap();
-    let mesh = SnowMesh {
+    let mesh = SnowObject {
         mesh: TriMesh {
             name: "cap".into(),
             // 1 m up in the scene.
@@ -109,7 +109,7 @@ fn textures_and_uvs_are_written_with_the_mesh() {
     for (x, _, p) in img.enumerate_pixels_mut() {
         *p = image::Rgba([255, 255, 255, if x < 2 { 255 } else { 0 }]);
     }
-    let mesh = SnowMesh {
+    let mesh = SnowObject {
         mesh: TriMesh {
             name: "masked snow".into(),
             positions: vec![
@@ -119,9 +119,9 @@ fn textures_and_uvs_are_written_with_the_mesh() {
                 [0.0, 1.0, 0.0],
             ],
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
             ..Default::default()
         },
-        uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
         texture: Some(img.clone()),
     };
     let frame = SourceFrame::default();
@@ -162,13 +162,13 @@ fn textures_and_uvs_are_written_with_the_mesh() {
         .unwrap()
         .into_f32()
         .collect();
-    assert_eq!(uvs, mesh.uvs.unwrap());
+    assert_eq!(uvs, mesh.mesh.uvs.unwrap());
 }
 
 #[test]
 fn inconsistent_meshes_are_refused_and_leave_nothing() {
     let d = tempfile::tempdir().unwrap();
-    let bad = SnowMesh::new(TriMesh {
+    let bad = SnowObject::new(TriMesh {
         name: "bad".into(),
         positions: vec![[0.0; 3], [1.0, 0.0, 0.0]],
         triangles: vec![[0, 1, 2]],
@@ -197,14 +197,14 @@ fn inconsistent_meshes_are_refused_and_leave_nothing() {
 fn non_finite_uvs_and_normals_are_never_written() {
     let d = tempfile::tempdir().unwrap();
     let frame = SourceFrame::default();
-    let good = SnowMesh {
+    let good = SnowObject {
         mesh: TriMesh {
             name: "uv".into(),
             positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             triangles: vec![[0, 1, 2]],
+            uvs: Some(vec![[0.0, 0.5]; 3]),
             ..Default::default()
         },
-        uvs: Some(vec![[0.0, 0.5]; 3]),
         texture: Some(image::RgbaImage::new(2, 2)),
     };
     let mut nan_uv = good.clone();

@@ -158,6 +158,7 @@ pub fn surface_mesh(
         positions,
         normals: Some(normals),
         triangles,
+        uvs: None,
     }))
 }
 

@@ -247,7 +247,7 @@ fn crop(mut o: SceneObject, e: [f64; 4], margin: f64) -> SceneObject {
 fn write_turntable(
     dir: &std::path::Path,
     scene: &Scene,
-    snow: &[snowscape_mesh::SnowMesh],
+    snow: &[snowscape_mesh::SnowObject],
     frames: usize,
 ) -> anyhow::Result<()> {
     let opts = PreviewOptions {

@@ -1,5 +1,5 @@
 //! Binary glTF 2.0 (GLB) output of snow meshes, through the project's one GLB writer
-//! (`snowscape_io::glb`, as `snowscape-render`'s terrain GLB): one scene, one node and mesh per [`SnowMesh`], one triangle primitive each (POSITION
+//! (`snowscape_io::glb`, as `snowscape-render`'s terrain GLB): one scene, one node and mesh per [`SnowObject`], one triangle primitive each (POSITION
 //! with min/max, NORMAL, optional TEXCOORD_0, u32 indices), one buffer in the BIN chunk with
 //! each attribute in its own tightly packed, 4-byte aligned buffer view. A mesh's texture is
 //! embedded as a PNG buffer view and used as the base colour texture, alpha mode MASK (cut at
@@ -8,7 +8,7 @@
 //! Coordinates are the input's own (see [`SourceFrame`]): for a y-up file in centimetres the
 //! GLB is y-up in centimetres, so it drops onto the input scene in any tool.
 
-use super::{SnowMesh, png_bytes};
+use super::{SnowObject, png_bytes};
 use crate::MeshError;
 use crate::scene::{Bounds, SourceFrame};
 use json::validation::Checked::Valid;
@@ -21,7 +21,7 @@ pub const SNOW_BASE_COLOUR: [f32; 4] = [0.92, 0.94, 0.97, 1.0];
 pub const SNOW_ROUGHNESS: f32 = 0.7;
 
 /// Writes `meshes` to `path` as a GLB, atomically, in `frame`'s axes and units.
-pub fn write_glb(path: &Path, meshes: &[SnowMesh], frame: &SourceFrame) -> Result<(), MeshError> {
+pub fn write_glb(path: &Path, meshes: &[SnowObject], frame: &SourceFrame) -> Result<(), MeshError> {
     let bytes = glb_bytes(meshes, frame, path)?;
     snowscape_io::write_bytes_atomic(path, &bytes)?;
     Ok(())
@@ -29,7 +29,7 @@ pub fn write_glb(path: &Path, meshes: &[SnowMesh], frame: &SourceFrame) -> Resul
 
 /// The GLB file of `meshes` (`path` only names the output in errors).
 pub fn glb_bytes(
-    meshes: &[SnowMesh],
+    meshes: &[SnowObject],
     frame: &SourceFrame,
     path: &Path,
 ) -> Result<Vec<u8>, MeshError> {
@@ -51,7 +51,7 @@ pub fn glb_bytes(
 /// Adds `mesh` (in `frame`'s axes and units), its material and texture, and a node.
 fn add_mesh(
     doc: &mut GlbDocument,
-    mesh: &SnowMesh,
+    mesh: &SnowObject,
     frame: &SourceFrame,
     path: &Path,
 ) -> Result<(), MeshError> {

@@ -1,4 +1,4 @@
-//! Snow-mesh output: [`SnowMesh`] (scene metres, z up) written as binary glTF ([`glb`]) or as
+//! Snow-mesh output: [`SnowObject`] (scene metres, z up) written as binary glTF ([`glb`]) or as
 //! OBJ + MTL + PNG texture ([`obj`]), converted back into the input's own axes and units with
 //! its [`SourceFrame`](crate::SourceFrame), so the snow lies exactly on the user's scene. Every file goes through
 //! [`snowscape_io::write_atomic`]: a temporary file renamed when complete.
@@ -13,46 +13,51 @@ use crate::MeshError;
 use crate::scene::{SceneObject, TriMesh, cross, norm};
 use image::RgbaImage;
 
-/// A triangle mesh to write (snow, or any scene object): a [`TriMesh`] in the scene frame
-/// (metres, z up; its `normals` `None` to have them computed, area-weighted) with optional
-/// texture coordinates and a texture. It reads as its mesh (`Deref`): `m.positions`,
-/// `m.triangles`.
+/// What the snow writers write: one [`TriMesh`] in the scene frame (metres, z up; its `normals`
+/// `None` to have them computed, area-weighted; its `uvs` mapping the texture) and its
+/// material's optional texture. It reads as its mesh (`Deref`): `m.positions`, `m.triangles`.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct SnowMesh {
-    /// The mesh: name, positions, normals, counter-clockwise triangles (seen from outside).
+pub struct SnowObject {
+    /// The mesh: name, positions, normals, texture coordinates, counter-clockwise triangles
+    /// (seen from outside).
     pub mesh: TriMesh,
-    /// Texture coordinates, one per position, glTF convention: u right, v down from the top
-    /// left of the image.
-    pub uvs: Option<Vec<[f32; 2]>>,
-    /// RGBA base colour texture; its alpha is a mask (cut at 0.5): snow where alpha is high.
+    /// RGBA base colour texture, sampled at the mesh's `uvs`; its alpha is a mask (cut at 0.5):
+    /// snow where alpha is high. Ignored when the mesh has no texture coordinates.
     pub texture: Option<RgbaImage>,
 }
 
-impl std::ops::Deref for SnowMesh {
+impl std::ops::Deref for SnowObject {
     type Target = TriMesh;
     fn deref(&self) -> &TriMesh {
         &self.mesh
     }
 }
 
-impl std::ops::DerefMut for SnowMesh {
+impl std::ops::DerefMut for SnowObject {
     fn deref_mut(&mut self) -> &mut TriMesh {
         &mut self.mesh
     }
 }
 
-impl SnowMesh {
-    /// An untextured mesh of `mesh` (normals as given: missing ones are computed when it is
+impl SnowObject {
+    /// An untextured object of `mesh` (normals as given: missing ones are computed when it is
     /// written, after its indices are checked).
     pub fn new(mesh: TriMesh) -> Self {
-        SnowMesh {
+        SnowObject {
             mesh,
-            uvs: None,
             texture: None,
         }
     }
 
-    /// A scene object (checked when it was read) as a mesh to write: its normals, or computed
+    /// `mesh` with its `texture` (sampled at the mesh's `uvs`).
+    pub fn textured(mesh: TriMesh, texture: RgbaImage) -> Self {
+        SnowObject {
+            mesh,
+            texture: Some(texture),
+        }
+    }
+
+    /// A scene object (checked when it was read) as an object to write: its normals, or computed
     /// ones.
     pub fn from_object(object: &SceneObject) -> Self {
         let mut mesh = object.clone();
@@ -62,14 +67,14 @@ impl SnowMesh {
         Self::new(mesh)
     }
 
-    /// The unit vertex normals (empty until computed: see [`SnowMesh::checked`]).
+    /// The unit vertex normals (empty until computed: see [`SnowObject::checked`]).
     pub fn normals(&self) -> &[[f32; 3]] {
         self.mesh.normals.as_deref().unwrap_or_default()
     }
 
     /// Checks lengths, indices and finiteness (positions, normals, texture coordinates: no NaN
     /// or infinity is ever written); fills in missing normals.
-    pub(crate) fn checked(&self) -> Result<std::borrow::Cow<'_, SnowMesh>, MeshError> {
+    pub(crate) fn checked(&self) -> Result<std::borrow::Cow<'_, SnowObject>, MeshError> {
         let bad = |reason: String| MeshError::InvalidMesh {
             mesh: self.name.clone(),
             reason,

@@ -5,7 +5,7 @@
 //! round-trip form, so reading the file back gives the same f32 values. Every file is written
 //! atomically, the OBJ last.
 
-use super::{SnowMesh, png_bytes};
+use super::{SnowObject, png_bytes};
 use crate::MeshError;
 use crate::scene::SourceFrame;
 use snowscape_io::{AtomicWriteError, write_atomic, write_bytes_atomic};
@@ -13,10 +13,10 @@ use std::io::Write;
 use std::path::Path;
 
 /// Writes `meshes` to `path` (`.obj`) with its `.mtl` and texture PNGs beside it.
-pub fn write_obj(path: &Path, meshes: &[SnowMesh], frame: &SourceFrame) -> Result<(), MeshError> {
+pub fn write_obj(path: &Path, meshes: &[SnowObject], frame: &SourceFrame) -> Result<(), MeshError> {
     let checked = meshes
         .iter()
-        .map(SnowMesh::checked)
+        .map(SnowObject::checked)
         .collect::<Result<Vec<_>, _>>()?;
     let stem = path
         .file_stem()
