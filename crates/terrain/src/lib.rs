@@ -17,6 +17,9 @@
 //! - [`operators`]: the one family of finite-difference stencils (gradient, slope, aspect,
 //!   normal, curvature) in f32 and f64, with the grid's axes stated once; [`surface`]: those
 //!   stencils per cell of a grid, shared by the renderer, the mesh exporter and the phenomena.
+//! - [`parallel`]: the one dispatch point for per-cell work (after pbrt-v4's `ParallelFor`):
+//!   rows of several arrays handed to a kernel, each row to exactly one call, results in row
+//!   order, so every phenomenon is deterministic for any thread count.
 
 pub mod crs_facts;
 pub mod crs_latitude;
@@ -27,6 +30,7 @@ pub mod lattice;
 pub mod layers;
 pub mod materials;
 pub mod operators;
+pub mod parallel;
 pub mod procedural;
 pub mod random;
 pub mod solar;
