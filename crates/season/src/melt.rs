@@ -16,9 +16,8 @@ use crate::phenomenon::{
     PhenomenonError, Validity, check_dt, check_map, check_range, with_validity,
 };
 use crate::{VolumeChange, ordered_sum};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::LayeredTerrain;
+use snowscape_terrain::{LayeredTerrain, parallel};
 
 pub mod energy_balance;
 pub mod enhanced;
@@ -147,38 +146,32 @@ fn melt_rows<V: Validity>(
 ) -> Vec<f64> {
     let w = terrain.geometry().width();
     let [compacted, stable, unstable, powder] = &mut terrain.snow;
-    compacted
-        .par_chunks_mut(w)
-        .zip(stable.par_chunks_mut(w))
-        .zip(unstable.par_chunks_mut(w))
-        .zip(powder.par_chunks_mut(w))
-        .zip(temperature.par_chunks(w))
-        .enumerate()
-        .map_init(
-            || vec![0.0f32; w],
-            |removed, (row, ((((c, s), u), p), t))| {
-                // A row where nothing is warm enough melts nothing: skip it without touching
-                // (and dirtying) its four layer rows, which is most rows in a cold spell.
-                let t0 = params.t0_melt as f32;
-                if t.iter().all(|&x| x <= t0) {
-                    return 0.0;
-                }
-                let (c, s, u, p, t) = (&mut c[..w], &mut s[..w], &mut u[..w], &mut p[..w], &t[..w]);
-                let removed = &mut removed[..w];
-                for col in 0..w {
-                    // A nodata cell melts nothing (its temperature may be anything).
-                    let depth = if valid.at(row * w + col) {
-                        melt_depth(params, t[col], dt_days)
-                    } else {
-                        0.0
-                    };
-                    let layers = [&mut c[col], &mut s[col], &mut u[col], &mut p[col]];
-                    removed[col] = remove_top_down(layers, depth);
-                }
-                crate::row_sum(removed)
-            },
-        )
-        .collect()
+    parallel::map_rows_with(
+        w,
+        (compacted, stable, unstable, powder, temperature),
+        || vec![0.0f32; w],
+        |removed, row, (c, s, u, p, t)| {
+            // A row where nothing is warm enough melts nothing: skip it without touching
+            // (and dirtying) its four layer rows, which is most rows in a cold spell.
+            let t0 = params.t0_melt as f32;
+            if t.iter().all(|&x| x <= t0) {
+                return 0.0;
+            }
+            let (c, s, u, p, t) = (&mut c[..w], &mut s[..w], &mut u[..w], &mut p[..w], &t[..w]);
+            let removed = &mut removed[..w];
+            for col in 0..w {
+                // A nodata cell melts nothing (its temperature may be anything).
+                let depth = if valid.at(row * w + col) {
+                    melt_depth(params, t[col], dt_days)
+                } else {
+                    0.0
+                };
+                let layers = [&mut c[col], &mut s[col], &mut u[col], &mut p[col]];
+                removed[col] = remove_top_down(layers, depth);
+            }
+            crate::row_sum(removed)
+        },
+    )
 }
 
 #[cfg(test)]
