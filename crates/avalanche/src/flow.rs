@@ -111,6 +111,7 @@ mod settle;
 mod state;
 mod substep;
 mod team;
+mod thickness;
 mod tiles;
 mod update;
 mod walk;
@@ -125,6 +126,7 @@ use peaks::{RecordRow, record_row_lanes};
 use pipes::*;
 use rows::Rows;
 use substep::substep;
+use thickness::*;
 use update::*;
 use walk::*;
 

@@ -6,6 +6,8 @@ use super::{
     DENSE, KernelTable, LAMBDA_ONE, MEMBER, PAD, ROOMY_LOWER, ROOMY_UPPER, SEEN, SEEN_UPPER, Sums,
     TWO, boundary_term, lambda_units,
 };
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
 
 /// A run of `len` contiguous columns of a disk row: their bases and flags and the table's
 /// weights for them (`t0` the table index of the first); each slice holds at least
@@ -145,7 +147,6 @@ unsafe fn dense_lanes_avx2<const PLAIN: bool>(
     h0: f32,
     inv_h0: f32,
 ) {
-    use std::arch::x86_64::*;
     let n = run.len;
     assert!(
         run.base.len() >= n + PAD
@@ -153,57 +154,19 @@ unsafe fn dense_lanes_avx2<const PLAIN: bool>(
             && run.flags.len() >= n + PAD
             && run.weight.len() >= n + PAD
     );
-    let (vs, vdrop, vinv) = (
-        _mm256_set1_ps(s),
-        _mm256_set1_ps(-h0),
-        _mm256_set1_ps(inv_h0),
-    );
-    let (vlo, vhi, vunit) = (
-        _mm256_set1_ps(-1.0),
-        _mm256_set1_ps(1.0),
-        _mm256_set1_ps(LAMBDA_ONE),
-    );
-    let bit = |b: i32| _mm256_set1_epi32(b);
-    let (dense_bit, member_bit, seen_bit) = (bit(DENSE), bit(MEMBER), bit(SEEN));
-    let (two_bit, seen_upper_bit) = (bit(TWO), bit(SEEN_UPPER));
-    let (roomy_lower_bit, roomy_upper_bit) = (bit(ROOMY_LOWER), bit(ROOMY_UPPER));
-    let roomy = if run.roomy { bit(-1) } else { bit(0) };
-    let magnitude = _mm256_castsi256_ps(bit(i32::MAX));
-    let has = |f: __m256i, b: __m256i| _mm256_cmpeq_epi32(_mm256_and_si256(f, b), b);
-    let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    let low = _mm256_set1_epi64x(0xffff_ffff);
-    let widen = |v: __m256i| _mm256_add_epi64(_mm256_and_si256(v, low), _mm256_srli_epi64::<32>(v));
     let table = run.table;
     assert!(
         table.towards_x.len() >= run.t0 + n + PAD
             && table.towards_y.len() >= run.t0 + n + PAD
             && table.distance.len() >= run.t0 + n + PAD
     );
-    let (tx_ptr, ty_ptr, d_ptr) = (
-        table.towards_x.as_ptr().wrapping_add(run.t0),
-        table.towards_y.as_ptr().wrapping_add(run.t0),
-        table.distance.as_ptr().wrapping_add(run.t0),
-    );
-    let infinity = _mm256_set1_ps(f32::INFINITY);
-    let minus_infinity = _mm256_set1_ps(f32::NEG_INFINITY);
-    let load = |v: &[i64; 4]| {
-        // SAFETY: `v` holds four i64.
-        unsafe { _mm256_loadu_si256(v.as_ptr().cast()) }
-    };
-    // SAFETY: `acc.edge` holds eight f32.
-    let mut edge = unsafe { _mm256_loadu_ps(acc.edge.as_ptr()) };
-    let (mut towards_x, mut towards_y) = (load(&acc.towards_x), load(&acc.towards_y));
-    let (mut even, mut odd) = (load(&acc.lambda_even), load(&acc.lambda_odd));
-    // The run's weights, of members and of visible members as 32-bit lane sums (a lane holds
-    // part of one disk row, whose weights sum to less than 2^32: `KernelTable::weight32`),
-    // widened once at the end; the fast-path columns counted the same way.
-    let zero = _mm256_setzero_si256();
-    let (mut weight, mut member, mut visible, mut counted) = (zero, zero, zero, zero);
+    let lanes = RunLanes::new(run, s, h0, inv_h0);
+    let mut sums = LaneRegisters::load(acc);
     let (eight, mut remaining) = (_mm256_set1_epi32(8), _mm256_set1_epi32(n as i32));
     let mut k = 0;
     while k < n {
         // The lanes still in the run.
-        let tail = _mm256_cmpgt_epi32(remaining, lane);
+        let tail = _mm256_cmpgt_epi32(remaining, lanes.lane);
         remaining = _mm256_sub_epi32(remaining, eight);
         // SAFETY: k < n and every slice holds n + PAD >= k + 8 values.
         let (b, table_w) = unsafe {
@@ -212,117 +175,319 @@ unsafe fn dense_lanes_avx2<const PLAIN: bool>(
                 _mm256_loadu_si256(run.weight.as_ptr().add(k).cast()),
             )
         };
-        let (live, dz, w);
-        if PLAIN {
-            // Every column is empty (base -∞) or one visible site: visible members are the
-            // members, added at the end.
-            live = tail;
-            dz = _mm256_sub_ps(b, vs);
-            w = _mm256_and_si256(table_w, live);
-            let is_member = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_NEQ_UQ>(b, minus_infinity));
-            member = _mm256_add_epi32(member, _mm256_and_si256(w, is_member));
+        let group = Group {
+            k,
+            tail,
+            b,
+            table_w,
+        };
+        let (live, dz, w) = if PLAIN {
+            sums.plain_columns(&lanes, group)
         } else {
             // SAFETY: as above.
-            let (b_upper, f) = unsafe {
-                (
-                    _mm256_loadu_ps(run.upper.as_ptr().add(k)),
-                    _mm256_loadu_si256(run.flags.as_ptr().add(k).cast()),
-                )
-            };
-            live = _mm256_and_si256(tail, has(f, dense_bit));
-            let dz_lower = _mm256_sub_ps(b, vs);
-            let dz_upper = _mm256_sub_ps(b_upper, vs);
-            // The member of a two-site column, as in the scalar loop.
-            let nearer = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(
-                _mm256_and_ps(dz_upper, magnitude),
-                _mm256_and_ps(dz_lower, magnitude),
-            ));
-            let moves = _mm256_and_si256(
-                _mm256_and_si256(roomy, has(f, roomy_upper_bit)),
-                _mm256_andnot_si256(has(f, roomy_lower_bit), bit(-1)),
-            );
-            let up = _mm256_and_si256(has(f, two_bit), _mm256_or_si256(nearer, moves));
-            dz = _mm256_blendv_ps(dz_lower, dz_upper, _mm256_castsi256_ps(up));
-            w = _mm256_and_si256(table_w, live);
-            let seen = _mm256_blendv_epi8(has(f, seen_bit), has(f, seen_upper_bit), up);
-            member = _mm256_add_epi32(member, _mm256_and_si256(w, has(f, member_bit)));
-            visible = _mm256_add_epi32(visible, _mm256_and_si256(w, seen));
-            counted = _mm256_sub_epi32(counted, live);
+            unsafe { sums.flagged_columns(&lanes, run, group) }
+        };
+        sums.weight = _mm256_add_epi32(sums.weight, w);
+        sums.add_lambda(&lanes, dz, w);
+        // SAFETY: t0 + k + 8 <= t0 + n + PAD, within the padded tables (asserted).
+        unsafe { sums.add_boundary(&lanes, k, dz, live) };
+        k += 8;
+    }
+    sums.store::<PLAIN>(acc, n);
+}
+
+/// What the AVX2 lanes of a [`DenseRun`] share, in every lane: the base `s` of the site's
+/// snow column, the boundary drop `-h0`, `1/h0`, the clamp of a λ to [-1, 1] and its integer
+/// unit (`lambda_units`), the flag bits, whether the site is roomy (all ones or zero), the
+/// lane indices; and the run's first column in the table's directions and distances.
+#[cfg(target_arch = "x86_64")]
+struct RunLanes {
+    s: __m256,
+    drop: __m256,
+    inv_h0: __m256,
+    lo: __m256,
+    hi: __m256,
+    unit: __m256,
+    dense: __m256i,
+    member: __m256i,
+    seen: __m256i,
+    two: __m256i,
+    seen_upper: __m256i,
+    roomy_lower: __m256i,
+    roomy_upper: __m256i,
+    roomy: __m256i,
+    /// All bits but the sign (`abs` as an `and`).
+    magnitude: __m256,
+    lane: __m256i,
+    infinity: __m256,
+    minus_infinity: __m256,
+    towards_x: *const i64,
+    towards_y: *const i64,
+    distance: *const f32,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl RunLanes {
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn new(run: &DenseRun, s: f32, h0: f32, inv_h0: f32) -> Self {
+        let table = run.table;
+        Self {
+            s: _mm256_set1_ps(s),
+            drop: _mm256_set1_ps(-h0),
+            inv_h0: _mm256_set1_ps(inv_h0),
+            lo: _mm256_set1_ps(-1.0),
+            hi: _mm256_set1_ps(1.0),
+            unit: _mm256_set1_ps(LAMBDA_ONE),
+            dense: bit(DENSE),
+            member: bit(MEMBER),
+            seen: bit(SEEN),
+            two: bit(TWO),
+            seen_upper: bit(SEEN_UPPER),
+            roomy_lower: bit(ROOMY_LOWER),
+            roomy_upper: bit(ROOMY_UPPER),
+            roomy: if run.roomy { bit(-1) } else { bit(0) },
+            magnitude: _mm256_castsi256_ps(bit(i32::MAX)),
+            lane: _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+            infinity: _mm256_set1_ps(f32::INFINITY),
+            minus_infinity: _mm256_set1_ps(f32::NEG_INFINITY),
+            towards_x: table.towards_x.as_ptr().wrapping_add(run.t0),
+            towards_y: table.towards_y.as_ptr().wrapping_add(run.t0),
+            distance: table.distance.as_ptr().wrapping_add(run.t0),
         }
-        weight = _mm256_add_epi32(weight, w);
+    }
+}
+
+/// `b` in every lane.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn bit(b: i32) -> __m256i {
+    _mm256_set1_epi32(b)
+}
+
+/// The lanes of flags `f` that have all the bits of `b`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn has(f: __m256i, b: __m256i) -> __m256i {
+    _mm256_cmpeq_epi32(_mm256_and_si256(f, b), b)
+}
+
+/// Eight 32-bit lane sums as four 64-bit ones (each the sum of two neighbours).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn widen(v: __m256i) -> __m256i {
+    let low = _mm256_set1_epi64x(0xffff_ffff);
+    _mm256_add_epi64(_mm256_and_si256(v, low), _mm256_srli_epi64::<32>(v))
+}
+
+/// Eight columns of a run from column `k`: the lanes still in the run (`tail`), their bases
+/// and the table's weights.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Group {
+    k: usize,
+    tail: __m256i,
+    b: __m256,
+    table_w: __m256i,
+}
+
+/// The [`LaneSums`] of a site while a run goes through the lanes. The run's weights, of
+/// members and of visible members are 32-bit lane sums (a lane holds part of one disk row,
+/// whose weights sum to less than 2^32: `KernelTable::weight32`), widened once at the end;
+/// the fast-path columns counted the same way.
+#[cfg(target_arch = "x86_64")]
+struct LaneRegisters {
+    edge: __m256,
+    towards_x: __m256i,
+    towards_y: __m256i,
+    even: __m256i,
+    odd: __m256i,
+    weight: __m256i,
+    member: __m256i,
+    visible: __m256i,
+    counted: __m256i,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl LaneRegisters {
+    /// The site's sums so far (the run's own from zero).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn load(acc: &LaneSums) -> Self {
+        let load = |v: &[i64; 4]| {
+            // SAFETY: `v` holds four i64.
+            unsafe { _mm256_loadu_si256(v.as_ptr().cast()) }
+        };
+        let zero = _mm256_setzero_si256();
+        Self {
+            // SAFETY: `acc.edge` holds eight f32.
+            edge: unsafe { _mm256_loadu_ps(acc.edge.as_ptr()) },
+            towards_x: load(&acc.towards_x),
+            towards_y: load(&acc.towards_y),
+            even: load(&acc.lambda_even),
+            odd: load(&acc.lambda_odd),
+            weight: zero,
+            member: zero,
+            visible: zero,
+            counted: zero,
+        }
+    }
+
+    /// The member of each column of a plain run (empty, base -∞, or one visible site: the
+    /// visible members are the members, added at the end): the live lanes, the member's drop
+    /// `dz` and weight `w`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn plain_columns(&mut self, lanes: &RunLanes, g: Group) -> (__m256i, __m256, __m256i) {
+        let live = g.tail;
+        let dz = _mm256_sub_ps(g.b, lanes.s);
+        let w = _mm256_and_si256(g.table_w, live);
+        let is_member =
+            _mm256_castps_si256(_mm256_cmp_ps::<_CMP_NEQ_UQ>(g.b, lanes.minus_infinity));
+        self.member = _mm256_add_epi32(self.member, _mm256_and_si256(w, is_member));
+        (live, dz, w)
+    }
+
+    /// The member of each column of a run with flags (the dense columns live; of a two-site
+    /// column, as in the scalar loop, the nearer base, ties to the lower site, or the upper
+    /// one where a roomy site moves up): the live lanes, the member's drop `dz` and weight `w`.
+    ///
+    /// # Safety
+    /// `run.upper` and `run.flags` hold at least `g.k + 8` values.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn flagged_columns(
+        &mut self,
+        lanes: &RunLanes,
+        run: &DenseRun,
+        g: Group,
+    ) -> (__m256i, __m256, __m256i) {
+        // SAFETY: the caller guarantees the values are there (see `# Safety`).
+        let (b_upper, f) = unsafe {
+            (
+                _mm256_loadu_ps(run.upper.as_ptr().add(g.k)),
+                _mm256_loadu_si256(run.flags.as_ptr().add(g.k).cast()),
+            )
+        };
+        let live = _mm256_and_si256(g.tail, has(f, lanes.dense));
+        let dz_lower = _mm256_sub_ps(g.b, lanes.s);
+        let dz_upper = _mm256_sub_ps(b_upper, lanes.s);
+        let nearer = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(
+            _mm256_and_ps(dz_upper, lanes.magnitude),
+            _mm256_and_ps(dz_lower, lanes.magnitude),
+        ));
+        let moves = _mm256_and_si256(
+            _mm256_and_si256(lanes.roomy, has(f, lanes.roomy_upper)),
+            _mm256_andnot_si256(has(f, lanes.roomy_lower), bit(-1)),
+        );
+        let up = _mm256_and_si256(has(f, lanes.two), _mm256_or_si256(nearer, moves));
+        let dz = _mm256_blendv_ps(dz_lower, dz_upper, _mm256_castsi256_ps(up));
+        let w = _mm256_and_si256(g.table_w, live);
+        let seen = _mm256_blendv_epi8(has(f, lanes.seen), has(f, lanes.seen_upper), up);
+        self.member = _mm256_add_epi32(self.member, _mm256_and_si256(w, has(f, lanes.member)));
+        self.visible = _mm256_add_epi32(self.visible, _mm256_and_si256(w, seen));
+        self.counted = _mm256_sub_epi32(self.counted, live);
+        (live, dz, w)
+    }
+
+    /// The weighted λ of the members (drops `dz`, weights `w`) into the 64-bit sums.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn add_lambda(&mut self, lanes: &RunLanes, dz: __m256, w: __m256i) {
         // `max` returns its second operand for a NaN, as `f32::max(x, -1)` returns -1 (and
         // an empty column's -∞ gives -1).
-        let x = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(dz, vinv), vlo), vhi);
-        let q = _mm256_cvttps_epi32(_mm256_mul_ps(x, vunit));
+        let x = _mm256_min_ps(
+            _mm256_max_ps(_mm256_mul_ps(dz, lanes.inv_h0), lanes.lo),
+            lanes.hi,
+        );
+        let q = _mm256_cvttps_epi32(_mm256_mul_ps(x, lanes.unit));
         // Signed 32 × 32 → 64-bit products of the even lanes, then of the odd ones.
-        even = _mm256_add_epi64(even, _mm256_mul_epi32(w, q));
-        odd = _mm256_add_epi64(
-            odd,
+        self.even = _mm256_add_epi64(self.even, _mm256_mul_epi32(w, q));
+        self.odd = _mm256_add_epi64(
+            self.odd,
             _mm256_mul_epi32(_mm256_srli_epi64::<32>(w), _mm256_srli_epi64::<32>(q)),
         );
-        // Boundary members (drops by more than h0, empty columns): the nearest one's
-        // distance and the weighted directions, with the 64-bit sums as two halves.
-        let drops = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(dz, vdrop));
+    }
+
+    /// Boundary members among the live lanes of the eight columns from `k` (drops `dz` by
+    /// more than h0, empty columns): the nearest one's distance and the weighted directions,
+    /// with the 64-bit sums as two halves.
+    ///
+    /// # Safety
+    /// The table's directions and distances hold the run's columns `k..k + 8`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn add_boundary(&mut self, lanes: &RunLanes, k: usize, dz: __m256, live: __m256i) {
+        let drops = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(dz, lanes.drop));
         if _mm256_testz_si256(drops, live) == 0 {
             let drops = _mm256_and_si256(drops, live);
-            // SAFETY: t0 + k + 8 <= t0 + n + PAD, within the padded tables (asserted).
+            // SAFETY: the caller guarantees the columns are there (see `# Safety`).
             let (d, x0, x1, y0, y1) = unsafe {
                 (
-                    _mm256_loadu_ps(d_ptr.add(k)),
-                    _mm256_loadu_si256(tx_ptr.add(k).cast()),
-                    _mm256_loadu_si256(tx_ptr.add(k + 4).cast()),
-                    _mm256_loadu_si256(ty_ptr.add(k).cast()),
-                    _mm256_loadu_si256(ty_ptr.add(k + 4).cast()),
+                    _mm256_loadu_ps(lanes.distance.add(k)),
+                    _mm256_loadu_si256(lanes.towards_x.add(k).cast()),
+                    _mm256_loadu_si256(lanes.towards_x.add(k + 4).cast()),
+                    _mm256_loadu_si256(lanes.towards_y.add(k).cast()),
+                    _mm256_loadu_si256(lanes.towards_y.add(k + 4).cast()),
                 )
             };
-            edge = _mm256_min_ps(
-                edge,
-                _mm256_blendv_ps(infinity, d, _mm256_castsi256_ps(drops)),
+            self.edge = _mm256_min_ps(
+                self.edge,
+                _mm256_blendv_ps(lanes.infinity, d, _mm256_castsi256_ps(drops)),
             );
             let m0 = _mm256_cvtepi32_epi64(_mm256_castsi256_si128(drops));
             let m1 = _mm256_cvtepi32_epi64(_mm256_extracti128_si256::<1>(drops));
-            towards_x = _mm256_add_epi64(
-                towards_x,
+            self.towards_x = _mm256_add_epi64(
+                self.towards_x,
                 _mm256_add_epi64(_mm256_and_si256(x0, m0), _mm256_and_si256(x1, m1)),
             );
-            towards_y = _mm256_add_epi64(
-                towards_y,
+            self.towards_y = _mm256_add_epi64(
+                self.towards_y,
                 _mm256_add_epi64(_mm256_and_si256(y0, m0), _mm256_and_si256(y1, m1)),
             );
         }
-        k += 8;
     }
-    if PLAIN {
-        visible = member;
-    }
-    let add = |v: &mut [i64; 4], lanes: __m256i| {
-        // SAFETY: `v` holds four i64.
-        unsafe {
-            let sum = _mm256_add_epi64(_mm256_loadu_si256(v.as_ptr().cast()), widen(lanes));
-            _mm256_storeu_si256(v.as_mut_ptr().cast(), sum)
+
+    /// The site's sums after a run of `n` columns back into `acc` (the 32-bit sums widened
+    /// and added).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn store<const PLAIN: bool>(mut self, acc: &mut LaneSums, n: usize) {
+        if PLAIN {
+            self.visible = self.member;
         }
-    };
-    add(&mut acc.weight, weight);
-    add(&mut acc.member, member);
-    add(&mut acc.visible, visible);
-    let store = |v: __m256i, to: &mut [i64; 4]| {
-        // SAFETY: `to` holds four i64.
-        unsafe { _mm256_storeu_si256(to.as_mut_ptr().cast(), v) }
-    };
-    store(even, &mut acc.lambda_even);
-    store(odd, &mut acc.lambda_odd);
-    store(towards_x, &mut acc.towards_x);
-    store(towards_y, &mut acc.towards_y);
-    // SAFETY: `acc.edge` holds eight f32.
-    unsafe { _mm256_storeu_ps(acc.edge.as_mut_ptr(), edge) };
-    acc.visited += if PLAIN {
-        n as u64
-    } else {
-        let mut c = [0u32; 8];
-        // SAFETY: `c` holds eight u32.
-        unsafe { _mm256_storeu_si256(c.as_mut_ptr().cast(), counted) };
-        c.iter().map(|&v| u64::from(v)).sum()
-    };
+        let add = |v: &mut [i64; 4], lanes: __m256i| {
+            // SAFETY: `v` holds four i64.
+            unsafe {
+                let sum = _mm256_add_epi64(_mm256_loadu_si256(v.as_ptr().cast()), widen(lanes));
+                _mm256_storeu_si256(v.as_mut_ptr().cast(), sum)
+            }
+        };
+        add(&mut acc.weight, self.weight);
+        add(&mut acc.member, self.member);
+        add(&mut acc.visible, self.visible);
+        let store = |v: __m256i, to: &mut [i64; 4]| {
+            // SAFETY: `to` holds four i64.
+            unsafe { _mm256_storeu_si256(to.as_mut_ptr().cast(), v) }
+        };
+        store(self.even, &mut acc.lambda_even);
+        store(self.odd, &mut acc.lambda_odd);
+        store(self.towards_x, &mut acc.towards_x);
+        store(self.towards_y, &mut acc.towards_y);
+        // SAFETY: `acc.edge` holds eight f32.
+        unsafe { _mm256_storeu_ps(acc.edge.as_mut_ptr(), self.edge) };
+        acc.visited += if PLAIN {
+            n as u64
+        } else {
+            let mut c = [0u32; 8];
+            // SAFETY: `c` holds eight u32.
+            unsafe { _mm256_storeu_si256(c.as_mut_ptr().cast(), self.counted) };
+            c.iter().map(|&v| u64::from(v)).sum()
+        };
+    }
 }
 
 #[cfg(test)]
