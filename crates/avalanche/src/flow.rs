@@ -91,7 +91,8 @@
 //! constant divisors (`2·dx`, `2·dy`, `L`, `dx·dy`) are applied as multiplications by their
 //! reciprocals.
 //!
-//! **Threads.** A large flow runs its passes on rayon's workers; a small one (below
+//! **Threads.** A large flow runs its passes through the project's one dispatch point
+//! ([`snowscape_terrain::parallel`]: blocks of rows, then rows); a small one (below
 //! [`PARALLEL_MIN_CELLS`] visited cells) on the calling thread, or, during a run to rest on a
 //! pool of two threads or more, shared with the run's helper thread (`team`: the first blocks or
 //! rows on the caller, the rest on the helper, split where half the visited cells lie).
@@ -134,8 +135,8 @@ pub use footprint::BedSource;
 
 use crate::friction_maps::FrictionMaps;
 use lanes::{Lanes, Simd, ld};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use snowscape_terrain::parallel::{self, PerRow};
 use snowscape_terrain::{GridGeometry, NodataMask};
 use std::sync::Mutex;
 pub(crate) use team::Team;
@@ -200,13 +201,13 @@ struct BlockRowsPool(Vec<Mutex<BlockRows>>);
 impl BlockRowsPool {
     /// Makes room for every worker of the current pool (and the two of a [`Team`]).
     fn reserve_workers(&mut self) {
-        let n = rayon::current_num_threads().max(2);
+        let n = snowscape_terrain::parallel::workers().max(2);
         if self.0.len() < n {
             self.0.resize_with(n, Default::default);
         }
     }
 
-    /// The rows of worker `worker` (a rayon worker's index, or a [`Team`]'s 0 and 1).
+    /// The rows of worker `worker` (a dispatch worker's index, or a [`Team`]'s 0 and 1).
     fn of_worker(&self, worker: usize) -> std::sync::MutexGuard<'_, BlockRows> {
         let i = worker % self.0.len().max(1);
         // A panic in another block poisons nothing we rely on: the rows are overwritten

@@ -183,6 +183,20 @@ pub fn map_cells<T: Send, U: Sync>(out: &mut [T], input: &[U], f: impl Fn(&U) ->
         .for_each(|(o, i)| *o = f(i));
 }
 
+/// How many workers the dispatch spreads rows over (the pool's width: `--threads` or
+/// `RAYON_NUM_THREADS`, else the cores); a kernel sizes per-worker scratch with it.
+#[inline]
+pub fn workers() -> usize {
+    rayon::current_num_threads()
+}
+
+/// The index of the worker running the caller, in `0..workers()` (0 outside the pool): the
+/// slot of its per-worker scratch.
+#[inline]
+pub fn worker_index() -> usize {
+    rayon::current_thread_index().unwrap_or(0)
+}
+
 /// Runs two independent jobs, possibly at the same time (a fork with two branches).
 #[inline]
 pub fn join<A: Send, B: Send>(
@@ -261,6 +275,8 @@ mod tests {
         map_cells(&mut out, &[1.0f32, 2.0, 3.0], |x| x * 2.0);
         assert_eq!(out, [2.0, 4.0, 6.0]);
         assert_eq!(join(|| 1, || 2), (1, 2));
+        assert_eq!(pool(3).install(workers), 3);
+        assert!(pool(3).install(worker_index) < 3);
         let sums = map_rows_with(
             2,
             &[1.0f32, 2.0, 3.0, 4.0, 5.0][..],

@@ -1,5 +1,6 @@
 //! Rows (or blocks of rows) of several arrays at once, each item an array of slices, without
-//! allocating a list of them: one after the other, on rayon's workers ([`Rows::par`]), or cut
+//! allocating a list of them: one after the other, on the dispatch's workers (as
+//! [`snowscape_terrain::parallel::Rows`], through [`Rows::par`]), or cut
 //! in two for the run's helper thread ([`Rows::split_at`]). A sub-step's passes hand their
 //! rows out this way, so a sub-step allocates nothing.
 
@@ -96,6 +97,15 @@ impl<T, const N: usize> DoubleEndedIterator for Rows<'_, T, N> {
 }
 
 impl<T, const N: usize> ExactSizeIterator for Rows<'_, T, N> {}
+
+/// [`Rows`] handed to the project's dispatch ([`snowscape_terrain::parallel`]) with their own
+/// chunk length (the dispatch's length applies to the slices beside them).
+impl<'a, T: Send, const N: usize> snowscape_terrain::parallel::Rows for Rows<'a, T, N> {
+    type Row = [&'a mut [T]; N];
+    fn par_rows(self, _len: usize) -> impl IndexedParallelIterator<Item = Self::Row> {
+        self.par()
+    }
+}
 
 /// [`Rows`] as a rayon parallel iterator.
 #[derive(Debug)]

@@ -117,7 +117,7 @@ enum Split {
     None,
     /// Halves on the calling thread and the run's helper.
     Team,
-    /// On rayon's workers.
+    /// On the dispatch's workers ([`snowscape_terrain::parallel`]).
     Rayon,
 }
 
@@ -125,10 +125,10 @@ impl Split {
     /// The split of a sub-step visiting the cells of `seg3`: a small flow runs on the calling
     /// thread, or splits its passes with the run's helper thread (`team`): below
     /// [`PARALLEL_MIN_CELLS`] cells a rayon fork and join cost more than the second core
-    /// saves. A large one runs on rayon's workers (on two threads, with the helper).
+    /// saves. A large one runs on the dispatch's workers (on two threads, with the helper).
     fn of(seg3: &Segments, team: &TeamHandle) -> Self {
         let big = seg3.cells >= PARALLEL_MIN_CELLS;
-        if team.is_on() && !(big && rayon::current_num_threads() > 2) {
+        if team.is_on() && !(big && parallel::workers() > 2) {
             Split::Team
         } else if big {
             Split::Rayon
@@ -191,8 +191,8 @@ fn pipe_pass(
         nb,
     );
     match split {
-        Split::Rayon => blocks.par().enumerate().for_each(|(bi, item)| {
-            pipe_block(pass, rayon::current_thread_index().unwrap_or(0), bi, item)
+        Split::Rayon => parallel::for_each_block(0, blocks, |bi, item| {
+            pipe_block(pass, parallel::worker_index(), bi, item)
         }),
         Split::None => blocks
             .enumerate()
@@ -394,12 +394,11 @@ fn thickness_pass(
         &mut row_stats[..],
     );
     match split {
-        Split::Rayon => rows
-            .par()
-            .zip(tiles.par_chunks_mut(ntx))
-            .zip(stats.par_iter_mut())
-            .enumerate()
-            .for_each(|(ri, ((item, trow), st))| *st = row(ri, item, trow)),
+        Split::Rayon => {
+            parallel::for_each_row(ntx, (rows, tiles, PerRow(stats)), |ri, (item, trow, st)| {
+                *st = row(ri, item, trow)
+            })
+        }
         Split::None => rows
             .zip(tiles.chunks_mut(ntx))
             .zip(stats.iter_mut())

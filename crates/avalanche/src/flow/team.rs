@@ -63,7 +63,7 @@ impl Team {
     /// A helper thread when the run may use more than one thread (the rayon pool it runs in
     /// has several), else `None`.
     pub(crate) fn start() -> Option<Team> {
-        if rayon::current_num_threads() < 2 {
+        if snowscape_terrain::parallel::workers() < 2 {
             return None;
         }
         let shared = Arc::new(Shared::default());
