@@ -8,8 +8,9 @@ use pyo3::types::PyBytes;
 use snowscape::avalanche::validation::ThicknessConvention;
 use snowscape::avalanche::{AvalancheParams, SamosAtParams};
 use snowscape::avalanche_job::{
-    AvalancheJob, AvalancheJobError, AvalancheSettings, Silent, run as run_avalanche,
+    AvalancheJob, AvalancheJobError, AvalancheSettings, run as run_avalanche,
 };
+use snowscape::control::Unattended;
 use snowscape::avalanche_release::ReleaseSpec;
 use snowscape::cover::{CoverParameters, DiffusionCoverReport, MeshInputSummary};
 use snowscape::mesh::{SourceFrame, UpAxis, read_scene};
@@ -61,7 +62,7 @@ pub(crate) fn avalanche<'py>(
         settings,
     };
     let outcome = py
-        .detach(|| run_avalanche(&job, &mut Silent))
+        .detach(|| run_avalanche(&job, &mut Unattended))
         .map_err(|e| match e {
             AvalancheJobError::NoReleaseFile(_) => {
                 PyOSError::new_err(snowscape::messages::clip_values(&e.to_string()))

@@ -1,6 +1,20 @@
-//! Progress display.
+//! Progress display and Ctrl-C.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Exit code of a job stopped by Ctrl-C (128 + SIGINT).
+pub const INTERRUPTED: u8 = 130;
+
+/// A flag Ctrl-C raises (a job's [`snowscape::control::Control::interrupt_flag`]).
+pub fn install_interrupt_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    // A second install (tests running several jobs in one process) keeps the first handler.
+    let _ = ctrlc::set_handler(move || f.store(true, Ordering::SeqCst));
+    flag
+}
 
 /// A bar counting simulated days (in tenths), hidden when `quiet`.
 pub fn day_bar(days: f64, quiet: bool) -> ProgressBar {

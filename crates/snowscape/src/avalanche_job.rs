@@ -13,11 +13,12 @@
 //! ([`AvalancheReport`]; the file names and keys are a contract).
 
 use crate::avalanche_release::{ReleaseError, ReleaseSpec, check_release_values, release_terrain};
+use crate::control::Control;
 use crate::outputs::OutputError;
 use crate::report::InputSummary;
 use snowscape_avalanche::validation::ThicknessConvention;
 use snowscape_avalanche::{
-    AvalancheError, AvalancheParams, AvalancheRun, AvalancheWorkspace, RestOutcome, RunOptions,
+    AvalancheError, AvalancheParams, AvalancheWorkspace, RestOutcome, RunOptions,
 };
 use snowscape_io::ReadOptions;
 use snowscape_render::PreviewOptions;
@@ -116,6 +117,9 @@ pub enum AvalancheJobError {
     /// A run option (duration, settle thickness, stop energy) out of its range.
     #[error(transparent)]
     RunOptions(AvalancheError),
+    /// The front end cancelled the run at simulated second `time_s`.
+    #[error("cancelled at t = {time_s:.1} s of the flow; nothing was written")]
+    Cancelled { time_s: f64 },
     #[error("frame interval {0} s must be within [0.01, 3600]")]
     FrameInterval(f64),
     #[error("comparison corridor {0} m must be within (0, 100000]")]
@@ -174,7 +178,11 @@ impl AvalancheJobError {
     pub fn is_bad_input(&self) -> bool {
         !matches!(
             self,
-            Self::CreateFrames { .. } | Self::Flow(_) | Self::Output(_) | Self::Report(_)
+            Self::CreateFrames { .. }
+                | Self::Flow(_)
+                | Self::Output(_)
+                | Self::Report(_)
+                | Self::Cancelled { .. }
         )
     }
 }
@@ -233,19 +241,6 @@ impl AvalancheJob {
     }
 }
 
-/// What a front end hears while the flow runs (all optional).
-pub trait AvalancheProgress {
-    /// A record of the flow (every `RunOptions::record_interval_s` of simulated time).
-    fn record(&mut self, _run: &AvalancheRun) {}
-    /// The flow has come to rest (the outputs are still to write).
-    fn flow_ended(&mut self) {}
-}
-
-/// Hears nothing.
-pub struct Silent;
-
-impl AvalancheProgress for Silent {}
-
 /// A finished job: its report (as written to `report.json` when there is a folder) and the
 /// flow's outcome.
 #[derive(Debug)]
@@ -288,9 +283,13 @@ fn to_f32(v: &[f64]) -> Vec<f32> {
 
 /// Runs the job: checks it, releases the snow, runs the flow to rest and, with an output
 /// folder, writes every file and `report.json`.
+///
+/// `control` hears the simulated time of the flow (of `RunOptions::duration_s`) and a status
+/// line at every record; a cancel is honoured between records and ends the job with
+/// [`AvalancheJobError::Cancelled`], nothing written (the staging folder is removed).
 pub fn run(
     job: &AvalancheJob,
-    progress: &mut dyn AvalancheProgress,
+    control: &mut dyn Control,
 ) -> Result<AvalancheOutcome, AvalancheJobError> {
     job.check()?;
     let s = &job.settings;
@@ -315,7 +314,7 @@ pub fn run(
         Some(o) => Some(outputs::Staged::open(o)?),
         None => None,
     };
-    let flow = outputs::run_flow(job, &mut workspace, released, staged, progress)?;
+    let flow = outputs::run_flow(job, &mut workspace, released, staged, control)?;
     let report_base = ReportBase {
         input: InputSummary::of(&job.source, &job.dem),
         friction_report,

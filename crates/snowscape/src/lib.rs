@@ -61,6 +61,7 @@
 
 pub mod avalanche_job;
 pub mod avalanche_release;
+pub mod control;
 pub mod cover;
 pub mod cpu;
 pub mod engine_export;

@@ -25,7 +25,6 @@
 //! chunk: the state can be checkpointed and runs on bit-identically.
 
 use snowscape_season::winter::{SeasonError, Winter};
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -87,38 +86,7 @@ impl StopReason {
     }
 }
 
-/// What a front end does while a season runs: hear its progress, cancel it, run its chunks
-/// where it must (all optional).
-pub trait Control {
-    /// The season has reached `day` of a run to `stop_time` (on the progress schedule).
-    fn progress(&mut self, _day: f64, _stop_time: f64) {}
-    /// Whether to stop the run now (asked between chunks, on the cancel-check schedule).
-    fn cancelled(&mut self) -> bool {
-        false
-    }
-    /// A flag another thread raises to stop the run between two events, inside a chunk.
-    fn interrupt_flag(&self) -> Option<Arc<AtomicBool>> {
-        None
-    }
-    /// Runs one chunk of the season (`chunk` advances it): a front end that must release a
-    /// lock or pick a thread pool for the work wraps it here.
-    fn run_chunk(&mut self, chunk: &mut (dyn FnMut() + Send)) {
-        chunk()
-    }
-}
-
-/// Hears nothing and never cancels.
-pub struct Unattended;
-
-impl Control for Unattended {}
-
-/// Whether `control` asks to stop now: its interrupt flag is raised, or it says so.
-pub fn cancel_requested(control: &mut dyn Control) -> bool {
-    control
-        .interrupt_flag()
-        .is_some_and(|f| f.load(Ordering::SeqCst))
-        || control.cancelled()
-}
+pub use crate::control::{Control, Unattended, cancel_requested};
 
 /// Why a run failed: the season's own error, or an output's.
 #[derive(Debug, thiserror::Error)]

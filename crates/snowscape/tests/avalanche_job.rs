@@ -4,9 +4,10 @@
 //! package's), and its typed refusals before any work.
 
 use snowscape::avalanche_job::{
-    self, AvalancheJob, AvalancheJobError, AvalancheSettings, OutputSpec, ReleaseReport, Silent,
+    self, AvalancheJob, AvalancheJobError, AvalancheSettings, OutputSpec, ReleaseReport,
 };
 use snowscape::avalanche_release::{ReleaseError, ReleaseSpec};
+use snowscape::control::Unattended;
 use snowscape::io::{ReadOptions, read_terrain};
 use snowscape::render::PreviewOptions;
 use std::path::{Path, PathBuf};
@@ -48,7 +49,7 @@ fn a_run_into_a_folder_writes_its_files_and_the_typed_report() {
             view: PreviewOptions::default(),
         }),
     );
-    let o = avalanche_job::run(&j, &mut Silent).unwrap();
+    let o = avalanche_job::run(&j, &mut Unattended).unwrap();
     let r = &o.report;
     assert_eq!(r.command, "avalanche");
     assert_eq!(
@@ -90,7 +91,7 @@ fn a_run_into_a_folder_writes_its_files_and_the_typed_report() {
 fn a_run_in_memory_gives_the_maps_and_the_flat_summary() {
     let (_, rel) = kot();
     let j = job(ReleaseSpec::File(rel), None);
-    let o = avalanche_job::run(&j, &mut Silent).unwrap();
+    let o = avalanche_job::run(&j, &mut Unattended).unwrap();
     assert!(o.report.outputs.is_empty());
     let n = j.dem.geometry().len();
     let maps = o.maps();
@@ -132,14 +133,14 @@ fn bad_values_are_refused_typed_before_any_work() {
     });
     let e = avalanche_job::run(
         &job(ReleaseSpec::File("no/such/rel.shp".into()), output.clone()),
-        &mut Silent,
+        &mut Unattended,
     )
     .unwrap_err();
     assert!(matches!(e, AvalancheJobError::NoReleaseFile(_)), "{e}");
     assert!(e.is_bad_input());
     let e = avalanche_job::run(
         &job(ReleaseSpec::Mask(vec![true; 10]), output.clone()),
-        &mut Silent,
+        &mut Unattended,
     )
     .unwrap_err();
     assert!(
@@ -148,14 +149,67 @@ fn bad_values_are_refused_typed_before_any_work() {
     );
     let mut j = job(ReleaseSpec::Point(0.0, 0.0), output.clone());
     j.settings.thickness_m = Some(51.0);
-    let e = avalanche_job::run(&j, &mut Silent).unwrap_err();
+    let e = avalanche_job::run(&j, &mut Unattended).unwrap_err();
     assert!(
         matches!(e, AvalancheJobError::Release(ReleaseError::Thickness(t)) if t == 51.0),
         "{e}"
     );
     // A point off the DEM: the release is refused, nothing is written.
-    let e =
-        avalanche_job::run(&job(ReleaseSpec::Point(0.0, 0.0), output), &mut Silent).unwrap_err();
+    let e = avalanche_job::run(&job(ReleaseSpec::Point(0.0, 0.0), output), &mut Unattended)
+        .unwrap_err();
     assert!(matches!(e, AvalancheJobError::Release(_)), "{e}");
     assert!(!out.exists());
+}
+
+/// A front end that hears the flow and cancels it after a second of simulated time.
+#[derive(Default)]
+struct CancelAfterOneSecond {
+    heard: Vec<(f64, f64)>,
+    statuses: usize,
+}
+
+impl snowscape::control::Control for CancelAfterOneSecond {
+    fn progress(&mut self, done: f64, total: f64) {
+        self.heard.push((done, total));
+    }
+    fn status(&mut self, _line: &str) {
+        self.statuses += 1;
+    }
+    fn cancelled(&mut self) -> bool {
+        self.heard.last().is_some_and(|&(t, _)| t >= 1.0)
+    }
+}
+
+#[test]
+fn a_cancelled_run_stops_between_records_and_writes_nothing() {
+    let (_, rel) = kot();
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("kot");
+    let j = job(
+        ReleaseSpec::File(rel),
+        Some(OutputSpec {
+            folder: out.clone(),
+            frame_interval_s: 0.5,
+            view: PreviewOptions::default(),
+        }),
+    );
+    let mut control = CancelAfterOneSecond::default();
+    let e = avalanche_job::run(&j, &mut control).unwrap_err();
+    let AvalancheJobError::Cancelled { time_s } = e else {
+        panic!("{e}")
+    };
+    assert!((1.0..1.5).contains(&time_s), "cancelled at {time_s} s");
+    assert!(!e.is_bad_input());
+    // The progress counted simulated seconds of the run's duration, with a status each time.
+    assert!(control.heard.iter().all(|&(_, total)| total == 2.0));
+    assert!(control.heard.windows(2).all(|w| w[0].0 <= w[1].0));
+    assert_eq!(control.statuses, control.heard.len());
+    // Nothing of the run is left: the folder it opened is empty (no output, no frames, no
+    // staging folder, no lock), and nothing was written beside it.
+    let left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    assert_eq!(std::fs::read_dir(t.path()).unwrap().count(), 1);
 }

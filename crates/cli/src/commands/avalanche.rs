@@ -7,22 +7,25 @@
 use crate::cli::{AvalancheArgs, FrictionArg, GlobalArgs, SlopeGravityArg, ThicknessArg};
 use crate::commands::render::preview_options;
 use crate::failure::{BAD_INPUT, ExitCodeExt, Failure, JOB_FAILED};
+use crate::progress::{INTERRUPTED, install_interrupt_flag};
 use crate::stdout::outln;
 use anyhow::{anyhow, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use snowscape::avalanche::validation::ThicknessConvention;
 use snowscape::avalanche::{
-    AvalancheParams, AvalancheRun, FrictionLaw, FrictionMaps, RunOptions, SamosAtParams,
-    SlopeGravity, StopReason,
+    AvalancheParams, FrictionLaw, FrictionMaps, RunOptions, SamosAtParams, SlopeGravity, StopReason,
 };
 use snowscape::avalanche_job::{
-    self, AvalancheJob, AvalancheJobError, AvalancheProgress, AvalancheSettings, CompareSpec,
-    FrictionRasterError, FrictionRasters, FrictionReport, OutputSpec,
+    self, AvalancheJob, AvalancheJobError, AvalancheSettings, CompareSpec, FrictionRasterError,
+    FrictionRasters, FrictionReport, OutputSpec,
 };
 use snowscape::avalanche_release::ReleaseSpec;
+use snowscape::control::Control;
 use snowscape_render::ColourMode;
 use snowscape_terrain::Grid;
 use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 /// The flow parameters the flags set: which flags belong to which friction law.
 fn flow_params(args: &AvalancheArgs) -> anyhow::Result<AvalancheParams> {
@@ -136,6 +139,8 @@ fn settings(args: &AvalancheArgs) -> anyhow::Result<AvalancheSettings> {
 fn failure(e: AvalancheJobError, args: &AvalancheArgs) -> Failure {
     let code = if e.is_bad_input() {
         BAD_INPUT
+    } else if matches!(e, AvalancheJobError::Cancelled { .. }) {
+        INTERRUPTED
     } else {
         JOB_FAILED
     };
@@ -210,21 +215,23 @@ pub(crate) fn friction_maps(
         .map_err(|e| friction_error(e, mu_raster, xi_raster))
 }
 
-/// The progress bar: simulated seconds, the moving volume and the kinetic energy.
-struct Bar(ProgressBar);
+/// The progress bar (simulated seconds, the moving volume and the kinetic energy) and the
+/// Ctrl-C flag that cancels the run.
+struct Bar(ProgressBar, Arc<AtomicBool>);
 
-impl AvalancheProgress for Bar {
-    fn record(&mut self, r: &AvalancheRun) {
-        self.0.set_position((r.time() * 10.0).round() as u64);
-        self.0.set_message(format!(
-            "t = {:.1} s, {:.0} m³ moving energy {:.3e}",
-            r.time(),
-            r.state.flowing_volume(),
-            r.kinetic_energy()
-        ));
+impl Control for Bar {
+    fn progress(&mut self, time_s: f64, _duration_s: f64) {
+        self.0.set_position((time_s * 10.0).round() as u64);
     }
-    fn flow_ended(&mut self) {
-        self.0.finish_and_clear();
+    fn status(&mut self, line: &str) {
+        if line == "writing outputs" {
+            self.0.finish_and_clear();
+        } else {
+            self.0.set_message(line.to_string());
+        }
+    }
+    fn interrupt_flag(&self) -> Option<Arc<AtomicBool>> {
+        Some(self.1.clone())
     }
 }
 
@@ -246,7 +253,11 @@ pub fn run(args: &AvalancheArgs, global: &GlobalArgs) -> Result<(), Failure> {
     {
         bar.set_style(style.progress_chars("=> "));
     }
-    let outcome = avalanche_job::run(&job, &mut Bar(bar)).map_err(|e| failure(e, args))?;
+    let mut bar = Bar(bar, install_interrupt_flag());
+    let outcome = avalanche_job::run(&job, &mut bar).map_err(|e| {
+        bar.0.abandon();
+        failure(e, args)
+    })?;
     let r = &outcome.report;
     if !global.quiet {
         outln!(

@@ -3,25 +3,15 @@
 //! command line around it: the progress bar, Ctrl-C, the exit codes and the summary line.
 
 use crate::failure::Failure;
+use crate::progress::{INTERRUPTED, install_interrupt_flag};
 use crate::stdout::outln;
 use anyhow::anyhow;
+use snowscape::control::Control;
 use snowscape::season_run::{SeasonOutcome, run_season as run_job};
-use snowscape::simulation::Control;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 pub use snowscape::season_run::SeasonJob;
-
-/// Exit code of a run stopped by Ctrl-C after writing its checkpoint (128 + SIGINT).
-const INTERRUPTED: u8 = 130;
-
-fn install_interrupt_flag() -> Arc<AtomicBool> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let f = flag.clone();
-    // A second install (tests running several jobs in one process) keeps the first handler.
-    let _ = ctrlc::set_handler(move || f.store(true, Ordering::SeqCst));
-    flag
-}
 
 /// The day bar, advanced by the season, and the Ctrl-C flag that stops it.
 struct Bar(indicatif::ProgressBar, Arc<AtomicBool>);

@@ -5,8 +5,9 @@
 //! `report.json`, staged in the output folder and committed together.
 
 use super::report::{AvalancheReport, ReleaseReport, RunParameters, Timings, convention_name};
-use super::{AvalancheJob, AvalancheJobError, AvalancheProgress, OutputSpec, ReportBase, compare};
+use super::{AvalancheJob, AvalancheJobError, OutputSpec, ReportBase, compare};
 use crate::avalanche_release::ReleaseSpec;
+use crate::control::{Control, cancel_requested};
 use crate::output_folder::{OutputFolder, REPORT};
 use crate::outputs::{OutputError, Written, write_png, write_report};
 use image::RgbaImage;
@@ -105,6 +106,18 @@ fn render_frame(frames: &ReliefFrames, run: &AvalancheRun) -> Result<RgbaImage, 
     })?)
 }
 
+/// Why the flow stopped short: its own error, or the front end's cancel (at that second).
+enum FlowStop {
+    Flow(AvalancheError),
+    Cancelled(f64),
+}
+
+impl From<AvalancheError> for FlowStop {
+    fn from(e: AvalancheError) -> Self {
+        FlowStop::Flow(e)
+    }
+}
+
 /// The flow at rest and what its run left to write.
 pub(super) struct Flow {
     released: Released,
@@ -120,7 +133,7 @@ pub(super) fn run_flow(
     workspace: &mut AvalancheWorkspace,
     mut released: Released,
     staged: Option<Staged>,
-    progress: &mut dyn AvalancheProgress,
+    control: &mut dyn Control,
 ) -> Result<Flow, AvalancheJobError> {
     let s = &job.settings;
     let mut recorder = match &staged {
@@ -138,22 +151,34 @@ pub(super) fn run_flow(
     };
     let t0 = Instant::now();
     let rest = workspace
-        .run_to_rest::<AvalancheError>(
+        .run_to_rest::<FlowStop>(
             &mut released.terrain,
             ReleasedCells::new(&released.cells, None),
             &s.flow,
             &s.run,
             SnowLayer::Stable,
             |r| {
-                progress.record(r);
+                control.progress(r.time(), s.run.duration_s);
+                control.status(&format!(
+                    "t = {:.1} s, {:.0} m³ moving, energy {:.3e} J",
+                    r.time(),
+                    r.state.flowing_volume(),
+                    r.kinetic_energy()
+                ));
+                if cancel_requested(control) {
+                    return Err(FlowStop::Cancelled(r.time()));
+                }
                 if let Some(f) = recorder.as_mut() {
                     f.record(r);
                 }
                 Ok(())
             },
         )
-        .map_err(AvalancheJobError::Flow)?;
-    progress.flow_ended();
+        .map_err(|e| match e {
+            FlowStop::Flow(e) => AvalancheJobError::Flow(e),
+            FlowStop::Cancelled(time_s) => AvalancheJobError::Cancelled { time_s },
+        })?;
+    control.status("writing outputs");
     let mut render_s = 0.0;
     let staged = match (staged, recorder) {
         (Some(st), Some(mut f)) => {
