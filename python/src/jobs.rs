@@ -2,7 +2,7 @@
 //! the library's path that the command line takes.
 
 use crate::{GridIn, GridOut, grid_in, grid_out, py_err, value_err};
-use pyo3::exceptions::PyOSError;
+use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use snowscape::avalanche::validation::ThicknessConvention;
@@ -10,8 +10,8 @@ use snowscape::avalanche::{AvalancheParams, SamosAtParams};
 use snowscape::avalanche_job::{
     AvalancheJob, AvalancheJobError, AvalancheSettings, run as run_avalanche,
 };
-use snowscape::control::Unattended;
 use snowscape::avalanche_release::ReleaseSpec;
+use snowscape::control::Unattended;
 use snowscape::cover::{CoverParameters, DiffusionCoverReport, MeshInputSummary};
 use snowscape::mesh::{SourceFrame, UpAxis, read_scene};
 use std::path::PathBuf;
@@ -308,7 +308,7 @@ pub(crate) fn validate(
     snow_threshold: f64,
     wind_from: Option<f64>,
 ) -> PyResult<String> {
-    use snowscape::validation::{ValidateJob, ValidationError};
+    use snowscape::validation::{Naming, ValidateJob, ValidationError};
     let job = ValidateJob {
         run,
         observed,
@@ -319,11 +319,18 @@ pub(crate) fn validate(
     };
     let outcome = py
         .detach(|| snowscape::validation::run(&job))
-        .map_err(|e| match e {
-            ValidationError::MissingFile { .. } | ValidationError::MissingRunFile { .. } => {
-                PyOSError::new_err(snowscape::messages::clip_values(&e.to_string()))
+        .map_err(|e| {
+            // Named by the Python keywords (`observed=...`), not the command line's flags.
+            let text = snowscape::messages::clip_values(&e.message(Naming::Parameters));
+            let missing = matches!(
+                e,
+                ValidationError::MissingFile { .. } | ValidationError::MissingRunFile { .. }
+            );
+            if missing || crate::io_in_chain(&e) {
+                PyOSError::new_err(text)
+            } else {
+                PyValueError::new_err(text)
             }
-            e => py_err(e),
         })?;
     serde_json::to_string(&outcome.report).map_err(|e| value_err(e.to_string()))
 }

@@ -46,17 +46,23 @@ pub(crate) fn message(e: &(dyn std::error::Error + 'static)) -> String {
     text
 }
 
+/// Whether an I/O error is among `e` and its sources (it is raised as `OSError`).
+pub(crate) fn io_in_chain(e: &(dyn std::error::Error + 'static)) -> bool {
+    let mut cur = Some(e);
+    while let Some(s) = cur {
+        if s.downcast_ref::<std::io::Error>().is_some() {
+            return true;
+        }
+        cur = s.source();
+    }
+    false
+}
+
 /// `OSError` when an I/O error lies under `e` (a file missing, unreadable, unwritable), else
 /// `ValueError`, with the command line's message.
 pub(crate) fn py_err(e: impl std::error::Error + 'static) -> PyErr {
-    let mut io = false;
-    let mut cur: Option<&(dyn std::error::Error + 'static)> = Some(&e);
-    while let Some(s) = cur {
-        io |= s.downcast_ref::<std::io::Error>().is_some();
-        cur = s.source();
-    }
     let text = snowscape::messages::clip_values(&message(&e));
-    if io {
+    if io_in_chain(&e) {
         PyOSError::new_err(text)
     } else {
         PyValueError::new_err(text)

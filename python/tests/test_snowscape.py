@@ -409,5 +409,9 @@ def test_validate_matches_the_command_line(tmp_path):
     assert cli == json.loads((tmp_path / "py" / "validation.json").read_text()) == v
     with pytest.raises(OSError, match="no/such.tif"):
         snowscape.validate(run, "no/such.tif")
-    with pytest.raises(ValueError, match="-1"):
+    # Named by the Python keyword, not the command line's flag.
+    with pytest.raises(ValueError, match="snow_threshold=-1") as e:
         snowscape.validate(run, observed, snow_threshold=-1.0)
+    assert "--" not in str(e.value)
+    with pytest.raises(OSError, match="observed=no/such.tif") as e:
+        snowscape.validate(run, "no/such.tif")

@@ -48,71 +48,197 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
-/// Why a validation cannot run. Each names the flag and file or value at fault.
+/// Which input of a validation a file or value came from ([`ValidateJob`]'s fields), named as
+/// each front end names it: the command line's flag or the Python keyword.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ValidationInput {
+    /// The run folder (`--run`, `run=`).
+    Run,
+    /// The observed depth raster (`--observed`, `observed=`).
+    Observed,
+    /// The mask raster (`--mask`, `mask=`).
+    Mask,
+    /// The snow-cover threshold (`--snow-threshold`, `snow_threshold=`).
+    SnowThreshold,
+    /// The prevailing wind direction (`--wind-from`, `wind_from=`).
+    WindFrom,
+}
+
+impl ValidationInput {
+    /// The command line's flag.
+    pub fn flag(self) -> &'static str {
+        match self {
+            Self::Run => "--run",
+            Self::Observed => "--observed",
+            Self::Mask => "--mask",
+            Self::SnowThreshold => "--snow-threshold",
+            Self::WindFrom => "--wind-from",
+        }
+    }
+
+    /// The Python keyword (and [`ValidateJob`]'s field, less its unit).
+    pub fn parameter(self) -> &'static str {
+        match self {
+            Self::Run => "run",
+            Self::Observed => "observed",
+            Self::Mask => "mask",
+            Self::SnowThreshold => "snow_threshold",
+            Self::WindFrom => "wind_from",
+        }
+    }
+
+    /// The input with its value, as `naming` says it: `--observed FILE` or `observed=FILE`.
+    fn with(self, naming: Naming, value: impl fmt::Display) -> String {
+        match naming {
+            Naming::Flags => format!("{} {value}", self.flag()),
+            Naming::Parameters => format!("{}={value}", self.parameter()),
+        }
+    }
+
+    /// The input alone, as `naming` says it.
+    fn name(self, naming: Naming) -> &'static str {
+        match naming {
+            Naming::Flags => self.flag(),
+            Naming::Parameters => self.parameter(),
+        }
+    }
+}
+
+/// How an error names its input: by the command line's flags (its `Display`) or by the Python
+/// keywords ([`ValidationError::message`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Naming {
+    Flags,
+    Parameters,
+}
+
+/// Why a validation cannot run. Each names the input ([`ValidationInput`]) and the file or
+/// value at fault; `Display` names inputs by their flags, [`ValidationError::message`] either
+/// way.
 #[derive(Debug, Error)]
 pub enum ValidationError {
-    #[error(
-        "--run {dir}: no {file} in the run folder (`snowscape run` and `snowscape demo` write it)"
-    )]
-    MissingRunFile { dir: PathBuf, file: &'static str },
-    #[error("{flag} {path}: no such file")]
-    MissingFile { flag: &'static str, path: PathBuf },
-    #[error("{flag}: {source}")]
+    MissingRunFile {
+        dir: PathBuf,
+        file: &'static str,
+    },
+    MissingFile {
+        input: ValidationInput,
+        path: PathBuf,
+    },
     Read {
-        flag: &'static str,
+        input: ValidationInput,
         #[source]
         source: RasterError,
     },
-    #[error("--run {dir}: bedrock.tif ({bedrock}) and depth.tif ({depth}) are not the same grid")]
     GridMismatch {
         dir: PathBuf,
         bedrock: String,
         depth: String,
     },
-    #[error(
-        "{flag} {path} is in {theirs} but the run is in {ours}: reproject it onto the run's CRS"
-    )]
     CrsMismatch {
-        flag: &'static str,
+        input: ValidationInput,
         path: PathBuf,
         theirs: Crs,
         ours: Crs,
     },
-    #[error(
-        "{flag} {path} does not overlap the run: it covers {extent}, the run {run} covers {run_extent} (map coordinates)"
-    )]
     NoOverlap {
-        flag: &'static str,
+        input: ValidationInput,
         path: PathBuf,
         extent: Box<Extent>,
         run: PathBuf,
         run_extent: Box<Extent>,
     },
-    #[error("no cell to compare between the run {run} and --observed {observed}: {excluded}")]
     NoValidCells {
         run: PathBuf,
         observed: PathBuf,
         excluded: Exclusions,
     },
-    #[error("{flag} {value}: expected {expected}")]
     BadParameter {
-        flag: &'static str,
+        input: ValidationInput,
         value: f64,
         expected: &'static str,
     },
-    #[error("--run {path}: {message}")]
-    Report { path: PathBuf, message: String },
+    Report {
+        path: PathBuf,
+        message: String,
+    },
     /// The output folder cannot be opened (nothing was written).
-    #[error(transparent)]
     OutputFolder(crate::outputs::OutputError),
     /// An output could not be written.
-    #[error(transparent)]
     Output(#[from] crate::outputs::OutputError),
-    #[error("cannot encode validation.json: {0}")]
     Encode(#[source] serde_json::Error),
 }
 
+impl fmt::Display for ValidationError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message(Naming::Flags))
+    }
+}
+
 impl ValidationError {
+    /// The message, naming the inputs as `naming` says (the CLI's flags, Python's keywords).
+    pub fn message(&self, naming: Naming) -> String {
+        use ValidationInput::{Observed, Run};
+        let path = |p: &PathBuf| p.display().to_string();
+        match self {
+            Self::MissingRunFile { dir, file } => format!(
+                "{}: no {file} in the run folder (`snowscape run` and `snowscape demo` write it)",
+                Run.with(naming, dir.display())
+            ),
+            Self::MissingFile { input, path: p } => {
+                format!("{}: no such file", input.with(naming, path(p)))
+            }
+            Self::Read { input, source } => format!("{}: {source}", input.name(naming)),
+            Self::GridMismatch {
+                dir,
+                bedrock,
+                depth,
+            } => format!(
+                "{}: bedrock.tif ({bedrock}) and depth.tif ({depth}) are not the same grid",
+                Run.with(naming, dir.display())
+            ),
+            Self::CrsMismatch {
+                input,
+                path: p,
+                theirs,
+                ours,
+            } => format!(
+                "{} is in {theirs} but the run is in {ours}: reproject it onto the run's CRS",
+                input.with(naming, path(p))
+            ),
+            Self::NoOverlap {
+                input,
+                path: p,
+                extent,
+                run,
+                run_extent,
+            } => format!(
+                "{} does not overlap the run: it covers {extent}, the run {} covers {run_extent} (map coordinates)",
+                input.with(naming, path(p)),
+                run.display()
+            ),
+            Self::NoValidCells {
+                run,
+                observed,
+                excluded,
+            } => format!(
+                "no cell to compare between the run {} and {}: {excluded}",
+                run.display(),
+                Observed.with(naming, observed.display())
+            ),
+            Self::BadParameter {
+                input,
+                value,
+                expected,
+            } => format!("{}: expected {expected}", input.with(naming, value)),
+            Self::Report { path: p, message } => {
+                format!("{}: {message}", Run.with(naming, path(p)))
+            }
+            Self::OutputFolder(e) | Self::Output(e) => e.to_string(),
+            Self::Encode(e) => format!("cannot encode validation.json: {e}"),
+        }
+    }
+
     /// Whether the validation was refused for its input (nothing was written) rather than
     /// failing while it wrote.
     pub fn is_bad_input(&self) -> bool {
@@ -125,8 +251,8 @@ impl ValidationError {
 pub struct Input<'a> {
     pub grid: &'a Grid,
     pub path: &'a Path,
-    /// The flag that named it (`--run`, `--observed`, `--mask`).
-    pub flag: &'static str,
+    /// The input that named it (the run, the observed raster, the mask).
+    pub input: ValidationInput,
 }
 
 /// What to compare.

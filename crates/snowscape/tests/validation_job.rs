@@ -5,7 +5,7 @@
 
 use snowscape::io::{ReadOptions, read_dem, write_geotiff};
 use snowscape::terrain::Grid;
-use snowscape::validation::{ValidateJob, ValidationError, run};
+use snowscape::validation::{Naming, ValidateJob, ValidationError, ValidationInput, run};
 use std::path::{Path, PathBuf};
 
 /// A run folder: the Idaho DEM as `bedrock.tif`, a depth of 0.5 m per 100 m above its lowest
@@ -107,19 +107,27 @@ fn bad_input_is_refused_typed() {
         matches!(
             e,
             ValidationError::BadParameter {
-                flag: "--snow-threshold",
+                input: ValidationInput::SnowThreshold,
                 ..
             }
         ),
         "{e}"
     );
     assert!(e.is_bad_input());
+    // Each front end hears the input by its own name: the flag, or the Python keyword.
+    assert_eq!(e.to_string(), e.message(Naming::Flags));
+    assert!(e.to_string().starts_with("--snow-threshold -1: "), "{e}");
+    assert!(
+        e.message(Naming::Parameters)
+            .starts_with("snow_threshold=-1: "),
+        "{e}"
+    );
     let e = run(&job(&run_dir, Path::new("no/such/observed.tif"))).unwrap_err();
     assert!(
         matches!(
             e,
             ValidationError::MissingFile {
-                flag: "--observed",
+                input: ValidationInput::Observed,
                 ..
             }
         ),
@@ -127,7 +135,13 @@ fn bad_input_is_refused_typed() {
     );
     let e = run(&job(&t.path().join("observed.tif"), &observed)).unwrap_err();
     assert!(
-        matches!(e, ValidationError::MissingFile { flag: "--run", .. }),
+        matches!(
+            e,
+            ValidationError::MissingFile {
+                input: ValidationInput::Run,
+                ..
+            }
+        ),
         "{e}"
     );
     assert!(!run_dir.join("validation").exists());

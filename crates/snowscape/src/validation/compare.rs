@@ -8,7 +8,7 @@ use super::matching::{CellSample, Extent, MaskSample, sample_mask, sample_observ
 use super::stats::{self, LinearFit, Metrics, quantile_map, spearman};
 use super::{
     AltitudeRho, Baseline, Baselines, Exclusions, Input, Inputs, Maps, MatchingSummary, PlaneFit,
-    Ratios, Settings, Validation, ValidationError,
+    Ratios, Settings, Validation, ValidationError, ValidationInput,
 };
 use snowscape_terrain::{Crs, Grid};
 use std::path::Path;
@@ -22,7 +22,7 @@ fn check_crs(run: &Input, other: &Input) -> Result<(), ValidationError> {
     match (run.grid.geometry().crs(), other.grid.geometry().crs()) {
         (Some(ours @ Crs::Epsg(a)), Some(theirs @ Crs::Epsg(b))) if a != b => {
             Err(ValidationError::CrsMismatch {
-                flag: other.flag,
+                input: other.input,
                 path: other.path.to_path_buf(),
                 theirs: theirs.clone(),
                 ours: ours.clone(),
@@ -31,7 +31,7 @@ fn check_crs(run: &Input, other: &Input) -> Result<(), ValidationError> {
         (Some(ours), Some(theirs)) if ours != theirs => {
             tracing::warn!(
                 "{} {} declares {theirs}, the run {ours}: taken as the same CRS",
-                other.flag,
+                other.input.flag(),
                 other.path.display()
             );
             Ok(())
@@ -49,7 +49,7 @@ fn check_overlap(run: &Input, other: &Input) -> Result<(), ValidationError> {
         Ok(())
     } else {
         Err(ValidationError::NoOverlap {
-            flag: other.flag,
+            input: other.input,
             path: other.path.to_path_buf(),
             extent: Box::new(b),
             run: run.path.to_path_buf(),
@@ -64,14 +64,14 @@ fn check(inputs: &Inputs, settings: &Settings) -> Result<(), ValidationError> {
     let threshold = settings.snow_threshold_m;
     if !(threshold.is_finite() && threshold >= 0.0) {
         return Err(ValidationError::BadParameter {
-            flag: "--snow-threshold",
+            input: ValidationInput::SnowThreshold,
             value: threshold,
             expected: "a depth in metres >= 0",
         });
     }
     if !settings.wind_from_deg.is_finite() {
         return Err(ValidationError::BadParameter {
-            flag: "--wind-from",
+            input: ValidationInput::WindFrom,
             value: settings.wind_from_deg,
             expected: "a direction in degrees clockwise from north",
         });

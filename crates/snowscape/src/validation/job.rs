@@ -9,7 +9,7 @@
 //! (westerly).
 
 use super::figures::{density_scatter, side_by_side};
-use super::{Input, Inputs, Maps, Settings, Validation, ValidationError, compare};
+use super::{Input, Inputs, Maps, Settings, Validation, ValidationError, ValidationInput, compare};
 use crate::output_folder::{OutputFolder, REPORT};
 use crate::outputs::write_png;
 use serde::Serialize;
@@ -71,14 +71,15 @@ pub struct ValidationOutcome {
     pub out: PathBuf,
 }
 
-fn read(flag: &'static str, path: &Path) -> Result<Grid, ValidationError> {
+fn read(input: ValidationInput, path: &Path) -> Result<Grid, ValidationError> {
     if !path.is_file() {
         return Err(ValidationError::MissingFile {
-            flag,
+            input,
             path: path.to_path_buf(),
         });
     }
-    read_dem(path, &ReadOptions::default()).map_err(|source| ValidationError::Read { flag, source })
+    read_dem(path, &ReadOptions::default())
+        .map_err(|source| ValidationError::Read { input, source })
 }
 
 fn run_file(dir: &Path, file: &'static str) -> Result<PathBuf, ValidationError> {
@@ -141,24 +142,28 @@ struct Rasters {
 fn read_rasters(job: &ValidateJob) -> Result<Rasters, ValidationError> {
     if !(job.snow_threshold_m.is_finite() && job.snow_threshold_m >= 0.0) {
         return Err(ValidationError::BadParameter {
-            flag: "--snow-threshold",
+            input: ValidationInput::SnowThreshold,
             value: job.snow_threshold_m,
             expected: "a depth in metres >= 0",
         });
     }
     if !job.run.is_dir() {
         return Err(ValidationError::MissingFile {
-            flag: "--run",
+            input: ValidationInput::Run,
             path: job.run.clone(),
         });
     }
     let depth_path = run_file(&job.run, "depth.tif")?;
     let bedrock_path = run_file(&job.run, "bedrock.tif")?;
     Ok(Rasters {
-        depth: read("--run", &depth_path)?,
-        bedrock: read("--run", &bedrock_path)?,
-        observed: read("--observed", &job.observed)?,
-        mask: job.mask.as_deref().map(|p| read("--mask", p)).transpose()?,
+        depth: read(ValidationInput::Run, &depth_path)?,
+        bedrock: read(ValidationInput::Run, &bedrock_path)?,
+        observed: read(ValidationInput::Observed, &job.observed)?,
+        mask: job
+            .mask
+            .as_deref()
+            .map(|p| read(ValidationInput::Mask, p))
+            .transpose()?,
         depth_path,
         bedrock_path,
     })
@@ -168,16 +173,16 @@ fn read_rasters(job: &ValidateJob) -> Result<Rasters, ValidationError> {
 pub fn run(job: &ValidateJob) -> Result<ValidationOutcome, ValidationError> {
     let r = read_rasters(job)?;
     let (wind_from_deg, wind_from_source) = wind_from(job)?;
-    let input = |grid, path, flag| Input { grid, path, flag };
+    let input = |grid, path, input| Input { grid, path, input };
     let inputs = Inputs {
-        depth: input(&r.depth, &r.depth_path, "--run"),
-        bedrock: input(&r.bedrock, &r.bedrock_path, "--run"),
-        observed: input(&r.observed, &job.observed, "--observed"),
+        depth: input(&r.depth, &r.depth_path, ValidationInput::Run),
+        bedrock: input(&r.bedrock, &r.bedrock_path, ValidationInput::Run),
+        observed: input(&r.observed, &job.observed, ValidationInput::Observed),
         mask: r
             .mask
             .as_ref()
             .zip(job.mask.as_deref())
-            .map(|(grid, path)| input(grid, path, "--mask")),
+            .map(|(grid, path)| input(grid, path, ValidationInput::Mask)),
     };
     let settings = Settings {
         snow_threshold_m: job.snow_threshold_m,
