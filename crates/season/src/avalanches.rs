@@ -32,12 +32,12 @@
 //! later avalanches; the stability phenomenon compacts it further), volume for volume, so the
 //! season's snow budget only loses what flowed off the grid.
 
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_avalanche::release_area::{ReleaseAreaError, RuptureParams};
 use snowscape_avalanche::{
     AvalancheError, AvalancheParams, AvalancheWorkspace, FrictionLaw, ReleasedCells, RunOptions,
 };
+use snowscape_terrain::parallel::{self, Chunks, PerRow};
 use snowscape_terrain::{LayeredTerrain, SnowLayer, surface};
 use thiserror::Error;
 
@@ -385,19 +385,22 @@ impl SlopeWindowCache {
             params.slope_max_deg,
         ]
         .map(f64::to_bits);
+        // Blocks of cells compared in parallel (a boolean: the same for any thread count).
+        const BLOCK: usize = 1 << 14;
         let same = self.key.as_ref().is_some_and(|(k, slopes)| {
             *k == window
                 && slopes.len() == slope_deg.len()
-                && slopes
-                    .par_iter()
-                    .zip(slope_deg.par_iter())
-                    .all(|(a, b)| *a == b.to_bits())
+                && parallel::map_rows(BLOCK, (slopes, slope_deg), |_, (slopes, slope_deg)| {
+                    slopes.iter().zip(slope_deg).all(|(a, b)| *a == b.to_bits())
+                })
+                .into_iter()
+                .all(|same| same)
         });
         if !same {
-            self.factor = slope_deg
-                .par_iter()
-                .map(|&s| params.slope_window(f64::from(s)))
-                .collect();
+            self.factor.resize(slope_deg.len(), 0.0);
+            parallel::map_cells(&mut self.factor, slope_deg, |&s| {
+                params.slope_window(f64::from(s))
+            });
             self.key = Some((window, slope_deg.iter().map(|s| s.to_bits()).collect()));
         }
         &self.factor
@@ -451,15 +454,15 @@ impl HazardMap {
             // Rows by groups of four: each row's sum is one chain of additions in cell order,
             // and four chains side by side run at once.
             const ROWS: usize = 4;
-            self.lambda
-                .par_chunks_mut(ROWS * w)
-                .zip(self.row_sums.par_chunks_mut(ROWS))
-                .zip(
-                    unstable
-                        .par_chunks(ROWS * w)
-                        .zip(window.par_chunks(ROWS * w)),
-                )
-                .for_each(|((rows, sums), (unstable, window))| {
+            parallel::for_each_block(
+                ROWS * w,
+                (
+                    &mut self.lambda,
+                    Chunks(&mut self.row_sums[..], ROWS),
+                    unstable,
+                    window,
+                ),
+                |_, (rows, sums, unstable, window)| {
                     for ((l, &u), &s) in rows.iter_mut().zip(unstable).zip(window) {
                         let u = f64::from(u);
                         *l = if u < min || s == 0.0 {
@@ -469,15 +472,15 @@ impl HazardMap {
                         };
                     }
                     row_sums_side_by_side(rows, w, sums);
-                });
+                },
+            );
             self.total = self.row_sums.iter().sum();
             return self.total;
         }
-        self.lambda
-            .par_chunks_mut(w)
-            .zip(self.row_sums.par_iter_mut())
-            .enumerate()
-            .for_each(|(r, (row, sum))| {
+        parallel::for_each_row(
+            w,
+            (&mut self.lambda, PerRow(&mut self.row_sums[..])),
+            |r, (row, sum)| {
                 *sum = 0.0;
                 let o = r * w;
                 for (c, l) in row.iter_mut().enumerate() {
@@ -492,7 +495,8 @@ impl HazardMap {
                     };
                     *sum += *l;
                 }
-            });
+            },
+        );
         self.total = self.row_sums.iter().sum();
         self.total
     }

@@ -14,9 +14,8 @@
 //! interleaved partial sums added in a fixed order, so the table does not depend on the
 //! thread count.
 
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::LayeredTerrain;
+use snowscape_terrain::{LayeredTerrain, parallel};
 
 /// Width of a band, m.
 pub const BAND_WIDTH_M: f64 = 200.0;
@@ -136,30 +135,25 @@ impl Bands {
         let n = self.len();
         let per_water = densities_kg_m3.map(|d| (d / 1000.0) as f32);
         let [c, s, u, p] = &terrain.snow;
-        let rows: Vec<Vec<f64>> = self
-            .band_of
-            .par_chunks(w)
-            .enumerate()
-            .map(|(row, bands)| {
-                // Per band, `SUM_LANES` interleaved partial sums (no chain of additions).
-                let mut sums = vec![0.0f64; n * LANES];
-                let at = row * w;
-                for (col, &b) in bands.iter().enumerate() {
-                    let i = at + col;
-                    if let Some(sum) = sums.get_mut(b as usize * LANES + col % LANES) {
-                        let swe = c[i] * per_water[0]
-                            + s[i] * per_water[1]
-                            + u[i] * per_water[2]
-                            + p[i] * per_water[3]
-                            + liquid_m.get(i).copied().unwrap_or(0.0);
-                        *sum += swe as f64;
-                    }
+        let rows: Vec<Vec<f64>> = parallel::map_rows(w, &self.band_of, |row, bands| {
+            // Per band, `SUM_LANES` interleaved partial sums (no chain of additions).
+            let mut sums = vec![0.0f64; n * LANES];
+            let at = row * w;
+            for (col, &b) in bands.iter().enumerate() {
+                let i = at + col;
+                if let Some(sum) = sums.get_mut(b as usize * LANES + col % LANES) {
+                    let swe = c[i] * per_water[0]
+                        + s[i] * per_water[1]
+                        + u[i] * per_water[2]
+                        + p[i] * per_water[3]
+                        + liquid_m.get(i).copied().unwrap_or(0.0);
+                    *sum += swe as f64;
                 }
-                sums.chunks_exact(LANES)
-                    .map(|l| (l[0] + l[1]) + (l[2] + l[3]))
-                    .collect()
-            })
-            .collect();
+            }
+            sums.chunks_exact(LANES)
+                .map(|l| (l[0] + l[1]) + (l[2] + l[3]))
+                .collect()
+        });
         let mut total = vec![0.0f64; n];
         for r in rows {
             for (t, v) in total.iter_mut().zip(r) {

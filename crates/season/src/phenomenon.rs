@@ -6,8 +6,7 @@
 //! (every validity test folds to `true`, so interior loops carry no mask branch) and with
 //! [`Masked`] (the terrain's per-cell nodata flags).
 
-use rayon::prelude::*;
-use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask, operators, surface};
+use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask, operators, parallel, surface};
 use thiserror::Error;
 
 /// A bad input to a phenomenon step: a map of the wrong size, a parameter out of range or a
@@ -194,15 +193,15 @@ pub(crate) fn fill_surface(terrain: &LayeredTerrain, out: &mut Vec<f32>) {
     let w = terrain.geometry().width();
     out.resize(terrain.geometry().len(), 0.0);
     let [c, s, u, p] = &terrain.snow;
-    out.par_chunks_mut(w)
-        .zip(terrain.bedrock.par_chunks(w))
-        .zip(c.par_chunks(w).zip(s.par_chunks(w)))
-        .zip(u.par_chunks(w).zip(p.par_chunks(w)))
-        .for_each(|(((a, b), (c, s)), (u, p))| {
+    parallel::for_each_row(
+        w,
+        (&mut out[..], &terrain.bedrock, c, s, u, p),
+        |_, (a, b, c, s, u, p)| {
             for (k, a) in a.iter_mut().enumerate() {
                 *a = b[k] + (c[k] + s[k] + u[k] + p[k]);
             }
-        });
+        },
+    );
 }
 
 /// Norm of the surface gradient `‖∇A‖` (tan of the slope) along one row, into `out`.

@@ -39,9 +39,8 @@ use crate::VolumeChange;
 use crate::phenomenon::{
     PhenomenonError, Validity, check_dt, check_range, fill_surface, with_validity,
 };
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::{LayeredTerrain, SnowLayer};
+use snowscape_terrain::{LayeredTerrain, SnowLayer, parallel};
 
 /// Largest share `f = k_m · δt_sub` of the excess slope relaxed in one sub-step (see the
 /// module documentation: `1 − 4f ≥ 0`).
@@ -243,7 +242,7 @@ fn limiter(f: [f32; 4], p: f32) -> f32 {
 /// Pass 1: every cell's limiter.
 fn limiter_pass<V: Validity>(st: &Stencil<V>, powder: &[f32], scale: &mut [f32]) {
     let w = st.w;
-    scale.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
+    parallel::for_each_row(w, scale, |row, line| {
         let base = row * w;
         let p = &powder[base..base + w];
         let general = |col: usize| {
@@ -280,86 +279,83 @@ fn update_pass<V: Validity>(
     a_next: &mut [f32],
 ) -> Vec<(f64, f64)> {
     let w = st.w;
-    powder
-        .par_chunks_mut(w)
-        .zip(a_next.par_chunks_mut(w))
-        .enumerate()
-        .map_init(
-            || vec![0.0f32; w],
-            |moved_row, (row, (p_line, a_line))| {
-                let base = row * w;
-                let a = &st.a[base..base + w];
-                let mut border = 0.0f64;
-                let mut general = |col: usize, p: &mut f32, a_new: &mut f32, moved: &mut f32| {
-                    let i = base + col;
-                    if !st.valid.at(i) {
-                        (*a_new, *moved) = (a[col], 0.0);
-                        return;
-                    }
-                    let (f, ghost) = st.general(col, row);
-                    let sp = scale[i];
-                    let (mut out, mut inflow, mut ghost_out) = (0.0f32, 0.0f32, 0.0f32);
-                    for k in 0..4 {
-                        if f[k] > 0.0 {
-                            *(if ghost[k] { &mut ghost_out } else { &mut out }) += f[k] * sp;
-                        } else if f[k] < 0.0 {
-                            let j = match k {
-                                EAST => i + 1,
-                                WEST => i - 1,
-                                NORTH => i - w,
-                                _ => i + w,
-                            };
-                            inflow += -f[k] * scale[j];
-                        }
-                    }
-                    let p_new = (*p - out - ghost_out + inflow).max(0.0);
-                    *a_new = a[col] + (p_new - *p);
-                    *p = p_new;
-                    *moved = out;
-                    border += ghost_out as f64;
-                };
-                match interior_span(w, st.h, row) {
-                    Some(span) => {
-                        general(0, &mut p_line[0], &mut a_line[0], &mut moved_row[0]);
-                        let last = w - 1;
-                        general(
-                            last,
-                            &mut p_line[last],
-                            &mut a_line[last],
-                            &mut moved_row[last],
-                        );
-                        let s_up = &scale[base - w..base];
-                        let s_mid = &scale[base..base + w];
-                        let s_dn = &scale[base + w..base + 2 * w];
-                        let (p_line, a_line) = (&mut p_line[..w], &mut a_line[..w]);
-                        let moved_row = &mut moved_row[..w];
-                        let rows = st.rows(row);
-                        for col in span {
-                            let f = st.interior(rows, col, base + col);
-                            let sp = s_mid[col];
-                            let out = f.iter().map(|f| f.max(0.0)).sum::<f32>() * sp;
-                            let inflow = (-f[EAST]).max(0.0) * s_mid[col + 1]
-                                + (-f[WEST]).max(0.0) * s_mid[col - 1]
-                                + (-f[NORTH]).max(0.0) * s_up[col]
-                                + (-f[SOUTH]).max(0.0) * s_dn[col];
-                            let p_old = p_line[col];
-                            let p_new = (p_old - out + inflow).max(0.0);
-                            p_line[col] = p_new;
-                            a_line[col] = a[col] + (p_new - p_old);
-                            moved_row[col] = out;
-                        }
-                    }
-                    None => {
-                        for col in 0..w {
-                            general(col, &mut p_line[col], &mut a_line[col], &mut moved_row[col]);
-                        }
+    parallel::map_rows_with(
+        w,
+        (powder, a_next),
+        || vec![0.0f32; w],
+        |moved_row, row, (p_line, a_line)| {
+            let base = row * w;
+            let a = &st.a[base..base + w];
+            let mut border = 0.0f64;
+            let mut general = |col: usize, p: &mut f32, a_new: &mut f32, moved: &mut f32| {
+                let i = base + col;
+                if !st.valid.at(i) {
+                    (*a_new, *moved) = (a[col], 0.0);
+                    return;
+                }
+                let (f, ghost) = st.general(col, row);
+                let sp = scale[i];
+                let (mut out, mut inflow, mut ghost_out) = (0.0f32, 0.0f32, 0.0f32);
+                for k in 0..4 {
+                    if f[k] > 0.0 {
+                        *(if ghost[k] { &mut ghost_out } else { &mut out }) += f[k] * sp;
+                    } else if f[k] < 0.0 {
+                        let j = match k {
+                            EAST => i + 1,
+                            WEST => i - 1,
+                            NORTH => i - w,
+                            _ => i + w,
+                        };
+                        inflow += -f[k] * scale[j];
                     }
                 }
-                let moved = crate::row_sum(moved_row);
-                (moved, border)
-            },
-        )
-        .collect()
+                let p_new = (*p - out - ghost_out + inflow).max(0.0);
+                *a_new = a[col] + (p_new - *p);
+                *p = p_new;
+                *moved = out;
+                border += ghost_out as f64;
+            };
+            match interior_span(w, st.h, row) {
+                Some(span) => {
+                    general(0, &mut p_line[0], &mut a_line[0], &mut moved_row[0]);
+                    let last = w - 1;
+                    general(
+                        last,
+                        &mut p_line[last],
+                        &mut a_line[last],
+                        &mut moved_row[last],
+                    );
+                    let s_up = &scale[base - w..base];
+                    let s_mid = &scale[base..base + w];
+                    let s_dn = &scale[base + w..base + 2 * w];
+                    let (p_line, a_line) = (&mut p_line[..w], &mut a_line[..w]);
+                    let moved_row = &mut moved_row[..w];
+                    let rows = st.rows(row);
+                    for col in span {
+                        let f = st.interior(rows, col, base + col);
+                        let sp = s_mid[col];
+                        let out = f.iter().map(|f| f.max(0.0)).sum::<f32>() * sp;
+                        let inflow = (-f[EAST]).max(0.0) * s_mid[col + 1]
+                            + (-f[WEST]).max(0.0) * s_mid[col - 1]
+                            + (-f[NORTH]).max(0.0) * s_up[col]
+                            + (-f[SOUTH]).max(0.0) * s_dn[col];
+                        let p_old = p_line[col];
+                        let p_new = (p_old - out + inflow).max(0.0);
+                        p_line[col] = p_new;
+                        a_line[col] = a[col] + (p_new - p_old);
+                        moved_row[col] = out;
+                    }
+                }
+                None => {
+                    for col in 0..w {
+                        general(col, &mut p_line[col], &mut a_line[col], &mut moved_row[col]);
+                    }
+                }
+            }
+            let moved = crate::row_sum(moved_row);
+            (moved, border)
+        },
+    )
 }
 
 /// Diffuses the powder layer over `dt_days`.

@@ -121,8 +121,8 @@ use neighbourhood::{
     Around, Neighbour, distance_inv_l, for_each_around, for_each_around_of, neighbours,
     steepest_descent,
 };
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use snowscape_terrain::parallel::{self, PerRow};
 use snowscape_terrain::{GridGeometry, LayeredTerrain, SnowLayer};
 use std::collections::BinaryHeap;
 
@@ -465,13 +465,17 @@ impl SheddingScratch {
     /// Rebuilds the strips if the bedrock or the mask changed.
     fn refresh_strips(&mut self, terrain: &LayeredTerrain) -> Result<(), PhenomenonError> {
         let mask = terrain.mask().invalid_cells();
+        // Blocks of cells compared in parallel (a boolean: the same for any thread count).
+        const BLOCK: usize = 1 << 14;
         let same = self.key_bedrock.len() == terrain.bedrock.len()
             && self.key_mask.as_deref() == mask
-            && self
-                .key_bedrock
-                .par_iter()
-                .zip(terrain.bedrock.par_iter())
-                .all(|(k, b)| *k == b.to_bits());
+            && parallel::map_rows(
+                BLOCK,
+                (&self.key_bedrock, &terrain.bedrock),
+                |_, (key, bedrock)| key.iter().zip(bedrock).all(|(k, b)| *k == b.to_bits()),
+            )
+            .into_iter()
+            .all(|same| same);
         if same {
             return Ok(());
         }
@@ -482,34 +486,34 @@ impl SheddingScratch {
         let nb = neighbours(geometry);
         let bedrock = &terrain.bedrock;
         let descents: Vec<(f32, f32)> = with_validity!(terrain.mask(), |valid| {
-            (0..bedrock.len())
-                .into_par_iter()
-                .map(|i| {
-                    let (mut bound, mut tan) = (0.0f32, 0.0f32);
-                    for_each_around(geometry, valid, &nb, i, |n, a| match a {
-                        Around::Cell(j) => {
-                            let t = (bedrock[i] - bedrock[j]) * n.inv_l;
-                            bound = bound.max(t);
-                            tan = tan.max(t);
-                        }
-                        Around::Ghost(o) => {
-                            bound = f32::INFINITY;
-                            tan = tan.max((bedrock[o] - bedrock[i]) * n.inv_l);
-                        }
-                    });
-                    (bound, if valid.at(i) { tan } else { 0.0 })
-                })
-                .collect()
+            parallel::map_range(bedrock.len(), |i| {
+                let (mut bound, mut tan) = (0.0f32, 0.0f32);
+                for_each_around(geometry, valid, &nb, i, |n, a| match a {
+                    Around::Cell(j) => {
+                        let t = (bedrock[i] - bedrock[j]) * n.inv_l;
+                        bound = bound.max(t);
+                        tan = tan.max(t);
+                    }
+                    Around::Ghost(o) => {
+                        bound = f32::INFINITY;
+                        tan = tan.max((bedrock[o] - bedrock[i]) * n.inv_l);
+                    }
+                });
+                (bound, if valid.at(i) { tan } else { 0.0 })
+            })
         });
         self.bedrock_descent = descents.iter().map(|d| d.0).collect();
         let bedrock_tan: Vec<f32> = descents.iter().map(|d| d.1).collect();
+        // The strips built in parallel, then their results in order (the first error, if any).
         self.strips = with_validity!(terrain.mask(), |valid| {
-            strip_rows(geometry.height())
-                .into_par_iter()
-                .map(|rows| Strip::new(rows, bedrock, geometry, valid, &bedrock_tan))
-                .collect::<Result<_, _>>()
+            parallel::map_rows(1, PerRow(strip_rows(geometry.height())), |_, rows| {
+                Strip::new(rows, bedrock, geometry, valid, &bedrock_tan)
+            })
+            .into_iter()
+            .collect::<Result<_, _>>()
         })?;
-        self.key_bedrock = terrain.bedrock.par_iter().map(|v| v.to_bits()).collect();
+        self.key_bedrock.resize(terrain.bedrock.len(), 0);
+        parallel::map_cells(&mut self.key_bedrock, &terrain.bedrock, |v| v.to_bits());
         self.key_mask = mask.map(<[bool]>::to_vec);
         Ok(())
     }
@@ -692,47 +696,47 @@ fn over_holding_depth<V: Validity>(
     let margin = 0.01 * inv_l_max;
     let bed = |j: usize| bedrock[j] + snow[0][j];
     let surface = |j: usize| bedrock[j] + (snow[0][j] + snow[1][j] + snow[2][j] + snow[3][j]);
-    (0..geometry.height())
-        .into_par_iter()
-        .map_init(
-            || vec![false; w],
-            |candidate, row| {
-                // The slope bound first, over the whole row (a loop that vectorises): it reads
-                // two arrays and rules out most cells.
-                let base = row * w;
-                let (b, c) = (&bound[base..base + w], &snow[0][base..base + w]);
-                for (k, out) in candidate.iter_mut().enumerate() {
-                    *out = b[k] + c[k] * inv_l_max + margin >= tan_min;
+    parallel::map_rows_with(
+        w,
+        (&bound[..], &snow[0][..]),
+        || vec![false; w],
+        |candidate, row, (b, c)| {
+            // The slope bound first, over the whole row (a loop that vectorises): it reads
+            // two arrays and rules out most cells.
+            let base = row * w;
+            let (b, c) = (&b[..w], &c[..w]);
+            for (k, out) in candidate.iter_mut().enumerate() {
+                *out = b[k] + c[k] * inv_l_max + margin >= tan_min;
+            }
+            let mut found = Vec::new();
+            for i in (0..w).filter(|&k| candidate[k]).map(|k| base + k) {
+                if !valid.at(i) {
+                    continue;
                 }
-                let mut found = Vec::new();
-                for i in (0..w).filter(|&k| candidate[k]).map(|k| base + k) {
-                    if !valid.at(i) {
-                        continue;
-                    }
-                    let depth = snow[0][i] + snow[1][i] + snow[2][i] + snow[3][i];
-                    if depth - floor <= MIN_SHED_M {
-                        continue;
-                    }
-                    let on_bed = steepest_descent(bed(i), bed, bed, geometry, valid, nb, i);
-                    if on_bed < tan_min {
-                        continue;
-                    }
-                    let on_snow =
-                        steepest_descent(surface(i), surface, bed, geometry, valid, nb, i);
-                    let t = on_bed.min(on_snow);
-                    if t < tan_min {
-                        continue;
-                    }
-                    let excess = depth - holding.hold(t, false);
-                    if excess > MIN_SHED_M {
-                        found.push((i as u32, t, excess));
-                    }
+                let depth = snow[0][i] + snow[1][i] + snow[2][i] + snow[3][i];
+                if depth - floor <= MIN_SHED_M {
+                    continue;
                 }
-                found
-            },
-        )
-        .flat_map_iter(|found| found)
-        .collect()
+                let on_bed = steepest_descent(bed(i), bed, bed, geometry, valid, nb, i);
+                if on_bed < tan_min {
+                    continue;
+                }
+                let on_snow = steepest_descent(surface(i), surface, bed, geometry, valid, nb, i);
+                let t = on_bed.min(on_snow);
+                if t < tan_min {
+                    continue;
+                }
+                let excess = depth - holding.hold(t, false);
+                if excess > MIN_SHED_M {
+                    found.push((i as u32, t, excess));
+                }
+            }
+            found
+        },
+    )
+    .into_iter()
+    .flatten()
+    .collect()
 }
 
 /// Monotone map of an f32 onto a u32 (larger values, larger keys; a total order).

@@ -24,9 +24,8 @@ use crate::phenomenon::{
     with_validity,
 };
 use crate::{VolumeChange, ordered_sum};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::LayeredTerrain;
+use snowscape_terrain::{LayeredTerrain, parallel};
 
 /// Which snowfall law a season uses.
 #[derive(
@@ -209,35 +208,31 @@ pub fn step(
     let k = ShareCoefficients::new(params);
     let [_, stable, unstable, powder] = &mut terrain.snow;
     let row_added: Vec<f64> = with_validity!(mask, |valid| {
-        stable
-            .par_chunks_mut(w)
-            .zip(unstable.par_chunks_mut(w))
-            .zip(powder.par_chunks_mut(w))
-            .enumerate()
-            .map_init(
-                || vec![0.0f32; w],
-                |gradient, (row, ((st, un), pw))| {
-                    row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
-                    let mut added = 0.0f64;
-                    for col in 0..w {
-                        let i = row * w + col;
-                        let depth = rate * (surf[i] - a0).max(0.0);
-                        if depth <= 0.0 || !valid.at(i) {
-                            continue;
-                        }
-                        let (xp, xu, _) = k.shares(gradient[col], temperature[i]);
-                        let (dp, du) = (depth * xp, depth * xu);
-                        // The stable share takes the remainder (never below 0 after rounding).
-                        let ds = (depth - dp - du).max(0.0);
-                        pw[col] += dp;
-                        un[col] += du;
-                        st[col] += ds;
-                        added += dp as f64 + du as f64 + ds as f64;
+        parallel::map_rows_with(
+            w,
+            (stable, unstable, powder),
+            || vec![0.0f32; w],
+            |gradient, row, (st, un, pw)| {
+                row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
+                let mut added = 0.0f64;
+                for col in 0..w {
+                    let i = row * w + col;
+                    let depth = rate * (surf[i] - a0).max(0.0);
+                    if depth <= 0.0 || !valid.at(i) {
+                        continue;
                     }
-                    added
-                },
-            )
-            .collect()
+                    let (xp, xu, _) = k.shares(gradient[col], temperature[i]);
+                    let (dp, du) = (depth * xp, depth * xu);
+                    // The stable share takes the remainder (never below 0 after rounding).
+                    let ds = (depth - dp - du).max(0.0);
+                    pw[col] += dp;
+                    un[col] += du;
+                    st[col] += ds;
+                    added += dp as f64 + du as f64 + ds as f64;
+                }
+                added
+            },
+        )
     });
     Ok(VolumeChange {
         added: ordered_sum(&row_added) * geometry.cell_area(),
@@ -394,64 +389,58 @@ pub fn add_precipitation(
     let [_, stable, unstable, powder] = &mut terrain.snow;
     let n_bands = band_water.len();
     let rows: Vec<([f64; 3], Vec<[f64; 2]>)> = with_validity!(mask, |valid| {
-        stable
-            .par_chunks_mut(w)
-            .zip(unstable.par_chunks_mut(w))
-            .zip(powder.par_chunks_mut(w))
-            .zip(surface_age.par_chunks_mut(w))
-            .zip(rain_out.par_chunks_mut(w))
-            .enumerate()
-            .map_init(
-                || vec![0.0f32; w],
-                |gradient, (row, ((((st, un), pw), age), rain))| {
-                    row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
-                    // Four interleaved partial sums of each term (as `crate::row_sum`).
-                    let mut sums = [[0.0f64; crate::SUM_LANES]; 3];
-                    // Per band and lane: snow water and rain.
-                    let mut by_band = vec![[0.0f64; 2]; n_bands * crate::SUM_LANES];
-                    for col in 0..w {
-                        let i = row * w + col;
-                        let lane = col % crate::SUM_LANES;
-                        if !valid.at(i) {
-                            continue;
-                        }
-                        let (s_ref, r_ref) = table.at(maps.lapse_offset_c[i]);
-                        let oro = maps.orographic[i];
-                        let (swe, r) = (s_ref * oro, r_ref * oro);
-                        rain[col] += r;
-                        sums[2][lane] += r as f64;
-                        let band = by_band.get_mut(band_of[i] as usize * crate::SUM_LANES + lane);
-                        if swe <= 0.0 {
-                            if let Some(b) = band {
-                                b[1] += r as f64;
-                            }
-                            continue;
-                        }
-                        let (xp, xu, _) = k.shares(gradient[col], maps.temperature[i]);
-                        let (wp, wu) = (swe * xp, swe * xu);
-                        let ws = (swe - wp - wu).max(0.0);
-                        let (dp, du, ds) = (
-                            wp * depth_per_water[3],
-                            wu * depth_per_water[2],
-                            ws * depth_per_water[1],
-                        );
-                        pw[col] += dp;
-                        un[col] += du;
-                        st[col] += ds;
-                        if swe >= reset {
-                            age[col] = 0.0;
-                        }
-                        sums[0][lane] += dp as f64 + du as f64 + ds as f64;
-                        sums[1][lane] += (wp + wu + ws) as f64;
+        parallel::map_rows_with(
+            w,
+            (stable, unstable, powder, surface_age, rain_out),
+            || vec![0.0f32; w],
+            |gradient, row, (st, un, pw, age, rain)| {
+                row_gradient_norm(surf, &geometry, &mask, valid, row, gradient);
+                // Four interleaved partial sums of each term (as `crate::row_sum`).
+                let mut sums = [[0.0f64; crate::SUM_LANES]; 3];
+                // Per band and lane: snow water and rain.
+                let mut by_band = vec![[0.0f64; 2]; n_bands * crate::SUM_LANES];
+                for col in 0..w {
+                    let i = row * w + col;
+                    let lane = col % crate::SUM_LANES;
+                    if !valid.at(i) {
+                        continue;
+                    }
+                    let (s_ref, r_ref) = table.at(maps.lapse_offset_c[i]);
+                    let oro = maps.orographic[i];
+                    let (swe, r) = (s_ref * oro, r_ref * oro);
+                    rain[col] += r;
+                    sums[2][lane] += r as f64;
+                    let band = by_band.get_mut(band_of[i] as usize * crate::SUM_LANES + lane);
+                    if swe <= 0.0 {
                         if let Some(b) = band {
-                            b[0] += (wp + wu + ws) as f64;
                             b[1] += r as f64;
                         }
+                        continue;
                     }
-                    (sums.map(crate::lane_total), by_band)
-                },
-            )
-            .collect()
+                    let (xp, xu, _) = k.shares(gradient[col], maps.temperature[i]);
+                    let (wp, wu) = (swe * xp, swe * xu);
+                    let ws = (swe - wp - wu).max(0.0);
+                    let (dp, du, ds) = (
+                        wp * depth_per_water[3],
+                        wu * depth_per_water[2],
+                        ws * depth_per_water[1],
+                    );
+                    pw[col] += dp;
+                    un[col] += du;
+                    st[col] += ds;
+                    if swe >= reset {
+                        age[col] = 0.0;
+                    }
+                    sums[0][lane] += dp as f64 + du as f64 + ds as f64;
+                    sums[1][lane] += (wp + wu + ws) as f64;
+                    if let Some(b) = band {
+                        b[0] += (wp + wu + ws) as f64;
+                        b[1] += r as f64;
+                    }
+                }
+                (sums.map(crate::lane_total), by_band)
+            },
+        )
     });
     let a = geometry.cell_area();
     let mut r = PrecipitationReport::default();

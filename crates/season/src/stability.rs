@@ -35,9 +35,8 @@ use crate::phenomenon::{
     with_validity,
 };
 use crate::{VolumeChange, ordered_sum};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask};
+use snowscape_terrain::{GridGeometry, LayeredTerrain, NodataMask, parallel};
 
 /// Parameters of the snow state changes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -419,28 +418,22 @@ fn run_rows<V: Validity>(
 ) -> Vec<[f64; 5]> {
     let w = geometry.width();
     let [compacted, stable, unstable, powder] = &mut terrain.snow;
-    compacted
-        .par_chunks_mut(w)
-        .zip(stable.par_chunks_mut(w))
-        .zip(unstable.par_chunks_mut(w))
-        .zip(powder.par_chunks_mut(w))
-        .zip(temperature.par_chunks(w))
-        .enumerate()
-        .map_init(
-            || RowTransfers::new(w),
-            |buf, (row, ((((c, s), u), p), t))| {
-                // Without stable, unstable or powder snow nothing ages, exchanges or compacts:
-                // skip the row (bit-identical: every transfer would be an exact 0).
-                let idle = |layer: &[f32]| layer.iter().all(|&v| v == 0.0);
-                if idle(s) && idle(u) && idle(p) {
-                    return [0.0; 5];
-                }
-                row_gradient_norm(surf, geometry, mask, valid, row, &mut buf.gradient);
-                row_update(k, [c, s, u, p], t, buf);
-                buf.sums()
-            },
-        )
-        .collect()
+    parallel::map_rows_with(
+        w,
+        (compacted, stable, unstable, powder, temperature),
+        || RowTransfers::new(w),
+        |buf, row, (c, s, u, p, t)| {
+            // Without stable, unstable or powder snow nothing ages, exchanges or compacts:
+            // skip the row (bit-identical: every transfer would be an exact 0).
+            let idle = |layer: &[f32]| layer.iter().all(|&v| v == 0.0);
+            if idle(s) && idle(u) && idle(p) {
+                return [0.0; 5];
+            }
+            row_gradient_norm(surf, geometry, mask, valid, row, &mut buf.gradient);
+            row_update(k, [c, s, u, p], t, buf);
+            buf.sums()
+        },
+    )
 }
 
 #[cfg(test)]

@@ -10,10 +10,9 @@ use crate::melt::MeltHour;
 use crate::scenario::WeatherPeriod;
 use crate::snowfall::{PrecipitationHour, PrecipitationTable};
 use crate::storms::StormRates;
-use rayon::prelude::*;
 use snowscape_environment::SeasonSun;
 use snowscape_environment::insolation::clear_sky;
-use snowscape_terrain::{LayeredTerrain, NodataMask};
+use snowscape_terrain::{LayeredTerrain, NodataMask, parallel};
 use std::sync::Arc;
 
 /// Longwave emission of a melting snow surface, `σ · 273.15⁴`, W/m² (emissivity 1).
@@ -245,10 +244,10 @@ impl Air {
         let t = self.sea_level_daily_c(day) as f32;
         out.resize(self.lapse_offset_c.len(), 0.0);
         const BLOCK: usize = 1 << 14;
-        out.par_chunks_mut(BLOCK)
-            .zip(self.lapse_offset_c.par_chunks(BLOCK))
-            .enumerate()
-            .for_each(|(b, (out, offsets))| match mask.invalid_cells() {
+        parallel::for_each_block(
+            BLOCK,
+            (&mut out[..], &self.lapse_offset_c[..]),
+            |b, (out, offsets)| match mask.invalid_cells() {
                 None => out.iter_mut().zip(offsets).for_each(|(o, &d)| *o = t + d),
                 Some(invalid) => {
                     let invalid = &invalid[b * BLOCK..b * BLOCK + out.len()];
@@ -256,7 +255,8 @@ impl Air {
                         *o = if bad { 0.0 } else { t + d };
                     }
                 }
-            });
+            },
+        );
     }
 
     /// The hour slots of the window `[t0, t1]` (season days): (start day, weight in hours).

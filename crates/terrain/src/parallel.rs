@@ -3,9 +3,9 @@
 //! [`for_each_row`] (or its variants here), never through the thread pool directly.
 //!
 //! A kernel is a function of a row index and that row's slices of several per-cell arrays
-//! ([`Rows`]: any tuple of `&mut [T]`, `&[T]` and [`PerRow`] records, up to twelve); the
-//! dispatch decides how rows are spread over the workers. What it guarantees, once for every
-//! kernel:
+//! ([`Rows`]: any tuple of `&mut [T]`, `&[T]`, [`PerRow`] records and [`Chunks`] of a few
+//! values per row, up to twelve); the dispatch decides how rows are spread over the workers.
+//! What it guarantees, once for every kernel:
 //!
 //! - **Each row is handed to exactly one call**, so a kernel that writes only its own row's
 //!   slices (and reads anything else) gives the same bytes whatever the thread count and
@@ -82,6 +82,27 @@ impl<'a, T: Sync + 'a> Rows for PerRow<&'a [T]> {
     type Row = &'a T;
     fn par_rows(self, _len: usize) -> impl IndexedParallelIterator<Item = &'a T> {
         self.0.par_iter()
+    }
+}
+
+/// `n` consecutive values per row, whatever the dispatch's row length: a slice of per-row
+/// outputs (or inputs) of several values each, such as the sums of a block's rows handed to
+/// a [`for_each_block`] kernel with that block's cells. `Chunks(v, n)` yields `v`'s chunks of
+/// `n` values (the last may be shorter), the `k`-th with the `k`-th row.
+#[derive(Debug)]
+pub struct Chunks<S>(pub S, pub usize);
+
+impl<'a, T: Send + Sync + 'a> Rows for Chunks<&'a mut [T]> {
+    type Row = &'a mut [T];
+    fn par_rows(self, _len: usize) -> impl IndexedParallelIterator<Item = Self::Row> {
+        self.0.par_chunks_mut(self.1.max(1))
+    }
+}
+
+impl<'a, T: Sync + 'a> Rows for Chunks<&'a [T]> {
+    type Row = &'a [T];
+    fn par_rows(self, _len: usize) -> impl IndexedParallelIterator<Item = Self::Row> {
+        self.0.par_chunks(self.1.max(1))
     }
 }
 
@@ -290,5 +311,22 @@ mod tests {
         let mut v = vec![0u32; 6];
         for_each_row_with(3, &mut v, || 10u32, |s, row, r| r.fill(*s + row as u32));
         assert_eq!(v, [10, 10, 10, 11, 11, 11]);
+    }
+
+    #[test]
+    fn chunks_hand_n_values_with_each_row() {
+        // Blocks of two rows of three cells, each with its two row sums (the last block
+        // holds one row, and one sum).
+        let cells: Vec<u32> = (0..15).collect();
+        let mut sums = vec![0u32; 5];
+        for_each_block(6, (&cells, Chunks(&mut sums[..], 2)), |block, (c, s)| {
+            assert_eq!(s.len(), if block == 2 { 1 } else { 2 });
+            for (s, row) in s.iter_mut().zip(c.chunks(3)) {
+                *s = row.iter().sum();
+            }
+        });
+        assert_eq!(sums, [3, 12, 21, 30, 39]);
+        let firsts = map_rows(6, (&cells, Chunks(&sums[..], 2)), |_, (c, s)| (c[0], s[0]));
+        assert_eq!(firsts, [(0, 3), (6, 21), (12, 39)]);
     }
 }

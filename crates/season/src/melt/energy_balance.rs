@@ -77,9 +77,9 @@ use super::enhanced::{
     self, EnhancedMeltParams, MeltForcing, MeltReport, SnowpackState, albedo_table,
 };
 use crate::phenomenon::{PhenomenonError, check_range};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
+use snowscape_terrain::parallel::{self, PerRow};
 
 mod kernel;
 mod steps;
@@ -257,48 +257,48 @@ fn step_and_surface(
     let surface_rows = super::enhanced::surface_rows(surface, &geometry);
     let bedrock = &terrain.bedrock;
     let [c, s, u, p] = &mut terrain.snow;
-    let rows: Vec<RowSums> = c
-        .par_chunks_mut(w)
-        .zip(s.par_chunks_mut(w))
-        .zip(u.par_chunks_mut(w))
-        .zip(p.par_chunks_mut(w))
-        .zip(pack.surface_age_days.par_chunks_mut(w))
-        .zip(pack.cold_content_m.par_chunks_mut(w))
-        .zip(pack.liquid_water_m.par_chunks_mut(w))
-        .zip(pack.melting.par_chunks_mut(w))
-        .zip(surface_rows.into_par_iter())
-        .enumerate()
-        .map_init(
-            || kernel::Scratch::new(w),
-            |scratch, (row, ((((((((c, s), u), p), age), cold), liquid), melting), surface))| {
-                let base = row * w;
-                let inputs = RowInputs {
-                    base,
-                    altitude: &bedrock[base..base + w],
-                    offset: &forcing.lapse_offset_c[base..base + w],
-                    sky_view: &forcing.sky_view_factor[base..base + w],
-                    rain: (!forcing.rain_m.is_empty()).then(|| &forcing.rain_m[base..base + w]),
-                    invalid: invalid.map(|v| &v[base..base + w]),
-                    albedo: &albedo,
-                };
-                let state = RowState {
-                    layers: [&mut *c, &mut *s, &mut *u, &mut *p],
-                    age,
-                    cold,
-                    liquid,
-                    melting,
-                };
-                kernel.row(&steps, &inputs, state, scratch);
-                if let Some(a) = surface {
-                    let b = &bedrock[base..base + w];
-                    for (k, a) in a.iter_mut().enumerate() {
-                        *a = b[k] + (c[k] + s[k] + u[k] + p[k]);
-                    }
+    let rows: Vec<RowSums> = parallel::map_rows_with(
+        w,
+        (
+            c,
+            s,
+            u,
+            p,
+            &mut pack.surface_age_days,
+            &mut pack.cold_content_m,
+            &mut pack.liquid_water_m,
+            &mut pack.melting,
+            PerRow(surface_rows),
+        ),
+        || kernel::Scratch::new(w),
+        |scratch, row, (c, s, u, p, age, cold, liquid, melting, surface)| {
+            let base = row * w;
+            let inputs = RowInputs {
+                base,
+                altitude: &bedrock[base..base + w],
+                offset: &forcing.lapse_offset_c[base..base + w],
+                sky_view: &forcing.sky_view_factor[base..base + w],
+                rain: (!forcing.rain_m.is_empty()).then(|| &forcing.rain_m[base..base + w]),
+                invalid: invalid.map(|v| &v[base..base + w]),
+                albedo: &albedo,
+            };
+            let state = RowState {
+                layers: [&mut *c, &mut *s, &mut *u, &mut *p],
+                age,
+                cold,
+                liquid,
+                melting,
+            };
+            kernel.row(&steps, &inputs, state, scratch);
+            if let Some(a) = surface {
+                let b = &bedrock[base..base + w];
+                for (k, a) in a.iter_mut().enumerate() {
+                    *a = b[k] + (c[k] + s[k] + u[k] + p[k]);
                 }
-                RowSums(std::array::from_fn(|k| crate::row_sum(&scratch.sums[k])))
-            },
-        )
-        .collect();
+            }
+            RowSums(std::array::from_fn(|k| crate::row_sum(&scratch.sums[k])))
+        },
+    );
     let a = geometry.cell_area();
     let mut t = [0.0f64; SUMS];
     for r in rows {

@@ -41,9 +41,9 @@
 //! for any thread count.
 
 use crate::phenomenon::{PhenomenonError, check_range};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use snowscape_terrain::LayeredTerrain;
+use snowscape_terrain::parallel::{self, PerRow};
 
 use snowscape_terrain::materials::{
     LATENT_HEAT_FUSION_J_KG as LATENT_HEAT_FUSION, LAYER_DENSITY_KG_M3,
@@ -221,11 +221,8 @@ impl SnowpackState {
     /// Total liquid water, m³.
     pub fn liquid_volume(&self, cell_area: f64) -> f64 {
         // Fixed blocks summed in parallel, then in order: the same bits for any thread count.
-        let blocks: Vec<f64> = self
-            .liquid_water_m
-            .par_chunks(1 << 14)
-            .map(crate::row_sum)
-            .collect();
+        let blocks: Vec<f64> =
+            parallel::map_rows(1 << 14, &self.liquid_water_m, |_, b| crate::row_sum(b));
         blocks.iter().sum::<f64>() * cell_area
     }
 }
@@ -403,57 +400,57 @@ fn step_and_surface(
     let surface_rows = surface_rows(surface, &geometry);
     let bedrock = &terrain.bedrock;
     let [c, s, u, p] = &mut terrain.snow;
-    let rows: Vec<RowSums> = c
-        .par_chunks_mut(w)
-        .zip(s.par_chunks_mut(w))
-        .zip(u.par_chunks_mut(w))
-        .zip(p.par_chunks_mut(w))
-        .zip(pack.surface_age_days.par_chunks_mut(w))
-        .zip(pack.cold_content_m.par_chunks_mut(w))
-        .zip(pack.liquid_water_m.par_chunks_mut(w))
-        .zip(pack.melting.par_chunks_mut(w))
-        .zip(surface_rows.into_par_iter())
-        .enumerate()
-        .map_init(
-            || RowScratch::new(w),
-            |scratch, (row, ((((((((c, s), u), p), age), cold), liquid), melting), surface))| {
-                let base = row * w;
-                let snowy = (0..w).any(|k| c[k] + s[k] + u[k] + p[k] > 0.0);
-                if snowy {
-                    row_shortwave(k.threshold, forcing, base, &mut scratch.shortwave);
-                } else {
-                    scratch.shortwave.fill(0.0);
+    let rows: Vec<RowSums> = parallel::map_rows_with(
+        w,
+        (
+            c,
+            s,
+            u,
+            p,
+            &mut pack.surface_age_days,
+            &mut pack.cold_content_m,
+            &mut pack.liquid_water_m,
+            &mut pack.melting,
+            PerRow(surface_rows),
+        ),
+        || RowScratch::new(w),
+        |scratch, row, (c, s, u, p, age, cold, liquid, melting, surface)| {
+            let base = row * w;
+            let snowy = (0..w).any(|k| c[k] + s[k] + u[k] + p[k] > 0.0);
+            if snowy {
+                row_shortwave(k.threshold, forcing, base, &mut scratch.shortwave);
+            } else {
+                scratch.shortwave.fill(0.0);
+            }
+            let valid = invalid.map(|v| &v[base..base + w]);
+            let rain = if forcing.rain_m.is_empty() {
+                None
+            } else {
+                Some(&forcing.rain_m[base..base + w])
+            };
+            let sums = k.row(
+                forcing,
+                base,
+                RowState {
+                    layers: [&mut *c, &mut *s, &mut *u, &mut *p],
+                    age,
+                    cold,
+                    liquid,
+                    melting,
+                },
+                rain,
+                valid,
+                scratch,
+            );
+            if let Some(a) = surface {
+                let b = &bedrock[base..base + w];
+                for (k, a) in a.iter_mut().enumerate() {
+                    *a = b[k] + (c[k] + s[k] + u[k] + p[k]);
                 }
-                let valid = invalid.map(|v| &v[base..base + w]);
-                let rain = if forcing.rain_m.is_empty() {
-                    None
-                } else {
-                    Some(&forcing.rain_m[base..base + w])
-                };
-                let sums = k.row(
-                    forcing,
-                    base,
-                    RowState {
-                        layers: [&mut *c, &mut *s, &mut *u, &mut *p],
-                        age,
-                        cold,
-                        liquid,
-                        melting,
-                    },
-                    rain,
-                    valid,
-                    scratch,
-                );
-                if let Some(a) = surface {
-                    let b = &bedrock[base..base + w];
-                    for (k, a) in a.iter_mut().enumerate() {
-                        *a = b[k] + (c[k] + s[k] + u[k] + p[k]);
-                    }
-                }
-                sums
-            },
-        )
-        .collect();
+            }
+            sums
+        },
+    );
     let a = geometry.cell_area();
     let mut r = MeltReport::default();
     for s in rows {
@@ -577,16 +574,18 @@ impl DegreeHours {
 
     fn new(hours: &[MeltHour], threshold: f32, offsets: &[f32]) -> Self {
         // (Minimum and maximum are exact in any order: the same range for any thread count.)
-        let (lo, hi) = offsets
-            .par_iter()
-            .fold(
-                || (f32::INFINITY, f32::NEG_INFINITY),
-                |(a, b), &o| (a.min(o), b.max(o)),
-            )
-            .reduce(
-                || (f32::INFINITY, f32::NEG_INFINITY),
-                |(a, b), (c, d)| (a.min(c), b.max(d)),
-            );
+        // Fixed blocks folded in parallel, then the blocks' ranges in order.
+        let (lo, hi) = parallel::map_rows(1 << 14, offsets, |_, block| {
+            block
+                .iter()
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &o| {
+                    (a.min(o), b.max(o))
+                })
+        })
+        .into_iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), (c, d)| {
+            (a.min(c), b.max(d))
+        });
         let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 0.0) };
         let n = (((hi - lo) / Self::STEP_C).ceil() as usize + 2).min(1 << 20);
         let (mut cooling, mut warm) = (vec![0.0f32; n], vec![0.0f32; n]);

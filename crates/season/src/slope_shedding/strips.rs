@@ -259,7 +259,7 @@ pub(super) fn shed_in_phases<V: Validity>(
     let deposit = tables.params.deposit_layer.index();
     let (bedrock, snow) = (&terrain.bedrock, &terrain.snow);
     // What the neighbours above expect a cell to keep: its surface less its own excess.
-    strips.par_iter_mut().for_each(|strip| {
+    parallel::for_each_row(1, PerRow(&mut *strips), |_, strip| {
         strip.clear();
         let lo = active.partition_point(|a| (a.0 as usize) < strip.rows.start * w);
         let hi = active.partition_point(|a| (a.0 as usize) < strip.rows.end * w);
@@ -287,7 +287,7 @@ pub(super) fn shed_in_phases<V: Validity>(
             if inbox.is_empty() {
                 break;
             }
-            strips.par_iter_mut().for_each(Strip::settle);
+            parallel::for_each_row(1, PerRow(&mut *strips), |_, strip| strip.settle());
             let snow = &mut terrain.snow;
             for &(g, share) in &inbox {
                 let g = g as usize;
@@ -336,14 +336,15 @@ pub(super) fn shed_in_phases<V: Validity>(
                 });
                 parts.push((strip, own));
             }
-            parts
-                .into_par_iter()
-                .enumerate()
-                .filter(|(s, _)| which.binary_search(s).is_ok())
-                .map(|(_, (strip, own))| {
+            // Only the strips in `which` sweep; their totals in strip order.
+            parallel::map_rows(1, PerRow(parts), |s, (strip, own)| {
+                which.binary_search(&s).is_ok().then(|| {
                     cascade::sweep(tables, &terrain.bedrock, strip, own, valid, generation)
                 })
-                .collect()
+            })
+            .into_iter()
+            .flatten()
+            .collect()
         };
         for t in swept {
             totals.moved += t.moved;

@@ -3,8 +3,8 @@
 
 use super::{Context, WindScratch, WindTerms, tamping_share};
 use crate::phenomenon::{Validity, row_gradient_norm};
-use rayon::prelude::*;
 use snowscape_terrain::LayeredTerrain;
+use snowscape_terrain::parallel::{self, PerRow};
 
 /// Per-thread row buffers.
 struct Row {
@@ -45,103 +45,98 @@ pub(super) fn run<V: Validity>(
     let bedrock = &terrain.bedrock;
     let [compacted, stable, unstable, powder] = &mut terrain.snow;
     let (compacted, stable) = (&*compacted, &*stable);
-    unstable
-        .par_chunks_mut(w)
-        .zip(powder.par_chunks_mut(w))
-        .zip(after_rows.into_par_iter())
-        .map(|((un, pw), after)| (un, pw, after))
-        .enumerate()
-        .map_init(
-            || Row {
-                gradient: vec![0.0; w],
-                deposited: vec![0.0; w],
-                slab: vec![0.0; w],
-                tamped: vec![0.0; w],
-            },
-            |buf, (row, (un, pw, after))| {
-                row_gradient_norm(a, ctx.geometry, ctx.mask, valid, row, &mut buf.gradient);
-                let base = row * w;
-                let general = |col: usize, buf: &mut Row, un: &mut f32, pw: &mut f32| {
-                    let i = base + col;
-                    if !valid.at(i) {
-                        (buf.deposited[col], buf.slab[col], buf.tamped[col]) = (0.0, 0.0, 0.0);
-                        return;
+    parallel::map_rows_with(
+        w,
+        (unstable, powder, PerRow(after_rows)),
+        || Row {
+            gradient: vec![0.0; w],
+            deposited: vec![0.0; w],
+            slab: vec![0.0; w],
+            tamped: vec![0.0; w],
+        },
+        |buf, row, (un, pw, after)| {
+            row_gradient_norm(a, ctx.geometry, ctx.mask, valid, row, &mut buf.gradient);
+            let base = row * w;
+            let general = |col: usize, buf: &mut Row, un: &mut f32, pw: &mut f32| {
+                let i = base + col;
+                if !valid.at(i) {
+                    (buf.deposited[col], buf.slab[col], buf.tamped[col]) = (0.0, 0.0, 0.0);
+                    return;
+                }
+                let mut d = 0.0f32;
+                if col > 0 {
+                    d += ox[i - 1].max(0.0);
+                }
+                if col + 1 < w {
+                    d += (-ox[i + 1]).max(0.0);
+                }
+                if row > 0 {
+                    d += (-oy[i - w]).max(0.0);
+                }
+                if row + 1 < h {
+                    d += oy[i + w].max(0.0);
+                }
+                let e = ox[i].abs() + oy[i].abs();
+                let (slab, tamped) = cell_update(ctx, e, a_z[i], d, buf.gradient[col], pw, un);
+                (buf.deposited[col], buf.slab[col], buf.tamped[col]) = (d, slab, tamped);
+            };
+            if row > 0 && row + 1 < h && w >= 3 {
+                general(0, buf, &mut un[0], &mut pw[0]);
+                general(w - 1, buf, &mut un[w - 1], &mut pw[w - 1]);
+                let ox_mid = &ox[base..base + w];
+                let (oy_up, oy_mid, oy_dn) = (
+                    &oy[base - w..base],
+                    &oy[base..base + w],
+                    &oy[base + w..base + 2 * w],
+                );
+                let (un, pw) = (&mut un[..w], &mut pw[..w]);
+                let a_z_row = &a_z[base..base + w];
+                let grad = &buf.gradient[..w];
+                let deposited = &mut buf.deposited[..w];
+                let slabs = &mut buf.slab[..w];
+                let tamps = &mut buf.tamped[..w];
+                for col in 1..w - 1 {
+                    if !valid.at(base + col) {
+                        (deposited[col], slabs[col], tamps[col]) = (0.0, 0.0, 0.0);
+                        continue;
                     }
-                    let mut d = 0.0f32;
-                    if col > 0 {
-                        d += ox[i - 1].max(0.0);
-                    }
-                    if col + 1 < w {
-                        d += (-ox[i + 1]).max(0.0);
-                    }
-                    if row > 0 {
-                        d += (-oy[i - w]).max(0.0);
-                    }
-                    if row + 1 < h {
-                        d += oy[i + w].max(0.0);
-                    }
-                    let e = ox[i].abs() + oy[i].abs();
-                    let (slab, tamped) = cell_update(ctx, e, a_z[i], d, buf.gradient[col], pw, un);
-                    (buf.deposited[col], buf.slab[col], buf.tamped[col]) = (d, slab, tamped);
-                };
-                if row > 0 && row + 1 < h && w >= 3 {
-                    general(0, buf, &mut un[0], &mut pw[0]);
-                    general(w - 1, buf, &mut un[w - 1], &mut pw[w - 1]);
-                    let ox_mid = &ox[base..base + w];
-                    let (oy_up, oy_mid, oy_dn) = (
-                        &oy[base - w..base],
-                        &oy[base..base + w],
-                        &oy[base + w..base + 2 * w],
+                    // (All four neighbours are in the grid; a nodata one sends nothing.)
+                    let d = ox_mid[col - 1].max(0.0)
+                        + (-ox_mid[col + 1]).max(0.0)
+                        + (-oy_up[col]).max(0.0)
+                        + oy_dn[col].max(0.0);
+                    let e = ox_mid[col].abs() + oy_mid[col].abs();
+                    let (slab, tamped) = cell_update(
+                        ctx,
+                        e,
+                        a_z_row[col],
+                        d,
+                        grad[col],
+                        &mut pw[col],
+                        &mut un[col],
                     );
-                    let (un, pw) = (&mut un[..w], &mut pw[..w]);
-                    let a_z_row = &a_z[base..base + w];
-                    let grad = &buf.gradient[..w];
-                    let deposited = &mut buf.deposited[..w];
-                    let slabs = &mut buf.slab[..w];
-                    let tamps = &mut buf.tamped[..w];
-                    for col in 1..w - 1 {
-                        if !valid.at(base + col) {
-                            (deposited[col], slabs[col], tamps[col]) = (0.0, 0.0, 0.0);
-                            continue;
-                        }
-                        // (All four neighbours are in the grid; a nodata one sends nothing.)
-                        let d = ox_mid[col - 1].max(0.0)
-                            + (-ox_mid[col + 1]).max(0.0)
-                            + (-oy_up[col]).max(0.0)
-                            + oy_dn[col].max(0.0);
-                        let e = ox_mid[col].abs() + oy_mid[col].abs();
-                        let (slab, tamped) = cell_update(
-                            ctx,
-                            e,
-                            a_z_row[col],
-                            d,
-                            grad[col],
-                            &mut pw[col],
-                            &mut un[col],
-                        );
-                        (deposited[col], slabs[col], tamps[col]) = (d, slab, tamped);
-                    }
-                } else {
-                    for col in 0..w {
-                        general(col, buf, &mut un[col], &mut pw[col]);
-                    }
+                    (deposited[col], slabs[col], tamps[col]) = (d, slab, tamped);
                 }
-                if let Some(after) = after {
-                    // The same sum, in the same order, as `fill_surface`.
-                    let r = row * w..(row + 1) * w;
-                    let (b, c, s) = (&bedrock[r.clone()], &compacted[r.clone()], &stable[r]);
-                    for (k, a) in after.iter_mut().enumerate() {
-                        *a = b[k] + (c[k] + s[k] + un[k] + pw[k]);
-                    }
+            } else {
+                for col in 0..w {
+                    general(col, buf, &mut un[col], &mut pw[col]);
                 }
-                [
-                    crate::row_sum(&buf.deposited[..w]),
-                    crate::row_sum(&buf.slab[..w]),
-                    crate::row_sum(&buf.tamped[..w]),
-                ]
-            },
-        )
-        .collect()
+            }
+            if let Some(after) = after {
+                // The same sum, in the same order, as `fill_surface`.
+                let r = row * w..(row + 1) * w;
+                let (b, c, s) = (&bedrock[r.clone()], &compacted[r.clone()], &stable[r]);
+                for (k, a) in after.iter_mut().enumerate() {
+                    *a = b[k] + (c[k] + s[k] + un[k] + pw[k]);
+                }
+            }
+            [
+                crate::row_sum(&buf.deposited[..w]),
+                crate::row_sum(&buf.slab[..w]),
+                crate::row_sum(&buf.tamped[..w]),
+            ]
+        },
+    )
 }
 
 /// One cell's update: removes its erosion `e` (powder first, then unstable snow), tamps

@@ -3,8 +3,7 @@
 use super::second_difference;
 use super::{Context, WindScratch, downwind_split, eroded_depth, erosion_curvature};
 use crate::phenomenon::Validity;
-use rayon::prelude::*;
-use snowscape_terrain::{LayeredTerrain, SnowLayer};
+use snowscape_terrain::{LayeredTerrain, SnowLayer, parallel};
 
 /// Fills `scratch.out_x` / `out_y` with the signed depths sent east (+) / west (−) and
 /// north (+) / south (−); returns per-row `[eroded, border outflow]`, m.
@@ -19,12 +18,10 @@ pub(super) fn run<V: Validity>(
     let a = &scratch.surface;
     let powder = terrain.layer(SnowLayer::Powder);
     let unstable = terrain.layer(SnowLayer::Unstable);
-    scratch
-        .out_x
-        .par_chunks_mut(w)
-        .zip(scratch.out_y.par_chunks_mut(w))
-        .enumerate()
-        .map(|(row, (ox, oy))| {
+    parallel::map_rows(
+        w,
+        (&mut scratch.out_x, &mut scratch.out_y),
+        |row, (ox, oy)| {
             let base = row * w;
             let cell = Cell {
                 ctx,
@@ -80,8 +77,8 @@ pub(super) fn run<V: Validity>(
             }
             let eroded = crate::row_sum_pairs(ox, oy, |x, y| x.abs() + y.abs());
             [eroded, border]
-        })
-        .collect()
+        },
+    )
 }
 
 /// One row's view of the layers, for the per-cell erosion.

@@ -56,9 +56,8 @@ use super::{Context, WindMaps};
 use crate::phenomenon::{
     PhenomenonError, Validity, check_range, flush_below, flush_negligible, row_gradient_norm_in,
 };
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use snowscape_terrain::LayeredTerrain;
+use snowscape_terrain::{LayeredTerrain, parallel};
 use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 
 pub mod blowing_snow;
@@ -236,28 +235,27 @@ impl KeepShareCache {
             u64::from(sheltered.to_bits()),
             u64::from(scour_zone.to_bits()),
         ];
+        // Rows compared in parallel (a boolean: the same for any thread count).
         let same = self.key.as_ref().is_some_and(|(k, old)| {
             *k == params
                 && old.len() == sx.len()
-                && old
-                    .par_iter()
-                    .zip(sx.par_iter())
-                    .all(|(a, b)| a.to_bits() == b.to_bits())
+                && parallel::map_rows(w, (old, sx), |_, (old, sx)| {
+                    old.iter().zip(sx).all(|(a, b)| a.to_bits() == b.to_bits())
+                })
+                .into_iter()
+                .all(|same| same)
         });
         if !same {
             self.share.resize(sx.len(), 0.0);
-            self.share
-                .par_chunks_mut(w)
-                .zip(sx.par_chunks(w))
-                .for_each(|(out, sx)| {
-                    for (o, &s) in out.iter_mut().zip(sx) {
-                        *o = if s < scour_zone {
-                            0.0
-                        } else {
-                            keep.at(s - sheltered)
-                        };
-                    }
-                });
+            parallel::for_each_row(w, (&mut self.share, sx), |_, (out, sx)| {
+                for (o, &s) in out.iter_mut().zip(sx) {
+                    *o = if s < scour_zone {
+                        0.0
+                    } else {
+                        keep.at(s - sheltered)
+                    };
+                }
+            });
             self.key = Some((params, sx.to_vec()));
         }
         &self.share
@@ -471,7 +469,7 @@ fn sweep<V: Validity>(
     let (upwind, downwind) = if dc > 0 { (west, east) } else { (east, west) };
     let handover: Vec<AtomicU32> = (0..h).map(|_| AtomicU32::new(0)).collect();
     let handed = AtomicUsize::new(0);
-    let (up, down) = rayon::join(
+    let (up, down) = parallel::join(
         || {
             upwind.sweep(
                 maps,

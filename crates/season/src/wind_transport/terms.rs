@@ -7,8 +7,7 @@
 
 use super::{Context, WindMaps, WindTransportParams, second_difference, vertical_wind_change};
 use crate::phenomenon::{PhenomenonError, Validity, check_map, with_validity};
-use rayon::prelude::*;
-use snowscape_terrain::{GridGeometry, NodataMask};
+use snowscape_terrain::{GridGeometry, NodataMask, parallel};
 
 /// The snow-independent terms of one wind field on one grid.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -50,10 +49,9 @@ impl WindTerms {
     pub(super) fn compute<V: Validity>(&mut self, ctx: &Context, valid: &V) {
         let w = ctx.geometry.width();
         self.vertical_change.resize(ctx.geometry.len(), 0.0);
-        self.vertical_change
-            .par_chunks_mut(w)
-            .enumerate()
-            .for_each(|(row, out)| vertical_change_row(ctx, valid, row, out));
+        parallel::for_each_row(w, &mut self.vertical_change, |row, out| {
+            vertical_change_row(ctx, valid, row, out)
+        });
         self.dominant = dominant(ctx, valid);
     }
 }
@@ -129,18 +127,11 @@ fn general_vertical_change<V: Validity>(ctx: &Context, valid: &V, col: usize, ro
 /// sums in row order, so it does not depend on the thread count). `None` in calm air.
 fn dominant<V: Validity>(ctx: &Context, valid: &V) -> Option<(f64, f64)> {
     let w = ctx.geometry.width();
-    let rows: Vec<(f64, f64)> = ctx
-        .wind
-        .u
-        .par_chunks(w)
-        .zip(ctx.wind.v.par_chunks(w))
-        .enumerate()
-        .map(|(row, (u, v))| {
-            (0..w)
-                .filter(|&c| valid.at(row * w + c))
-                .fold((0.0, 0.0), |(a, b), c| (a + u[c] as f64, b + v[c] as f64))
-        })
-        .collect();
+    let rows: Vec<(f64, f64)> = parallel::map_rows(w, (ctx.wind.u, ctx.wind.v), |row, (u, v)| {
+        (0..w)
+            .filter(|&c| valid.at(row * w + c))
+            .fold((0.0, 0.0), |(a, b), c| (a + u[c] as f64, b + v[c] as f64))
+    });
     let (su, sv) = rows.iter().fold((0.0, 0.0), |(a, b), r| (a + r.0, b + r.1));
     let norm = su.hypot(sv);
     (norm > 0.0 && norm.is_finite()).then(|| (su / norm, sv / norm))

@@ -5,7 +5,7 @@
 
 use super::super::enhanced::{MeltForcing, MeltHour};
 use super::constants::{MELTING_POINT_K, STEFAN_BOLTZMANN};
-use rayon::prelude::*;
+use snowscape_terrain::parallel;
 
 /// Degree of the per-step polynomials, plus one.
 pub(super) const TERMS: usize = 5;
@@ -22,16 +22,18 @@ impl OffsetRange {
     /// The range of `offsets` (at least ±0.5 °C wide). Minimum and maximum are exact in any
     /// order: the same range for any thread count.
     pub(super) fn of(offsets: &[f32]) -> Self {
-        let (lo, hi) = offsets
-            .par_iter()
-            .fold(
-                || (f32::INFINITY, f32::NEG_INFINITY),
-                |(a, b), &o| (a.min(o), b.max(o)),
-            )
-            .reduce(
-                || (f32::INFINITY, f32::NEG_INFINITY),
-                |(a, b), (c, d)| (a.min(c), b.max(d)),
-            );
+        // Fixed blocks folded in parallel, then the blocks' ranges in order.
+        let (lo, hi) = parallel::map_rows(1 << 14, offsets, |_, block| {
+            block
+                .iter()
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &o| {
+                    (a.min(o), b.max(o))
+                })
+        })
+        .into_iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), (c, d)| {
+            (a.min(c), b.max(d))
+        });
         let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 0.0) };
         Self {
             mid: 0.5 * (lo + hi),
