@@ -175,6 +175,18 @@ mod tests {
         assert!(report.failures.is_empty(), "{:?}", report.failures);
         let names: Vec<&str> = report.kernels.iter().map(|k| k.name.as_str()).collect();
         assert_eq!(names, ["avalanche/slope_run_to_rest"]);
+        // A kernel of the season set up apart from the season's others (the snowpack's).
+        for name in ["season/enhanced_melt", "season/slope_shedding"] {
+            let report = run(
+                &BenchConfig {
+                    only: Some(name.into()),
+                    ..config.clone()
+                },
+                |_| {},
+            );
+            let names: Vec<&str> = report.kernels.iter().map(|k| k.name.as_str()).collect();
+            assert_eq!(names, [name], "{:?}", report.failures);
+        }
     }
 
     #[test]

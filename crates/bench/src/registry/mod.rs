@@ -48,7 +48,8 @@ pub fn kernels_matching(size: usize, only: Option<&str>) -> Result<Vec<Kernel>, 
     if wanted("season") {
         kernels.extend(season_kernels(&terrain)?);
     }
-    if wanted("snowpack") {
+    // The snowpack's kernels are season kernels (`season/enhanced_melt`, ...), set up apart.
+    if wanted("season") {
         kernels.extend(snowpack_kernels(&terrain)?);
     }
     if wanted("avalanche") {
