@@ -1,5 +1,5 @@
-//! The one-shot jobs: an avalanche to rest, a mesh cover (and the 3D transport run), each on
-//! the library's path that the command line takes.
+//! The one-shot jobs: an avalanche to rest, a mesh cover, the 3D transport run and a
+//! validation, each the library's job that the command line runs.
 
 use crate::{GridIn, GridOut, grid_in, grid_out, py_err, value_err};
 use pyo3::exceptions::{PyOSError, PyValueError};
@@ -12,8 +12,8 @@ use snowscape::avalanche_job::{
 };
 use snowscape::avalanche_release::ReleaseSpec;
 use snowscape::control::Unattended;
-use snowscape::cover::{CoverParameters, DiffusionCoverReport, MeshInputSummary};
-use snowscape::mesh::{SourceFrame, UpAxis, read_scene};
+use snowscape::cover::{CoverJob, CoverJobError, CoverMethod, CoverParameters};
+use snowscape::mesh::{SourceFrame, UpAxis};
 use std::path::PathBuf;
 
 /// One avalanche from release to rest on `dem`, the job of `snowscape avalanche`
@@ -126,9 +126,10 @@ fn avalanche_params(json: &str) -> PyResult<AvalancheParams> {
 }
 
 /// A snow cover of a mesh scene (`method` `diffusion` or `fearing`, `params_json` the method's
-/// `[diffusion]` / `[fearing]` keys of a cover parameter file): the snow mesh's vertices
-/// (`f32` x, y, z in the mesh file's axes and units, as `snow.obj`) and triangles (`u32`), and
-/// the report (JSON).
+/// `[diffusion]` / `[fearing]` keys of a cover parameter file), the job of `snowscape cover`
+/// ([`snowscape::cover::run`], without an output folder): the snow mesh's vertices (`f32` x,
+/// y, z in the mesh file's axes and units, as `snow.obj`) and triangles (`u32`), and the report
+/// (JSON, the keys of `report.json`).
 #[pyfunction]
 #[pyo3(signature = (mesh, method, up, scale, params_json))]
 pub(crate) fn cover<'py>(
@@ -139,16 +140,19 @@ pub(crate) fn cover<'py>(
     scale: f64,
     params_json: String,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)> {
-    if method != "diffusion" && method != "fearing" {
-        return Err(value_err(format!(
-            "method {method:?}: expected \"diffusion\" or \"fearing\""
-        )));
-    }
-    let up_name = up.as_str();
-    let up: UpAxis = up
+    let cover_method = match method.as_str() {
+        "diffusion" => CoverMethod::Diffusion,
+        "fearing" => CoverMethod::Fearing,
+        _ => {
+            return Err(value_err(format!(
+                "method {method:?}: expected \"diffusion\" or \"fearing\""
+            )));
+        }
+    };
+    let axis: UpAxis = up
         .parse()
         .map_err(|e| value_err(format!("up {up:?}: {e}")))?;
-    let frame = SourceFrame::new(up, scale).map_err(py_err)?;
+    let frame = SourceFrame::new(axis, scale).map_err(py_err)?;
     // The keywords are the method's table of a cover parameter file: the same parser and checks.
     let params: serde_json::Value = serde_json::from_str(&params_json)
         .map_err(|e| value_err(format!("cover parameters: {e}")))?;
@@ -161,40 +165,27 @@ pub(crate) fn cover<'py>(
             mesh.display()
         )));
     }
-    let (snow, report) = py.detach(|| -> PyResult<_> {
-        let t0 = std::time::Instant::now();
-        let (scene, mesh_report) = read_scene(&mesh, &frame).map_err(py_err)?;
-        // The report the command line writes as report.json (without files or a DEM).
-        let input = MeshInputSummary::new(&mesh, up_name, scale, &mesh_report, &scene);
-        if method == "diffusion" {
-            let c = snowscape::festenberg::cover(&scene, &file.diffusion).map_err(py_err)?;
-            let report = DiffusionCoverReport::new(
-                input,
-                &c,
-                None,
-                &c.stats.timings,
-                t0.elapsed().as_secs_f64(),
-                Vec::new(),
-            );
-            let report = serde_json::to_value(&report).map_err(|e| value_err(e.to_string()))?;
-            Ok((c.mesh, report))
-        } else {
-            let params = file.fearing_for(&scene).ok_or_else(|| {
+    let job = CoverJob {
+        up,
+        scale,
+        parameters: file,
+        ..CoverJob::new(mesh.clone(), cover_method)
+    };
+    let outcome = py
+        .detach(|| snowscape::cover::run(&job, &mut Unattended))
+        .map_err(|e| match e {
+            CoverJobError::NoDiffusionSnow { .. } | CoverJobError::NoFearingSnow(_) => {
+                value_err(format!(
+                    "no snow settled on {} (try a finer resolution_m or a larger depth_m)",
+                    mesh.display()
+                ))
+            }
+            CoverJobError::NoTriangles => {
                 value_err(format!("{}: the mesh has no triangles", mesh.display()))
-            })?;
-            let c = snowscape::fearing::cover(&scene, &params).map_err(py_err)?;
-            let input = serde_json::to_value(&input).map_err(|e| value_err(e.to_string()))?;
-            let report = snowscape::cover::fearing_report(&c, Some(input))
-                .map_err(|e| value_err(e.to_string()))?;
-            Ok((c.surface.to_mesh("snow"), report))
-        }
-    })?;
-    if snow.triangles.is_empty() {
-        return Err(value_err(format!(
-            "no snow settled on {} (try a finer resolution_m or a larger depth_m)",
-            mesh.display()
-        )));
-    }
+            }
+            e => py_err(e),
+        })?;
+    let snow = &outcome.snow;
     let mut v = Vec::with_capacity(snow.positions.len() * 12);
     for p in &snow.positions {
         for c in frame.to_file(*p) {
@@ -207,6 +198,8 @@ pub(crate) fn cover<'py>(
             f.extend_from_slice(&i.to_le_bytes());
         }
     }
+    // Through a JSON value, as report.json is written (its f32 values widened to f64).
+    let report = serde_json::to_value(&outcome.report).map_err(|e| value_err(e.to_string()))?;
     Ok((
         PyBytes::new(py, &v),
         PyBytes::new(py, &f),
@@ -214,9 +207,11 @@ pub(crate) fn cover<'py>(
     ))
 }
 
-/// A 3D transport run (Jubert 2018) over a DEM or a scenario's own scene: its rasters (snow
-/// depth, density, saltation, suspension and sublimation fluxes, precipitation ratio, wind u
-/// and v) and its report (mass budget, wind, flakes; JSON).
+/// A 3D transport run (Jubert 2018) over a DEM or a scenario's own scene, the job of
+/// `snowscape transport` ([`snowscape::transport_job::run`], without an output folder): its
+/// rasters (snow depth, density, saltation, suspension and sublimation fluxes, precipitation
+/// ratio, wind u and v) and its report (mass budget, wind, flakes; JSON, the keys of
+/// `report.json` but for `input`, which says whether a DEM was given and the scenario's name).
 #[pyfunction]
 #[pyo3(signature = (dem, scenario, hours, seed, flakes, wind_iterations, voxel_size, voxel_layers, uniform_precipitation))]
 #[allow(clippy::too_many_arguments)]
@@ -232,63 +227,45 @@ pub(crate) fn transport<'py>(
     voxel_layers: Option<usize>,
     uniform_precipitation: bool,
 ) -> PyResult<(Vec<(String, GridOut<'py>)>, String)> {
-    use snowscape::terrain::NodataMask;
-    use snowscape::transport::scenario::{SceneSpec, run};
-    use snowscape::transport_job::{
-        Overrides, TransportReport, dem_heights, fit_to_scene, load_scenario,
-    };
-    let t0 = std::time::Instant::now();
-    let (mut scenario, from_file) = load_scenario(scenario.as_deref()).map_err(py_err)?;
+    use snowscape::dem_source::DemSource;
+    use snowscape::transport_job::{Overrides, TransportJob, TransportJobError};
+    let dem = dem.map(grid_in).transpose()?;
     let dem_given = dem.is_some();
-    let (geometry, heights, mask) = match dem {
-        Some(d) => {
-            let grid = grid_in(d)?;
-            let (heights, _) = dem_heights(&grid, "dem").map_err(py_err)?;
-            scenario.scene = SceneSpec::Input;
-            (grid.geometry().clone(), heights, grid.mask().clone())
-        }
-        None => match scenario.build_scene().map_err(py_err)? {
-            Some((g, h)) => (g, h, NodataMask::all_valid()),
-            None => {
-                return Err(value_err(
-                    "no scene: give a dem, or a scenario with a [scene] (e.g. scenario=\"castle\")",
-                ));
-            }
+    let job = TransportJob {
+        scenario,
+        dem: dem.map(|grid| DemSource::Grid {
+            name: "dem".into(),
+            grid,
+        }),
+        mesh: None,
+        overrides: Overrides {
+            hours,
+            flakes,
+            seed,
+            wind_iterations,
+            voxel_size,
+            voxel_layers,
+            uniform_precipitation,
         },
+        output: None,
     };
-    let overrides = Overrides {
-        hours,
-        flakes,
-        seed,
-        wind_iterations,
-        voxel_size,
-        voxel_layers,
-        uniform_precipitation,
-    };
-    if !from_file && !overrides.sets_voxels() {
-        fit_to_scene(&mut scenario, &geometry, &heights);
-    }
-    overrides.apply(&mut scenario).map_err(py_err)?;
-    let out = py
-        .detach(|| run(&scenario, &geometry, &heights))
-        .map_err(py_err)?;
-    let maps: Vec<(&str, Vec<f32>)> = vec![
-        ("depth", out.state.depth()),
-        ("density", out.state.density.clone()),
-        ("q_salt", out.q_salt.clone()),
-        ("q_susp", out.q_susp.clone()),
-        ("q_subl", out.q_subl.clone()),
-        ("precipitation", out.precipitation_ratio.clone()),
-        ("wind_u", out.wind_u.clone()),
-        ("wind_v", out.wind_v.clone()),
-    ];
-    let rasters = maps
+    let outcome = py
+        .detach(|| snowscape::transport_job::run(&job, &mut Unattended))
+        .map_err(|e| match e {
+            TransportJobError::NoScene => value_err(
+                "no scene: give a dem, or a scenario with a [scene] (e.g. scenario=\"castle\")",
+            ),
+            e => py_err(e),
+        })?;
+    let (g, mask) = (&outcome.run.geometry, outcome.mask());
+    let rasters = outcome
+        .maps()
         .into_iter()
-        .map(|(n, v)| (n.to_string(), grid_out(py, &out.geometry, &mask, &v)))
+        .map(|(n, v)| (n.to_string(), grid_out(py, g, mask, &v)))
         .collect();
-    // The report the command line writes as report.json.
-    let input = serde_json::json!({ "dem": dem_given, "scenario": scenario.name });
-    let report = TransportReport::new(&scenario, &out, input, t0.elapsed().as_secs_f64());
+    // The report of report.json, but for where the scene came from.
+    let mut report = outcome.report;
+    report.input = serde_json::json!({ "dem": dem_given, "scenario": report.scenario.name });
     let report = serde_json::to_string(&report).map_err(|e| value_err(e.to_string()))?;
     Ok((rasters, report))
 }

@@ -110,14 +110,14 @@ fn every_shared_mesh_gets_snow_aligned_with_it() {
 #[test]
 fn roof_and_basin_scene_built_in_code() {
     let out = tempfile::tempdir().unwrap();
-    let scene = snowscape_fearing::scenes::roof_and_basin();
+    let scene = snowscape::fearing::scenes::roof_and_basin();
     let meshes: Vec<_> = scene
         .objects
         .iter()
-        .map(snowscape_mesh::SnowObject::from_object)
+        .map(snowscape::mesh::SnowObject::from_object)
         .collect();
     let obj = out.path().join("roof_and_basin.obj");
-    snowscape_mesh::write::write_obj(&obj, &meshes, &scene.frame).unwrap();
+    snowscape::mesh::write::write_obj(&obj, &meshes, &scene.frame).unwrap();
     let dir = out.path().join("cover");
     let o = snowscape(&[
         "cover",

@@ -49,6 +49,59 @@ pub fn cancel_requested(control: &mut dyn Control) -> bool {
         || control.cancelled()
 }
 
+/// The stages of a job whose progress counts stages (a cover, the outer steps of a transport):
+/// each [`Stages::begin`] asks for a cancel (between two stages), then reports the stages done
+/// of all and the new stage's name as the status line.
+pub struct Stages<'a> {
+    control: &'a mut dyn Control,
+    done: usize,
+    total: usize,
+}
+
+/// A cancel asked between two stages: the stage that would have begun next (`"commit"` before
+/// a job's files are moved into place).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StageCancelled(pub &'static str);
+
+impl<'a> Stages<'a> {
+    /// `total` stages, none done yet.
+    pub fn new(control: &'a mut dyn Control, total: usize) -> Self {
+        Self {
+            control,
+            done: 0,
+            total,
+        }
+    }
+
+    /// Stages done, and stages in all.
+    pub fn counts(&self) -> (usize, usize) {
+        (self.done, self.total)
+    }
+
+    /// Begins stage `name`: a cancel asked since the last stage ends the job here (the first
+    /// stage is not asked), else the front end hears `progress(done, total)` and `name`.
+    pub fn begin(&mut self, name: &'static str) -> Result<(), StageCancelled> {
+        if self.done > 0 && cancel_requested(self.control) {
+            return Err(StageCancelled(name));
+        }
+        self.control.progress(self.done as f64, self.total as f64);
+        self.control.status(name);
+        self.done = (self.done + 1).min(self.total);
+        Ok(())
+    }
+
+    /// The last question before the job's files are moved into place: a cancel asked now still
+    /// ends the job with nothing written; otherwise every stage is reported done.
+    pub fn finish(&mut self) -> Result<(), StageCancelled> {
+        if cancel_requested(self.control) {
+            return Err(StageCancelled("commit"));
+        }
+        self.done = self.total;
+        self.control.progress(self.total as f64, self.total as f64);
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -58,6 +111,44 @@ mod tests {
         fn interrupt_flag(&self) -> Option<Arc<AtomicBool>> {
             Some(self.0.clone())
         }
+    }
+
+    /// Hears every call and cancels once `stop_at` progress calls were heard.
+    #[derive(Default)]
+    struct Heard {
+        progress: Vec<(f64, f64)>,
+        status: Vec<String>,
+        stop_at: Option<usize>,
+    }
+    impl Control for Heard {
+        fn progress(&mut self, done: f64, total: f64) {
+            self.progress.push((done, total));
+        }
+        fn status(&mut self, line: &str) {
+            self.status.push(line.to_string());
+        }
+        fn cancelled(&mut self) -> bool {
+            self.stop_at.is_some_and(|n| self.progress.len() >= n)
+        }
+    }
+
+    #[test]
+    fn stages_count_up_and_a_cancel_ends_them_between_two() {
+        let mut heard = Heard::default();
+        let mut s = Stages::new(&mut heard, 2);
+        s.begin("read").unwrap();
+        s.begin("write").unwrap();
+        s.finish().unwrap();
+        assert_eq!(heard.progress, [(0.0, 2.0), (1.0, 2.0), (2.0, 2.0)]);
+        assert_eq!(heard.status, ["read", "write"]);
+        let mut heard = Heard {
+            stop_at: Some(1),
+            ..Heard::default()
+        };
+        let mut s = Stages::new(&mut heard, 3);
+        s.begin("read").unwrap();
+        assert_eq!(s.begin("cover"), Err(StageCancelled("cover")));
+        assert_eq!(s.finish(), Err(StageCancelled("commit")));
     }
 
     #[test]

@@ -1,5 +1,20 @@
-//! The parameters of the two mesh covers read from a TOML file (`snowscape cover --parameters
-//! FILE`, the library, the Python package), like a season's scenario:
+//! Snow on a triangle-mesh scene, alone or standing on a DEM: the job of `snowscape cover`
+//! and of the Python package's `snowscape.cover`, so that the same inputs give the same bytes
+//! from each front end.
+//!
+//! The job ([`run`], [`CoverJob`]) checks every value first ([`CoverJob::check`]), reads the
+//! mesh (its up axis and scale) and, given a DEM, stands it there with the terrain around it,
+//! then covers the scene by one of two methods: the diffusion cover of von Festenberg & Gumhold
+//! 2011 (`snowscape::festenberg`: a diffusion kernel on a height-span map, bridges, overhangs,
+//! boundary texture coordinates, and its Eq. 2 growth animation) or the flake cover of Fearing
+//! 2000 (`snowscape::fearing`: flakes shot from the sky, angle-of-repose stability). With an
+//! output folder it writes the snow meshes (GLB, OBJ), a preview, a turntable GIF and the typed
+//! `report.json` ([`CoverReport`]; the file names and keys are a contract), staged and committed
+//! together through [`crate::output_folder::OutputFolder`].
+//!
+//! The parameters of both methods come from a TOML file (`snowscape cover --parameters FILE`,
+//! the Python package's keywords), like a season's scenario; a front end's flags override the
+//! file's values through [`CoverOverrides`]:
 //!
 //! ```toml
 //! [diffusion]          # von Festenberg & Gumhold 2011 (snowscape::festenberg::CoverParams)
@@ -18,16 +33,24 @@
 //!
 //! Every key is one of the parameter structs' fields (unknown keys are refused with their
 //! name), every value is range-checked before any mesh is read. A cover's reports
-//! ([`MeshInputSummary`], [`DiffusionCoverReport`]) are typed here too, for every front end.
+//! ([`MeshInputSummary`], [`DiffusionCoverReport`], [`FearingCoverReport`]) are typed here.
 
 use serde::{Deserialize, Serialize};
 use snowscape_fearing::{FearingError, FearingParams};
 use snowscape_festenberg::{CoverParams, FestenbergError};
 use std::path::Path;
 
+mod diffusion;
+mod flakes;
+mod input;
+mod job;
 mod outputs;
 mod report;
-pub use outputs::{fearing_report, write_fearing_outputs};
+pub use job::{
+    CoverDem, CoverJob, CoverJobError, CoverMethod, CoverOutcome, CoverOverrides, CoverReport,
+    FearingCoverReport, GROWTH_FRAMES, TURNTABLE_FRAMES, run,
+};
+pub use outputs::{fearing_no_snow, fearing_report, write_fearing_outputs, write_turntable};
 pub use report::{
     DIFFUSION_PAPER, DemPlacement, DiffusionCoverReport, FEARING_PAPER, FearingInputSummary,
     GrowthSummary, KernelWork, MeshInputSummary, SiteCounts, SnowMeshCounts, Turntable,

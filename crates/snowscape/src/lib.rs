@@ -27,10 +27,11 @@
 //! | [`report`] | the typed `report.json` of every job |
 //! | [`avalanche_job`] | one avalanche from release to rest on a DEM, its range checks, maps, frames, comparison and typed `report.json` (the path of `snowscape avalanche` and the Python package's `avalanche`) |
 //! | [`avalanche_release`] | one avalanche's release on a DEM (file, mask or rupture point), as `snowscape avalanche` and the Python package take it |
-//! | [`cover`] | both mesh covers' parameters from a TOML file |
+//! | [`cover`] | snow on a mesh scene, alone or on a DEM, by either method: the parameters from a TOML file, the files, the typed `report.json` (the path of `snowscape cover` and the Python package's `cover`) |
+//! | [`dem_source`] | a job's DEM: a file it reads after its checks, or a grid in memory |
 //! | [`engine_export`] | a run's terrain and snow for Unreal, Unity or Godot: heightmaps, weight maps, import scales |
 //! | [`validation`] | a run's snow depth against a measured depth raster: matching, statistics, baselines, class ratios, figures and the typed `validation.json` (the path of `snowscape validate` and the Python package's `validate`) |
-//! | [`transport_job`] | a 3D transport run's scenario, a DEM as its scene, the wind grid fitted to it |
+//! | [`transport_job`] | a 3D transport run over a DEM, a mesh, a mesh on a DEM or a scenario's scene: the scenario, the wind grid fitted to the scene, the files and the typed `report.json` (the path of `snowscape transport` and the Python package's `transport`) |
 //!
 //! Every phenomenon is a module with a pure `step(params, state, scratch, dt)`, its
 //! parameters a struct whose fields carry units and cite their source, its errors a typed
@@ -64,6 +65,7 @@ pub mod avalanche_release;
 pub mod control;
 pub mod cover;
 pub mod cpu;
+pub mod dem_source;
 pub mod engine_export;
 pub mod memory;
 pub mod messages;

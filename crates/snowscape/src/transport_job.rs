@@ -1,23 +1,36 @@
-//! One 3D transport run's inputs (Jubert 2018, `snowscape::transport`), the path `snowscape
-//! transport` and the Python package's `snowscape.transport` share: which scenario (a file, a
-//! shipped one, or the Table 7.I weather on the input scene), a DEM as the scene's heights,
-//! and the wind grid fitted to the scene when no scenario file sets it; and the files of a
-//! run ([`write_outputs`], the typed [`TransportReport`]).
+//! One 3D transport run (Jubert 2018, `snowscape::transport`: a 3D wind, the precipitation
+//! map, SnowTran-3D saltation, suspension, sublimation and melt through a weather timeline):
+//! the job of `snowscape transport` and of the Python package's `snowscape.transport`, so that
+//! the same inputs give the same bytes from each front end.
+//!
+//! The job ([`run`], [`TransportJob`]) is prepared first ([`prepare`]: every refusal before any
+//! work or file): which scenario (a file, a shipped one, or the Table 7.I weather on the input
+//! scene, [`load_scenario`]), the scene as a height map (a DEM, [`dem_heights`]; a mesh's top
+//! view, alone or standing on the DEM; or the scenario's own scene), the wind grid fitted to the
+//! scene when no scenario file sets it ([`fit_to_scene`]) and the front end's [`Overrides`].
+//! Then it runs the pipeline and, with an output folder, writes the maps, the mean 3D wind, a
+//! preview and `report.json` ([`write_outputs`], the typed [`TransportReport`]; the file names
+//! and keys are a contract), staged and committed together through
+//! [`crate::output_folder::OutputFolder`].
 
 use snowscape_terrain::{Grid, GridGeometry};
 use snowscape_transport::scenario::{Scenario, SceneSpec, fit_voxels, shipped_scenario};
 use std::path::Path;
 
+mod job;
 mod outputs;
+mod scene;
+pub use job::{PreparedTransport, TransportJob, TransportMesh, TransportOutcome, prepare, run};
 pub use outputs::{
     DepthStats, FlakeCounts, GridSize, KgBudget, OutputError as TransportOutputError, RunContext,
     TransportReport, TransportTimings, VoxelSize, WindSolve, write_outputs,
 };
+pub use scene::{DemSummary, MeshSummary, SceneInput, SceneSummary};
 
 /// Columns of the wind grid fitted to a scene without a scenario file.
 pub const FITTED_COLUMNS: usize = 128;
 
-/// Why a transport run's inputs were refused.
+/// Why a transport job was refused or failed.
 #[derive(Debug, thiserror::Error)]
 pub enum TransportJobError {
     #[error("cannot read scenario {path}: {source}")]
@@ -39,6 +52,73 @@ pub enum TransportJobError {
     Unknown(String),
     #[error("{0}: every cell is nodata")]
     AllNodata(String),
+    /// The scenario with the front end's overrides is out of range.
+    #[error("scenario after the overrides: {source}")]
+    Overridden {
+        #[source]
+        source: snowscape_transport::TransportError,
+    },
+    /// Neither a DEM, a mesh nor a scenario with a scene.
+    #[error("no scene: give a DEM, a mesh, or a scenario with a [scene] (e.g. castle)")]
+    NoScene,
+    /// The DEM cannot be read.
+    #[error(transparent)]
+    Dem(snowscape_io::RasterError),
+    /// The mesh cannot be read or seen from above.
+    #[error(transparent)]
+    Mesh(snowscape_mesh::MeshError),
+    #[error("up {up:?}: {source}")]
+    Up {
+        up: String,
+        #[source]
+        source: Box<snowscape_mesh::MeshError>,
+    },
+    #[error("scale: {0}")]
+    Scale(#[source] snowscape_mesh::MeshError),
+    #[error("{0}: no valid triangle")]
+    NoTriangles(String),
+    /// A top view's cell size or margin given for a mesh on a DEM.
+    #[error("the resolution and margin apply to a mesh alone: on a DEM the DEM's grid is used")]
+    MeshGridOnDem,
+    #[error("{at:?} lies outside the DEM")]
+    AtOutsideDem { at: [f64; 2] },
+    /// The DEM is no grid.
+    #[error(transparent)]
+    Terrain(#[from] snowscape_terrain::TerrainError),
+    /// The transport refused the scene or the scenario (its sizes, its scene), or failed.
+    #[error(transparent)]
+    Transport(snowscape_transport::TransportError),
+    /// The output folder cannot be opened (nothing was run).
+    #[error(transparent)]
+    OutputFolder(crate::outputs::OutputError),
+    /// The front end cancelled the job before the stage named.
+    #[error("cancelled before {stage}; nothing was written")]
+    Cancelled { stage: &'static str },
+    #[error("the scene summary: {0}")]
+    Summary(#[source] serde_json::Error),
+    /// An output could not be written.
+    #[error(transparent)]
+    Output(TransportOutputError),
+    /// The outputs could not be moved into place.
+    #[error(transparent)]
+    Commit(crate::outputs::OutputError),
+}
+
+impl From<crate::control::StageCancelled> for TransportJobError {
+    fn from(c: crate::control::StageCancelled) -> Self {
+        Self::Cancelled { stage: c.0 }
+    }
+}
+
+impl TransportJobError {
+    /// Whether the job was refused for its input (the scenario, the scene, the overrides, the
+    /// folder, sizes the transport refuses) rather than failing while it wrote.
+    pub fn is_bad_input(&self) -> bool {
+        !matches!(
+            self,
+            Self::Cancelled { .. } | Self::Summary(_) | Self::Output(_) | Self::Commit(_)
+        )
+    }
 }
 
 /// The scenario of a run and whether the user named it (a file or a shipped scenario's name);
@@ -168,9 +248,7 @@ impl Overrides {
         if self.uniform_precipitation {
             s.uniform_precipitation = true;
         }
-        s.validate().map_err(|source| TransportJobError::Invalid {
-            name: "after the overrides".into(),
-            source,
-        })
+        s.validate()
+            .map_err(|source| TransportJobError::Overridden { source })
     }
 }

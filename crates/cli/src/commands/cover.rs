@@ -1,29 +1,22 @@
 //! `snowscape cover --mesh FILE --method diffusion|fearing`: snow on a triangle-mesh scene,
-//! alone or standing on a DEM.
-//!
-//! The front part is shared by both methods: read the mesh (`--up`, `--scale`), optionally
-//! place it on a `--dem` (at `--at X,Y`, default the DEM's centre; the terrain around it is
-//! covered too), prepare `--out`. Then one function per method: [`cover_diffusion`] (von
-//! Festenberg & Gumhold 2011, `snowscape-festenberg`) and [`cover_fearing`] (Fearing 2000).
+//! alone or standing on a DEM (at `--at X,Y`, default the DEM's centre; the terrain around it
+//! is covered too). The job is the library's ([`snowscape::cover`]: the mesh input, the
+//! placement, the diffusion cover of von Festenberg & Gumhold 2011 or Fearing's of 2000, the
+//! files and `report.json`); this is its flags, its summary line and its exit codes.
 
 use crate::cli::GlobalArgs;
 use crate::dem_input::DemInputArgs;
-use crate::failure::{BAD_INPUT, ExitCodeExt, Failure};
-use crate::outputs::{write_png, write_report};
-use crate::report::InputSummary;
+use crate::failure::{BAD_INPUT, ExitCodeExt, Failure, JOB_FAILED};
+use crate::pairs::parse_xy;
+use crate::progress::INTERRUPTED;
 use crate::stdout::outln;
-use anyhow::{Context, anyhow, bail};
+use anyhow::anyhow;
 use clap::{Args, ValueEnum};
+use snowscape::control::Unattended;
 use snowscape::cover::{
-    CoverParameters, DemPlacement, DiffusionCoverReport, FearingInputSummary, GrowthSummary,
-    MeshInputSummary, Turntable,
+    self, CoverDem, CoverJob, CoverJobError, CoverOverrides, CoverParameters, CoverReport,
 };
-use snowscape::output_folder::OutputFolder;
-use snowscape_festenberg::{CoverParams, FestenbergError, GrowthParams, cover, grow_cover};
-use snowscape_mesh::preview::{PreviewOptions, render_turntable, write_preview};
-use snowscape_mesh::terrain::{grid_object, map_to_scene, place_scene_on_grid};
-use snowscape_mesh::write::{write_glb, write_obj};
-use snowscape_mesh::{Scene, SceneObject, SourceFrame, UpAxis, read_scene};
+use snowscape::dem_source::DemSource;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -125,384 +118,142 @@ pub struct CoverArgs {
     pub dem_input: DemInputArgs,
 }
 
-/// What the front part read: the scene (mesh, and terrain when on a DEM) and its summary.
-pub struct CoverInput {
-    pub scene: Scene,
-    /// What was read: the mesh, the DEM it stands on, the parameter file.
-    pub summary: MeshInputSummary,
-    /// The region to cover, scene metres (`None`: the scene's bounds).
-    pub extent_m: Option<[f64; 4]>,
-    pub read_s: f64,
+/// The job the flags describe: the parameter file with the flags over it, the DEM and where
+/// the mesh stands on it (the values' ranges are the job's to check).
+fn job(args: &CoverArgs) -> anyhow::Result<CoverJob> {
+    let method = match args.method {
+        CoverMethod::Diffusion => cover::CoverMethod::Diffusion,
+        CoverMethod::Fearing => cover::CoverMethod::Fearing,
+    };
+    let file = match &args.parameters {
+        Some(p) => CoverParameters::read(p)?,
+        None => CoverParameters::default(),
+    };
+    // The wind is Fearing's: another method never reads the flag.
+    let wind_m_s = match (&args.wind, method) {
+        (Some(w), cover::CoverMethod::Fearing) => {
+            let (x, y) = parse_xy("--wind", w)?;
+            Some([x, y])
+        }
+        _ => None,
+    };
+    let overrides = CoverOverrides {
+        depth_m: args.depth,
+        radius_m: args.radius,
+        bridge_m: args.bridge,
+        overhang: args.overhang,
+        resolution_m: args.resolution,
+        material: args.material.clone(),
+        aor_deg: args.aor,
+        budget_s: args.budget,
+        flutter_m: args.flutter,
+        wind_m_s,
+        seed: args.seed,
+        sites: args.sites,
+        passes: args.passes,
+        wind_transport: args.wind_transport,
+    };
+    let dem = match &args.dem {
+        Some(path) => Some(CoverDem {
+            dem: DemSource::File {
+                path: path.clone(),
+                options: args.dem_input.read_options()?,
+            },
+            at: match &args.at {
+                Some(text) => {
+                    let (x, y) = parse_xy("--at", text)?;
+                    Some([x, y])
+                }
+                None => None,
+            },
+        }),
+        None => None,
+    };
+    Ok(CoverJob {
+        mesh: args.mesh.clone(),
+        up: args.up.clone(),
+        scale: args.scale,
+        method,
+        parameters: overrides.apply(method, file)?,
+        parameters_file: args.parameters.clone(),
+        dem,
+        growth: args.growth,
+        turntable: args.turntable,
+        output: Some(args.out.clone()),
+    })
+}
+
+/// A job's error in the flags' words, with its exit code.
+fn failure(e: CoverJobError, args: &CoverArgs) -> Failure {
+    let code = if e.is_bad_input() {
+        BAD_INPUT
+    } else if matches!(e, CoverJobError::Cancelled { .. }) {
+        INTERRUPTED
+    } else {
+        JOB_FAILED
+    };
+    let error = match e {
+        CoverJobError::TurntableFrames(n) => anyhow!("--turntable {n}: 2..=720 frames"),
+        CoverJobError::GrowthFrames(n) => {
+            anyhow!("--growth must be 1..=10000 frames, got {n}")
+        }
+        CoverJobError::Scale(s) => {
+            anyhow!("--scale must be a positive number of metres per mesh unit, got {s}")
+        }
+        CoverJobError::Up { up, source } => anyhow!(source).context(format!("--up {up:?}")),
+        CoverJobError::AtOutsideDem { dem, .. } => anyhow!(
+            "--at {:?} lies outside the DEM {dem}",
+            args.at.as_deref().unwrap_or_default()
+        ),
+        CoverJobError::NoDiffusionSnow { mesh, resolution_m } => anyhow!(
+            "no snow settled on {} (every site is an edge at --resolution {resolution_m} m: try a finer one)",
+            mesh.display()
+        ),
+        e => anyhow!(e),
+    };
+    Failure { code, error }
 }
 
 /// Runs `snowscape cover`.
 pub fn run(args: &CoverArgs, global: &GlobalArgs) -> Result<(), Failure> {
     let t0 = Instant::now();
-    if let Some(n) = args.turntable
-        && !(2..=720).contains(&n)
-    {
-        return Err(anyhow!("--turntable {n}: 2..=720 frames")).bad_input();
+    let job = job(args).bad_input()?;
+    // The stages are long (a cover, a turntable): Ctrl-C ends the process, as it always has;
+    // the next job into the folder removes what was staged.
+    let outcome = cover::run(&job, &mut Unattended).map_err(|e| failure(e, args))?;
+    if global.quiet {
+        return Ok(());
     }
-    let file = match &args.parameters {
-        Some(p) => CoverParameters::read(p).bad_input()?,
-        None => CoverParameters::default(),
-    };
-    let input = read_input(args).bad_input()?;
-    let folder = OutputFolder::open(&args.out).bad_input()?;
-    folder.check_subfolder("growth").bad_input()?;
-    match args.method {
-        CoverMethod::Diffusion => {
-            cover_diffusion(args, global, &input, file.diffusion, (folder, t0))
-        }
-        CoverMethod::Fearing => {
-            let depth_set = file.fearing_depth_set;
-            cover_fearing(args, global, &input, file.fearing, depth_set, (folder, t0))
-        }
-    }
-}
-
-/// The common front part: the mesh in scene metres (z up), standing on the DEM if given.
-fn read_input(args: &CoverArgs) -> anyhow::Result<CoverInput> {
-    let t0 = Instant::now();
-    if !(args.scale.is_finite() && args.scale > 0.0) {
-        bail!(
-            "--scale must be a positive number of metres per mesh unit, got {}",
-            args.scale
-        );
-    }
-    let up: UpAxis = args
-        .up
-        .parse()
-        .with_context(|| format!("--up {:?}", args.up))?;
-    let frame = SourceFrame::new(up, args.scale)?;
-    let (mut scene, mesh_report) = read_scene(&args.mesh, &frame)?;
-    let (mut extent_m, mut dem) = (None, None);
-    if let Some(path) = &args.dem {
-        let grid = args.dem_input.read(path)?;
-        let g = grid.geometry();
-        let (x, y) = match &args.at {
-            None => (0.5 * g.extent_m().0, 0.5 * g.extent_m().1),
-            Some(text) => {
-                let (mx, my) = crate::pairs::parse_xy("--at", text)?;
-                map_to_scene(g, mx, my).ok_or_else(|| {
-                    anyhow!("--at {text:?} lies outside the DEM {}", path.display())
-                })?
-            }
-        };
-        // Place the scene as one piece: every object moves by the same offset.
-        let (ground, _) = place_scene_on_grid(&mut scene, &grid, x, y)
-            .with_context(|| format!("placing {} on {}", args.mesh.display(), path.display()))?;
-        let after = scene
-            .bounds()
-            .ok_or_else(|| anyhow!("the mesh has no triangles"))?;
-        // Cover the object and the ground around it: a quarter of its size on each side.
-        let margin = 0.25 * after.size()[0].max(after.size()[1]) as f64;
-        let e = [
-            after.min[0] as f64 - margin,
-            after.min[1] as f64 - margin,
-            after.max[0] as f64 + margin,
-            after.max[1] as f64 + margin,
-        ];
-        let terrain = crop(grid_object(&grid, "terrain")?, e, margin);
-        if terrain.triangles.is_empty() {
-            bail!(
-                "the DEM {} has no valid cells around the mesh",
-                path.display()
-            );
-        }
-        scene.objects.push(terrain);
-        extent_m = Some(e);
-        dem = Some(DemPlacement {
-            terrain: InputSummary::of(&path.display().to_string(), &grid),
-            at_scene_m: [x, y],
-            ground_m: ground,
-        });
-    }
-    let mut summary = MeshInputSummary::new(&args.mesh, &args.up, args.scale, &mesh_report, &scene);
-    summary.dem = dem;
-    summary.parameters_file = args.parameters.as_ref().map(|p| p.display().to_string());
-    Ok(CoverInput {
-        scene,
-        summary,
-        extent_m,
-        read_s: t0.elapsed().as_secs_f64(),
-    })
-}
-
-/// The triangles of `o` within `margin` of the extent `e`.
-fn crop(mut o: SceneObject, e: [f64; 4], margin: f64) -> SceneObject {
-    let inside = |p: &[f32; 3]| {
-        (p[0] as f64) >= e[0] - margin
-            && (p[0] as f64) <= e[2] + margin
-            && (p[1] as f64) >= e[1] - margin
-            && (p[1] as f64) <= e[3] + margin
-    };
-    let pos = &o.positions;
-    o.triangles
-        .retain(|t| t.iter().any(|&i| inside(&pos[i as usize])));
-    o
-}
-
-/// `turntable.gif` in `dir`: `frames` previews around the scene and its snow, 80 ms apart.
-fn write_turntable(
-    dir: &std::path::Path,
-    scene: &Scene,
-    snow: &[snowscape_mesh::SnowObject],
-    frames: usize,
-) -> anyhow::Result<()> {
-    let opts = PreviewOptions {
-        width: 480,
-        height: 360,
-        ..PreviewOptions::default()
-    };
-    let images: Vec<image::RgbaImage> = render_turntable(scene, snow, &opts, frames)?
-        .into_iter()
-        .map(|i| image::DynamicImage::ImageRgb8(i).into_rgba8())
-        .collect();
-    let gif = snowscape_render::encode_gif(&images, 80)?;
-    snowscape_io::write_bytes_atomic(&dir.join("turntable.gif"), &gif)?;
-    Ok(())
-}
-
-/// The exit code of a snow-cover error: the user's input (2) unless it is an output problem.
-fn festenberg_failure(e: FestenbergError) -> Failure {
-    let code = match &e {
-        FestenbergError::Mesh(snowscape_mesh::MeshError::Write(_)) => crate::failure::JOB_FAILED,
-        _ => BAD_INPUT,
-    };
-    Failure {
-        code,
-        error: e.into(),
-    }
-}
-
-/// Diffusion-based snow cover (von Festenberg & Gumhold 2011): `snow.glb`, `snow.obj` (+ MTL
-/// and mask PNG), `mask.png`, `preview.png`, `growth/` with `--growth`, and `report.json`.
-fn cover_diffusion(
-    args: &CoverArgs,
-    global: &GlobalArgs,
-    input: &CoverInput,
-    file: CoverParams,
-    (folder, t0): (OutputFolder, Instant),
-) -> Result<(), Failure> {
-    // The file's values, each flag given overriding its own; a DEM fixes the extent.
-    let params = CoverParams {
-        depth_m: args.depth.or(file.depth_m),
-        radius_m: args.radius.or(file.radius_m),
-        bridge_m: args.bridge.or(file.bridge_m),
-        overhang: args.overhang || file.overhang,
-        resolution_m: args.resolution.or(file.resolution_m),
-        extent_m: input.extent_m.or(file.extent_m),
-        ..file
-    };
-    if args.growth.is_some_and(|n| n == 0 || n > 10_000) {
-        return Err(anyhow!(
-            "--growth must be 1..=10000 frames, got {}",
-            args.growth.unwrap_or(0)
-        ))
-        .bad_input();
-    }
-    let scene = &input.scene;
-    let c = cover(scene, &params).map_err(festenberg_failure)?;
-    if c.mesh.triangles.is_empty() {
-        return Err(anyhow!(
-            "no snow settled on {} (every site is an edge at --resolution {} m: try a finer one)",
-            args.mesh.display(),
-            c.resolved.resolution_m
-        ))
-        .job_failed();
-    }
-    let dir = &folder.staging().to_path_buf();
-    let mut files = Vec::new();
-    let mut timings = vec![("read".to_string(), input.read_s)];
-    timings.extend(c.stats.timings.iter().cloned());
-    let mut stage = |name: &str, f: &mut dyn FnMut() -> anyhow::Result<()>| {
-        let t = Instant::now();
-        let r = f();
-        timings.push((name.to_string(), t.elapsed().as_secs_f64()));
-        r
-    };
-    let meshes = std::slice::from_ref(&c.mesh);
-    stage("write_glb", &mut || {
-        Ok(write_glb(&dir.join("snow.glb"), meshes, &scene.frame)?)
-    })
-    .job_failed()?;
-    stage("write_obj", &mut || {
-        Ok(write_obj(&dir.join("snow.obj"), meshes, &scene.frame)?)
-    })
-    .job_failed()?;
-    files.extend(["snow.glb", "snow.obj", "snow.mtl", "snow_0.png"].map(String::from));
-    if let Some(mask) = &c.mesh.texture {
-        write_png(&dir.join("mask.png"), mask).job_failed()?;
-        files.push("mask.png".into());
-    }
-    stage("preview", &mut || {
-        Ok(write_preview(
-            &dir.join("preview.png"),
-            scene,
-            meshes,
-            &PreviewOptions::default(),
-        )?)
-    })
-    .job_failed()?;
-    files.push("preview.png".into());
-    if let Some(n) = args.turntable {
-        stage("turntable", &mut || write_turntable(dir, scene, meshes, n)).job_failed()?;
-        files.push("turntable.gif".into());
-    }
-    let mut growth_report = None;
-    if let Some(frames) = args.growth {
-        let t = Instant::now();
-        let growth = GrowthParams::for_cover(&c.resolved, frames);
-        let gdir = dir.join("growth");
-        std::fs::create_dir_all(&gdir)
-            .with_context(|| format!("cannot create {}", gdir.display()))
-            .job_failed()?;
-        let (_, g) = grow_cover(
-            scene,
-            &params,
-            &growth,
-            |i, _, mesh| -> anyhow::Result<()> {
-                let name = format!("frame_{i:04}.glb");
-                if mesh.triangles.is_empty() {
-                    return Ok(()); // no snow yet anywhere
-                }
-                write_glb(&gdir.join(&name), &[mesh], &scene.frame)?;
-                files.push(format!("growth/{name}"));
-                Ok(())
-            },
-        )
-        .job_failed()?;
-        timings.push(("growth".into(), t.elapsed().as_secs_f64()));
-        growth_report = Some(GrowthSummary {
-            parameters: growth,
-            run: g,
-        });
-    }
-    files.push(snowscape::output_folder::REPORT.into());
-    let report = DiffusionCoverReport::new(
-        input.summary.clone(),
-        &c,
-        growth_report,
-        &timings,
-        t0.elapsed().as_secs_f64(),
-        files,
-    );
-    let report = serde_json::to_value(&report)
-        .context(snowscape::output_folder::REPORT)
-        .job_failed()?;
-    write_report(folder, report).job_failed()?;
-    if !global.quiet {
-        let s = &c.stats;
-        outln!(
+    match &outcome.report {
+        CoverReport::Diffusion(r) => outln!(
             "cover (diffusion): {} sites + {} bridge sites, snow {} vertices / {} triangles, \
              max {:.3} m, kernel {:.0} sites/s, {:.2} s -> {}",
-            s.ground_sites,
-            s.bridge_sites,
-            s.vertices,
-            s.triangles,
-            s.max_height_m,
-            s.kernel_sites_per_s(),
-            t0.elapsed().as_secs_f64(),
-            dir.display()
-        );
-    }
-    Ok(())
-}
-
-/// Fearing 2000 snow on meshes (`snowscape-fearing`): `snow.glb`, `snow.obj` (+ MTL),
-/// `preview.png` and `report.json`.
-fn cover_fearing(
-    args: &CoverArgs,
-    global: &GlobalArgs,
-    input: &CoverInput,
-    file: snowscape_fearing::FearingParams,
-    depth_set: bool,
-    (folder, t0): (OutputFolder, Instant),
-) -> Result<(), Failure> {
-    use snowscape_fearing::Material;
-    let scene = &input.scene;
-    // The file's values, each flag given overriding its own.
-    let mut params = file;
-    if let Some(m) = &args.material {
-        params.material = Material::preset(m).bad_input()?;
-    }
-    if let Some(a) = args.aor {
-        params.material.aor_deg = a;
-    }
-    params.depth_m = match args.depth {
-        Some(d) => d,
-        None if depth_set => params.depth_m,
-        None => snowscape::cover::default_depth_m(scene)
-            .ok_or_else(|| anyhow!("the mesh has no triangles"))
-            .bad_input()?,
-    };
-    if let Some(b) = args.budget {
-        params.budget_s = b;
-    }
-    params.flutter_m = args.flutter;
-    if let Some(w) = &args.wind {
-        let (x, y) = crate::pairs::parse_xy("--wind", w).bad_input()?;
-        params.wind_m_s = [x, y];
-    }
-    if let Some(seed) = args.seed {
-        params.seed = seed;
-    }
-    if let Some(n) = args.sites {
-        params.target_sites = n;
-    }
-    if let Some(p) = args.passes {
-        params.passes = p;
-    }
-    if let Some(w) = args.wind_transport {
-        params.wind_transport = w;
-    }
-    let c = snowscape_fearing::cover(scene, &params).bad_input()?;
-    if let Some(n) = args.turntable {
-        let meshes = c.meshes();
-        write_turntable(folder.staging(), scene, &meshes, n).job_failed()?;
-    }
-    let summary = FearingInputSummary {
-        mesh: input.summary.clone(),
-        read_s: input.read_s,
-        wall_s: t0.elapsed().as_secs_f64(),
-        turntable: args.turntable.map(|frames| Turntable {
-            file: "turntable.gif",
-            frames,
-        }),
-    };
-    let summary = serde_json::to_value(&summary)
-        .context(snowscape::output_folder::REPORT)
-        .job_failed()?;
-    // Nothing to write (no snow settled) or a file that cannot be written: the job failed.
-    let written =
-        snowscape::cover::write_fearing_outputs(folder.staging(), scene, &c, Some(summary))
-            .job_failed()?;
-    let mut files: Vec<String> = written
-        .iter()
-        .filter_map(|p| p.strip_prefix(folder.staging()).ok())
-        .map(|p| p.to_string_lossy().into_owned())
-        .collect();
-    if args.turntable.is_some() {
-        files.push("turntable.gif".into());
-    }
-    folder.commit(&files, None).job_failed()?;
-    if !global.quiet {
-        let r = &c.report;
-        outln!(
-            "cover (fearing): {} sites in {} edge groups, {} flakes ({:.0} flakes/s), snow {} \
-             triangles, max {:.3} m, {:.3} m³ caught, {:.3} m³ left the scene, {:.2} s -> {}",
-            r.sites_final,
-            r.edge_groups,
-            r.flakes_shot,
-            r.flakes_per_s,
-            r.surface_triangles,
-            r.max_depth_m,
-            r.mass.allocated_m3,
-            r.mass.left_scene_m3,
+            r.sites.ground_sites,
+            r.sites.bridge_sites,
+            r.snow.vertices,
+            r.snow.triangles,
+            r.snow.max_height_m,
+            r.kernel.sites_per_s,
             t0.elapsed().as_secs_f64(),
             args.out.display()
-        );
+        ),
+        CoverReport::Fearing(f) => {
+            let r = &f.cover;
+            outln!(
+                "cover (fearing): {} sites in {} edge groups, {} flakes ({:.0} flakes/s), snow {} \
+                 triangles, max {:.3} m, {:.3} m³ caught, {:.3} m³ left the scene, {:.2} s -> {}",
+                r.sites_final,
+                r.edge_groups,
+                r.flakes_shot,
+                r.flakes_per_s,
+                r.surface_triangles,
+                r.max_depth_m,
+                r.mass.allocated_m3,
+                r.mass.left_scene_m3,
+                t0.elapsed().as_secs_f64(),
+                args.out.display()
+            );
+        }
     }
     Ok(())
 }

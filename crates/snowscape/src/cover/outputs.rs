@@ -2,11 +2,12 @@
 //! in the input's own axes and units so it lies on the input scene; `preview.png`, a CPU render
 //! of the scene with its snow; `report.json` (the
 //! [`FearingReport`](snowscape_fearing::FearingReport), with whatever the caller adds under
-//! `input`). Every file is written atomically.
+//! `input`). Every file is written atomically. A cover's `turntable.gif` (either method's)
+//! is written here too.
 
 use crate::outputs::OutputError;
 use snowscape_fearing::{FearingCover, FearingError};
-use snowscape_mesh::{Scene, preview};
+use snowscape_mesh::{Scene, SnowObject, preview};
 use std::path::{Path, PathBuf};
 
 /// Writes the outputs into `dir` (created if needed); returns the files written. `input` goes
@@ -21,17 +22,10 @@ pub fn write_fearing_outputs(
         path: dir.to_path_buf(),
         source,
     })?;
-    let meshes = cover.meshes();
-    if meshes[0].triangles.is_empty() {
-        return Err(OutputError::Fearing(FearingError::NoSnow {
-            sites: cover.topology.leaves.len(),
-            min_depth_m: cover
-                .report
-                .params
-                .as_ref()
-                .map_or(0.0, |p| p.min_surface_depth_m),
-        }));
+    if let Some(e) = fearing_no_snow(cover) {
+        return Err(OutputError::Fearing(e));
     }
+    let meshes = cover.meshes();
     let glb = dir.join("snow.glb");
     snowscape_mesh::write::write_glb(&glb, &meshes, &scene.frame)?;
     let obj = dir.join("snow.obj");
@@ -54,6 +48,43 @@ pub fn write_fearing_outputs(
     }
     files.extend([png, json]);
     Ok(files)
+}
+
+/// [`FearingError::NoSnow`] when no snow settled deep enough for the surface (nothing to
+/// write), else `None`.
+pub fn fearing_no_snow(cover: &FearingCover) -> Option<FearingError> {
+    if !cover.surface.to_mesh("snow").triangles.is_empty() {
+        return None;
+    }
+    Some(FearingError::NoSnow {
+        sites: cover.topology.leaves.len(),
+        min_depth_m: cover
+            .report
+            .params
+            .as_ref()
+            .map_or(0.0, |p| p.min_surface_depth_m),
+    })
+}
+
+/// `turntable.gif` in `dir`: `frames` previews around the scene and its snow, 80 ms apart.
+pub fn write_turntable(
+    dir: &Path,
+    scene: &Scene,
+    snow: &[SnowObject],
+    frames: usize,
+) -> Result<(), OutputError> {
+    let opts = preview::PreviewOptions {
+        width: 480,
+        height: 360,
+        ..preview::PreviewOptions::default()
+    };
+    let images: Vec<image::RgbaImage> = preview::render_turntable(scene, snow, &opts, frames)?
+        .into_iter()
+        .map(|i| image::DynamicImage::ImageRgb8(i).into_rgba8())
+        .collect();
+    let gif = snowscape_render::encode_gif(&images, 80)?;
+    snowscape_io::write_bytes_atomic(&dir.join("turntable.gif"), &gif)?;
+    Ok(())
 }
 
 /// A Fearing cover's report (its [`FearingReport`](snowscape_fearing::FearingReport)) with

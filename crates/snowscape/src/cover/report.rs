@@ -1,6 +1,6 @@
 //! The reports of a mesh cover: what was read (the mesh, and the DEM it stands on) and, for the
-//! diffusion cover, the whole `report.json`. The command line and the Python package build the
-//! same structs, so a cover reports the same keys whichever front end ran it.
+//! diffusion cover, the whole `report.json`. The cover job builds them for every front end, so
+//! a cover reports the same keys whichever front end ran it.
 
 use crate::report::{InputSummary, timings_object};
 use serde::Serialize;
@@ -147,6 +147,9 @@ pub struct DiffusionCoverReport {
     pub wall_s: f64,
     /// Files written, relative to the output folder.
     pub outputs: Vec<String>,
+    /// Earlier outputs of the folder this run removed (left out when none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub removed_stale: Vec<String>,
 }
 
 impl DiffusionCoverReport {
@@ -198,6 +201,7 @@ impl DiffusionCoverReport {
             timings_s: timings_object(timings),
             wall_s,
             outputs,
+            removed_stale: Vec::new(),
         }
     }
 }

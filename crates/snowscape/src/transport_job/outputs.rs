@@ -97,9 +97,9 @@ pub fn write_outputs(
 /// depth reached, the mass budget (kg) and the timings. `write_outputs` writes it; the Python
 /// package returns it.
 #[derive(Debug, Clone, Serialize)]
-pub struct TransportReport<'a> {
+pub struct TransportReport {
     /// Every parameter of the run, as the scenario file would spell it.
-    pub scenario: &'a Scenario,
+    pub scenario: Scenario,
     pub grid: GridSize,
     pub voxels: VoxelSize,
     pub wind: WindSolve,
@@ -189,11 +189,11 @@ pub struct TransportTimings {
     pub wall: f64,
 }
 
-impl<'a> TransportReport<'a> {
+impl TransportReport {
     /// The report of run `out` of `scenario`; `input` says where the scene came from, `wall_s`
     /// is the whole job's time.
     pub fn new(
-        scenario: &'a Scenario,
+        scenario: &Scenario,
         out: &RunOutputs,
         input: serde_json::Value,
         wall_s: f64,
@@ -202,7 +202,7 @@ impl<'a> TransportReport<'a> {
         let depth = out.state.depth();
         let n = depth.len().max(1) as f64;
         Self {
-            scenario,
+            scenario: scenario.clone(),
             grid: GridSize {
                 width: g.width(),
                 height: g.height(),
