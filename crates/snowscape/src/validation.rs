@@ -35,7 +35,7 @@ pub mod summary;
 
 pub use compare::compare;
 pub use job::{
-    DEFAULT_WIND_FROM_DEG, OUTPUTS, ValidateJob, ValidationOutcome, ValidationReport, run,
+    DEFAULT_WIND_FROM_DEG, OUTPUTS, ValidateJob, ValidationOutcome, ValidationReport, run, run_with,
 };
 
 use classes::ContrastRatio;
@@ -167,6 +167,16 @@ pub enum ValidationError {
     /// An output could not be written.
     Output(#[from] crate::outputs::OutputError),
     Encode(#[source] serde_json::Error),
+    /// The front end cancelled the job before `stage` (nothing was written).
+    Cancelled {
+        stage: &'static str,
+    },
+}
+
+impl From<crate::control::StageCancelled> for ValidationError {
+    fn from(c: crate::control::StageCancelled) -> Self {
+        ValidationError::Cancelled { stage: c.0 }
+    }
 }
 
 impl fmt::Display for ValidationError {
@@ -236,13 +246,17 @@ impl ValidationError {
             }
             Self::OutputFolder(e) | Self::Output(e) => e.to_string(),
             Self::Encode(e) => format!("cannot encode validation.json: {e}"),
+            Self::Cancelled { stage } => format!("cancelled before {stage}; nothing was written"),
         }
     }
 
     /// Whether the validation was refused for its input (nothing was written) rather than
     /// failing while it wrote.
     pub fn is_bad_input(&self) -> bool {
-        !matches!(self, Self::Output(_) | Self::Encode(_))
+        !matches!(
+            self,
+            Self::Output(_) | Self::Encode(_) | Self::Cancelled { .. }
+        )
     }
 }
 

@@ -5,7 +5,7 @@
 
 use snowscape::io::{ReadOptions, read_dem, write_geotiff};
 use snowscape::terrain::Grid;
-use snowscape::validation::{Naming, ValidateJob, ValidationError, ValidationInput, run};
+use snowscape::validation::{Naming, ValidateJob, ValidationError, ValidationInput, run, run_with};
 use std::path::{Path, PathBuf};
 
 /// A run folder: the Idaho DEM as `bedrock.tif`, a depth of 0.5 m per 100 m above its lowest
@@ -145,4 +145,51 @@ fn bad_input_is_refused_typed() {
         "{e}"
     );
     assert!(!run_dir.join("validation").exists());
+}
+
+/// Hears the stages and cancels once `after` of them have begun.
+struct CancelAfter {
+    after: usize,
+    heard: Vec<String>,
+}
+
+impl snowscape::control::Control for CancelAfter {
+    fn status(&mut self, line: &str) {
+        self.heard.push(line.to_string());
+    }
+    fn cancelled(&mut self) -> bool {
+        self.heard.len() >= self.after
+    }
+}
+
+#[test]
+fn the_stages_are_heard_and_a_cancel_between_them_writes_nothing() {
+    let t = tempfile::tempdir().unwrap();
+    let (run_dir, observed) = run_folder(t.path());
+    for after in [1, 2, 3] {
+        let mut control = CancelAfter {
+            after,
+            heard: Vec::new(),
+        };
+        let e = run_with(&job(&run_dir, &observed), &mut control).unwrap_err();
+        assert!(matches!(e, ValidationError::Cancelled { .. }), "{e}");
+        assert!(!e.is_bad_input());
+        assert_eq!(control.heard.len(), after);
+        let out = run_dir.join("validation");
+        assert!(
+            !out.join("validation.json").exists(),
+            "a cancel after {after} stages wrote its report"
+        );
+    }
+    // Unattended, all three stages run and the files are written.
+    let mut control = CancelAfter {
+        after: usize::MAX,
+        heard: Vec::new(),
+    };
+    run_with(&job(&run_dir, &observed), &mut control).unwrap();
+    assert_eq!(
+        control.heard,
+        ["reading the rasters", "comparing", "writing outputs"]
+    );
+    assert!(run_dir.join("validation/validation.json").is_file());
 }

@@ -10,6 +10,7 @@
 
 use super::figures::{density_scatter, side_by_side};
 use super::{Input, Inputs, Maps, Settings, Validation, ValidationError, ValidationInput, compare};
+use crate::control::{Control, Stages, Unattended};
 use crate::output_folder::{OutputFolder, REPORT};
 use crate::outputs::write_png;
 use serde::Serialize;
@@ -169,8 +170,20 @@ fn read_rasters(job: &ValidateJob) -> Result<Rasters, ValidationError> {
     })
 }
 
-/// Runs the validation and writes its files.
+/// Runs the validation and writes its files, unattended.
 pub fn run(job: &ValidateJob) -> Result<ValidationOutcome, ValidationError> {
+    run_with(job, &mut Unattended)
+}
+
+/// Runs the validation and writes its files; `control` hears its three stages (reading the
+/// rasters, comparing, writing the outputs), and a cancel between them (or before the commit)
+/// ends it with [`ValidationError::Cancelled`] and nothing written.
+pub fn run_with(
+    job: &ValidateJob,
+    control: &mut dyn Control,
+) -> Result<ValidationOutcome, ValidationError> {
+    let mut stages = Stages::new(control, 3);
+    stages.begin("reading the rasters")?;
     let r = read_rasters(job)?;
     let (wind_from_deg, wind_from_source) = wind_from(job)?;
     let input = |grid, path, input| Input { grid, path, input };
@@ -188,7 +201,9 @@ pub fn run(job: &ValidateJob) -> Result<ValidationOutcome, ValidationError> {
         snow_threshold_m: job.snow_threshold_m,
         wind_from_deg,
     };
+    stages.begin("comparing")?;
     let (validation, maps) = compare(&inputs, &settings)?;
+    stages.begin("writing outputs")?;
     let out = job
         .out
         .clone()
@@ -206,7 +221,7 @@ pub fn run(job: &ValidateJob) -> Result<ValidationOutcome, ValidationError> {
         validation,
         outputs: OUTPUTS.to_vec(),
     };
-    write(folder, &report, &maps)?;
+    write(folder, &report, &maps, &mut stages)?;
     Ok(ValidationOutcome { report, maps, out })
 }
 
@@ -215,6 +230,7 @@ fn write(
     folder: OutputFolder,
     report: &ValidationReport,
     maps: &Maps,
+    stages: &mut Stages,
 ) -> Result<(), ValidationError> {
     let stage = folder.staging().to_path_buf();
     let json = serde_json::to_vec_pretty(report).map_err(ValidationError::Encode)?;
@@ -226,6 +242,7 @@ fn write(
     let scatter = density_scatter(&compared(&maps.observed), &compared(&maps.simulated));
     write_png(&stage.join("scatter.png"), &scatter)?;
     let names: Vec<String> = OUTPUTS.iter().map(|n| n.to_string()).collect();
+    stages.finish()?;
     folder.commit(&names, None)?;
     Ok(())
 }
