@@ -204,6 +204,21 @@ pub fn map_cells<T: Send, U: Sync>(out: &mut [T], input: &[U], f: impl Fn(&U) ->
         .for_each(|(o, i)| *o = f(i));
 }
 
+/// The smallest and largest of `values` (`None` when empty or all NaN): fixed blocks folded
+/// in parallel, then the blocks' ranges in order, so the same pair (signed zeros included) for
+/// any thread count.
+pub fn range(values: &[f32]) -> Option<(f32, f32)> {
+    let fold = |(a, b): (f32, f32), (c, d): (f32, f32)| (a.min(c), b.max(d));
+    let (lo, hi) = map_rows(1 << 14, values, |_, block| {
+        block
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |r, &v| fold(r, (v, v)))
+    })
+    .into_iter()
+    .fold((f32::INFINITY, f32::NEG_INFINITY), fold);
+    (lo <= hi).then_some((lo, hi))
+}
+
 /// How many workers the dispatch spreads rows over (the pool's width: `--threads` or
 /// `RAYON_NUM_THREADS`, else the cores); a kernel sizes per-worker scratch with it.
 #[inline]
@@ -296,6 +311,13 @@ mod tests {
         map_cells(&mut out, &[1.0f32, 2.0, 3.0], |x| x * 2.0);
         assert_eq!(out, [2.0, 4.0, 6.0]);
         assert_eq!(join(|| 1, || 2), (1, 2));
+        let many: Vec<f32> = (0..40_000)
+            .map(|i| ((i * 7919) % 40_001) as f32 - 20_000.0)
+            .collect();
+        assert_eq!(range(&many), Some((-20_000.0, 20_000.0)));
+        assert_eq!(range(&[]), None);
+        assert_eq!(range(&[f32::NAN]), None);
+        assert_eq!(range(&[2.0, f32::NAN, -1.0]), Some((-1.0, 2.0)));
         assert_eq!(pool(3).install(workers), 3);
         assert!(pool(3).install(worker_index) < 3);
         let sums = map_rows_with(

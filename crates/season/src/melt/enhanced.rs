@@ -574,19 +574,7 @@ impl DegreeHours {
 
     fn new(hours: &[MeltHour], threshold: f32, offsets: &[f32]) -> Self {
         // (Minimum and maximum are exact in any order: the same range for any thread count.)
-        // Fixed blocks folded in parallel, then the blocks' ranges in order.
-        let (lo, hi) = parallel::map_rows(1 << 14, offsets, |_, block| {
-            block
-                .iter()
-                .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &o| {
-                    (a.min(o), b.max(o))
-                })
-        })
-        .into_iter()
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), (c, d)| {
-            (a.min(c), b.max(d))
-        });
-        let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 0.0) };
+        let (lo, hi) = parallel::range(offsets).unwrap_or((0.0, 0.0));
         let n = (((hi - lo) / Self::STEP_C).ceil() as usize + 2).min(1 << 20);
         let (mut cooling, mut warm) = (vec![0.0f32; n], vec![0.0f32; n]);
         for k in 0..n {

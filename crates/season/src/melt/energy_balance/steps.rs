@@ -22,19 +22,7 @@ impl OffsetRange {
     /// The range of `offsets` (at least ±0.5 °C wide). Minimum and maximum are exact in any
     /// order: the same range for any thread count.
     pub(super) fn of(offsets: &[f32]) -> Self {
-        // Fixed blocks folded in parallel, then the blocks' ranges in order.
-        let (lo, hi) = parallel::map_rows(1 << 14, offsets, |_, block| {
-            block
-                .iter()
-                .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &o| {
-                    (a.min(o), b.max(o))
-                })
-        })
-        .into_iter()
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), (c, d)| {
-            (a.min(c), b.max(d))
-        });
-        let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 0.0) };
+        let (lo, hi) = parallel::range(offsets).unwrap_or((0.0, 0.0));
         Self {
             mid: 0.5 * (lo + hi),
             half: (0.5 * (hi - lo)).max(0.5),
