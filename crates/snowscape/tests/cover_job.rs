@@ -5,7 +5,10 @@
 //! mesh standing on a DEM, the typed refusals before any work, and cancelled runs that leave
 //! nothing behind.
 
-use snowscape::control::{Control, Unattended};
+mod common;
+
+use common::Heard;
+use snowscape::control::Unattended;
 use snowscape::cover::{
     self, CoverDem, CoverJob, CoverJobError, CoverMethod, CoverOverrides, CoverReport,
 };
@@ -38,27 +41,6 @@ fn names(dir: &Path) -> Vec<String> {
 /// The written report.json.
 fn written(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
-}
-
-/// Hears every stage.
-#[derive(Default)]
-struct Heard {
-    progress: Vec<(f64, f64)>,
-    status: Vec<String>,
-    /// Cancel once this many stages were heard.
-    cancel_after: Option<usize>,
-}
-
-impl Control for Heard {
-    fn progress(&mut self, done: f64, total: f64) {
-        self.progress.push((done, total));
-    }
-    fn status(&mut self, line: &str) {
-        self.status.push(line.to_string());
-    }
-    fn cancelled(&mut self) -> bool {
-        self.cancel_after.is_some_and(|n| self.status.len() >= n)
-    }
 }
 
 #[test]

@@ -4,7 +4,10 @@
 //! run into a folder, the same maps from a grid in memory (the Python package's run), a mesh's
 //! top view, the typed refusals before any work, and a cancelled run that writes nothing.
 
-use snowscape::control::{Control, Unattended};
+mod common;
+
+use common::Heard;
+use snowscape::control::Unattended;
 use snowscape::dem_source::DemSource;
 use snowscape::io::{ReadOptions, read_terrain};
 use snowscape::transport_job::{
@@ -45,26 +48,6 @@ fn short_run(dem: DemSource, output: Option<PathBuf>) -> TransportJob {
 /// values written shortest, read back as f64).
 fn as_json(report: &impl serde::Serialize) -> serde_json::Value {
     serde_json::from_str(&serde_json::to_string_pretty(report).unwrap()).unwrap()
-}
-
-/// Hears every stage; cancels once `cancel_after` were heard.
-#[derive(Default)]
-struct Heard {
-    progress: Vec<(f64, f64)>,
-    status: Vec<String>,
-    cancel_after: Option<usize>,
-}
-
-impl Control for Heard {
-    fn progress(&mut self, done: f64, total: f64) {
-        self.progress.push((done, total));
-    }
-    fn status(&mut self, line: &str) {
-        self.status.push(line.to_string());
-    }
-    fn cancelled(&mut self) -> bool {
-        self.cancel_after.is_some_and(|n| self.status.len() >= n)
-    }
 }
 
 #[test]
