@@ -390,6 +390,20 @@ fn general_pipes(
     (moving, cell_moved)
 }
 
+/// The factor of pipe `d`'s upwind cell (the cell itself when its volume flows out, the
+/// neighbour when it flows in), or `None` for a pipe that carries nothing (general code).
+fn upwind_factor(k: &Consts, inp: &Inputs, kk: usize, c: usize, r: usize, d: usize) -> Option<f64> {
+    let f = inp.flux[d][kk];
+    (f != 0.0).then(|| {
+        let src = if f > 0.0 {
+            kk
+        } else {
+            k.neighbour(c, r, d).unwrap_or(kk)
+        };
+        inp.factor[src]
+    })
+}
+
 /// A pipe's new velocity scaled by its upwind cell's factor (general code).
 pub(super) fn scaled_pipe(
     k: &Consts,
@@ -400,17 +414,7 @@ pub(super) fn scaled_pipe(
     d: usize,
 ) -> f64 {
     let u = inp.new_pipes[d][kk];
-    let f = inp.flux[d][kk];
-    if f != 0.0 {
-        let src = if f > 0.0 {
-            kk
-        } else {
-            k.neighbour(c, r, d).unwrap_or(kk)
-        };
-        u * inp.factor[src]
-    } else {
-        u
-    }
+    upwind_factor(k, inp, kk, c, r, d).map_or(u, |factor| u * factor)
 }
 
 /// A pipe's volume scaled by its upwind cell's factor (general code).
@@ -423,16 +427,7 @@ pub(super) fn scaled_flux(
     d: usize,
 ) -> f64 {
     let f = inp.flux[d][kk];
-    if f != 0.0 {
-        let src = if f > 0.0 {
-            kk
-        } else {
-            k.neighbour(c, r, d).unwrap_or(kk)
-        };
-        f * inp.factor[src]
-    } else {
-        f
-    }
+    upwind_factor(k, inp, kk, c, r, d).map_or(f, |factor| f * factor)
 }
 
 /// Pass 2 on `V::N` cells away from the ghost ring: the pipes they own scaled by their upwind
